@@ -1,0 +1,74 @@
+//! The one error type of this crate.
+//!
+//! For: every way a metric or an image load/save can refuse its input. Not for: anything that is
+//! a *result* (identical images give an infinite PSNR, which is a value, not an error).
+
+use std::path::PathBuf;
+
+/// Why a metric could not be computed or an image could not be read or written.
+#[derive(Debug, thiserror::Error)]
+pub enum MetricsError {
+    /// The two images of a comparison do not have the same width and height.
+    #[error(
+        "image sizes differ: reference is {ref_width}x{ref_height}, test is \
+         {test_width}x{test_height}; both images of a comparison must have the same size"
+    )]
+    SizeMismatch {
+        ref_width: u32,
+        ref_height: u32,
+        test_width: u32,
+        test_height: u32,
+    },
+    /// An image has zero width or zero height.
+    #[error("image is empty ({width}x{height}); metrics need at least one pixel")]
+    EmptyImage { width: u32, height: u32 },
+    /// An image's buffer length does not match its width and height.
+    #[error(
+        "image buffer holds {actual} values but {width}x{height} with 3 channels needs {expected}"
+    )]
+    BadBufferLength {
+        width: u32,
+        height: u32,
+        expected: usize,
+        actual: usize,
+    },
+    /// The image is smaller than a metric's window (SSIM needs at least 11x11 pixels).
+    #[error("{metric} needs images of at least {min}x{min} pixels, got {width}x{height}")]
+    TooSmall {
+        metric: &'static str,
+        min: u32,
+        width: u32,
+        height: u32,
+    },
+    /// A metric parameter is out of its domain (e.g. pixels per degree not positive and finite).
+    #[error("invalid parameter {name} = {value}: {expected}")]
+    InvalidParameter {
+        name: &'static str,
+        value: f64,
+        expected: &'static str,
+    },
+    /// The two images are of different kinds (one LDR, one HDR).
+    #[error("cannot compare {reference} reference with {test} test image; convert one first")]
+    KindMismatch {
+        reference: &'static str,
+        test: &'static str,
+    },
+    /// Reading or writing a file failed.
+    #[error("cannot {action} {path}: {source}")]
+    Io {
+        action: &'static str,
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    /// The file could be read but not decoded, or its format is not supported.
+    #[error("cannot decode {path}: {reason}; supported: {supported}")]
+    Decode {
+        path: PathBuf,
+        reason: String,
+        supported: &'static str,
+    },
+    /// Encoding an output image failed.
+    #[error("cannot encode {path}: {reason}")]
+    Encode { path: PathBuf, reason: String },
+}

@@ -1,0 +1,27 @@
+//! Image error metrics for Tessera, computed on the CPU exactly as their reference
+//! implementations compute them: PSNR/MSE as scikit-image, SSIM as Wang et al. 2004 (scikit-image
+//! with `gaussian_weights=True, sigma=1.5, use_sample_covariance=False`), and NVIDIA FLIP (LDR and
+//! HDR) as the `flip-evaluator` package.
+//!
+//! For: numbers from a reference/test pair of frames, loading and saving the images they come
+//! from, and summarising per-frame series. Not for: rendering, GPU work or deciding pass/fail
+//! (gates belong to the harness). See the crate README for exact settings and measured
+//! agreement with the reference implementations.
+
+mod error;
+mod image;
+mod io;
+mod luma;
+mod pixel;
+mod series;
+mod srgb;
+
+pub use error::MetricsError;
+pub use image::{HdrImage, Rgb8Image};
+pub use io::{load_image, save_png, LoadedImage, SUPPORTED_INPUTS};
+pub use luma::LUMA_WEIGHTS;
+pub use pixel::{
+    max_abs_error, mse_luma, mse_rgb, psnr_from_mse, psnr_luma, psnr_rgb, DATA_RANGE_8BIT,
+};
+pub use series::{series_stats, SeriesStats};
+pub use srgb::{encode_srgb8, linear_to_srgb, srgb_to_linear};
