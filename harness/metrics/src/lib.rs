@@ -15,6 +15,7 @@ mod luma;
 mod pixel;
 mod series;
 mod srgb;
+mod ssim;
 
 pub use error::MetricsError;
 pub use image::{HdrImage, Rgb8Image};
@@ -25,3 +26,4 @@ pub use pixel::{
 };
 pub use series::{series_stats, SeriesStats};
 pub use srgb::{encode_srgb8, linear_to_srgb, srgb_to_linear};
+pub use ssim::{ssim_luma, ssim_rgb, SSIM_MIN_SIZE};
