@@ -1,0 +1,7 @@
+//! Tessera's harness: scenarios in, timed GPU frames and result files out.
+//!
+//! The binary (`main.rs`) is a thin command-line layer over this library so that tests can drive
+//! the same code paths.
+
+pub mod scenario;
+pub mod technique;

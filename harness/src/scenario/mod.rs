@@ -1,0 +1,424 @@
+//! Scenarios: the TOML format, parsed and validated into domain types.
+//!
+//! `load` reads one file; `collect` expands files and folders into a sorted list of scenario files.
+//! Parsing rejects unknown keys (`raw.rs`), validation checks values (`validate.rs`), and every error
+//! names the file, line:column and dotted key, and says what is allowed. Nothing here touches a GPU:
+//! limits that depend on the adapter are checked when a scenario runs.
+
+mod raw;
+pub mod span;
+mod validate;
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use glam::{Mat4, Vec3};
+
+use crate::technique::Variant;
+pub use span::KeyPath;
+
+/// Largest width or height accepted without an adapter (wgpu's largest texture limit on any
+/// backend). The adapter's own limit is checked at run time.
+pub const MAX_DIMENSION: u32 = 16384;
+
+/// A validated scenario.
+#[derive(Clone, Debug)]
+pub struct Scenario {
+    pub name: String,
+    pub file: PathBuf,
+    pub description: String,
+    pub width: u32,
+    pub height: u32,
+    pub warmup_frames: u32,
+    pub measured_frames: u32,
+    /// Measured-frame indices to save as PNG.
+    pub save_frames: Vec<u32>,
+    pub time_step: f64,
+    pub reference: Reference,
+    pub metrics: Vec<MetricKind>,
+    pub scene: Scene,
+    pub camera: CameraTrack,
+    pub variants: Vec<Variant>,
+    pub gates: Vec<Gate>,
+}
+
+impl Scenario {
+    pub fn total_frames(&self) -> u32 {
+        self.warmup_frames + self.measured_frames
+    }
+
+    /// Scene time of frame `index` (warm-up frames first). Fixed step: runs are deterministic.
+    pub fn frame_time(&self, index: u32) -> f64 {
+        index as f64 * self.time_step
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Reference {
+    /// No reference render: no metrics.
+    None,
+    /// The `native` technique in the same run on the same adapter.
+    Native,
+    /// NxN supersampled native render, box-downsampled.
+    GroundTruth { supersample: u32 },
+}
+
+impl Reference {
+    pub fn name(self) -> &'static str {
+        match self {
+            Reference::None => "none",
+            Reference::Native => "native",
+            Reference::GroundTruth { .. } => "ground-truth",
+        }
+    }
+}
+
+/// Image metrics a scenario can ask for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MetricKind {
+    Psnr,
+    PsnrLuma,
+    MaxAbsError,
+    Ssim,
+    SsimLuma,
+    Flip,
+}
+
+impl MetricKind {
+    pub const ALL: [MetricKind; 6] = [
+        MetricKind::Psnr,
+        MetricKind::PsnrLuma,
+        MetricKind::MaxAbsError,
+        MetricKind::Ssim,
+        MetricKind::SsimLuma,
+        MetricKind::Flip,
+    ];
+    pub const DEFAULT: [MetricKind; 3] =
+        [MetricKind::Psnr, MetricKind::PsnrLuma, MetricKind::MaxAbsError];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            MetricKind::Psnr => "psnr",
+            MetricKind::PsnrLuma => "psnr-luma",
+            MetricKind::MaxAbsError => "max-abs-error",
+            MetricKind::Ssim => "ssim",
+            MetricKind::SsimLuma => "ssim-luma",
+            MetricKind::Flip => "flip",
+        }
+    }
+
+    pub fn higher_is_better(self) -> bool {
+        matches!(self, MetricKind::Psnr | MetricKind::PsnrLuma | MetricKind::Ssim | MetricKind::SsimLuma)
+    }
+}
+
+/// What is drawn.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    pub background: Vec3,
+    pub ambient: f32,
+    pub shading_cost: u32,
+    pub ground: Option<Ground>,
+    pub lights: Vec<Light>,
+    pub objects: Vec<Object>,
+}
+
+impl Scene {
+    /// Whether anything moves by itself (not counting the camera).
+    pub fn has_dynamic_objects(&self) -> bool {
+        self.objects.iter().any(|o| o.animation.is_some())
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct Ground {
+    pub size: f32,
+    pub height: f32,
+    pub checker_size: f32,
+    pub colors: [Vec3; 2],
+    pub filter: GroundFilter,
+    pub filter_epsilon: f32,
+}
+
+/// How the ground's checkerboard is filtered (`seeds/iq-filtered-checkerboard.txt`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GroundFilter {
+    /// Point-sampled: aliases at a distance.
+    None,
+    /// IQ's analytic box filter over the pixel footprint from screen-space gradients.
+    Box,
+}
+
+#[derive(Clone, Debug)]
+pub enum Light {
+    Directional { direction: Vec3, color: Vec3, intensity: f32 },
+    Point { position: Vec3, color: Vec3, intensity: f32 },
+}
+
+#[derive(Clone, Debug)]
+pub struct Object {
+    pub shape: Shape,
+    pub position: Vec3,
+    pub yaw_degrees: f32,
+    pub color: Vec3,
+    pub emissive: Vec3,
+    pub specular: f32,
+    pub animation: Option<Animation>,
+}
+
+#[derive(Clone, Debug)]
+pub enum Shape {
+    /// Full extents.
+    Box { size: Vec3 },
+    Sphere { radius: f32 },
+    /// A thin vertical cylinder standing on `position`.
+    Pole { radius: f32, height: f32 },
+    /// Posts from `position` to `end` with horizontal rails.
+    Fence { end: Vec3, height: f32, posts: u32, rails: u32, thickness: f32 },
+    /// A glTF 2.0 file, resolved against the scenario's folder.
+    Mesh { path: PathBuf, scale: f32 },
+}
+
+impl Shape {
+    pub fn name(&self) -> &'static str {
+        match self {
+            Shape::Box { .. } => "box",
+            Shape::Sphere { .. } => "sphere",
+            Shape::Pole { .. } => "pole",
+            Shape::Fence { .. } => "fence",
+            Shape::Mesh { .. } => "mesh",
+        }
+    }
+}
+
+#[derive(Clone, Debug)]
+pub enum Animation {
+    Rotate { axis: Vec3, degrees_per_second: f32 },
+    Translate { velocity: Vec3 },
+    Oscillate { amplitude: Vec3, period: f32 },
+}
+
+impl Object {
+    /// Model matrix at scene time `t` (seconds).
+    pub fn model_at(&self, t: f64) -> Mat4 {
+        let base = Mat4::from_translation(self.position)
+            * Mat4::from_rotation_y(self.yaw_degrees.to_radians());
+        match &self.animation {
+            None => base,
+            Some(Animation::Rotate { axis, degrees_per_second }) => {
+                let angle = (*degrees_per_second as f64 * t).to_radians() as f32;
+                base * Mat4::from_axis_angle(axis.normalize(), angle)
+            }
+            Some(Animation::Translate { velocity }) => {
+                Mat4::from_translation(*velocity * t as f32) * base
+            }
+            Some(Animation::Oscillate { amplitude, period }) => {
+                let phase = (std::f64::consts::TAU * t / *period as f64).sin() as f32;
+                Mat4::from_translation(*amplitude * phase) * base
+            }
+        }
+    }
+}
+
+/// Timed keyframes of the camera, with cuts.
+#[derive(Clone, Debug)]
+pub struct CameraTrack {
+    pub near: f32,
+    pub far: f32,
+    pub interpolation: Interpolation,
+    pub keyframes: Vec<Keyframe>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Interpolation {
+    Linear,
+    /// Catmull-Rom through the keyframe positions and targets.
+    Smooth,
+}
+
+#[derive(Clone, Debug)]
+pub struct Keyframe {
+    pub time: f64,
+    pub position: Vec3,
+    pub target: Vec3,
+    pub fov_degrees: f32,
+    pub cut: bool,
+}
+
+/// The camera at one instant.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CameraPose {
+    pub position: Vec3,
+    pub target: Vec3,
+    pub fov_degrees: f32,
+    /// Index of the segment (between cuts) the pose belongs to: history is invalid across a change.
+    pub segment: usize,
+}
+
+impl CameraTrack {
+    /// The pose at scene time `t`. Before the first keyframe the camera holds it; after the last, too.
+    /// A cut keyframe is not interpolated towards: the camera holds the previous pose until the cut.
+    pub fn pose_at(&self, t: f64) -> CameraPose {
+        let k = &self.keyframes;
+        let segment_of = |i: usize| k[..=i].iter().filter(|f| f.cut).count();
+        let hold = |i: usize| CameraPose {
+            position: k[i].position,
+            target: k[i].target,
+            fov_degrees: k[i].fov_degrees,
+            segment: segment_of(i),
+        };
+        if t <= k[0].time {
+            return hold(0);
+        }
+        let Some(next) = k.iter().position(|f| f.time > t) else {
+            return hold(k.len() - 1);
+        };
+        let prev = next - 1;
+        if k[next].cut {
+            return hold(prev);
+        }
+        let span = k[next].time - k[prev].time;
+        let s = ((t - k[prev].time) / span) as f32;
+        let (position, target) = match self.interpolation {
+            Interpolation::Linear => (
+                k[prev].position.lerp(k[next].position, s),
+                k[prev].target.lerp(k[next].target, s),
+            ),
+            Interpolation::Smooth => {
+                // Neighbours across a cut do not shape the curve.
+                let before = if prev > 0 && !k[prev].cut { prev - 1 } else { prev };
+                let after = if next + 1 < k.len() && !k[next + 1].cut { next + 1 } else { next };
+                (
+                    catmull_rom(k[before].position, k[prev].position, k[next].position, k[after].position, s),
+                    catmull_rom(k[before].target, k[prev].target, k[next].target, k[after].target, s),
+                )
+            }
+        };
+        CameraPose {
+            position,
+            target,
+            fov_degrees: k[prev].fov_degrees + (k[next].fov_degrees - k[prev].fov_degrees) * s,
+            segment: segment_of(prev),
+        }
+    }
+}
+
+fn catmull_rom(p0: Vec3, p1: Vec3, p2: Vec3, p3: Vec3, t: f32) -> Vec3 {
+    let t2 = t * t;
+    let t3 = t2 * t;
+    0.5 * ((2.0 * p1)
+        + (-p0 + p2) * t
+        + (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3) * t2
+        + (-p0 + 3.0 * p1 - 3.0 * p2 + p3) * t3)
+}
+
+/// A threshold on a metric or timing.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Gate {
+    /// A metric name, or `gpu_ms`, `cpu_ms`, `speedup`.
+    pub measure: String,
+    /// Variant name pattern; `None` means every variant but the reference.
+    pub variants: Option<String>,
+    pub warn_below: Option<f64>,
+    pub fail_below: Option<f64>,
+    pub warn_above: Option<f64>,
+    pub fail_above: Option<f64>,
+}
+
+/// Measures a gate can name besides metrics.
+pub const TIMING_MEASURES: [&str; 3] = ["gpu_ms", "cpu_ms", "speedup"];
+
+/// A problem in a scenario file, at a place in it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ScenarioError {
+    pub file: PathBuf,
+    /// 1-based; 0 when the problem has no position (unreadable file).
+    pub line: usize,
+    pub column: usize,
+    /// Dotted key path; empty for syntax errors.
+    pub key: String,
+    pub message: String,
+}
+
+impl fmt::Display for ScenarioError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.file.display())?;
+        if self.line > 0 {
+            write!(f, ":{}:{}", self.line, self.column)?;
+        }
+        if !self.key.is_empty() {
+            write!(f, ": `{}`", self.key)?;
+        }
+        write!(f, ": {}", self.message)
+    }
+}
+
+impl std::error::Error for ScenarioError {}
+
+/// Every problem found in one file (validation reports all of them, not only the first).
+#[derive(Clone, Debug)]
+pub struct ScenarioErrors(pub Vec<ScenarioError>);
+
+impl fmt::Display for ScenarioErrors {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        for (i, e) in self.0.iter().enumerate() {
+            if i > 0 {
+                writeln!(f)?;
+            }
+            write!(f, "{e}")?;
+        }
+        Ok(())
+    }
+}
+
+impl std::error::Error for ScenarioErrors {}
+
+/// Reads, parses and validates one scenario file.
+pub fn load(path: &Path) -> Result<Scenario, ScenarioErrors> {
+    let source = std::fs::read_to_string(path).map_err(|e| {
+        ScenarioErrors(vec![ScenarioError {
+            file: path.to_path_buf(),
+            line: 0,
+            column: 0,
+            key: String::new(),
+            message: format!("cannot read the file: {e}"),
+        }])
+    })?;
+    parse(path, &source)
+}
+
+/// Parses and validates scenario `source` as if read from `path`.
+pub fn parse(path: &Path, source: &str) -> Result<Scenario, ScenarioErrors> {
+    validate::parse_and_validate(path, source)
+}
+
+/// Expands files and folders into scenario files: folders are searched (not recursively) for
+/// `*.toml`, sorted by name so that runs are reproducible.
+pub fn collect(inputs: &[PathBuf]) -> Result<Vec<PathBuf>, ScenarioError> {
+    let mut files = Vec::new();
+    for input in inputs {
+        let err = |message: String| ScenarioError {
+            file: input.clone(),
+            line: 0,
+            column: 0,
+            key: String::new(),
+            message,
+        };
+        let meta = std::fs::metadata(input).map_err(|e| err(format!("cannot read: {e}")))?;
+        if meta.is_dir() {
+            let mut found: Vec<PathBuf> = std::fs::read_dir(input)
+                .map_err(|e| err(format!("cannot list the folder: {e}")))?
+                .filter_map(|entry| entry.ok().map(|e| e.path()))
+                .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+                .collect();
+            if found.is_empty() {
+                return Err(err("the folder holds no scenario (*.toml) files".to_string()));
+            }
+            found.sort();
+            files.extend(found);
+        } else {
+            files.push(input.clone());
+        }
+    }
+    Ok(files)
+}

@@ -1,0 +1,183 @@
+//! Raw serde structs mirroring the scenario TOML one to one.
+//!
+//! Unknown keys are rejected here; values are checked in `validate.rs`, which turns these structs into
+//! the domain types of `mod.rs`. Every key is documented in `scenarios/README.md`.
+
+use std::collections::BTreeMap;
+
+use serde::Deserialize;
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawScenario {
+    /// Defaults to the file stem.
+    pub name: Option<String>,
+    #[serde(default)]
+    pub description: String,
+    /// `[width, height]` in pixels.
+    pub resolution: Vec<i64>,
+    /// Seconds of scene time per frame (fixed step, so runs are deterministic). Default 1/60.
+    pub time_step: Option<f64>,
+    /// Image metrics computed against the reference. Default `["psnr", "psnr-luma", "max-abs-error"]`
+    /// when there is a reference.
+    pub metrics: Option<Vec<String>>,
+    #[serde(default)]
+    pub frames: RawFrames,
+    #[serde(default)]
+    pub reference: RawReference,
+    #[serde(default)]
+    pub scene: RawScene,
+    pub camera: RawCamera,
+    #[serde(default)]
+    pub techniques: Vec<RawTechnique>,
+    #[serde(default)]
+    pub gates: Vec<RawGate>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawFrames {
+    /// Frames rendered before measuring; excluded from timings and metrics. Default 2.
+    pub warmup: Option<i64>,
+    /// Frames timed and compared. Default 8.
+    pub measured: Option<i64>,
+    /// Measured-frame indices saved as PNG; negative counts from the end. Default `[-1]`.
+    pub save: Option<Vec<i64>>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawReference {
+    /// `native` (default), `ground-truth` or `none`.
+    pub kind: Option<String>,
+    /// Ground truth: samples per axis per pixel (NxN, box-downsampled). Default 4.
+    pub supersample: Option<i64>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawScene {
+    pub background: Option<Vec<f64>>,
+    pub ambient: Option<f64>,
+    /// Extra deterministic ALU iterations per fragment: makes a scene shading-bound.
+    pub shading_cost: Option<i64>,
+    pub ground: Option<RawGround>,
+    #[serde(default)]
+    pub lights: Vec<RawLight>,
+    #[serde(default)]
+    pub objects: Vec<RawObject>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawGround {
+    pub size: Option<f64>,
+    pub height: Option<f64>,
+    pub checker_size: Option<f64>,
+    pub colors: Option<Vec<Vec<f64>>>,
+    /// `box` (IQ's analytic box filter, default) or `none`.
+    pub filter: Option<String>,
+    /// IQ's Shadertoy copies add 0.01 to the filter width; default 0.
+    pub filter_epsilon: Option<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawLight {
+    /// `directional` or `point`.
+    #[serde(rename = "type")]
+    pub kind: String,
+    pub direction: Option<Vec<f64>>,
+    pub position: Option<Vec<f64>>,
+    pub color: Option<Vec<f64>>,
+    pub intensity: Option<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawObject {
+    /// `box`, `sphere`, `pole`, `fence` or `mesh`.
+    pub shape: String,
+    pub position: Option<Vec<f64>>,
+    pub size: Option<Vec<f64>>,
+    pub radius: Option<f64>,
+    pub height: Option<f64>,
+    /// Fence: the far end (the near end is `position`).
+    pub end: Option<Vec<f64>>,
+    /// Fence: number of posts.
+    pub posts: Option<i64>,
+    /// Fence: number of horizontal rails.
+    pub rails: Option<i64>,
+    /// Fence: thickness of posts and rails.
+    pub thickness: Option<f64>,
+    /// Mesh: glTF 2.0 file (`.glb` or `.gltf`), relative to the scenario file.
+    pub path: Option<String>,
+    /// Mesh: uniform scale.
+    pub scale: Option<f64>,
+    /// Degrees about the y axis.
+    pub yaw: Option<f64>,
+    pub color: Option<Vec<f64>>,
+    /// Linear radiance added to the shaded colour (HDR highlights).
+    pub emissive: Option<Vec<f64>>,
+    pub specular: Option<f64>,
+    pub animation: Option<RawAnimation>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawAnimation {
+    /// `rotate`, `translate` or `oscillate`.
+    pub kind: String,
+    pub axis: Option<Vec<f64>>,
+    pub degrees_per_second: Option<f64>,
+    pub velocity: Option<Vec<f64>>,
+    pub amplitude: Option<Vec<f64>>,
+    pub period: Option<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawCamera {
+    pub near: Option<f64>,
+    pub far: Option<f64>,
+    /// `linear` (default) or `smooth` (Catmull-Rom).
+    pub interpolation: Option<String>,
+    pub keyframes: Vec<RawKeyframe>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawKeyframe {
+    pub time: f64,
+    pub position: Vec<f64>,
+    pub target: Vec<f64>,
+    /// Vertical field of view in degrees. Default 60.
+    pub fov: Option<f64>,
+    /// The camera jumps to this keyframe at its time instead of moving towards it.
+    #[serde(default)]
+    pub cut: bool,
+}
+
+/// A technique entry; its parameters are checked against the technique's own parameter list.
+#[derive(Debug, Deserialize)]
+pub struct RawTechnique {
+    pub technique: String,
+    /// Overrides the generated variant name (only without sweeps).
+    pub label: Option<String>,
+    #[serde(flatten)]
+    pub params: BTreeMap<String, toml::Value>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawGate {
+    /// A metric name, or `gpu_ms`, `cpu_ms`, `speedup`.
+    pub measure: String,
+    /// Variant name pattern (`*` matches any run of characters). Default: every variant but the
+    /// reference.
+    pub variants: Option<String>,
+    pub warn_below: Option<f64>,
+    pub fail_below: Option<f64>,
+    pub warn_above: Option<f64>,
+    pub fail_above: Option<f64>,
+}

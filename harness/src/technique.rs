@@ -1,0 +1,243 @@
+//! The catalogue of techniques and their parameters, as the scenario format sees them.
+//!
+//! This is what `tessera validate` checks against without a GPU. How a technique renders lives in
+//! `render/`; this module only names techniques, declares their parameters (type, range, default)
+//! and turns concrete values into variant names.
+
+use std::collections::BTreeMap;
+use std::fmt;
+
+/// A technique the harness can run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum TechniqueKind {
+    /// Full-resolution forward rendering: the reference and the baseline.
+    Native,
+    /// Render at a scale factor, then upscale: what a user would pick instead of a technique.
+    Upscale,
+}
+
+impl TechniqueKind {
+    pub const ALL: [TechniqueKind; 2] = [TechniqueKind::Native, TechniqueKind::Upscale];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            TechniqueKind::Native => "native",
+            TechniqueKind::Upscale => "upscale",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<TechniqueKind> {
+        Self::ALL.into_iter().find(|t| t.name() == name)
+    }
+
+    /// Names of every known technique, for error messages.
+    pub fn known_names() -> Vec<&'static str> {
+        Self::ALL.iter().map(|t| t.name()).collect()
+    }
+
+    pub fn params(self) -> &'static [ParamSpec] {
+        match self {
+            TechniqueKind::Native => &[],
+            TechniqueKind::Upscale => &UPSCALE_PARAMS,
+        }
+    }
+}
+
+impl fmt::Display for TechniqueKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+static UPSCALE_PARAMS: [ParamSpec; 2] = [
+    ParamSpec {
+        name: "scale",
+        kind: ParamKind::Float { min: 0.0, min_inclusive: false, max: 1.0 },
+        default: Default::Float(0.5),
+        doc: "render width and height as a fraction of the output resolution",
+    },
+    ParamSpec {
+        name: "filter",
+        kind: ParamKind::Choice(&["bilinear", "nearest"]),
+        default: Default::Str("bilinear"),
+        doc: "upscaling filter",
+    },
+];
+
+/// One parameter of a technique.
+#[derive(Debug)]
+pub struct ParamSpec {
+    pub name: &'static str,
+    pub kind: ParamKind,
+    pub default: Default,
+    pub doc: &'static str,
+}
+
+#[derive(Debug)]
+pub enum ParamKind {
+    /// A finite float in `(min, max]` or `[min, max]`.
+    Float { min: f64, min_inclusive: bool, max: f64 },
+    Int { min: i64, max: i64 },
+    Choice(&'static [&'static str]),
+    Bool,
+}
+
+#[derive(Debug)]
+pub enum Default {
+    Float(f64),
+    Int(i64),
+    Str(&'static str),
+    Bool(bool),
+}
+
+impl Default {
+    pub fn value(&self) -> ParamValue {
+        match self {
+            Default::Float(v) => ParamValue::Float(*v),
+            Default::Int(v) => ParamValue::Int(*v),
+            Default::Str(v) => ParamValue::Str((*v).to_string()),
+            Default::Bool(v) => ParamValue::Bool(*v),
+        }
+    }
+}
+
+impl ParamKind {
+    /// What values are allowed, in words, for error messages.
+    pub fn allowed(&self) -> String {
+        match self {
+            ParamKind::Float { min, min_inclusive, max } => {
+                let open = if *min_inclusive { "[" } else { "(" };
+                format!("a number in {open}{min}, {max}]")
+            }
+            ParamKind::Int { min, max } => format!("an integer from {min} to {max}"),
+            ParamKind::Choice(options) => format!("one of {}", quoted_list(options)),
+            ParamKind::Bool => "true or false".to_string(),
+        }
+    }
+
+    /// Checks one TOML value against this kind.
+    pub fn check(&self, value: &toml::Value) -> Result<ParamValue, String> {
+        let fail = || Err(format!("expected {}", self.allowed()));
+        match (self, value) {
+            (ParamKind::Float { min, min_inclusive, max }, v) => {
+                let x = match v {
+                    toml::Value::Float(x) => *x,
+                    toml::Value::Integer(i) => *i as f64,
+                    _ => return fail(),
+                };
+                let above_min = if *min_inclusive { x >= *min } else { x > *min };
+                if !x.is_finite() || !above_min || x > *max {
+                    return Err(format!("{x} is out of range: expected {}", self.allowed()));
+                }
+                Ok(ParamValue::Float(x))
+            }
+            (ParamKind::Int { min, max }, toml::Value::Integer(i)) => {
+                if i < min || i > max {
+                    return Err(format!("{i} is out of range: expected {}", self.allowed()));
+                }
+                Ok(ParamValue::Int(*i))
+            }
+            (ParamKind::Choice(options), toml::Value::String(s)) => {
+                if options.contains(&s.as_str()) {
+                    Ok(ParamValue::Str(s.clone()))
+                } else {
+                    Err(format!("unknown value \"{s}\": expected {}", self.allowed()))
+                }
+            }
+            (ParamKind::Bool, toml::Value::Boolean(b)) => Ok(ParamValue::Bool(*b)),
+            _ => fail(),
+        }
+    }
+}
+
+/// A concrete parameter value of a variant.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ParamValue {
+    Float(f64),
+    Int(i64),
+    Str(String),
+    Bool(bool),
+}
+
+impl ParamValue {
+    pub fn as_f64(&self) -> Option<f64> {
+        match self {
+            ParamValue::Float(x) => Some(*x),
+            ParamValue::Int(i) => Some(*i as f64),
+            _ => None,
+        }
+    }
+
+    pub fn as_str(&self) -> Option<&str> {
+        match self {
+            ParamValue::Str(s) => Some(s),
+            _ => None,
+        }
+    }
+
+    pub fn to_json(&self) -> serde_json::Value {
+        match self {
+            ParamValue::Float(x) => serde_json::json!(x),
+            ParamValue::Int(i) => serde_json::json!(i),
+            ParamValue::Str(s) => serde_json::json!(s),
+            ParamValue::Bool(b) => serde_json::json!(b),
+        }
+    }
+}
+
+impl fmt::Display for ParamValue {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            ParamValue::Float(x) => write!(f, "{x}"),
+            ParamValue::Int(i) => write!(f, "{i}"),
+            ParamValue::Str(s) => f.write_str(s),
+            ParamValue::Bool(b) => write!(f, "{b}"),
+        }
+    }
+}
+
+/// A technique with concrete parameter values.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Variant {
+    pub name: String,
+    pub technique: TechniqueKind,
+    /// Every parameter of the technique, defaults filled in.
+    pub params: BTreeMap<String, ParamValue>,
+}
+
+impl Variant {
+    pub fn float(&self, name: &str) -> f64 {
+        self.params.get(name).and_then(ParamValue::as_f64).unwrap_or_else(|| {
+            panic!("validated variant {} lacks float parameter {name}", self.name)
+        })
+    }
+
+    pub fn choice(&self, name: &str) -> &str {
+        self.params.get(name).and_then(ParamValue::as_str).unwrap_or_else(|| {
+            panic!("validated variant {} lacks choice parameter {name}", self.name)
+        })
+    }
+}
+
+/// `technique` or `technique[a=1,b=x]` listing the parameters the scenario set explicitly.
+pub fn variant_name(technique: TechniqueKind, explicit: &[(String, ParamValue)]) -> String {
+    if explicit.is_empty() {
+        return technique.name().to_string();
+    }
+    let parts: Vec<String> = explicit.iter().map(|(k, v)| format!("{k}={v}")).collect();
+    format!("{}[{}]", technique.name(), parts.join(","))
+}
+
+/// The closest known name to `unknown`, if any is close enough to be a likely typo.
+pub fn closest<'a>(unknown: &str, known: &[&'a str]) -> Option<&'a str> {
+    known
+        .iter()
+        .map(|k| (strsim::damerau_levenshtein(unknown, k), *k))
+        .filter(|(d, k)| *d <= 3.max(k.len() / 3) && *d < k.len())
+        .min_by_key(|(d, _)| *d)
+        .map(|(_, k)| k)
+}
+
+pub fn quoted_list(items: &[&str]) -> String {
+    items.iter().map(|s| format!("\"{s}\"")).collect::<Vec<_>>().join(", ")
+}

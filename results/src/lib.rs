@@ -1,0 +1,336 @@
+//! Result record types shared by the harness (which writes them) and the dashboard (which reads them).
+//!
+//! This crate holds types and their (de)serialisation only: no I/O policy, no GPU, no HTTP. The file
+//! format built from these types is documented in `results/README.md`; bump [`SCHEMA_VERSION`] on any
+//! change a reader could notice.
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+
+/// Version of the result format. Readers refuse versions they do not know.
+pub const SCHEMA_VERSION: u32 = 1;
+
+/// `run.json`: one invocation over a suite on one adapter at one commit.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct RunInfo {
+    pub schema_version: u32,
+    pub run_id: String,
+    /// `None` when the harness was not run from a git checkout.
+    pub commit: Option<CommitInfo>,
+    /// RFC 3339, UTC.
+    pub started_at: String,
+    /// RFC 3339, UTC; `None` while the run is going on or when it was interrupted.
+    pub finished_at: Option<String>,
+    pub status: RunStatus,
+    pub harness_version: String,
+    pub adapter: AdapterInfo,
+    pub host: HostInfo,
+    pub command_line: Vec<String>,
+    /// Scenario files of the suite, in the order they run.
+    pub scenarios: Vec<String>,
+}
+
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum RunStatus {
+    Running,
+    Complete,
+    /// The process ended before the last scenario; the scenario files present are complete.
+    Interrupted,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq, Eq)]
+pub struct CommitInfo {
+    pub sha: String,
+    /// Uncommitted changes to tracked files when the run started.
+    pub dirty: bool,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq, Eq)]
+pub struct HostInfo {
+    pub hostname: String,
+    pub os: String,
+    pub arch: String,
+    pub cpu_cores: usize,
+}
+
+/// GPU plus driver as wgpu reports it, and the features that matter to Tessera.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct AdapterInfo {
+    pub name: String,
+    pub vendor: u32,
+    pub device: u32,
+    /// `discrete-gpu`, `integrated-gpu`, `virtual-gpu`, `cpu` or `other`.
+    pub device_type: String,
+    pub driver: String,
+    pub driver_info: String,
+    /// `vulkan`, `metal`, `dx12`, `gl`, ...
+    pub backend: String,
+    pub features: AdapterFeatures,
+}
+
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+pub struct AdapterFeatures {
+    /// Timestamp queries at pass boundaries (`TIMESTAMP_QUERY`).
+    pub timestamps: bool,
+    /// Timestamp writes inside passes (`TIMESTAMP_QUERY_INSIDE_PASSES`).
+    pub timestamps_inside_passes: bool,
+    /// Nanoseconds per timestamp tick; `None` without timestamps.
+    pub timestamp_period_ns: Option<f32>,
+    pub pipeline_statistics: bool,
+    pub shader_f16: bool,
+    /// Supported MSAA sample counts per texture format (e.g. `"rgba16float": [1, 4]`).
+    pub msaa: BTreeMap<String, Vec<u32>>,
+    pub max_texture_dimension_2d: u32,
+}
+
+/// One scenario's results: `scenarios/<scenario>.json` in a run folder.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct ScenarioResult {
+    pub schema_version: u32,
+    pub run_id: String,
+    pub scenario: String,
+    /// The scenario file as given on the command line.
+    pub file: String,
+    pub width: u32,
+    pub height: u32,
+    pub warmup_frames: u32,
+    pub measured_frames: u32,
+    /// Seconds of scene time per frame.
+    pub time_step: f64,
+    /// `native`, `ground-truth` or `none`.
+    pub reference: String,
+    pub results: Vec<VariantResult>,
+    /// CPU wall time of the whole scenario, including readback and metrics.
+    pub wall_ms: f64,
+}
+
+/// One (run, scenario, variant) record.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct VariantResult {
+    /// `technique` or `technique[key=value,...]` for swept parameters.
+    pub variant: String,
+    pub technique: String,
+    /// Concrete parameter values of this variant.
+    pub params: BTreeMap<String, serde_json::Value>,
+    pub status: Status,
+    /// What the metrics were computed against (`native`, `ground-truth`); `None` without metrics.
+    pub reference: Option<String>,
+    /// Passes recorded per frame, in submission order. Culled passes are absent.
+    pub passes: Vec<PassRecord>,
+    /// Passes the technique declares but that nothing read, so they were not recorded.
+    pub culled_passes: Vec<String>,
+    /// Sum of the pass times of each measured frame; `None` without timestamps.
+    pub gpu_frame_ms: Option<Summary>,
+    /// CPU wall time from the start of encoding to the frame's completion on the GPU.
+    pub cpu_frame_ms: Summary,
+    /// Every GPU resource the technique allocated.
+    pub resources: Vec<ResourceRecord>,
+    pub allocated_bytes: u64,
+    pub metrics: Vec<MetricRecord>,
+    /// Non-finite channel values in the variant's output, summed over measured frames.
+    pub non_finite_values: u64,
+    /// Saved frames (paths relative to the run folder).
+    pub images: Vec<ImageRecord>,
+    pub gates: Vec<GateOutcome>,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(tag = "state", rename_all = "kebab-case")]
+pub enum Status {
+    Ok,
+    Skipped { reason: String },
+    Failed { error: String },
+}
+
+impl Status {
+    pub fn label(&self) -> &'static str {
+        match self {
+            Status::Ok => "ok",
+            Status::Skipped { .. } => "skipped",
+            Status::Failed { .. } => "failed",
+        }
+    }
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct PassRecord {
+    pub name: String,
+    /// `render`, `compute` or `copy`.
+    pub kind: String,
+    pub reads: Vec<String>,
+    pub writes: Vec<String>,
+    /// `None` when the adapter cannot time this pass (absent, never zero).
+    pub gpu_ms: Option<Summary>,
+    /// Raw per-frame GPU times of the measured frames, in milliseconds.
+    pub samples_ms: Vec<f64>,
+    /// Fragment shader invocations of one frame (median over measured frames), where the adapter
+    /// has pipeline statistics and the pass is a render pass.
+    pub fragment_invocations: Option<u64>,
+}
+
+/// Order statistics of a set of samples, in the unit the field name gives.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Summary {
+    pub count: usize,
+    pub median: f64,
+    pub p5: f64,
+    pub p95: f64,
+    pub min: f64,
+    pub max: f64,
+    pub mean: f64,
+}
+
+impl Summary {
+    /// Summary of `samples`; `None` when there are none. Percentiles interpolate linearly between
+    /// order statistics (the "linear" method of numpy).
+    pub fn of(samples: &[f64]) -> Option<Summary> {
+        if samples.is_empty() {
+            return None;
+        }
+        let mut sorted: Vec<f64> = samples.to_vec();
+        sorted.sort_by(|a, b| a.total_cmp(b));
+        let q = |p: f64| {
+            let pos = p * (sorted.len() - 1) as f64;
+            let lo = pos.floor() as usize;
+            let hi = pos.ceil() as usize;
+            sorted[lo] + (sorted[hi] - sorted[lo]) * (pos - lo as f64)
+        };
+        Some(Summary {
+            count: sorted.len(),
+            median: q(0.5),
+            p5: q(0.05),
+            p95: q(0.95),
+            min: sorted[0],
+            max: sorted[sorted.len() - 1],
+            mean: sorted.iter().sum::<f64>() / sorted.len() as f64,
+        })
+    }
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq, Eq)]
+pub struct ResourceRecord {
+    pub name: String,
+    /// `texture` or `buffer`.
+    pub kind: String,
+    /// wgpu texture format in kebab case, empty for buffers.
+    pub format: String,
+    pub width: u32,
+    pub height: u32,
+    pub samples: u32,
+    pub bytes: u64,
+}
+
+/// A metric of a variant against its reference: per measured frame, and aggregated.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct MetricRecord {
+    /// `psnr`, `psnr-luma`, `max-abs-error`, ...
+    pub name: String,
+    /// Per compared frame. Infinite PSNR (identical frames) is written as `null` in JSON.
+    #[serde(with = "opt_f64_vec")]
+    pub per_frame: Vec<f64>,
+    /// Frame indices (measured-frame numbering) that `per_frame` refers to.
+    pub frames: Vec<u32>,
+    /// Aggregate over frames: mean, or for PSNR the PSNR of the mean MSE. `None` in JSON when infinite.
+    #[serde(with = "opt_f64")]
+    pub value: f64,
+    /// Whether larger values are better (PSNR, SSIM) or worse (errors).
+    pub higher_is_better: bool,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq, Eq)]
+pub struct ImageRecord {
+    /// Measured-frame index.
+    pub frame: u32,
+    /// `output` (this variant), `reference`, `heatmap`.
+    pub kind: String,
+    pub path: String,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct GateOutcome {
+    /// What was gated: a metric name or `gpu_ms`, `cpu_ms`, `speedup`.
+    pub measure: String,
+    #[serde(with = "opt_f64")]
+    pub value: f64,
+    pub level: GateLevel,
+    pub message: String,
+}
+
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq, PartialOrd, Ord)]
+#[serde(rename_all = "kebab-case")]
+pub enum GateLevel {
+    Pass,
+    Warn,
+    Fail,
+}
+
+/// Non-finite values (infinite PSNR) are not valid JSON numbers: they are written as `null` and
+/// read back as `+inf`, the only non-finite value a metric aggregate can take.
+mod opt_f64 {
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer>(v: &f64, s: S) -> Result<S::Ok, S::Error> {
+        if v.is_finite() {
+            s.serialize_f64(*v)
+        } else {
+            s.serialize_none()
+        }
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+        Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::INFINITY))
+    }
+}
+
+mod opt_f64_vec {
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    pub fn serialize<S: Serializer>(v: &[f64], s: S) -> Result<S::Ok, S::Error> {
+        let opts: Vec<Option<f64>> = v.iter().map(|x| x.is_finite().then_some(*x)).collect();
+        opts.serialize(s)
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<f64>, D::Error> {
+        let opts = Vec::<Option<f64>>::deserialize(d)?;
+        Ok(opts.into_iter().map(|x| x.unwrap_or(f64::INFINITY)).collect())
+    }
+}
+
+/// Columns of `results.csv`, in order. One row per (scenario, variant, measure).
+pub const CSV_COLUMNS: [&str; 10] = [
+    "run_id", "scenario", "variant", "technique", "adapter", "backend", "status", "measure", "value",
+    "unit",
+];
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn summary_percentiles_interpolate() {
+        let s = Summary::of(&[4.0, 1.0, 3.0, 2.0, 5.0]).unwrap();
+        assert_eq!(s.median, 3.0);
+        assert_eq!(s.min, 1.0);
+        assert_eq!(s.max, 5.0);
+        assert!((s.p5 - 1.2).abs() < 1e-12);
+        assert!((s.p95 - 4.8).abs() < 1e-12);
+        assert!(Summary::of(&[]).is_none());
+    }
+
+    #[test]
+    fn infinite_metric_round_trips_as_null() {
+        let m = MetricRecord {
+            name: "psnr".into(),
+            per_frame: vec![f64::INFINITY, 42.0],
+            frames: vec![0, 1],
+            value: f64::INFINITY,
+            higher_is_better: true,
+        };
+        let json = serde_json::to_string(&m).unwrap();
+        assert!(json.contains("\"per_frame\":[null,42.0]"), "{json}");
+        let back: MetricRecord = serde_json::from_str(&json).unwrap();
+        assert_eq!(back, m);
+    }
+}
