@@ -5,3 +5,5 @@
 
 pub mod scenario;
 pub mod technique;
+pub mod gpu;
+pub mod render;

@@ -53,6 +53,11 @@ pub enum MetricsError {
         reference: &'static str,
         test: &'static str,
     },
+    /// An HDR image holds NaN or infinite values, which FLIP cannot compare.
+    #[error(
+        "{image} image holds {count} non-finite values (NaN or infinity); fix or mask them first"
+    )]
+    NonFinite { image: &'static str, count: usize },
     /// Reading or writing a file failed.
     #[error("cannot {action} {path}: {source}")]
     Io {

@@ -9,6 +9,7 @@
 //! agreement with the reference implementations.
 
 mod error;
+mod flip;
 mod image;
 mod io;
 mod luma;
@@ -18,6 +19,10 @@ mod srgb;
 mod ssim;
 
 pub use error::MetricsError;
+pub use flip::{
+    flip_hdr, flip_heatmap, flip_ldr, hdr_exposure_range, pixels_per_degree, ExposureRange,
+    FlipResult, DEFAULT_PIXELS_PER_DEGREE, MAX_EXPOSURES,
+};
 pub use image::{HdrImage, Rgb8Image};
 pub use io::{load_image, save_png, LoadedImage, SUPPORTED_INPUTS};
 pub use luma::LUMA_WEIGHTS;

@@ -12,7 +12,7 @@ mod validate;
 use std::fmt;
 use std::path::{Path, PathBuf};
 
-use glam::{Mat4, Vec3};
+use glam::{DMat4, Vec3};
 
 use crate::technique::Variant;
 pub use span::KeyPath;
@@ -199,22 +199,23 @@ pub enum Animation {
 }
 
 impl Object {
-    /// Model matrix at scene time `t` (seconds).
-    pub fn model_at(&self, t: f64) -> Mat4 {
-        let base = Mat4::from_translation(self.position)
-            * Mat4::from_rotation_y(self.yaw_degrees.to_radians());
+    /// World-space model matrix at scene time `t` (seconds), in f64 so that objects far from the
+    /// origin keep their precision once made camera-relative.
+    pub fn model_at(&self, t: f64) -> DMat4 {
+        let base = DMat4::from_translation(self.position.as_dvec3())
+            * DMat4::from_rotation_y((self.yaw_degrees as f64).to_radians());
         match &self.animation {
             None => base,
             Some(Animation::Rotate { axis, degrees_per_second }) => {
-                let angle = (*degrees_per_second as f64 * t).to_radians() as f32;
-                base * Mat4::from_axis_angle(axis.normalize(), angle)
+                let angle = (*degrees_per_second as f64 * t).to_radians();
+                base * DMat4::from_axis_angle(axis.as_dvec3().normalize(), angle)
             }
             Some(Animation::Translate { velocity }) => {
-                Mat4::from_translation(*velocity * t as f32) * base
+                DMat4::from_translation(velocity.as_dvec3() * t) * base
             }
             Some(Animation::Oscillate { amplitude, period }) => {
-                let phase = (std::f64::consts::TAU * t / *period as f64).sin() as f32;
-                Mat4::from_translation(*amplitude * phase) * base
+                let phase = (std::f64::consts::TAU * t / *period as f64).sin();
+                DMat4::from_translation(amplitude.as_dvec3() * phase) * base
             }
         }
     }

@@ -1,0 +1,5 @@
+//! Rendering: scene geometry and passes on the GPU, the pass graph, and the techniques built on them.
+
+pub mod graph;
+pub mod mesh;
+pub mod scene;

@@ -1,0 +1,383 @@
+//! A scene on the GPU: geometry uploaded once, per-frame uniforms, and the forward `scene` pass.
+//!
+//! Positions are made camera-relative on the CPU in f64 (objects, lights, previous camera), so a
+//! camera a million units from the origin keeps sub-millimetre precision. Depth is reversed-Z:
+//! near maps to 1, far to 0, cleared to 0, compared with `Greater`; with Depth32Float this keeps
+//! precision from near = 1e-4 to far = 1e7. Techniques call [`SceneGpu::write_view`] once per view
+//! slot and frame, then [`SceneGpu::draw`] inside their render passes.
+
+use std::collections::HashMap;
+
+use bytemuck::{Pod, Zeroable};
+use glam::{DMat4, DVec3, Vec2, Vec4};
+
+use super::mesh::{self, Mesh, MeshError, Vertex};
+use crate::scenario::{CameraPose, GroundFilter, Light, Scenario};
+
+pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+pub const MAX_LIGHTS: usize = 8;
+/// Views (camera + jitter combinations) a technique may render per frame.
+pub const VIEW_SLOTS: u64 = 4;
+const SLOT_STRIDE: u64 = 1024;
+
+pub static SCENE_WGSL: &str = include_str!("../../../shaders/scene.wgsl");
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct GpuLight {
+    position_or_direction: [f32; 4],
+    radiance: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct GpuFrame {
+    view_proj: [[f32; 4]; 4],
+    prev_view_proj: [[f32; 4]; 4],
+    jitter: [f32; 4],
+    camera_mod: [f32; 4],
+    background: [f32; 4],
+    params: [f32; 4],
+    ground: [f32; 4],
+    ground_a: [f32; 4],
+    ground_b: [f32; 4],
+    counts: [u32; 4],
+    lights: [GpuLight; MAX_LIGHTS],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct GpuObject {
+    model: [[f32; 4]; 4],
+    prev_model: [[f32; 4]; 4],
+    color: [f32; 4],
+    emissive: [f32; 4],
+}
+
+/// What a technique asks of one view of the scene.
+#[derive(Clone, Copy, Debug)]
+pub struct View {
+    /// Scene time of this frame and of the previous one (for motion).
+    pub time: f64,
+    pub prev_time: f64,
+    /// Render target size (the aspect ratio comes from the scenario's resolution).
+    pub width: u32,
+    pub height: u32,
+    /// Offset in pixels of the render target, applied through the projection.
+    pub jitter_px: Vec2,
+    /// Multiplies screen-space derivatives of the ground pattern (1 at native resolution).
+    pub gradient_scale: f32,
+}
+
+/// A draw: one object's index range.
+struct Draw {
+    first_index: u32,
+    index_count: u32,
+    base_vertex: i32,
+}
+
+pub struct SceneGpu {
+    scenario: Scenario,
+    vertex_buffer: wgpu::Buffer,
+    index_buffer: wgpu::Buffer,
+    draws: Vec<Draw>,
+    frame_buffer: wgpu::Buffer,
+    object_buffer: wgpu::Buffer,
+    bind_group: wgpu::BindGroup,
+    layout: wgpu::PipelineLayout,
+    module: wgpu::ShaderModule,
+    pipelines: HashMap<u32, wgpu::RenderPipeline>,
+    pub triangles: usize,
+    /// Bytes of geometry and uniform buffers, shared by every variant.
+    pub buffer_bytes: u64,
+}
+
+impl SceneGpu {
+    /// Builds geometry (loading glTF files) and GPU objects once per scenario.
+    pub fn new(device: &wgpu::Device, scenario: &Scenario) -> Result<SceneGpu, MeshError> {
+        let mut meshes: Vec<Mesh> = Vec::new();
+        if let Some(g) = &scenario.scene.ground {
+            meshes.push(mesh::ground_quad(g.size));
+        }
+        for o in &scenario.scene.objects {
+            meshes.push(mesh::build(&o.shape)?);
+        }
+        let mut vertices: Vec<Vertex> = Vec::new();
+        let mut indices: Vec<u32> = Vec::new();
+        let mut draws = Vec::new();
+        for m in &meshes {
+            draws.push(Draw {
+                first_index: indices.len() as u32,
+                index_count: m.indices.len() as u32,
+                base_vertex: vertices.len() as i32,
+            });
+            vertices.extend_from_slice(&m.vertices);
+            indices.extend_from_slice(&m.indices);
+        }
+        let triangles = indices.len() / 3;
+        // Empty scenes still need valid (non-zero-sized) buffers.
+        if vertices.is_empty() {
+            vertices.push(Vertex { position: [0.0; 3], normal: [0.0, 1.0, 0.0] });
+            indices.extend([0, 0, 0]);
+        }
+        use wgpu::util::DeviceExt;
+        let vertex_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("scene vertices"),
+            contents: bytemuck::cast_slice(&vertices),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+        let index_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("scene indices"),
+            contents: bytemuck::cast_slice(&indices),
+            usage: wgpu::BufferUsages::INDEX,
+        });
+        let frame_buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("scene frame uniforms"),
+            size: SLOT_STRIDE * VIEW_SLOTS,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let object_count = draws.len().max(1) as u64;
+        let object_buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("scene objects"),
+            size: object_count * std::mem::size_of::<GpuObject>() as u64,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let bgl = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("scene"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: true,
+                        min_binding_size: wgpu::BufferSize::new(std::mem::size_of::<GpuFrame>() as u64),
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Storage { read_only: true },
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+            ],
+        });
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("scene"),
+            layout: &bgl,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                        buffer: &frame_buffer,
+                        offset: 0,
+                        size: wgpu::BufferSize::new(std::mem::size_of::<GpuFrame>() as u64),
+                    }),
+                },
+                wgpu::BindGroupEntry { binding: 1, resource: object_buffer.as_entire_binding() },
+            ],
+        });
+        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("scene"),
+            bind_group_layouts: &[Some(&bgl)],
+            immediate_size: 0,
+        });
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("scene.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(SCENE_WGSL.into()),
+        });
+        let buffer_bytes = vertex_buffer.size() + index_buffer.size() + frame_buffer.size() + object_buffer.size();
+        Ok(SceneGpu {
+            scenario: scenario.clone(),
+            vertex_buffer,
+            index_buffer,
+            draws,
+            frame_buffer,
+            object_buffer,
+            bind_group,
+            layout,
+            module,
+            pipelines: HashMap::new(),
+            triangles,
+            buffer_bytes,
+        })
+    }
+
+    /// The forward pipeline for `samples` MSAA samples, built on first use.
+    pub fn pipeline(&mut self, device: &wgpu::Device, samples: u32) -> &wgpu::RenderPipeline {
+        let (layout, module) = (&self.layout, &self.module);
+        self.pipelines.entry(samples).or_insert_with(|| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("scene"),
+                layout: Some(layout),
+                vertex: wgpu::VertexState {
+                    module,
+                    entry_point: Some("vs_main"),
+                    compilation_options: Default::default(),
+                    buffers: &[Some(wgpu::VertexBufferLayout {
+                        array_stride: std::mem::size_of::<Vertex>() as u64,
+                        step_mode: wgpu::VertexStepMode::Vertex,
+                        attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3],
+                    })],
+                },
+                fragment: Some(wgpu::FragmentState {
+                    module,
+                    entry_point: Some("fs_main"),
+                    compilation_options: Default::default(),
+                    targets: &[Some(COLOR_FORMAT.into())],
+                }),
+                primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: DEPTH_FORMAT,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(wgpu::CompareFunction::Greater),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: wgpu::MultisampleState { count: samples, ..Default::default() },
+                multiview_mask: None,
+                cache: None,
+            })
+        })
+    }
+
+    /// Writes object matrices for `time` relative to the camera at `time`. Call once per frame.
+    pub fn write_objects(&self, queue: &wgpu::Queue, time: f64, prev_time: f64) {
+        let pose = self.scenario.camera.pose_at(time);
+        let eye = pose.position.as_dvec3();
+        let rel = |m: DMat4| (DMat4::from_translation(-eye) * m).as_mat4().to_cols_array_2d();
+        let mut objects = Vec::new();
+        if let Some(g) = &self.scenario.scene.ground {
+            // The quad follows the camera in x and z; the pattern is anchored in world space.
+            let m = DMat4::from_translation(DVec3::new(eye.x, g.height as f64, eye.z));
+            let prev_eye = self.scenario.camera.pose_at(prev_time).position.as_dvec3();
+            let pm = DMat4::from_translation(DVec3::new(prev_eye.x, g.height as f64, prev_eye.z));
+            objects.push(GpuObject {
+                model: rel(m),
+                prev_model: rel(pm),
+                color: [1.0, 1.0, 1.0, 0.05],
+                emissive: [0.0, 0.0, 0.0, 1.0],
+            });
+        }
+        for o in &self.scenario.scene.objects {
+            objects.push(GpuObject {
+                model: rel(o.model_at(time)),
+                prev_model: rel(o.model_at(prev_time)),
+                color: o.color.extend(o.specular).into(),
+                emissive: o.emissive.extend(0.0).into(),
+            });
+        }
+        if !objects.is_empty() {
+            queue.write_buffer(&self.object_buffer, 0, bytemuck::cast_slice(&objects));
+        }
+    }
+
+    /// Writes the uniforms of view `slot` (0..VIEW_SLOTS) for this frame.
+    pub fn write_view(&self, queue: &wgpu::Queue, slot: u32, view: &View) {
+        assert!((slot as u64) < VIEW_SLOTS, "view slot {slot} out of range");
+        let s = &self.scenario;
+        let pose = s.camera.pose_at(view.time);
+        let prev = s.camera.pose_at(view.prev_time);
+        let aspect = s.width as f64 / s.height as f64;
+        let vp = |p: &CameraPose| -> DMat4 {
+            let proj = reversed_z_projection(p.fov_degrees as f64, aspect, s.camera.near as f64, s.camera.far as f64);
+            proj * rotation_view(p)
+        };
+        // Jitter in NDC: one pixel is 2 / size.
+        let jitter = Vec4::new(2.0 * view.jitter_px.x / view.width as f32, -2.0 * view.jitter_px.y / view.height as f32, 0.0, 0.0);
+        let eye = pose.position.as_dvec3();
+        let prev_vp = vp(&prev) * DMat4::from_translation(eye - prev.position.as_dvec3());
+        let (ground, filter, checker) = match &s.scene.ground {
+            Some(g) => (Some(g), if g.filter == GroundFilter::Box { 1.0 } else { 0.0 }, g.checker_size as f64),
+            None => (None, 0.0, 1.0),
+        };
+        let period = 2.0 * checker;
+        let camera_mod = [eye.x.rem_euclid(period) as f32, 0.0, eye.z.rem_euclid(period) as f32, 0.0];
+        let mut lights = [GpuLight { position_or_direction: [0.0; 4], radiance: [0.0; 4] }; MAX_LIGHTS];
+        for (i, l) in s.scene.lights.iter().take(MAX_LIGHTS).enumerate() {
+            lights[i] = match l {
+                Light::Directional { direction, color, intensity } => GpuLight {
+                    position_or_direction: direction.extend(0.0).into(),
+                    radiance: (*color * *intensity).extend(0.0).into(),
+                },
+                Light::Point { position, color, intensity } => GpuLight {
+                    position_or_direction: (position.as_dvec3() - eye).as_vec3().extend(1.0).into(),
+                    radiance: (*color * *intensity).extend(0.0).into(),
+                },
+            };
+        }
+        let frame = GpuFrame {
+            view_proj: vp(&pose).as_mat4().to_cols_array_2d(),
+            prev_view_proj: prev_vp.as_mat4().to_cols_array_2d(),
+            jitter: jitter.into(),
+            camera_mod,
+            background: s.scene.background.extend(1.0).into(),
+            params: [s.scene.ambient, s.scene.shading_cost as f32, view.gradient_scale, filter],
+            ground: [checker as f32, ground.map(|g| g.filter_epsilon).unwrap_or(0.0), 0.0, 0.0],
+            ground_a: ground.map(|g| g.colors[0].extend(1.0).into()).unwrap_or([0.0; 4]),
+            ground_b: ground.map(|g| g.colors[1].extend(1.0).into()).unwrap_or([0.0; 4]),
+            counts: [s.scene.lights.len().min(MAX_LIGHTS) as u32, 0, 0, 0],
+            lights,
+        };
+        queue.write_buffer(&self.frame_buffer, slot as u64 * SLOT_STRIDE, bytemuck::bytes_of(&frame));
+    }
+
+    /// Clear colour of the scene pass (linear radiance).
+    pub fn clear_color(&self) -> wgpu::Color {
+        let b = self.scenario.scene.background;
+        wgpu::Color { r: b.x as f64, g: b.y as f64, b: b.z as f64, a: 1.0 }
+    }
+
+    /// Draws every object with view `slot` into the current render pass.
+    pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>, pipeline: &wgpu::RenderPipeline, slot: u32) {
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, &self.bind_group, &[(slot as u64 * SLOT_STRIDE) as u32]);
+        pass.set_vertex_buffer(0, self.vertex_buffer.slice(..));
+        pass.set_index_buffer(self.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
+        for (i, d) in self.draws.iter().enumerate() {
+            let i = i as u32;
+            pass.draw_indexed(d.first_index..d.first_index + d.index_count, d.base_vertex, i..i + 1);
+        }
+    }
+}
+
+/// Camera rotation only (the translation is applied per object in f64).
+fn rotation_view(p: &CameraPose) -> DMat4 {
+    let dir = (p.target.as_dvec3() - p.position.as_dvec3()).normalize();
+    let up = if dir.y.abs() > 0.999 { DVec3::Z } else { DVec3::Y };
+    DMat4::look_to_rh(DVec3::ZERO, dir, up)
+}
+
+/// Right-handed perspective with reversed depth: view depth `near` maps to 1, `far` to 0.
+pub fn reversed_z_projection(fov_degrees: f64, aspect: f64, near: f64, far: f64) -> DMat4 {
+    DMat4::perspective_rh(fov_degrees.to_radians(), aspect, far, near)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reversed_z_maps_near_to_one_and_far_to_zero_at_extreme_ranges() {
+        for (near, far) in [(0.1, 1000.0), (1e-4, 1e7)] {
+            let p = reversed_z_projection(60.0, 16.0 / 9.0, near, far);
+            let depth = |d: f64| {
+                let c = p * glam::DVec4::new(0.0, 0.0, -d, 1.0);
+                c.z / c.w
+            };
+            assert!((depth(near) - 1.0).abs() < 1e-9);
+            assert!(depth(far).abs() < 1e-9);
+            // Monotonic and still distinguishable in f32 between 1000 and 1001 units.
+            let (a, b) = (depth(1000.0) as f32, depth(1001.0) as f32);
+            assert!(a > b, "{a} {b}");
+        }
+    }
+}
