@@ -14,6 +14,7 @@ mod image;
 mod io;
 mod luma;
 mod pixel;
+mod report;
 mod series;
 mod srgb;
 mod ssim;
@@ -29,6 +30,7 @@ pub use luma::LUMA_WEIGHTS;
 pub use pixel::{
     max_abs_error, mse_luma, mse_rgb, psnr_from_mse, psnr_luma, psnr_rgb, DATA_RANGE_8BIT,
 };
+pub use report::{diff, diff_at, DiffReport};
 pub use series::{series_stats, SeriesStats};
 pub use srgb::{encode_srgb8, linear_to_srgb, srgb_to_linear};
 pub use ssim::{ssim_luma, ssim_rgb, SSIM_MIN_SIZE};
