@@ -31,6 +31,12 @@ fn read_png(path: &Path) -> Rgb8Image {
     }
 }
 
+/// Writes the FLIP error map as raw little-endian f32 to `DIR/NAME.flipmap.f32`.
+fn write_map(dir: &Path, name: &str, f: &FlipResult) {
+    let bytes: Vec<u8> = f.error_map.iter().flat_map(|v| v.to_le_bytes()).collect();
+    std::fs::write(dir.join(format!("{name}.flipmap.f32")), bytes).unwrap();
+}
+
 fn flip_json(f: &FlipResult) -> serde_json::Value {
     serde_json::json!({"mean": f.mean, "p50": f.p50, "p95": f.p95, "p99": f.p99, "max": f.max})
 }
@@ -53,12 +59,14 @@ fn main() {
             let (a, b) = (read_raw(&r, w, h), read_raw(&t, w, h));
             let range = hdr_exposure_range(&a);
             let f = flip_hdr(&a, &b, &range, DEFAULT_PIXELS_PER_DEGREE).unwrap();
+            write_map(&dir, name, &f);
             serde_json::json!({"name": name, "range": range, "flip": flip_json(&f)})
         } else {
             let (a, b) = (read_png(&r), read_png(&t));
             let start = std::time::Instant::now();
             let report = diff(&a, &b).unwrap();
             let secs = start.elapsed().as_secs_f64();
+            write_map(&dir, name, &report.flip);
             serde_json::json!({
                 "name": name,
                 "seconds": secs,
