@@ -7,3 +7,4 @@ pub mod scenario;
 pub mod technique;
 pub mod gpu;
 pub mod render;
+pub mod run;

@@ -1,1 +1,224 @@
-fn main() {}
+//! `tessera`: the command line. Parses arguments, calls the library, prints, and picks the exit code.
+//!
+//! Exit codes (documented in README.md): 0 ok, 1 a gate failed or a variant failed, 2 bad input
+//! (scenario, arguments, images, output folder), 3 no usable adapter or a device failure.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+use tessera::run::{self, console, SuiteError};
+use tessera::scenario::{self, Scenario};
+
+const EXIT_GATE: u8 = 1;
+const EXIT_INPUT: u8 = 2;
+const EXIT_DEVICE: u8 = 3;
+
+#[derive(Parser)]
+#[command(name = "tessera", version, about = "GPU benchmark harness for shading-reduction techniques")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run scenarios (files or folders of *.toml) on one adapter and write results.
+    Run {
+        #[arg(required = true)]
+        paths: Vec<PathBuf>,
+        /// Adapter whose name, driver or backend contains this text (case-insensitive).
+        #[arg(long)]
+        adapter: Option<String>,
+        /// Folder that receives `<run-id>/`.
+        #[arg(long, default_value = "results")]
+        out: PathBuf,
+        /// Also write JUnit XML here.
+        #[arg(long)]
+        junit: Option<PathBuf>,
+        /// No progress bar.
+        #[arg(long)]
+        quiet: bool,
+    },
+    /// Check scenarios without a GPU.
+    Validate {
+        #[arg(required = true)]
+        paths: Vec<PathBuf>,
+    },
+    /// List every adapter with the features that matter to Tessera.
+    Adapters {
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Compare two images: PSNR, SSIM, FLIP and more.
+    Diff {
+        reference: PathBuf,
+        test: PathBuf,
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+        /// Write the FLIP error map in magma colours here.
+        #[arg(long)]
+        heatmap: Option<PathBuf>,
+    },
+}
+
+fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            let code = if e.use_stderr() { EXIT_INPUT } else { 0 };
+            let _ = e.print();
+            return ExitCode::from(code);
+        }
+    };
+    ExitCode::from(match cli.command {
+        Command::Run { paths, adapter, out, junit, quiet } => run_command(&paths, adapter, out, junit, quiet),
+        Command::Validate { paths } => validate_command(&paths),
+        Command::Adapters { json } => adapters_command(json),
+        Command::Diff { reference, test, json, heatmap } => diff_command(&reference, &test, json, heatmap),
+    })
+}
+
+/// Loads every scenario, printing every problem; `None` if any file is bad.
+fn load_all(paths: &[PathBuf]) -> Option<Vec<Scenario>> {
+    let files = match scenario::collect(paths) {
+        Ok(f) => f,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return None;
+        }
+    };
+    let mut ok = Vec::new();
+    let mut bad = 0;
+    for f in &files {
+        match scenario::load(f) {
+            Ok(s) => ok.push(s),
+            Err(errors) => {
+                bad += 1;
+                for e in errors.0 {
+                    eprintln!("error: {e}");
+                }
+            }
+        }
+    }
+    let mut names: Vec<&str> = ok.iter().map(|s| s.name.as_str()).collect();
+    names.sort();
+    if let Some(w) = names.windows(2).find(|w| w[0] == w[1]) {
+        eprintln!("error: two scenarios are named \"{}\": names must be unique within a run (set `name`)", w[0]);
+        return None;
+    }
+    (bad == 0).then_some(ok)
+}
+
+fn validate_command(paths: &[PathBuf]) -> u8 {
+    match load_all(paths) {
+        Some(s) => {
+            let variants: usize = s.iter().map(|s| s.variants.len()).sum();
+            println!("{} scenarios valid ({variants} variants)", s.len());
+            0
+        }
+        None => EXIT_INPUT,
+    }
+}
+
+fn run_command(paths: &[PathBuf], adapter: Option<String>, out: PathBuf, junit: Option<PathBuf>, quiet: bool) -> u8 {
+    let Some(scenarios) = load_all(paths) else { return EXIT_INPUT };
+    let opts = run::Options {
+        adapter,
+        out,
+        junit,
+        progress: !quiet && std::io::IsTerminal::is_terminal(&std::io::stderr()),
+        command_line: std::env::args().collect(),
+    };
+    let outcome = match run::run_suite(&scenarios, &opts) {
+        Ok(o) => o,
+        Err(SuiteError::Gpu(e)) => {
+            eprintln!("error: {e}");
+            return EXIT_DEVICE;
+        }
+        Err(SuiteError::Write(e)) => {
+            eprintln!("error: {e}");
+            return EXIT_INPUT;
+        }
+    };
+    let tally = console::tally(&outcome.scenarios);
+    eprintln!("results: {}", outcome.run_dir.display());
+    println!("{}", console::verdict(&tally));
+    if outcome.device_lost {
+        EXIT_DEVICE
+    } else if tally.failed > 0 || tally.gate_failures > 0 {
+        EXIT_GATE
+    } else {
+        0
+    }
+}
+
+fn adapters_command(json: bool) -> u8 {
+    let adapters = tessera::gpu::enumerate();
+    if adapters.is_empty() {
+        eprintln!("error: {}", tessera::gpu::GpuError::NoAdapter);
+        return EXIT_DEVICE;
+    }
+    let infos: Vec<_> = adapters.iter().map(tessera::gpu::describe).collect();
+    if json {
+        println!("{}", serde_json::to_string_pretty(&infos).unwrap_or_default());
+        return 0;
+    }
+    for i in infos {
+        let f = &i.features;
+        println!("{} ({}, {})", i.name, i.backend, i.device_type);
+        println!("  driver:        {} {}", i.driver, i.driver_info);
+        println!("  ids:           vendor 0x{:04x}, device 0x{:04x}", i.vendor, i.device);
+        println!(
+            "  timestamps:    {}{}",
+            if f.timestamps { "yes" } else { "no" },
+            if f.timestamps_inside_passes { " (inside passes too)" } else { "" }
+        );
+        println!("  pipeline stats: {}", if f.pipeline_statistics { "yes" } else { "no" });
+        println!("  shader f16:    {}", if f.shader_f16 { "yes" } else { "no" });
+        println!("  max texture:   {}", f.max_texture_dimension_2d);
+        for (format, counts) in &f.msaa {
+            let c: Vec<String> = counts.iter().map(|n| format!("{n}x")).collect();
+            println!("  msaa {format:<13} {}", c.join(" "));
+        }
+    }
+    0
+}
+
+fn diff_command(reference: &std::path::Path, test: &std::path::Path, json: bool, heatmap: Option<PathBuf>) -> u8 {
+    use tessera_metrics::LoadedImage;
+    let load = |p: &std::path::Path| match tessera_metrics::load_image(p) {
+        Ok(LoadedImage::Ldr(i)) => Ok(i),
+        Ok(LoadedImage::Hdr(h)) => Ok(tessera_metrics::encode_srgb8(&h)),
+        Err(e) => Err(e),
+    };
+    let (r, t) = match (load(reference), load(test)) {
+        (Ok(r), Ok(t)) => (r, t),
+        (Err(e), _) | (_, Err(e)) => {
+            eprintln!("error: {e}");
+            return EXIT_INPUT;
+        }
+    };
+    let report = match tessera_metrics::diff(&r, &t) {
+        Ok(rep) => rep,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return EXIT_INPUT;
+        }
+    };
+    if let Some(path) = heatmap {
+        if let Err(e) = tessera_metrics::save_png(&path, &tessera_metrics::flip_heatmap(&report.flip)) {
+            eprintln!("error: {e}");
+            return EXIT_INPUT;
+        }
+    }
+    if json {
+        println!("{}", serde_json::to_string_pretty(&report).unwrap_or_default());
+    } else {
+        print!("{}", report.to_text());
+    }
+    0
+}

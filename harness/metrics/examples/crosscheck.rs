@@ -38,7 +38,7 @@ fn write_map(dir: &Path, name: &str, f: &FlipResult) {
 }
 
 fn flip_json(f: &FlipResult) -> serde_json::Value {
-    serde_json::json!({"mean": f.mean, "p50": f.p50, "p95": f.p95, "p99": f.p99, "max": f.max})
+    serde_json::json!({"mean": f.mean, "exact_mean": f.exact_mean, "p50": f.p50, "p95": f.p95, "p99": f.p99, "max": f.max})
 }
 
 fn main() {

@@ -3,3 +3,6 @@
 pub mod graph;
 pub mod mesh;
 pub mod scene;
+pub mod readback;
+pub mod technique;
+pub mod timers;

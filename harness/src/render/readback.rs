@@ -1,0 +1,85 @@
+//! Copies a frame's Rgba16Float output to the CPU, outside every timed pass.
+//!
+//! Returns linear RGB floats plus the count of non-finite channel values (NaN and ±Inf are counted
+//! before anything can clamp them). Converting to sRGB for images and metrics is the caller's job.
+
+use tessera_metrics::HdrImage;
+
+pub struct Readback {
+    buffer: wgpu::Buffer,
+    width: u32,
+    height: u32,
+    padded_row: u32,
+}
+
+/// A frame on the CPU.
+pub struct CpuFrame {
+    pub image: HdrImage,
+    /// NaN or infinite values among the R, G and B channels.
+    pub non_finite: u64,
+}
+
+impl Readback {
+    pub fn new(device: &wgpu::Device, width: u32, height: u32) -> Readback {
+        let row = width * 8;
+        let padded_row = row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("frame readback"),
+            size: padded_row as u64 * height as u64,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        Readback { buffer, width, height, padded_row }
+    }
+
+    pub fn bytes(&self) -> u64 {
+        self.buffer.size()
+    }
+
+    /// Records the copy of `texture` (Rgba16Float, the readback's size) into the buffer.
+    pub fn copy(&self, encoder: &mut wgpu::CommandEncoder, texture: &wgpu::Texture) {
+        encoder.copy_texture_to_buffer(
+            texture.as_image_copy(),
+            wgpu::TexelCopyBufferInfo {
+                buffer: &self.buffer,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(self.padded_row),
+                    rows_per_image: Some(self.height),
+                },
+            },
+            wgpu::Extent3d { width: self.width, height: self.height, depth_or_array_layers: 1 },
+        );
+    }
+
+    /// Maps the buffer (after the copy's submission) and decodes it.
+    pub fn read(&self, device: &wgpu::Device) -> Result<CpuFrame, wgpu::BufferAsyncError> {
+        let slice = self.buffer.slice(..);
+        let (tx, rx) = std::sync::mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        let _ = device.poll(wgpu::PollType::Wait { submission_index: None, timeout: None });
+        rx.recv().unwrap_or(Err(wgpu::BufferAsyncError))?;
+        let mut data = Vec::with_capacity(self.width as usize * self.height as usize * 3);
+        let mut non_finite = 0u64;
+        {
+            let mapped = slice.get_mapped_range().map_err(|_| wgpu::BufferAsyncError)?;
+            for y in 0..self.height as usize {
+                let start = y * self.padded_row as usize;
+                let row: &[half::f16] = bytemuck::cast_slice(&mapped[start..start + self.width as usize * 8]);
+                for px in row.chunks_exact(4) {
+                    for c in &px[..3] {
+                        let v = c.to_f32();
+                        if !v.is_finite() {
+                            non_finite += 1;
+                        }
+                        data.push(v);
+                    }
+                }
+            }
+        }
+        self.buffer.unmap();
+        Ok(CpuFrame { image: HdrImage { width: self.width, height: self.height, data }, non_finite })
+    }
+}

@@ -1,0 +1,308 @@
+//! Techniques on the GPU: each builds its pass graph, allocates what the plan keeps, and records
+//! its passes per frame with a timer (and fragment-invocation counter) per pass.
+//!
+//! Implemented here: `native` (full-resolution forward; reference and baseline), `upscale` (render
+//! at a scale factor, then bilinear or nearest upscale) and the ground-truth reference (NxN
+//! supersampled native, box-downsampled). What a technique *is* (its parameters) lives in
+//! `technique.rs`; running frames and collecting results is `run/`'s job.
+
+use std::collections::HashMap;
+
+use glam::Vec2;
+
+use super::graph::{Graph, PassKind, Plan, TextureDesc};
+use super::scene::{SceneGpu, View, COLOR_FORMAT, DEPTH_FORMAT};
+use super::timers::Timers;
+use crate::gpu::Gpu;
+use crate::technique::{TechniqueKind, Variant};
+
+/// Per-frame facts a technique needs.
+#[derive(Clone, Copy, Debug)]
+pub struct FrameInfo {
+    /// Frame number from the first warm-up frame.
+    pub index: u32,
+    pub time: f64,
+    pub prev_time: f64,
+}
+
+/// Why a variant cannot run on this adapter: reported as status `skipped`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Unsupported(pub String);
+
+pub trait Technique {
+    fn plan(&self) -> &Plan;
+    /// The full-resolution Rgba16Float output of the frame.
+    fn output(&self) -> &wgpu::Texture;
+    fn record(&mut self, gpu: &Gpu, scene: &mut SceneGpu, timers: &Timers, encoder: &mut wgpu::CommandEncoder, frame: FrameInfo);
+}
+
+/// Builds the GPU side of a variant at `width` x `height`.
+pub fn build(gpu: &Gpu, variant: &Variant, width: u32, height: u32) -> Result<Box<dyn Technique>, Unsupported> {
+    check_size(gpu, width, height)?;
+    Ok(match variant.technique {
+        TechniqueKind::Native => Box::new(Forward::new(gpu, width, height, Resolve::None)),
+        TechniqueKind::Upscale => {
+            let s = variant.float("scale");
+            let lw = ((width as f64 * s).round() as u32).max(1);
+            let lh = ((height as f64 * s).round() as u32).max(1);
+            let filter = match variant.choice("filter") {
+                "nearest" => wgpu::FilterMode::Nearest,
+                _ => wgpu::FilterMode::Linear,
+            };
+            Box::new(Forward::new(gpu, lw, lh, Resolve::Upscale { width, height, filter }))
+        }
+    })
+}
+
+/// The ground-truth reference: native at `supersample`x the resolution per axis, box-downsampled.
+pub fn ground_truth(gpu: &Gpu, width: u32, height: u32, supersample: u32) -> Result<Box<dyn Technique>, Unsupported> {
+    check_size(gpu, width * supersample, height * supersample).map_err(|u| Unsupported(format!("ground-truth reference ({supersample}x{supersample} supersampled): {}", u.0)))?;
+    Ok(Box::new(Forward::new(gpu, width * supersample, height * supersample, Resolve::Downsample { width, height, factor: supersample })))
+}
+
+fn check_size(gpu: &Gpu, width: u32, height: u32) -> Result<(), Unsupported> {
+    let max = gpu.max_dimension();
+    if width > max || height > max {
+        return Err(Unsupported(format!("{width}x{height} exceeds the adapter's maximum texture size {max}")));
+    }
+    Ok(())
+}
+
+/// How the forward render becomes the full-resolution output.
+#[derive(Clone, Copy, Debug)]
+enum Resolve {
+    /// Rendered at output resolution.
+    None,
+    Upscale { width: u32, height: u32, filter: wgpu::FilterMode },
+    Downsample { width: u32, height: u32, factor: u32 },
+}
+
+/// Forward rendering at some resolution, optionally followed by a resampling compute pass.
+struct Forward {
+    plan: Plan,
+    textures: HashMap<&'static str, wgpu::Texture>,
+    resample: Option<(wgpu::ComputePipeline, wgpu::BindGroup, [u32; 2])>,
+    width: u32,
+    height: u32,
+    out_width: u32,
+    output: &'static str,
+}
+
+impl Forward {
+    fn new(gpu: &Gpu, width: u32, height: u32, resolve: Resolve) -> Forward {
+        let tex = |format, width, height| TextureDesc { format, width, height, samples: 1 };
+        let mut g = Graph::default();
+        let output = match resolve {
+            Resolve::None => {
+                g.resource("color", tex(COLOR_FORMAT, width, height))
+                    .resource("depth", tex(DEPTH_FORMAT, width, height))
+                    .pass("scene", PassKind::Render, &[], &["color", "depth"])
+                    .output("color");
+                "color"
+            }
+            Resolve::Upscale { width: ow, height: oh, .. } => {
+                g.resource("color_low", tex(COLOR_FORMAT, width, height))
+                    .resource("depth_low", tex(DEPTH_FORMAT, width, height))
+                    .resource("color", tex(COLOR_FORMAT, ow, oh))
+                    .pass("scene", PassKind::Render, &[], &["color_low", "depth_low"])
+                    .pass("upscale", PassKind::Compute, &["color_low"], &["color"])
+                    .output("color");
+                "color"
+            }
+            Resolve::Downsample { width: ow, height: oh, .. } => {
+                g.resource("color_ss", tex(COLOR_FORMAT, width, height))
+                    .resource("depth_ss", tex(DEPTH_FORMAT, width, height))
+                    .resource("color", tex(COLOR_FORMAT, ow, oh))
+                    .pass("scene", PassKind::Render, &[], &["color_ss", "depth_ss"])
+                    .pass("downsample", PassKind::Compute, &["color_ss"], &["color"])
+                    .output("color");
+                "color"
+            }
+        };
+        let plan = g.plan().expect("built-in graphs are well formed");
+        let textures = allocate(&gpu.device, &plan);
+        let out_width = plan.desc(output).map(|d| d.width).unwrap_or(width);
+        let resample = match resolve {
+            Resolve::None => None,
+            Resolve::Upscale { width: ow, height: oh, filter } => Some(upscale_pipeline(gpu, &textures["color_low"], &textures["color"], filter, [ow, oh])),
+            Resolve::Downsample { width: ow, height: oh, factor } => Some(downsample_pipeline(gpu, &textures["color_ss"], &textures["color"], factor, [ow, oh])),
+        };
+        Forward { plan, textures, resample, width, height, out_width, output }
+    }
+}
+
+impl Technique for Forward {
+    fn plan(&self) -> &Plan {
+        &self.plan
+    }
+
+    fn output(&self) -> &wgpu::Texture {
+        &self.textures[self.output]
+    }
+
+    fn record(&mut self, gpu: &Gpu, scene: &mut SceneGpu, timers: &Timers, encoder: &mut wgpu::CommandEncoder, frame: FrameInfo) {
+        let view = View {
+            time: frame.time,
+            prev_time: frame.prev_time,
+            width: self.width,
+            height: self.height,
+            jitter_px: Vec2::ZERO,
+            gradient_scale: 1.0,
+        };
+        scene.write_view(&gpu.queue, 0, &view);
+        let pass = &self.plan.passes[0];
+        let (color, depth) = (&self.textures[pass.writes[0]], &self.textures[pass.writes[1]]);
+        record_scene_pass(gpu, scene, timers, encoder, "scene", color, depth, 0);
+        if let Some((pipeline, bind_group, [w, h])) = &self.resample {
+            let name = self.plan.passes[1].name;
+            let q = timers.begin(name, encoder);
+            {
+                let mut cp = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some(name),
+                    timestamp_writes: q.compute_pass_timestamp_writes(),
+                });
+                cp.set_pipeline(pipeline);
+                cp.set_bind_group(0, bind_group, &[]);
+                cp.dispatch_workgroups(w.div_ceil(8), h.div_ceil(8), 1);
+            }
+            timers.end(encoder, q);
+        }
+        let _ = self.out_width;
+    }
+}
+
+/// Allocates every texture the plan keeps.
+pub fn allocate(device: &wgpu::Device, plan: &Plan) -> HashMap<&'static str, wgpu::Texture> {
+    plan.resources
+        .iter()
+        .map(|r| {
+            let d = &r.desc;
+            let mut usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_SRC;
+            if !d.format.is_depth_stencil_format() && d.samples == 1 {
+                usage |= wgpu::TextureUsages::STORAGE_BINDING;
+            }
+            let t = device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(r.name),
+                size: wgpu::Extent3d { width: d.width, height: d.height, depth_or_array_layers: 1 },
+                mip_level_count: 1,
+                sample_count: d.samples,
+                dimension: wgpu::TextureDimension::D2,
+                format: d.format,
+                usage,
+                view_formats: &[],
+            });
+            (r.name, t)
+        })
+        .collect()
+}
+
+/// The forward `scene` pass into `color` and `depth`, timed and counted.
+#[allow(clippy::too_many_arguments)]
+pub fn record_scene_pass(
+    gpu: &Gpu,
+    scene: &mut SceneGpu,
+    timers: &Timers,
+    encoder: &mut wgpu::CommandEncoder,
+    name: &'static str,
+    color: &wgpu::Texture,
+    depth: &wgpu::Texture,
+    slot: u32,
+) {
+    let samples = color.sample_count();
+    let clear = scene.clear_color();
+    let pipeline = scene.pipeline(&gpu.device, samples).clone();
+    let color_view = color.create_view(&Default::default());
+    let depth_view = depth.create_view(&Default::default());
+    let q = timers.begin(name, encoder);
+    {
+        let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some(name),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &color_view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations { load: wgpu::LoadOp::Clear(clear), store: wgpu::StoreOp::Store },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &depth_view,
+                depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(0.0), store: wgpu::StoreOp::Store }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: q.render_pass_timestamp_writes(),
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        timers.begin_stats(&mut rp, name);
+        scene.draw(&mut rp, &pipeline, slot);
+        timers.end_stats(&mut rp, name);
+    }
+    timers.end(encoder, q);
+}
+
+static UPSCALE_WGSL: &str = include_str!("../../../shaders/upscale.wgsl");
+static DOWNSAMPLE_WGSL: &str = include_str!("../../../shaders/downsample.wgsl");
+
+fn upscale_pipeline(gpu: &Gpu, src: &wgpu::Texture, dst: &wgpu::Texture, filter: wgpu::FilterMode, size: [u32; 2]) -> (wgpu::ComputePipeline, wgpu::BindGroup, [u32; 2]) {
+    let device = &gpu.device;
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor { label: Some("upscale.wgsl"), source: wgpu::ShaderSource::Wgsl(UPSCALE_WGSL.into()) });
+    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some("upscale"),
+        layout: None,
+        module: &module,
+        entry_point: Some("main"),
+        compilation_options: Default::default(),
+        cache: None,
+    });
+    let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+        label: Some("upscale"),
+        mag_filter: filter,
+        min_filter: filter,
+        address_mode_u: wgpu::AddressMode::ClampToEdge,
+        address_mode_v: wgpu::AddressMode::ClampToEdge,
+        ..Default::default()
+    });
+    let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("upscale"),
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &[
+            wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&src.create_view(&Default::default())) },
+            wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::Sampler(&sampler) },
+            wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(&dst.create_view(&Default::default())) },
+        ],
+    });
+    (pipeline, bind_group, size)
+}
+
+fn downsample_pipeline(gpu: &Gpu, src: &wgpu::Texture, dst: &wgpu::Texture, factor: u32, size: [u32; 2]) -> (wgpu::ComputePipeline, wgpu::BindGroup, [u32; 2]) {
+    use wgpu::util::DeviceExt;
+    let device = &gpu.device;
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor { label: Some("downsample.wgsl"), source: wgpu::ShaderSource::Wgsl(DOWNSAMPLE_WGSL.into()) });
+    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some("downsample"),
+        layout: None,
+        module: &module,
+        entry_point: Some("main"),
+        compilation_options: Default::default(),
+        cache: None,
+    });
+    let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("downsample params"),
+        contents: bytemuck::cast_slice(&[factor, 0, 0, 0]),
+        usage: wgpu::BufferUsages::UNIFORM,
+    });
+    let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("downsample"),
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &[
+            wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&src.create_view(&Default::default())) },
+            wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&dst.create_view(&Default::default())) },
+            wgpu::BindGroupEntry { binding: 2, resource: params.as_entire_binding() },
+        ],
+    });
+    (pipeline, bind_group, size)
+}
+
+/// Every WGSL file the harness ships, for validation without a GPU.
+pub fn shader_sources() -> [(&'static str, &'static str); 3] {
+    [("scene.wgsl", super::scene::SCENE_WGSL), ("upscale.wgsl", UPSCALE_WGSL), ("downsample.wgsl", DOWNSAMPLE_WGSL)]
+}

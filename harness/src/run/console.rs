@@ -1,0 +1,128 @@
+//! Console report: per scenario an aligned table of variants on stdout, then one verdict line.
+//!
+//! Formatting only; numbers come from the finished records.
+
+use std::fmt::Write as _;
+
+use tessera_results::{GateLevel, ScenarioResult, Status, VariantResult};
+
+use super::gates;
+
+fn ms(v: Option<f64>) -> String {
+    v.map(|v| format!("{v:.3}")).unwrap_or_else(|| "-".to_string())
+}
+
+fn psnr(r: &VariantResult) -> String {
+    match r.metrics.iter().find(|m| m.name == "psnr") {
+        Some(m) if m.value.is_infinite() => "inf".to_string(),
+        Some(m) => format!("{:.2}", m.value),
+        None => "-".to_string(),
+    }
+}
+
+fn status(r: &VariantResult) -> String {
+    let gate = r.gates.iter().map(|g| g.level).max().unwrap_or(GateLevel::Pass);
+    match &r.status {
+        Status::Ok => match gate {
+            GateLevel::Pass => "ok".to_string(),
+            GateLevel::Warn => format!("ok, gate warns: {}", gate_messages(r, GateLevel::Warn)),
+            GateLevel::Fail => format!("gate failed: {}", gate_messages(r, GateLevel::Fail)),
+        },
+        Status::Skipped { reason } => format!("skipped: {reason}"),
+        Status::Failed { error } => format!("failed: {error}"),
+    }
+}
+
+fn gate_messages(r: &VariantResult, level: GateLevel) -> String {
+    r.gates.iter().filter(|g| g.level == level).map(|g| g.message.as_str()).collect::<Vec<_>>().join("; ")
+}
+
+/// The table of one scenario.
+pub fn scenario_table(s: &ScenarioResult) -> String {
+    let header = ["variant", "GPU ms", "CPU ms", "speedup", "PSNR dB", "status"];
+    let rows: Vec<[String; 6]> = s
+        .results
+        .iter()
+        .map(|r| {
+            let ok = r.status == Status::Ok;
+            [
+                r.variant.clone(),
+                if ok { ms(gates::frame_ms(r)) } else { "-".into() },
+                if ok { ms(Some(r.cpu_frame_ms.median)) } else { "-".into() },
+                gates::speedup(&s.results, r).map(|v| format!("{v:.2}x")).unwrap_or_else(|| "-".into()),
+                psnr(r),
+                status(r),
+            ]
+        })
+        .collect();
+    let mut widths = header.map(str::len);
+    for row in &rows {
+        for (i, c) in row.iter().enumerate().take(5) {
+            widths[i] = widths[i].max(c.chars().count());
+        }
+    }
+    let mut out = String::new();
+    let _ = writeln!(out, "{} ({}x{}, {} measured frames, reference: {})", s.scenario, s.width, s.height, s.measured_frames, s.reference);
+    let line = |cells: &[String]| {
+        let mut l = format!("  {:<w0$}", cells[0], w0 = widths[0]);
+        for i in 1..5 {
+            let _ = write!(l, "  {:>w$}", cells[i], w = widths[i]);
+        }
+        let _ = write!(l, "  {}", cells[5]);
+        l.trim_end().to_string()
+    };
+    let _ = writeln!(out, "{}", line(&header.map(String::from)));
+    for row in &rows {
+        let _ = writeln!(out, "{}", line(row));
+    }
+    out
+}
+
+/// Counts over a whole run.
+#[derive(Debug, Default, PartialEq, Eq)]
+pub struct Tally {
+    pub ok: usize,
+    pub skipped: usize,
+    pub failed: usize,
+    pub gate_warnings: usize,
+    pub gate_failures: usize,
+}
+
+pub fn tally(scenarios: &[ScenarioResult]) -> Tally {
+    let mut t = Tally::default();
+    for r in scenarios.iter().flat_map(|s| &s.results) {
+        match r.status {
+            Status::Ok => t.ok += 1,
+            Status::Skipped { .. } => t.skipped += 1,
+            Status::Failed { .. } => t.failed += 1,
+        }
+        t.gate_warnings += r.gates.iter().filter(|g| g.level == GateLevel::Warn).count();
+        t.gate_failures += r.gates.iter().filter(|g| g.level == GateLevel::Fail).count();
+    }
+    t
+}
+
+/// The one verdict line.
+pub fn verdict(t: &Tally) -> String {
+    let counts = format!("{} ok, {} skipped, {} failed; gates: {} failed, {} warned", t.ok, t.skipped, t.failed, t.gate_failures, t.gate_warnings);
+    if t.failed > 0 || t.gate_failures > 0 {
+        format!("FAILED: {counts}")
+    } else if t.gate_warnings > 0 {
+        format!("PASSED with warnings: {counts}")
+    } else {
+        format!("PASSED: {counts}")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn verdict_lines() {
+        assert_eq!(verdict(&Tally { ok: 3, skipped: 1, ..Default::default() }), "PASSED: 3 ok, 1 skipped, 0 failed; gates: 0 failed, 0 warned");
+        assert!(verdict(&Tally { ok: 3, gate_warnings: 1, ..Default::default() }).starts_with("PASSED with warnings"));
+        assert!(verdict(&Tally { ok: 3, gate_failures: 1, ..Default::default() }).starts_with("FAILED"));
+        assert!(verdict(&Tally { failed: 1, ..Default::default() }).starts_with("FAILED"));
+    }
+}

@@ -1,0 +1,169 @@
+//! Running a suite: open the adapter, run each scenario, write its results as soon as it finishes.
+//!
+//! The run folder is `<out>/<run-id>/`. `run.json` is written first (status `running`) and again at
+//! the end; each scenario's JSON and the whole `results.csv` are rewritten atomically after every
+//! scenario, so an interrupted run keeps what it completed.
+
+pub mod console;
+pub mod frames;
+pub mod gates;
+pub mod output;
+pub mod scenario;
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+
+use tessera_results::{CommitInfo, HostInfo, RunInfo, RunStatus, ScenarioResult, Status, SCHEMA_VERSION};
+
+use crate::gpu::{self, Gpu, GpuError};
+use crate::scenario::Scenario;
+use output::{write_atomic, WriteError};
+
+pub struct Options {
+    pub adapter: Option<String>,
+    pub out: PathBuf,
+    pub junit: Option<PathBuf>,
+    pub progress: bool,
+    pub command_line: Vec<String>,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum SuiteError {
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+    #[error(transparent)]
+    Write(#[from] WriteError),
+}
+
+pub struct SuiteOutcome {
+    pub run_dir: PathBuf,
+    pub scenarios: Vec<ScenarioResult>,
+    pub device_lost: bool,
+}
+
+/// Opens the adapter and runs every scenario.
+pub fn run_suite(scenarios: &[Scenario], opts: &Options) -> Result<SuiteOutcome, SuiteError> {
+    let adapter = gpu::select(opts.adapter.as_deref())?;
+    let gpu = gpu::open(adapter)?;
+    run_on(&gpu, scenarios, opts)
+}
+
+/// Runs every scenario on an open device.
+pub fn run_on(gpu: &Gpu, scenarios: &[Scenario], opts: &Options) -> Result<SuiteOutcome, SuiteError> {
+    let lost = Arc::new(AtomicBool::new(false));
+    {
+        let lost = lost.clone();
+        gpu.device.set_device_lost_callback(move |_, message| {
+            eprintln!("error: the GPU device was lost: {message}");
+            lost.store(true, Ordering::SeqCst);
+        });
+    }
+    // Errors outside an error scope are reported, not turned into a panic.
+    gpu.device.on_uncaptured_error(Arc::new(|e| eprintln!("warning: uncaptured GPU error: {e}")));
+
+    let started = chrono::Utc::now();
+    let commit = git_commit();
+    let run_id = unique_run_id(&opts.out, &started, commit.as_ref());
+    let run_dir = opts.out.join(&run_id);
+    let mut run = RunInfo {
+        schema_version: SCHEMA_VERSION,
+        run_id: run_id.clone(),
+        commit,
+        started_at: started.to_rfc3339_opts(chrono::SecondsFormat::Secs, true),
+        finished_at: None,
+        status: RunStatus::Running,
+        harness_version: env!("CARGO_PKG_VERSION").to_string(),
+        adapter: gpu.info.clone(),
+        host: host_info(),
+        command_line: opts.command_line.clone(),
+        scenarios: scenarios.iter().map(|s| s.file.display().to_string()).collect(),
+    };
+    write_atomic(&run_dir.join("run.json"), &output::run_json(&run))?;
+
+    let total: u64 = scenarios.iter().map(|s| s.total_frames() as u64 * (s.variants.len() as u64 + 1)).sum();
+    let bar = if opts.progress {
+        let b = indicatif::ProgressBar::new(total);
+        b.set_style(
+            indicatif::ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} frames  {msg}")
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        b
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+
+    let mut results: Vec<ScenarioResult> = Vec::new();
+    for s in scenarios {
+        bar.set_message(s.name.clone());
+        let result = if lost.load(Ordering::SeqCst) {
+            device_lost_result(s, &run_id)
+        } else {
+            scenario::run(gpu, s, &run_id, &run_dir, &mut || bar.inc(1))
+        };
+        write_atomic(&run_dir.join("scenarios").join(format!("{}.json", s.name)), &output::scenario_json(&result))?;
+        results.push(result);
+        write_atomic(&run_dir.join("results.csv"), &output::results_csv(&run, &results))?;
+        bar.suspend(|| print!("{}", console::scenario_table(results.last().expect("just pushed"))));
+    }
+    bar.finish_and_clear();
+
+    run.finished_at = Some(chrono::Utc::now().to_rfc3339_opts(chrono::SecondsFormat::Secs, true));
+    run.status = RunStatus::Complete;
+    write_atomic(&run_dir.join("run.json"), &output::run_json(&run))?;
+    if let Some(path) = &opts.junit {
+        write_atomic(path, &output::junit(&run, &results))?;
+    }
+    Ok(SuiteOutcome { run_dir, scenarios: results, device_lost: lost.load(Ordering::SeqCst) })
+}
+
+fn device_lost_result(s: &Scenario, run_id: &str) -> ScenarioResult {
+    let mut r = scenario::run_failed(s, run_id, "the GPU device was lost earlier in the run");
+    for v in &mut r.results {
+        v.status = Status::Failed { error: "the GPU device was lost earlier in the run".into() };
+    }
+    r
+}
+
+/// `20261122T031500Z-<sha7>`, with a counter appended if that folder exists.
+fn unique_run_id(out: &Path, t: &chrono::DateTime<chrono::Utc>, commit: Option<&CommitInfo>) -> String {
+    let base = match commit {
+        Some(c) => format!("{}-{}", t.format("%Y%m%dT%H%M%SZ"), &c.sha[..c.sha.len().min(7)]),
+        None => t.format("%Y%m%dT%H%M%SZ").to_string(),
+    };
+    let mut id = base.clone();
+    let mut n = 2;
+    while out.join(&id).exists() {
+        id = format!("{base}-{n}");
+        n += 1;
+    }
+    id
+}
+
+/// The commit of the current directory's git checkout, if any.
+fn git_commit() -> Option<CommitInfo> {
+    let sha = std::process::Command::new("git").args(["rev-parse", "HEAD"]).output().ok()?;
+    if !sha.status.success() {
+        return None;
+    }
+    let dirty = std::process::Command::new("git")
+        .args(["status", "--porcelain", "--untracked-files=no"])
+        .output()
+        .map(|o| !o.stdout.is_empty())
+        .unwrap_or(false);
+    Some(CommitInfo { sha: String::from_utf8_lossy(&sha.stdout).trim().to_string(), dirty })
+}
+
+fn host_info() -> HostInfo {
+    let hostname = std::fs::read_to_string("/etc/hostname")
+        .map(|s| s.trim().to_string())
+        .or_else(|_| std::env::var("HOSTNAME"))
+        .or_else(|_| std::env::var("COMPUTERNAME"))
+        .unwrap_or_default();
+    HostInfo {
+        hostname,
+        os: std::env::consts::OS.to_string(),
+        arch: std::env::consts::ARCH.to_string(),
+        cpu_cores: std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1),
+    }
+}

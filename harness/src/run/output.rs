@@ -1,0 +1,171 @@
+//! Result files: `run.json`, `scenarios/<scenario>.json`, `results.csv` and JUnit XML.
+//!
+//! Exporters are pure (records in, bytes out); [`write_atomic`] puts bytes on disk through a
+//! temporary file and a rename, so an interrupted run keeps every scenario it completed and never
+//! leaves a half-written file. The format is documented in `results/README.md`.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use tessera_results::{GateLevel, RunInfo, ScenarioResult, Status, CSV_COLUMNS};
+
+use super::gates;
+
+#[derive(Debug, thiserror::Error)]
+#[error("cannot write {path}: {source}")]
+pub struct WriteError {
+    pub path: PathBuf,
+    pub source: std::io::Error,
+}
+
+/// Writes `bytes` to `path` via a sibling temporary file and a rename.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), WriteError> {
+    let err = |source| WriteError { path: path.to_path_buf(), source };
+    if let Some(parent) = path.parent() {
+        std::fs::create_dir_all(parent).map_err(err)?;
+    }
+    let tmp = path.with_extension(format!("{}.tmp", path.extension().and_then(|e| e.to_str()).unwrap_or("")));
+    std::fs::write(&tmp, bytes).map_err(err)?;
+    std::fs::rename(&tmp, path).map_err(err)
+}
+
+pub fn run_json(run: &RunInfo) -> Vec<u8> {
+    serde_json::to_vec_pretty(run).expect("run records serialise")
+}
+
+pub fn scenario_json(s: &ScenarioResult) -> Vec<u8> {
+    serde_json::to_vec_pretty(s).expect("scenario records serialise")
+}
+
+fn csv_field(s: &str) -> String {
+    if s.contains([',', '"', '\n']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
+}
+
+fn num(v: f64) -> String {
+    if v.is_infinite() && v > 0.0 {
+        "inf".to_string()
+    } else if v.is_finite() {
+        format!("{v}")
+    } else {
+        String::new()
+    }
+}
+
+/// `results.csv`: one row per (scenario, variant, measure); columns in [`CSV_COLUMNS`].
+pub fn results_csv(run: &RunInfo, scenarios: &[ScenarioResult]) -> Vec<u8> {
+    let mut out = CSV_COLUMNS.join(",");
+    out.push('\n');
+    for s in scenarios {
+        for r in &s.results {
+            let mut row = |measure: &str, value: String, unit: &str| {
+                let fields = [
+                    run.run_id.as_str(),
+                    s.scenario.as_str(),
+                    r.variant.as_str(),
+                    r.technique.as_str(),
+                    run.adapter.name.as_str(),
+                    run.adapter.backend.as_str(),
+                    r.status.label(),
+                    measure,
+                    value.as_str(),
+                    unit,
+                ];
+                let line: Vec<String> = fields.iter().map(|f| csv_field(f)).collect();
+                out.push_str(&line.join(","));
+                out.push('\n');
+            };
+            if r.status != Status::Ok {
+                row("status", String::new(), "");
+                continue;
+            }
+            if let Some(t) = r.gpu_frame_ms {
+                row("gpu_ms.median", num(t.median), "ms");
+                row("gpu_ms.p5", num(t.p5), "ms");
+                row("gpu_ms.p95", num(t.p95), "ms");
+                row("gpu_ms.min", num(t.min), "ms");
+            }
+            row("cpu_ms.median", num(r.cpu_frame_ms.median), "ms");
+            if let Some(sp) = gates::speedup(&s.results, r) {
+                row("speedup", num(sp), "x");
+            }
+            for p in &r.passes {
+                if let Some(t) = p.gpu_ms {
+                    row(&format!("pass.{}.gpu_ms.median", p.name), num(t.median), "ms");
+                }
+                if let Some(f) = p.fragment_invocations {
+                    row(&format!("pass.{}.fragment_invocations", p.name), f.to_string(), "count");
+                }
+            }
+            row("allocated_bytes", r.allocated_bytes.to_string(), "bytes");
+            row("non_finite_values", r.non_finite_values.to_string(), "count");
+            for m in &r.metrics {
+                let unit = if m.name.starts_with("psnr") { "dB" } else { "" };
+                row(&m.name, num(m.value), unit);
+            }
+        }
+    }
+    out.into_bytes()
+}
+
+fn xml(s: &str) -> String {
+    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
+}
+
+/// JUnit XML: one test suite per scenario, one test case per variant. Failed variants and failed
+/// gates are failures; skipped variants are skipped; warnings go to system-out.
+pub fn junit(run: &RunInfo, scenarios: &[ScenarioResult]) -> Vec<u8> {
+    let mut out = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
+    let tests: usize = scenarios.iter().map(|s| s.results.len()).sum();
+    let _ = writeln!(out, "<testsuites name=\"tessera {}\" tests=\"{tests}\">", xml(&run.run_id));
+    for s in scenarios {
+        let failures = s.results.iter().filter(|r| failed(r)).count();
+        let skipped = s.results.iter().filter(|r| matches!(r.status, Status::Skipped { .. })).count();
+        let _ = writeln!(
+            out,
+            "  <testsuite name=\"{}\" tests=\"{}\" failures=\"{failures}\" skipped=\"{skipped}\" time=\"{:.3}\">",
+            xml(&s.scenario),
+            s.results.len(),
+            s.wall_ms / 1000.0
+        );
+        for r in &s.results {
+            let time = r.cpu_frame_ms.mean * r.cpu_frame_ms.count as f64 / 1000.0;
+            let _ = write!(out, "    <testcase classname=\"{}\" name=\"{}\" time=\"{time:.3}\"", xml(&s.scenario), xml(&r.variant));
+            let mut body = String::new();
+            match &r.status {
+                Status::Skipped { reason } => {
+                    let _ = writeln!(body, "      <skipped message=\"{}\"/>", xml(reason));
+                }
+                Status::Failed { error } => {
+                    let _ = writeln!(body, "      <failure message=\"{}\"/>", xml(error));
+                }
+                Status::Ok => {
+                    for g in r.gates.iter().filter(|g| g.level == GateLevel::Fail) {
+                        let _ = writeln!(body, "      <failure message=\"{}\"/>", xml(&g.message));
+                    }
+                }
+            }
+            let warnings: Vec<&str> = r.gates.iter().filter(|g| g.level == GateLevel::Warn).map(|g| g.message.as_str()).collect();
+            if !warnings.is_empty() {
+                let _ = writeln!(body, "      <system-out>{}</system-out>", xml(&warnings.join("\n")));
+            }
+            if body.is_empty() {
+                out.push_str("/>\n");
+            } else {
+                out.push_str(">\n");
+                out.push_str(&body);
+                out.push_str("    </testcase>\n");
+            }
+        }
+        out.push_str("  </testsuite>\n");
+    }
+    out.push_str("</testsuites>\n");
+    out.into_bytes()
+}
+
+fn failed(r: &tessera_results::VariantResult) -> bool {
+    matches!(r.status, Status::Failed { .. }) || r.gates.iter().any(|g| g.level == GateLevel::Fail)
+}

@@ -1,0 +1,322 @@
+//! Runs one scenario on an open device: the reference first, then every variant, then metrics and
+//! gates, into a [`ScenarioResult`].
+//!
+//! A variant that needs what the adapter lacks is `skipped` with the reason; a GPU error fails that
+//! variant and the scenario goes on. Metrics are computed only after a variant's frames are all
+//! rendered, never while timed GPU work is in flight.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::time::Instant;
+
+use tessera_metrics::{HdrImage, Rgb8Image};
+use tessera_results::{ImageRecord, MetricRecord, PassRecord, ScenarioResult, Status, Summary, VariantResult};
+
+use super::frames::{self, Rendered};
+use super::gates;
+use crate::gpu::Gpu;
+use crate::render::scene::SceneGpu;
+use crate::render::technique::{self, Technique, Unsupported};
+use crate::scenario::{MetricKind, Reference, Scenario};
+use crate::technique::{TechniqueKind, Variant};
+
+/// Frames a reference render produced, in measured-frame order.
+struct ReferenceFrames {
+    frames: Vec<Rgb8Image>,
+    #[allow(dead_code)]
+    hdr: Vec<HdrImage>,
+}
+
+/// Runs `scenario`. Images go under `run_dir/images/<scenario>/`. `on_frame` ticks progress.
+pub fn run(gpu: &Gpu, scenario: &Scenario, run_id: &str, run_dir: &Path, on_frame: &mut dyn FnMut()) -> ScenarioResult {
+    let start = Instant::now();
+    let mut results: Vec<VariantResult> = Vec::new();
+    let scene = SceneGpu::new(&gpu.device, scenario);
+    let mut scene = match scene {
+        Ok(s) => s,
+        Err(e) => {
+            for v in &scenario.variants {
+                results.push(empty_result(v, Status::Failed { error: e.to_string() }));
+            }
+            return finish(scenario, run_id, results, start);
+        }
+    };
+
+    let needs_reference = scenario.reference != Reference::None && !scenario.metrics.is_empty();
+    let native_is_reference = |v: &Variant| v.technique == TechniqueKind::Native && scenario.reference == Reference::Native;
+    // The reference renders first; when it is the native variant itself, that render is reused.
+    let mut reference: Option<Result<ReferenceFrames, String>> = None;
+    if needs_reference && !scenario.variants.iter().any(native_is_reference) {
+        reference = Some(render_reference(gpu, &mut scene, scenario, on_frame));
+    }
+    let mut order: Vec<&Variant> = scenario.variants.iter().filter(|v| native_is_reference(v)).collect();
+    order.extend(scenario.variants.iter().filter(|v| !native_is_reference(v)));
+
+    let image_dir = run_dir.join("images").join(&scenario.name);
+    for variant in order {
+        let is_reference = needs_reference && native_is_reference(variant) && reference.is_none();
+        let keep = needs_reference || !scenario.save_frames.is_empty();
+        let mut result = empty_result(variant, Status::Ok);
+        let outcome = render_variant(gpu, &mut scene, scenario, variant, keep, on_frame);
+        let rendered = match outcome {
+            Ok(Ok((r, plan_record))) => {
+                fill_timings(&mut result, &r, plan_record);
+                r
+            }
+            Ok(Err(Unsupported(reason))) => {
+                result.status = Status::Skipped { reason };
+                results.push(result);
+                continue;
+            }
+            Err(error) => {
+                result.status = Status::Failed { error };
+                if is_reference {
+                    reference = Some(Err(format!("the native reference failed: {}", variant.name)));
+                }
+                results.push(result);
+                continue;
+            }
+        };
+        result.non_finite_values = rendered.non_finite;
+        save_images(&mut result, &rendered.frames, scenario, &image_dir, run_dir, "output");
+        if is_reference {
+            reference = Some(Ok(ReferenceFrames { frames: rendered.frames.clone(), hdr: rendered.hdr_frames.clone() }));
+        }
+        if needs_reference {
+            match reference.as_ref() {
+                Some(Ok(r)) => {
+                    result.reference = Some(scenario.reference.name().to_string());
+                    match compute_metrics(scenario, &r.frames, &rendered.frames) {
+                        Ok(m) => result.metrics = m,
+                        Err(e) => result.status = Status::Failed { error: format!("metrics: {e}") },
+                    }
+                }
+                Some(Err(e)) => result.status = Status::Failed { error: e.clone() },
+                None => {}
+            }
+        }
+        results.push(result);
+    }
+    // Reference images once per scenario, next to the variants'.
+    if let Some(Ok(r)) = &reference {
+        if let Some(first) = results.iter_mut().find(|r| r.status == Status::Ok && r.technique != "native") {
+            save_images(first, &r.frames, scenario, &image_dir, run_dir, "reference");
+        }
+    }
+    // Put results back in the scenario's declaration order.
+    results.sort_by_key(|r| scenario.variants.iter().position(|v| v.name == r.variant).unwrap_or(usize::MAX));
+    gates::apply(scenario, &mut results);
+    finish(scenario, run_id, results, start)
+}
+
+fn finish(scenario: &Scenario, run_id: &str, results: Vec<VariantResult>, start: Instant) -> ScenarioResult {
+    ScenarioResult {
+        schema_version: tessera_results::SCHEMA_VERSION,
+        run_id: run_id.to_string(),
+        scenario: scenario.name.clone(),
+        file: scenario.file.display().to_string(),
+        width: scenario.width,
+        height: scenario.height,
+        warmup_frames: scenario.warmup_frames,
+        measured_frames: scenario.measured_frames,
+        time_step: scenario.time_step,
+        reference: scenario.reference.name().to_string(),
+        results,
+        wall_ms: start.elapsed().as_secs_f64() * 1000.0,
+    }
+}
+
+fn empty_result(v: &Variant, status: Status) -> VariantResult {
+    VariantResult {
+        variant: v.name.clone(),
+        technique: v.technique.name().to_string(),
+        params: v.params.iter().map(|(k, p)| (k.clone(), p.to_json())).collect(),
+        status,
+        reference: None,
+        passes: Vec::new(),
+        culled_passes: Vec::new(),
+        gpu_frame_ms: None,
+        cpu_frame_ms: Summary { count: 0, median: 0.0, p5: 0.0, p95: 0.0, min: 0.0, max: 0.0, mean: 0.0 },
+        resources: Vec::new(),
+        allocated_bytes: 0,
+        metrics: Vec::new(),
+        non_finite_values: 0,
+        images: Vec::new(),
+        gates: Vec::new(),
+    }
+}
+
+/// What the plan of a rendered variant looked like.
+struct PlanRecord {
+    passes: Vec<(String, String, Vec<String>, Vec<String>)>,
+    culled: Vec<String>,
+    resources: Vec<tessera_results::ResourceRecord>,
+}
+
+type VariantOutcome = Result<Result<(Rendered, PlanRecord), Unsupported>, String>;
+
+/// Builds and renders a variant inside a GPU error scope. Outer error: the GPU failed.
+fn render_variant(gpu: &Gpu, scene: &mut SceneGpu, scenario: &Scenario, variant: &Variant, keep: bool, on_frame: &mut dyn FnMut()) -> VariantOutcome {
+    let validation = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let oom = gpu.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+    let built = technique::build(gpu, variant, scenario.width, scenario.height);
+    let result = match built {
+        Err(u) => Ok(Err(u)),
+        Ok(mut t) => {
+            let plan = plan_record(t.as_ref());
+            match frames::render(gpu, scene, scenario, t.as_mut(), keep, false, on_frame) {
+                Ok(r) => Ok(Ok((r, plan))),
+                Err(e) => Err(e.to_string()),
+            }
+        }
+    };
+    let oom = pollster::block_on(oom.pop());
+    let validation = pollster::block_on(validation.pop());
+    if let Some(e) = oom.or(validation) {
+        return Err(format!("GPU error: {}", first_line(&e.to_string())));
+    }
+    result
+}
+
+fn first_line(s: &str) -> String {
+    s.lines().map(str::trim).filter(|l| !l.is_empty()).take(3).collect::<Vec<_>>().join(" ")
+}
+
+fn plan_record(t: &dyn Technique) -> PlanRecord {
+    let plan = t.plan();
+    PlanRecord {
+        passes: plan
+            .passes
+            .iter()
+            .map(|p| {
+                (
+                    p.name.to_string(),
+                    p.kind.name().to_string(),
+                    p.reads.iter().map(|s| s.to_string()).collect(),
+                    p.writes.iter().map(|s| s.to_string()).collect(),
+                )
+            })
+            .collect(),
+        culled: plan.culled.iter().map(|s| s.to_string()).collect(),
+        resources: plan.records(),
+    }
+}
+
+fn render_reference(gpu: &Gpu, scene: &mut SceneGpu, scenario: &Scenario, on_frame: &mut dyn FnMut()) -> Result<ReferenceFrames, String> {
+    let validation = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let built: Result<Box<dyn Technique>, Unsupported> = match scenario.reference {
+        Reference::GroundTruth { supersample } => technique::ground_truth(gpu, scenario.width, scenario.height, supersample),
+        _ => {
+            let native = Variant { name: "native".into(), technique: TechniqueKind::Native, params: BTreeMap::new() };
+            technique::build(gpu, &native, scenario.width, scenario.height)
+        }
+    };
+    let result = match built {
+        Err(Unsupported(reason)) => Err(format!("no reference: {reason}")),
+        Ok(mut t) => frames::render(gpu, scene, scenario, t.as_mut(), true, false, on_frame)
+            .map(|r| ReferenceFrames { frames: r.frames, hdr: r.hdr_frames })
+            .map_err(|e| format!("reference render failed: {e}")),
+    };
+    if let Some(e) = pollster::block_on(validation.pop()) {
+        return Err(format!("reference render failed: GPU error: {}", first_line(&e.to_string())));
+    }
+    result
+}
+
+fn fill_timings(result: &mut VariantResult, r: &Rendered, plan: PlanRecord) {
+    for (name, kind, reads, writes) in plan.passes {
+        let samples: Vec<f64> = if r.timestamps {
+            r.measurements.iter().filter_map(|m| m.gpu_ms.get(&name).copied()).collect()
+        } else {
+            Vec::new()
+        };
+        let mut invocations: Vec<f64> =
+            r.measurements.iter().filter_map(|m| m.fragment_invocations.get(&name).map(|c| *c as f64)).collect();
+        invocations.sort_by(|a, b| a.total_cmp(b));
+        result.passes.push(PassRecord {
+            name,
+            kind,
+            reads,
+            writes,
+            gpu_ms: Summary::of(&samples),
+            samples_ms: samples,
+            fragment_invocations: (!invocations.is_empty()).then(|| invocations[invocations.len() / 2] as u64),
+        });
+    }
+    if r.timestamps {
+        let per_frame: Vec<f64> = r.measurements.iter().map(|m| m.gpu_ms.values().sum()).collect();
+        result.gpu_frame_ms = Summary::of(&per_frame);
+    }
+    if let Some(s) = Summary::of(&r.cpu_ms) {
+        result.cpu_frame_ms = s;
+    }
+    result.culled_passes = plan.culled;
+    result.allocated_bytes = plan.resources.iter().map(|r| r.bytes).sum();
+    result.resources = plan.resources;
+}
+
+/// Metrics of every measured frame against the reference's frame of the same index.
+fn compute_metrics(scenario: &Scenario, reference: &[Rgb8Image], test: &[Rgb8Image]) -> Result<Vec<MetricRecord>, tessera_metrics::MetricsError> {
+    let frames: Vec<u32> = (0..test.len().min(reference.len()) as u32).collect();
+    let mut out = Vec::new();
+    for &kind in &scenario.metrics {
+        let mut per_frame = Vec::new();
+        for &f in &frames {
+            let (r, t) = (&reference[f as usize], &test[f as usize]);
+            let v = match kind {
+                MetricKind::Psnr => tessera_metrics::mse_rgb(r, t)?,
+                MetricKind::PsnrLuma => tessera_metrics::mse_luma(r, t)?,
+                MetricKind::MaxAbsError => tessera_metrics::max_abs_error(r, t)? as f64,
+                MetricKind::Ssim => tessera_metrics::ssim_rgb(r, t)?,
+                MetricKind::SsimLuma => tessera_metrics::ssim_luma(r, t)?,
+                MetricKind::Flip => tessera_metrics::flip_ldr(r, t, tessera_metrics::DEFAULT_PIXELS_PER_DEGREE)?.mean,
+            };
+            per_frame.push(v);
+        }
+        // PSNR is aggregated from the mean MSE (the PSNR of the sequence), per frame from each MSE.
+        let (per_frame, value) = match kind {
+            MetricKind::Psnr | MetricKind::PsnrLuma => {
+                let mean_mse = per_frame.iter().sum::<f64>() / per_frame.len().max(1) as f64;
+                let psnr: Vec<f64> = per_frame.iter().map(|m| tessera_metrics::psnr_from_mse(*m, 255.0)).collect();
+                (psnr, tessera_metrics::psnr_from_mse(mean_mse, 255.0))
+            }
+            MetricKind::MaxAbsError => {
+                let max = per_frame.iter().copied().fold(0.0, f64::max);
+                (per_frame, max)
+            }
+            _ => {
+                let mean = per_frame.iter().sum::<f64>() / per_frame.len().max(1) as f64;
+                (per_frame, mean)
+            }
+        };
+        out.push(MetricRecord { name: kind.name().to_string(), per_frame, frames: frames.clone(), value, higher_is_better: kind.higher_is_better() });
+    }
+    Ok(out)
+}
+
+fn save_images(result: &mut VariantResult, frames: &[Rgb8Image], scenario: &Scenario, dir: &Path, run_dir: &Path, kind: &str) {
+    if frames.is_empty() {
+        return;
+    }
+    let _ = std::fs::create_dir_all(dir);
+    let stem = if kind == "reference" { "reference".to_string() } else { sanitize(&result.variant) };
+    for &f in &scenario.save_frames {
+        let Some(img) = frames.get(f as usize) else { continue };
+        let path = dir.join(format!("{stem}-f{f:03}.png"));
+        if tessera_metrics::save_png(&path, img).is_ok() {
+            let rel = path.strip_prefix(run_dir).unwrap_or(&path).to_string_lossy().replace('\\', "/");
+            result.images.push(ImageRecord { frame: f, kind: kind.to_string(), path: rel });
+        }
+    }
+}
+
+/// A variant name as a file name: `upscale[scale=0.5]` → `upscale_scale=0.5_`.
+pub fn sanitize(name: &str) -> String {
+    name.chars().map(|c| if c.is_ascii_alphanumeric() || "-_.=".contains(c) { c } else { '_' }).collect()
+}
+
+/// A scenario result whose every variant failed with `error` (e.g. after a lost device).
+pub fn run_failed(scenario: &Scenario, run_id: &str, error: &str) -> ScenarioResult {
+    let results = scenario.variants.iter().map(|v| empty_result(v, Status::Failed { error: error.to_string() })).collect();
+    finish(scenario, run_id, results, Instant::now())
+}
