@@ -1,0 +1,244 @@
+//! A run bundle: one run's `run.json`, its scenario results and its saved images, as read from a
+//! run folder or received by `POST /api/runs`, checked before anything touches the store.
+//!
+//! The wire format of the upload is documented in the crate README ("Uploading"). Not for:
+//! storing (see [`crate::store`]) or HTTP details (see [`crate::server::upload`]).
+
+use std::collections::BTreeMap;
+use std::path::{Component, Path};
+
+use base64::Engine;
+use serde::{Deserialize, Serialize};
+use tessera_results::{RunInfo, ScenarioResult, SCHEMA_VERSION};
+
+/// Largest single image accepted, in bytes.
+pub const MAX_IMAGE_BYTES: usize = 16 << 20;
+
+/// What `POST /api/runs` accepts: the run, every scenario result, and the images the results list,
+/// keyed by their path in the run folder (as in `VariantResult::images`) and encoded in base64.
+#[derive(Debug, Deserialize, Serialize)]
+pub struct UploadBody {
+    pub run: serde_json::Value,
+    pub scenarios: Vec<serde_json::Value>,
+    #[serde(default)]
+    pub images: BTreeMap<String, String>,
+}
+
+/// A checked run, ready to store.
+#[derive(Debug, Clone)]
+pub struct RunBundle {
+    pub run: RunInfo,
+    pub scenarios: Vec<ScenarioResult>,
+    /// Image bytes by path in the run folder.
+    pub images: BTreeMap<String, Vec<u8>>,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum BundleError {
+    #[error("{what} has schema_version {found}; this dashboard reads version {SCHEMA_VERSION} only: upgrade tessera-dashboard to store it")]
+    UnknownSchema { what: String, found: String },
+    #[error("{what} is not a valid record: {source}")]
+    Invalid {
+        what: String,
+        #[source]
+        source: serde_json::Error,
+    },
+    #[error("{0}")]
+    Inconsistent(String),
+    #[error("image {path}: {problem}")]
+    Image { path: String, problem: String },
+    #[error("cannot read {path}: {source}")]
+    Io {
+        path: String,
+        #[source]
+        source: std::io::Error,
+    },
+}
+
+fn check_schema(what: &str, value: &serde_json::Value) -> Result<(), BundleError> {
+    match value.get("schema_version") {
+        Some(v) if v.as_u64() == Some(SCHEMA_VERSION as u64) => Ok(()),
+        other => Err(BundleError::UnknownSchema {
+            what: what.to_string(),
+            found: other.map_or_else(|| "none".to_string(), |v| v.to_string()),
+        }),
+    }
+}
+
+fn parse<T: serde::de::DeserializeOwned>(what: &str, value: serde_json::Value) -> Result<T, BundleError> {
+    check_schema(what, &value)?;
+    serde_json::from_value(value).map_err(|source| BundleError::Invalid { what: what.to_string(), source })
+}
+
+/// Run ids appear in URLs: letters, digits, `.`, `_`, `-`, at most 128.
+pub fn valid_run_id(id: &str) -> bool {
+    !id.is_empty()
+        && id.len() <= 128
+        && id != "."
+        && id != ".."
+        && id.chars().all(|c| c.is_ascii_alphanumeric() || matches!(c, '.' | '_' | '-'))
+}
+
+/// An image path must stay inside the run folder: relative, no `..`, no root.
+pub fn safe_relative_path(path: &str) -> bool {
+    let p = Path::new(path);
+    !path.is_empty() && p.components().all(|c| matches!(c, Component::Normal(_))) && !path.contains('\\')
+}
+
+const PNG_SIGNATURE: &[u8] = b"\x89PNG\r\n\x1a\n";
+
+impl RunBundle {
+    /// Checks the schema versions first (so a newer format is named as such rather than as a
+    /// parse error), then the records, the run ids and every image.
+    pub fn from_parts(
+        run: serde_json::Value,
+        scenarios: Vec<serde_json::Value>,
+        images: BTreeMap<String, Vec<u8>>,
+    ) -> Result<RunBundle, BundleError> {
+        let run: RunInfo = parse("run.json", run)?;
+        if !valid_run_id(&run.run_id) {
+            return Err(BundleError::Inconsistent(format!(
+                "run_id {:?} may only hold letters, digits, '.', '_' and '-' (at most 128)",
+                run.run_id
+            )));
+        }
+        let mut parsed: Vec<ScenarioResult> = Vec::with_capacity(scenarios.len());
+        for (i, s) in scenarios.into_iter().enumerate() {
+            let name = s.get("scenario").and_then(|v| v.as_str()).unwrap_or("?").to_string();
+            let s: ScenarioResult = parse(&format!("scenario result {i} ({name})"), s)?;
+            if s.run_id != run.run_id {
+                return Err(BundleError::Inconsistent(format!(
+                    "scenario {} has run_id {:?} but run.json has {:?}",
+                    s.scenario, s.run_id, run.run_id
+                )));
+            }
+            if parsed.iter().any(|p| p.scenario == s.scenario) {
+                return Err(BundleError::Inconsistent(format!("scenario {} appears twice", s.scenario)));
+            }
+            let mut seen = std::collections::BTreeSet::new();
+            for v in &s.results {
+                if !seen.insert(&v.variant) {
+                    return Err(BundleError::Inconsistent(format!(
+                        "scenario {} lists variant {} twice",
+                        s.scenario, v.variant
+                    )));
+                }
+            }
+            parsed.push(s);
+        }
+        let referenced: std::collections::BTreeSet<&str> = parsed
+            .iter()
+            .flat_map(|s| s.results.iter().flat_map(|v| v.images.iter().map(|i| i.path.as_str())))
+            .collect();
+        for (path, bytes) in &images {
+            let problem = if !safe_relative_path(path) {
+                Some("must be a relative path inside the run folder".to_string())
+            } else if !referenced.contains(path.as_str()) {
+                Some("is not listed in any result's images".to_string())
+            } else if bytes.len() > MAX_IMAGE_BYTES {
+                Some(format!("is {} bytes; the limit is {MAX_IMAGE_BYTES}", bytes.len()))
+            } else if !bytes.starts_with(PNG_SIGNATURE) {
+                Some("is not a PNG file".to_string())
+            } else {
+                None
+            };
+            if let Some(problem) = problem {
+                return Err(BundleError::Image { path: path.clone(), problem });
+            }
+        }
+        Ok(RunBundle { run, scenarios: parsed, images })
+    }
+
+    /// Decodes an upload body.
+    pub fn from_upload(body: UploadBody) -> Result<RunBundle, BundleError> {
+        let mut images = BTreeMap::new();
+        for (path, b64) in body.images {
+            let bytes = base64::engine::general_purpose::STANDARD.decode(b64.as_bytes()).map_err(|e| {
+                BundleError::Image { path: path.clone(), problem: format!("is not valid base64: {e}") }
+            })?;
+            images.insert(path, bytes);
+        }
+        RunBundle::from_parts(body.run, body.scenarios, images)
+    }
+
+    /// Reads a run folder: `run.json`, `scenarios/*.json` (in name order) and every listed image
+    /// that exists (a missing image is left out, not an error: runs may be saved without them).
+    pub fn read_folder(dir: &Path) -> Result<RunBundle, BundleError> {
+        let read = |p: &Path| std::fs::read(p).map_err(|source| BundleError::Io { path: p.display().to_string(), source });
+        let json = |p: &Path| -> Result<serde_json::Value, BundleError> {
+            serde_json::from_slice(&read(p)?).map_err(|source| BundleError::Invalid { what: p.display().to_string(), source })
+        };
+        let run = json(&dir.join("run.json"))?;
+        let scen_dir = dir.join("scenarios");
+        let mut files: Vec<_> = match std::fs::read_dir(&scen_dir) {
+            Ok(entries) => entries
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| p.extension().is_some_and(|x| x == "json"))
+                .collect(),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Vec::new(),
+            Err(source) => return Err(BundleError::Io { path: scen_dir.display().to_string(), source }),
+        };
+        files.sort();
+        let scenarios = files.iter().map(|p| json(p)).collect::<Result<Vec<_>, _>>()?;
+        let mut images = BTreeMap::new();
+        for s in &scenarios {
+            let paths = s["results"].as_array().into_iter().flatten().flat_map(|v| {
+                v["images"].as_array().into_iter().flatten().filter_map(|i| i["path"].as_str())
+            });
+            for path in paths {
+                if !safe_relative_path(path) || images.contains_key(path) {
+                    continue; // from_parts names unsafe paths; duplicates are read once
+                }
+                let full = dir.join(path);
+                if full.is_file() {
+                    images.insert(path.to_string(), read(&full)?);
+                }
+            }
+        }
+        RunBundle::from_parts(run, scenarios, images)
+    }
+
+    /// The upload body for this bundle (what `tessera run --upload` sends).
+    pub fn to_upload(&self) -> UploadBody {
+        UploadBody {
+            run: serde_json::to_value(&self.run).expect("records serialise"),
+            scenarios: self.scenarios.iter().map(|s| serde_json::to_value(s).expect("records serialise")).collect(),
+            images: self
+                .images
+                .iter()
+                .map(|(p, b)| (p.clone(), base64::engine::general_purpose::STANDARD.encode(b)))
+                .collect(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn paths_cannot_leave_the_run_folder() {
+        assert!(safe_relative_path("images/tiny/native-f002.png"));
+        for bad in ["../x.png", "/etc/passwd", "images/../../x", "", "a\\..\\b"] {
+            assert!(!safe_relative_path(bad), "{bad}");
+        }
+    }
+
+    #[test]
+    fn run_ids_are_url_safe() {
+        assert!(valid_run_id("20261122T025424Z"));
+        for bad in ["", "..", "a/b", "a b", "%2e"] {
+            assert!(!valid_run_id(bad), "{bad}");
+        }
+    }
+
+    #[test]
+    fn unknown_schema_version_is_named() {
+        let err = RunBundle::from_parts(serde_json::json!({"schema_version": 99}), vec![], BTreeMap::new())
+            .unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "run.json has schema_version 99; this dashboard reads version 1 only: upgrade tessera-dashboard to store it"
+        );
+    }
+}

@@ -1,0 +1,223 @@
+//! Storing a checked [`RunBundle`] in one transaction: all of it or nothing, idempotent by run id,
+//! safe against concurrent uploads (conflicting inserts are `ON CONFLICT DO NOTHING`, rows are
+//! taken in one global order, and a deadlocked transaction is retried).
+//!
+//! Not for: checking the bundle (see [`crate::bundle`]), regression detection (see
+//! [`crate::regressions`]), which runs after the commit on the series this returns.
+
+use std::collections::BTreeMap;
+
+use sha2::{Digest, Sha256};
+use tessera_results::{RunInfo, Status};
+
+use super::measures::{measures, native_gpu_ms};
+use super::StoreError;
+use crate::bundle::RunBundle;
+use crate::db::{transaction, Connection, DbError, Value};
+
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Ingested {
+    /// Newly stored; `series` are the ids of the series that got a point.
+    Stored { run_pk: i64, results: usize, series: Vec<i64> },
+    /// A run with this id was stored before; nothing changed.
+    AlreadyStored { run_pk: i64 },
+}
+
+/// Stores `bundle`; retries the whole transaction a few times on a write conflict.
+pub fn ingest(conn: &mut dyn Connection, bundle: &RunBundle) -> Result<Ingested, StoreError> {
+    let mut attempt = 0;
+    loop {
+        match transaction(conn, |c| ingest_once(c, bundle)) {
+            Err(StoreError::Db(e)) if e.is_retryable() && attempt < 5 => attempt += 1,
+            other => return other,
+        }
+    }
+}
+
+pub fn adapter_id(conn: &mut dyn Connection, run: &RunInfo) -> Result<i64, DbError> {
+    let a = &run.adapter;
+    let key = [
+        Value::from(a.name.as_str()),
+        Value::Int(a.vendor.into()),
+        Value::Int(a.device.into()),
+        Value::from(a.backend.as_str()),
+    ];
+    if let Some(row) = conn.query_opt(
+        "SELECT id FROM adapters WHERE name = $1 AND vendor = $2 AND device = $3 AND backend = $4",
+        &key,
+    )? {
+        return row.i64(0);
+    }
+    let mut params = key.to_vec();
+    params.push(a.device_type.as_str().into());
+    conn.execute(
+        "INSERT INTO adapters (name, vendor, device, backend, device_type) VALUES ($1, $2, $3, $4, $5)
+         ON CONFLICT DO NOTHING",
+        &params,
+    )?;
+    conn.query(
+        "SELECT id FROM adapters WHERE name = $1 AND vendor = $2 AND device = $3 AND backend = $4",
+        &key,
+    )?[0]
+        .i64(0)
+}
+
+pub fn digest(bytes: &[u8]) -> String {
+    Sha256::digest(bytes).iter().map(|b| format!("{b:02x}")).collect()
+}
+
+fn ingest_once(conn: &mut dyn Connection, bundle: &RunBundle) -> Result<Ingested, StoreError> {
+    let run = &bundle.run;
+    if let Some(row) = conn.query_opt("SELECT id FROM runs WHERE run_id = $1", &[run.run_id.as_str().into()])? {
+        return Ok(Ingested::AlreadyStored { run_pk: row.i64(0)? });
+    }
+    let adapter = adapter_id(conn, run)?;
+    let mut counts = [0i64; 3];
+    for v in bundle.scenarios.iter().flat_map(|s| &s.results) {
+        counts[match v.status {
+            Status::Ok => 0,
+            Status::Skipped { .. } => 1,
+            Status::Failed { .. } => 2,
+        }] += 1;
+    }
+    let run_json = serde_json::to_string(run).expect("records serialise");
+    let inserted = conn.query(
+        "INSERT INTO runs (run_id, commit_sha, dirty, started_at, finished_at, status, harness_version,
+             adapter_id, driver, driver_info, hostname, n_ok, n_skipped, n_failed, run_json, imported_at)
+         VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13, $14, $15, $16)
+         ON CONFLICT (run_id) DO NOTHING RETURNING id",
+        &[
+            run.run_id.as_str().into(),
+            run.commit.as_ref().map(|c| c.sha.clone()).into(),
+            run.commit.as_ref().is_some_and(|c| c.dirty).into(),
+            run.started_at.as_str().into(),
+            run.finished_at.clone().into(),
+            serde_json::to_value(run.status).expect("status serialises").as_str().unwrap_or("").into(),
+            run.harness_version.as_str().into(),
+            Value::Int(adapter),
+            run.adapter.driver.as_str().into(),
+            run.adapter.driver_info.as_str().into(),
+            run.host.hostname.as_str().into(),
+            Value::Int(counts[0]),
+            Value::Int(counts[1]),
+            Value::Int(counts[2]),
+            run_json.into(),
+            crate::now_rfc3339().into(),
+        ],
+    )?;
+    let Some(row) = inserted.first() else {
+        // Another upload of the same run committed first.
+        let row = conn.query("SELECT id FROM runs WHERE run_id = $1", &[run.run_id.as_str().into()])?;
+        return Ok(Ingested::AlreadyStored { run_pk: row[0].i64(0)? });
+    };
+    let run_pk = row.i64(0)?;
+
+    // Images, content-addressed; in digest order so that concurrent uploads take rows in one order.
+    let mut digests: BTreeMap<&str, String> = BTreeMap::new();
+    let mut by_digest: BTreeMap<String, &[u8]> = BTreeMap::new();
+    for (path, bytes) in &bundle.images {
+        let d = digest(bytes);
+        digests.insert(path, d.clone());
+        by_digest.insert(d, bytes);
+    }
+    for (d, bytes) in &by_digest {
+        conn.execute(
+            "INSERT INTO blobs (digest, bytes) VALUES ($1, $2) ON CONFLICT DO NOTHING",
+            &[d.as_str().into(), Value::Blob(bytes.to_vec())],
+        )?;
+    }
+
+    let mut points: BTreeMap<(String, String, String), (f64, bool)> = BTreeMap::new();
+    let mut results = 0;
+    for s in &bundle.scenarios {
+        let record = serde_json::to_string(s).expect("records serialise");
+        conn.execute(
+            "INSERT INTO scenario_results (run_pk, scenario, width, height, wall_ms, record_json)
+             VALUES ($1, $2, $3, $4, $5, $6)",
+            &[
+                Value::Int(run_pk),
+                s.scenario.as_str().into(),
+                Value::Int(s.width.into()),
+                Value::Int(s.height.into()),
+                Value::from(s.wall_ms),
+                record.into(),
+            ],
+        )?;
+        let native = native_gpu_ms(s);
+        for v in &s.results {
+            results += 1;
+            let reason = match &v.status {
+                Status::Ok => None,
+                Status::Skipped { reason } => Some(reason.clone()),
+                Status::Failed { error } => Some(error.clone()),
+            };
+            conn.execute(
+                "INSERT INTO results (run_pk, scenario, variant, technique, status, reason, gpu_ms, cpu_ms,
+                     speedup, allocated_bytes)
+                 VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10)",
+                &[
+                    Value::Int(run_pk),
+                    s.scenario.as_str().into(),
+                    v.variant.as_str().into(),
+                    v.technique.as_str().into(),
+                    v.status.label().into(),
+                    reason.into(),
+                    v.gpu_frame_ms.map(|g| g.median).into(),
+                    Value::from(v.cpu_frame_ms.median),
+                    super::measures::speedup(v, native).into(),
+                    Value::Int(v.allocated_bytes.min(i64::MAX as u64) as i64),
+                ],
+            )?;
+            for img in &v.images {
+                if let Some(d) = digests.get(img.path.as_str()) {
+                    conn.execute(
+                        "INSERT INTO images (run_pk, scenario, variant, frame, kind, digest)
+                         VALUES ($1, $2, $3, $4, $5, $6) ON CONFLICT DO NOTHING",
+                        &[
+                            Value::Int(run_pk),
+                            s.scenario.as_str().into(),
+                            v.variant.as_str().into(),
+                            Value::Int(img.frame.into()),
+                            img.kind.as_str().into(),
+                            d.as_str().into(),
+                        ],
+                    )?;
+                }
+            }
+            for m in measures(v, native) {
+                points.insert((s.scenario.clone(), v.variant.clone(), m.name), (m.value, m.higher_is_better));
+            }
+        }
+    }
+
+    let mut series = Vec::with_capacity(points.len());
+    for ((scenario, variant, measure), (value, hib)) in points {
+        let key = [scenario.into(), variant.into(), Value::Int(adapter), measure.into()];
+        let id = match conn.query_opt(
+            "SELECT id FROM series WHERE scenario = $1 AND variant = $2 AND adapter_id = $3 AND measure = $4",
+            &key,
+        )? {
+            Some(row) => row.i64(0)?,
+            None => {
+                let mut params = key.to_vec();
+                params.push(hib.into());
+                conn.execute(
+                    "INSERT INTO series (scenario, variant, adapter_id, measure, higher_is_better)
+                     VALUES ($1, $2, $3, $4, $5) ON CONFLICT DO NOTHING",
+                    &params,
+                )?;
+                conn.query(
+                    "SELECT id FROM series WHERE scenario = $1 AND variant = $2 AND adapter_id = $3 AND measure = $4",
+                    &key,
+                )?[0]
+                    .i64(0)?
+            }
+        };
+        conn.execute(
+            "INSERT INTO points (series_id, run_pk, value) VALUES ($1, $2, $3)",
+            &[Value::Int(id), Value::Int(run_pk), Value::Real(value)],
+        )?;
+        series.push(id);
+    }
+    Ok(Ingested::Stored { run_pk, results, series })
+}

@@ -1,0 +1,24 @@
+//! Tessera's queries, written once against [`crate::db::Connection`] for both backends: storing a
+//! run bundle, reading what each page shows, keeping regressions and their triage.
+//!
+//! Not for: SQL dialect details (see [`crate::db`]), HTTP or HTML.
+
+pub mod ingest;
+pub mod measures;
+pub mod read;
+pub mod triage;
+
+use crate::db::DbError;
+
+/// Errors of the store's queries.
+#[derive(Debug, thiserror::Error)]
+pub enum StoreError {
+    #[error(transparent)]
+    Db(#[from] DbError),
+    #[error("stored record is corrupt: {0}")]
+    Corrupt(String),
+    #[error("{0} not found")]
+    NotFound(String),
+    #[error("{0}")]
+    Invalid(String),
+}

@@ -1,0 +1,428 @@
+//! What the pages show, read from the store: one function per view, each returning a plain
+//! serialisable struct that is also the JSON API's response. Not for: rendering (see
+//! [`crate::server`]) or statistics (see [`crate::detect`]).
+
+use serde::Serialize;
+use tessera_results::{RunInfo, ScenarioResult};
+
+use super::StoreError;
+use crate::db::{Connection, Row, Value};
+
+/// One run in lists.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct RunRow {
+    pub run_id: String,
+    pub commit: Option<String>,
+    pub dirty: bool,
+    pub started_at: String,
+    pub status: String,
+    pub harness_version: String,
+    pub adapter_id: i64,
+    pub adapter: String,
+    pub backend: String,
+    pub driver: String,
+    pub driver_info: String,
+    pub ok: i64,
+    pub skipped: i64,
+    pub failed: i64,
+}
+
+const RUN_COLUMNS: &str = "r.run_id, r.commit_sha, r.dirty, r.started_at, r.status, r.harness_version, r.adapter_id,
+    a.name, a.backend, r.driver, r.driver_info, r.n_ok, r.n_skipped, r.n_failed";
+
+fn run_row(r: &Row) -> Result<RunRow, StoreError> {
+    Ok(RunRow {
+        run_id: r.string(0)?,
+        commit: r.opt_string(1)?,
+        dirty: r.bool(2)?,
+        started_at: r.string(3)?,
+        status: r.string(4)?,
+        harness_version: r.string(5)?,
+        adapter_id: r.i64(6)?,
+        adapter: r.string(7)?,
+        backend: r.string(8)?,
+        driver: r.string(9)?,
+        driver_info: r.string(10)?,
+        ok: r.i64(11)?,
+        skipped: r.i64(12)?,
+        failed: r.i64(13)?,
+    })
+}
+
+/// The newest runs first, optionally on one adapter.
+pub fn runs(conn: &mut dyn Connection, adapter: Option<i64>, limit: i64) -> Result<Vec<RunRow>, StoreError> {
+    let rows = match adapter {
+        Some(a) => conn.query(
+            &format!(
+                "SELECT {RUN_COLUMNS} FROM runs r JOIN adapters a ON a.id = r.adapter_id
+                 WHERE r.adapter_id = $1 ORDER BY r.started_at DESC, r.id DESC LIMIT $2"
+            ),
+            &[Value::Int(a), Value::Int(limit)],
+        )?,
+        None => conn.query(
+            &format!(
+                "SELECT {RUN_COLUMNS} FROM runs r JOIN adapters a ON a.id = r.adapter_id
+                 ORDER BY r.started_at DESC, r.id DESC LIMIT $1"
+            ),
+            &[Value::Int(limit)],
+        )?,
+    };
+    rows.iter().map(run_row).collect()
+}
+
+/// An adapter as stored (GPU without driver: the driver is part of each run's environment).
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct AdapterRow {
+    pub id: i64,
+    pub name: String,
+    pub backend: String,
+    pub device_type: String,
+    pub runs: i64,
+}
+
+pub fn adapters(conn: &mut dyn Connection) -> Result<Vec<AdapterRow>, StoreError> {
+    conn.query(
+        "SELECT a.id, a.name, a.backend, a.device_type, (SELECT COUNT(*) FROM runs r WHERE r.adapter_id = a.id)
+         FROM adapters a ORDER BY a.name, a.backend",
+        &[],
+    )?
+    .iter()
+    .map(|r| {
+        Ok(AdapterRow {
+            id: r.i64(0)?,
+            name: r.string(1)?,
+            backend: r.string(2)?,
+            device_type: r.string(3)?,
+            runs: r.i64(4)?,
+        })
+    })
+    .collect()
+}
+
+/// An image stored for a result.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct ImageRow {
+    pub scenario: String,
+    pub variant: String,
+    pub frame: i64,
+    pub kind: String,
+    pub digest: String,
+}
+
+/// Series ids of a run's results, so that pages can link to their history.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct SeriesLink {
+    pub scenario: String,
+    pub variant: String,
+    pub measure: String,
+    pub series_id: i64,
+}
+
+/// One run with its records.
+#[derive(Clone, Debug, Serialize)]
+pub struct RunDetail {
+    pub run: RunRow,
+    pub info: RunInfo,
+    pub scenarios: Vec<ScenarioResult>,
+    pub images: Vec<ImageRow>,
+    pub series: Vec<SeriesLink>,
+}
+
+fn run_pk(conn: &mut dyn Connection, run_id: &str) -> Result<i64, StoreError> {
+    conn.query_opt("SELECT id FROM runs WHERE run_id = $1", &[run_id.into()])?
+        .ok_or_else(|| StoreError::NotFound(format!("run {run_id}")))?
+        .i64(0)
+        .map_err(Into::into)
+}
+
+pub fn run(conn: &mut dyn Connection, run_id: &str) -> Result<RunDetail, StoreError> {
+    let pk = run_pk(conn, run_id)?;
+    let row = conn.query(
+        &format!(
+            "SELECT {RUN_COLUMNS}, r.run_json FROM runs r JOIN adapters a ON a.id = r.adapter_id WHERE r.id = $1"
+        ),
+        &[Value::Int(pk)],
+    )?;
+    let run = run_row(&row[0])?;
+    let info: RunInfo = serde_json::from_str(row[0].str(14)?).map_err(|e| StoreError::Corrupt(e.to_string()))?;
+    let scenarios = scenarios_of(conn, pk)?;
+    let images = images_of(conn, pk, None)?;
+    let series = conn
+        .query(
+            "SELECT DISTINCT s.scenario, s.variant, s.measure, s.id FROM points p JOIN series s ON s.id = p.series_id
+             WHERE p.run_pk = $1 ORDER BY s.scenario, s.variant, s.measure",
+            &[Value::Int(pk)],
+        )?
+        .iter()
+        .map(|r| {
+            Ok(SeriesLink { scenario: r.string(0)?, variant: r.string(1)?, measure: r.string(2)?, series_id: r.i64(3)? })
+        })
+        .collect::<Result<_, StoreError>>()?;
+    Ok(RunDetail { run, info, scenarios, images, series })
+}
+
+fn scenarios_of(conn: &mut dyn Connection, pk: i64) -> Result<Vec<ScenarioResult>, StoreError> {
+    conn.query("SELECT record_json FROM scenario_results WHERE run_pk = $1 ORDER BY scenario", &[Value::Int(pk)])?
+        .iter()
+        .map(|r| serde_json::from_str(r.str(0)?).map_err(|e| StoreError::Corrupt(e.to_string())))
+        .collect()
+}
+
+fn images_of(conn: &mut dyn Connection, pk: i64, scenario: Option<&str>) -> Result<Vec<ImageRow>, StoreError> {
+    let rows = match scenario {
+        Some(s) => conn.query(
+            "SELECT scenario, variant, frame, kind, digest FROM images WHERE run_pk = $1 AND scenario = $2
+             ORDER BY scenario, variant, frame, kind",
+            &[Value::Int(pk), s.into()],
+        )?,
+        None => conn.query(
+            "SELECT scenario, variant, frame, kind, digest FROM images WHERE run_pk = $1
+             ORDER BY scenario, variant, frame, kind",
+            &[Value::Int(pk)],
+        )?,
+    };
+    rows.iter()
+        .map(|r| {
+            Ok(ImageRow {
+                scenario: r.string(0)?,
+                variant: r.string(1)?,
+                frame: r.i64(2)?,
+                kind: r.string(3)?,
+                digest: r.string(4)?,
+            })
+        })
+        .collect()
+}
+
+/// Images of one scenario of a run (the image viewer shows one variant with the reference).
+pub fn run_images(conn: &mut dyn Connection, run_id: &str, scenario: &str) -> Result<Vec<ImageRow>, StoreError> {
+    let pk = run_pk(conn, run_id)?;
+    images_of(conn, pk, Some(scenario))
+}
+
+/// The bytes of a stored image by digest.
+pub fn blob(conn: &mut dyn Connection, digest: &str) -> Result<Vec<u8>, StoreError> {
+    let row = conn
+        .query_opt("SELECT bytes FROM blobs WHERE digest = $1", &[digest.into()])?
+        .ok_or_else(|| StoreError::NotFound(format!("image {digest}")))?;
+    Ok(row.blob(0)?.to_vec())
+}
+
+/// What identifies a series.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct SeriesKey {
+    pub id: i64,
+    pub scenario: String,
+    pub variant: String,
+    pub adapter_id: i64,
+    pub adapter: String,
+    pub measure: String,
+    pub higher_is_better: bool,
+}
+
+const SERIES_COLUMNS: &str = "s.id, s.scenario, s.variant, s.adapter_id, a.name, s.measure, s.higher_is_better";
+
+fn series_key(r: &Row) -> Result<SeriesKey, StoreError> {
+    Ok(SeriesKey {
+        id: r.i64(0)?,
+        scenario: r.string(1)?,
+        variant: r.string(2)?,
+        adapter_id: r.i64(3)?,
+        adapter: r.string(4)?,
+        measure: r.string(5)?,
+        higher_is_better: r.bool(6)?,
+    })
+}
+
+/// Series matching a filter (each part optional), at most `limit`.
+pub fn find_series(
+    conn: &mut dyn Connection,
+    scenario: Option<&str>,
+    variant: Option<&str>,
+    adapter: Option<i64>,
+    measure: Option<&str>,
+    limit: i64,
+) -> Result<Vec<SeriesKey>, StoreError> {
+    // Optional filters as bound parameters: `$n IS NULL OR column = $n`.
+    conn.query(
+        &format!(
+            "SELECT {SERIES_COLUMNS} FROM series s JOIN adapters a ON a.id = s.adapter_id
+             WHERE ($1 IS NULL OR s.scenario = $1) AND ($2 IS NULL OR s.variant = $2)
+               AND ($3 IS NULL OR s.adapter_id = $3) AND ($4 IS NULL OR s.measure = $4)
+             ORDER BY s.scenario, s.variant, a.name, s.measure LIMIT $5"
+        ),
+        &[
+            scenario.map(str::to_string).into(),
+            variant.map(str::to_string).into(),
+            adapter.into(),
+            measure.map(str::to_string).into(),
+            Value::Int(limit),
+        ],
+    )?
+    .iter()
+    .map(series_key)
+    .collect()
+}
+
+/// One point of a series as shown.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct PointRow {
+    pub run_id: String,
+    pub commit: Option<String>,
+    pub started_at: String,
+    pub environment: String,
+    pub value: f64,
+}
+
+/// A series with its points, environment segments and stored regressions.
+#[derive(Clone, Debug, Serialize)]
+pub struct SeriesDetail {
+    pub series: SeriesKey,
+    pub points: Vec<PointRow>,
+    /// Indices into `points` where the environment (driver, harness version) changes.
+    pub segment_starts: Vec<usize>,
+    pub regressions: Vec<RegressionRow>,
+}
+
+pub fn series(conn: &mut dyn Connection, id: i64) -> Result<SeriesDetail, StoreError> {
+    let key = conn
+        .query_opt(
+            &format!("SELECT {SERIES_COLUMNS} FROM series s JOIN adapters a ON a.id = s.adapter_id WHERE s.id = $1"),
+            &[Value::Int(id)],
+        )?
+        .ok_or_else(|| StoreError::NotFound(format!("series {id}")))?;
+    let series = series_key(&key)?;
+    let pts = crate::regressions::points(conn, id)?;
+    let mut segment_starts = Vec::new();
+    for i in 0..pts.len() {
+        if i == 0 || pts[i].environment != pts[i - 1].environment {
+            segment_starts.push(i);
+        }
+    }
+    let points = pts
+        .into_iter()
+        .map(|p| PointRow {
+            run_id: p.run_id,
+            commit: p.commit,
+            started_at: p.started_at,
+            environment: p.environment,
+            value: p.value,
+        })
+        .collect();
+    let regressions = regressions(conn, None, Some(id), 1000)?;
+    Ok(SeriesDetail { series, points, segment_starts, regressions })
+}
+
+/// A detected change with its triage.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct RegressionRow {
+    pub id: i64,
+    pub series: SeriesKey,
+    pub run_before: String,
+    pub commit_before: Option<String>,
+    pub run_after: String,
+    pub commit_after: Option<String>,
+    pub started_at: String,
+    pub value_before: f64,
+    pub value_after: f64,
+    pub relative_change: f64,
+    /// `true` when the change makes the measure worse.
+    pub is_regression: bool,
+    pub confidence: f64,
+    pub state: String,
+    pub note: String,
+    pub detected_at: String,
+    pub updated_at: String,
+}
+
+/// Stored changes, newest first, optionally of one triage state or one series.
+pub fn regressions(
+    conn: &mut dyn Connection,
+    state: Option<&str>,
+    series: Option<i64>,
+    limit: i64,
+) -> Result<Vec<RegressionRow>, StoreError> {
+    conn.query(
+        &format!(
+            "SELECT {SERIES_COLUMNS}, g.id, rb.run_id, rb.commit_sha, ra.run_id, ra.commit_sha, ra.started_at,
+                g.value_before, g.value_after, g.relative_change, g.confidence, g.state, g.note, g.detected_at,
+                g.updated_at
+             FROM regressions g JOIN series s ON s.id = g.series_id JOIN adapters a ON a.id = s.adapter_id
+             JOIN runs rb ON rb.id = g.run_pk_before JOIN runs ra ON ra.id = g.run_pk_after
+             WHERE ($1 IS NULL OR g.state = $1) AND ($2 IS NULL OR g.series_id = $2)
+             ORDER BY ra.started_at DESC, g.id DESC LIMIT $3"
+        ),
+        &[state.map(str::to_string).into(), series.into(), Value::Int(limit)],
+    )?
+    .iter()
+    .map(|r| {
+        let series = series_key(r)?;
+        let relative_change = r.opt_f64(15)?.unwrap_or(f64::INFINITY);
+        Ok(RegressionRow {
+            id: r.i64(7)?,
+            is_regression: (relative_change > 0.0) != series.higher_is_better,
+            series,
+            run_before: r.string(8)?,
+            commit_before: r.opt_string(9)?,
+            run_after: r.string(10)?,
+            commit_after: r.opt_string(11)?,
+            started_at: r.string(12)?,
+            value_before: r.f64(13)?,
+            value_after: r.f64(14)?,
+            relative_change,
+            confidence: r.f64(16)?,
+            state: r.string(17)?,
+            note: r.string(18)?,
+            detected_at: r.string(19)?,
+            updated_at: r.string(20)?,
+        })
+    })
+    .collect()
+}
+
+/// The newest run on an adapter that has `scenario` (any scenario when `None`), and the one before.
+pub fn latest_runs_with(
+    conn: &mut dyn Connection,
+    adapter: i64,
+    scenario: Option<&str>,
+    limit: i64,
+) -> Result<Vec<String>, StoreError> {
+    conn.query(
+        "SELECT r.run_id FROM runs r WHERE r.adapter_id = $1
+           AND ($2 IS NULL OR EXISTS (SELECT 1 FROM scenario_results s WHERE s.run_pk = r.id AND s.scenario = $2))
+         ORDER BY r.started_at DESC, r.id DESC LIMIT $3",
+        &[Value::Int(adapter), scenario.map(str::to_string).into(), Value::Int(limit)],
+    )?
+    .iter()
+    .map(|r| r.string(0).map_err(Into::into))
+    .collect()
+}
+
+/// One scenario's record in a run.
+pub fn scenario_result(conn: &mut dyn Connection, run_id: &str, scenario: &str) -> Result<ScenarioResult, StoreError> {
+    let pk = run_pk(conn, run_id)?;
+    let row = conn
+        .query_opt(
+            "SELECT record_json FROM scenario_results WHERE run_pk = $1 AND scenario = $2",
+            &[Value::Int(pk), scenario.into()],
+        )?
+        .ok_or_else(|| StoreError::NotFound(format!("scenario {scenario} in run {run_id}")))?;
+    serde_json::from_str(row.str(0)?).map_err(|e| StoreError::Corrupt(e.to_string()))
+}
+
+/// Every scenario record of a run (the adapter comparison reads two runs).
+pub fn run_scenarios(conn: &mut dyn Connection, run_id: &str) -> Result<Vec<ScenarioResult>, StoreError> {
+    let pk = run_pk(conn, run_id)?;
+    scenarios_of(conn, pk)
+}
+
+/// Scenario names on an adapter, for pickers.
+pub fn scenarios_on(conn: &mut dyn Connection, adapter: Option<i64>) -> Result<Vec<String>, StoreError> {
+    conn.query(
+        "SELECT DISTINCT scenario FROM series WHERE ($1 IS NULL OR adapter_id = $1) ORDER BY scenario",
+        &[adapter.into()],
+    )?
+    .iter()
+    .map(|r| r.string(0).map_err(Into::into))
+    .collect()
+}
