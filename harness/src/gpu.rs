@@ -21,7 +21,10 @@ pub enum GpuError {
     #[error("no adapter matches \"{wanted}\"; available: {available}")]
     NoMatch { wanted: String, available: String },
     #[error("cannot open a device on {adapter}: {source}")]
-    RequestDevice { adapter: String, source: wgpu::RequestDeviceError },
+    RequestDevice {
+        adapter: String,
+        source: wgpu::RequestDeviceError,
+    },
 }
 
 /// An opened device and what Tessera knows about its adapter.
@@ -42,15 +45,20 @@ impl Gpu {
     }
 }
 
-fn instance() -> wgpu::Instance {
-    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
-    desc.backends = wgpu::Backends::from_env().unwrap_or(wgpu::Backends::all());
-    wgpu::Instance::new(desc)
+/// Backends searched: `WGPU_BACKEND` if set (e.g. `vulkan`, `gl`), else `default`.
+fn backends(default: wgpu::Backends) -> wgpu::Backends {
+    wgpu::Backends::from_env().unwrap_or(default)
 }
 
-/// Every adapter of every backend, in the order wgpu enumerates them.
+fn enumerate_backends(backends: wgpu::Backends) -> Vec<wgpu::Adapter> {
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+    desc.backends = backends;
+    pollster::block_on(wgpu::Instance::new(desc).enumerate_adapters(backends))
+}
+
+/// Every adapter of every backend (GL included), in the order wgpu enumerates them.
 pub fn enumerate() -> Vec<wgpu::Adapter> {
-    pollster::block_on(instance().enumerate_adapters(wgpu::Backends::all()))
+    enumerate_backends(backends(wgpu::Backends::all()))
 }
 
 /// Describes an adapter: identity, driver and the features that matter here.
@@ -72,7 +80,8 @@ pub fn describe(adapter: &wgpu::Adapter) -> AdapterInfo {
         backend: info.backend.to_str().to_string(),
         features: AdapterFeatures {
             timestamps: features.contains(wgpu::Features::TIMESTAMP_QUERY),
-            timestamps_inside_passes: features.contains(wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES),
+            timestamps_inside_passes: features
+                .contains(wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES),
             timestamp_period_ns: None,
             pipeline_statistics: features.contains(wgpu::Features::PIPELINE_STATISTICS_QUERY),
             shader_f16: features.contains(wgpu::Features::SHADER_F16),
@@ -112,8 +121,11 @@ fn rank(info: &wgpu::AdapterInfo) -> (u8, u8) {
 
 /// Picks an adapter: the first whose name, driver or backend contains `wanted` (case-insensitive),
 /// or by default the best-ranked one.
+///
+/// Runs search Vulkan, Metal and DX12 only, unless `WGPU_BACKEND` says otherwise: the GL backend
+/// mis-times render passes and cannot read multisampled textures in compute (DESIGN.md).
 pub fn select(wanted: Option<&str>) -> Result<wgpu::Adapter, GpuError> {
-    let mut adapters = enumerate();
+    let mut adapters = enumerate_backends(backends(wgpu::Backends::PRIMARY));
     if adapters.is_empty() {
         return Err(GpuError::NoAdapter);
     }
@@ -122,9 +134,14 @@ pub fn select(wanted: Option<&str>) -> Result<wgpu::Adapter, GpuError> {
             let needle = w.to_lowercase();
             let found = adapters.iter().position(|a| {
                 let i = a.get_info();
-                [i.name.as_str(), i.driver.as_str(), i.driver_info.as_str(), i.backend.to_str()]
-                    .iter()
-                    .any(|s| s.to_lowercase().contains(&needle))
+                [
+                    i.name.as_str(),
+                    i.driver.as_str(),
+                    i.driver_info.as_str(),
+                    i.backend.to_str(),
+                ]
+                .iter()
+                .any(|s| s.to_lowercase().contains(&needle))
             });
             match found {
                 Some(i) => Ok(adapters.swap_remove(i)),
@@ -171,10 +188,19 @@ pub fn open(adapter: wgpu::Adapter) -> Result<Gpu, GpuError> {
         memory_hints: wgpu::MemoryHints::Performance,
         trace: wgpu::Trace::Off,
     };
-    let (device, queue) = pollster::block_on(adapter.request_device(&desc))
-        .map_err(|source| GpuError::RequestDevice { adapter: info.name.clone(), source })?;
+    let (device, queue) = pollster::block_on(adapter.request_device(&desc)).map_err(|source| {
+        GpuError::RequestDevice {
+            adapter: info.name.clone(),
+            source,
+        }
+    })?;
     if features.contains(wgpu::Features::TIMESTAMP_QUERY) {
         info.features.timestamp_period_ns = Some(queue.get_timestamp_period());
     }
-    Ok(Gpu { adapter, device, queue, info })
+    Ok(Gpu {
+        adapter,
+        device,
+        queue,
+        info,
+    })
 }

@@ -16,7 +16,11 @@ const EXIT_INPUT: u8 = 2;
 const EXIT_DEVICE: u8 = 3;
 
 #[derive(Parser)]
-#[command(name = "tessera", version, about = "GPU benchmark harness for shading-reduction techniques")]
+#[command(
+    name = "tessera",
+    version,
+    about = "GPU benchmark harness for shading-reduction techniques"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -66,6 +70,7 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    quiet_headless_probing();
     let cli = match Cli::try_parse() {
         Ok(c) => c,
         Err(e) => {
@@ -75,11 +80,39 @@ fn main() -> ExitCode {
         }
     };
     ExitCode::from(match cli.command {
-        Command::Run { paths, adapter, out, junit, quiet } => run_command(&paths, adapter, out, junit, quiet),
+        Command::Run {
+            paths,
+            adapter,
+            out,
+            junit,
+            quiet,
+        } => run_command(&paths, adapter, out, junit, quiet),
         Command::Validate { paths } => validate_command(&paths),
         Command::Adapters { json } => adapters_command(json),
-        Command::Diff { reference, test, json, heatmap } => diff_command(&reference, &test, json, heatmap),
+        Command::Diff {
+            reference,
+            test,
+            json,
+            heatmap,
+        } => diff_command(&reference, &test, json, heatmap),
     })
+}
+
+/// Tessera never presents to a display, but libwayland (loaded by the Vulkan and EGL loaders while
+/// probing) prints "error: XDG_RUNTIME_DIR is invalid" on headless machines. Give it a private
+/// runtime folder so that the only `error:` lines on stderr are Tessera's own.
+fn quiet_headless_probing() {
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
+        let dir = std::env::temp_dir().join("tessera-runtime");
+        if std::fs::create_dir_all(&dir).is_ok() {
+            #[cfg(unix)]
+            {
+                use std::os::unix::fs::PermissionsExt;
+                let _ = std::fs::set_permissions(&dir, std::fs::Permissions::from_mode(0o700));
+            }
+            std::env::set_var("XDG_RUNTIME_DIR", &dir);
+        }
+    }
 }
 
 /// Loads every scenario, printing every problem; `None` if any file is bad.
@@ -107,7 +140,10 @@ fn load_all(paths: &[PathBuf]) -> Option<Vec<Scenario>> {
     let mut names: Vec<&str> = ok.iter().map(|s| s.name.as_str()).collect();
     names.sort();
     if let Some(w) = names.windows(2).find(|w| w[0] == w[1]) {
-        eprintln!("error: two scenarios are named \"{}\": names must be unique within a run (set `name`)", w[0]);
+        eprintln!(
+            "error: two scenarios are named \"{}\": names must be unique within a run (set `name`)",
+            w[0]
+        );
         return None;
     }
     (bad == 0).then_some(ok)
@@ -124,8 +160,16 @@ fn validate_command(paths: &[PathBuf]) -> u8 {
     }
 }
 
-fn run_command(paths: &[PathBuf], adapter: Option<String>, out: PathBuf, junit: Option<PathBuf>, quiet: bool) -> u8 {
-    let Some(scenarios) = load_all(paths) else { return EXIT_INPUT };
+fn run_command(
+    paths: &[PathBuf],
+    adapter: Option<String>,
+    out: PathBuf,
+    junit: Option<PathBuf>,
+    quiet: bool,
+) -> u8 {
+    let Some(scenarios) = load_all(paths) else {
+        return EXIT_INPUT;
+    };
     let opts = run::Options {
         adapter,
         out,
@@ -164,31 +208,52 @@ fn adapters_command(json: bool) -> u8 {
     }
     let infos: Vec<_> = adapters.iter().map(tessera::gpu::describe).collect();
     if json {
-        println!("{}", serde_json::to_string_pretty(&infos).unwrap_or_default());
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&infos).unwrap_or_default()
+        );
         return 0;
     }
     for i in infos {
         let f = &i.features;
         println!("{} ({}, {})", i.name, i.backend, i.device_type);
-        println!("  driver:        {} {}", i.driver, i.driver_info);
-        println!("  ids:           vendor 0x{:04x}, device 0x{:04x}", i.vendor, i.device);
+        println!("  driver:         {} {}", i.driver, i.driver_info);
         println!(
-            "  timestamps:    {}{}",
-            if f.timestamps { "yes" } else { "no" },
-            if f.timestamps_inside_passes { " (inside passes too)" } else { "" }
+            "  ids:            vendor 0x{:04x}, device 0x{:04x}",
+            i.vendor, i.device
         );
-        println!("  pipeline stats: {}", if f.pipeline_statistics { "yes" } else { "no" });
-        println!("  shader f16:    {}", if f.shader_f16 { "yes" } else { "no" });
-        println!("  max texture:   {}", f.max_texture_dimension_2d);
+        println!(
+            "  timestamps:     {}{}",
+            if f.timestamps { "yes" } else { "no" },
+            if f.timestamps_inside_passes {
+                " (inside passes too)"
+            } else {
+                ""
+            }
+        );
+        println!(
+            "  pipeline stats: {}",
+            if f.pipeline_statistics { "yes" } else { "no" }
+        );
+        println!(
+            "  shader f16:     {}",
+            if f.shader_f16 { "yes" } else { "no" }
+        );
+        println!("  max texture:    {}", f.max_texture_dimension_2d);
         for (format, counts) in &f.msaa {
             let c: Vec<String> = counts.iter().map(|n| format!("{n}x")).collect();
-            println!("  msaa {format:<13} {}", c.join(" "));
+            println!("  msaa {format:<12}  {}", c.join(" "));
         }
     }
     0
 }
 
-fn diff_command(reference: &std::path::Path, test: &std::path::Path, json: bool, heatmap: Option<PathBuf>) -> u8 {
+fn diff_command(
+    reference: &std::path::Path,
+    test: &std::path::Path,
+    json: bool,
+    heatmap: Option<PathBuf>,
+) -> u8 {
     use tessera_metrics::LoadedImage;
     let load = |p: &std::path::Path| match tessera_metrics::load_image(p) {
         Ok(LoadedImage::Ldr(i)) => Ok(i),
@@ -210,13 +275,18 @@ fn diff_command(reference: &std::path::Path, test: &std::path::Path, json: bool,
         }
     };
     if let Some(path) = heatmap {
-        if let Err(e) = tessera_metrics::save_png(&path, &tessera_metrics::flip_heatmap(&report.flip)) {
+        if let Err(e) =
+            tessera_metrics::save_png(&path, &tessera_metrics::flip_heatmap(&report.flip))
+        {
             eprintln!("error: {e}");
             return EXIT_INPUT;
         }
     }
     if json {
-        println!("{}", serde_json::to_string_pretty(&report).unwrap_or_default());
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&report).unwrap_or_default()
+        );
     } else {
         print!("{}", report.to_text());
     }

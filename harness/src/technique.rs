@@ -52,7 +52,11 @@ impl fmt::Display for TechniqueKind {
 static UPSCALE_PARAMS: [ParamSpec; 2] = [
     ParamSpec {
         name: "scale",
-        kind: ParamKind::Float { min: 0.0, min_inclusive: false, max: 1.0 },
+        kind: ParamKind::Float {
+            min: 0.0,
+            min_inclusive: false,
+            max: 1.0,
+        },
         default: Default::Float(0.5),
         doc: "render width and height as a fraction of the output resolution",
     },
@@ -76,8 +80,15 @@ pub struct ParamSpec {
 #[derive(Debug)]
 pub enum ParamKind {
     /// A finite float in `(min, max]` or `[min, max]`.
-    Float { min: f64, min_inclusive: bool, max: f64 },
-    Int { min: i64, max: i64 },
+    Float {
+        min: f64,
+        min_inclusive: bool,
+        max: f64,
+    },
+    Int {
+        min: i64,
+        max: i64,
+    },
     Choice(&'static [&'static str]),
     Bool,
 }
@@ -105,7 +116,11 @@ impl ParamKind {
     /// What values are allowed, in words, for error messages.
     pub fn allowed(&self) -> String {
         match self {
-            ParamKind::Float { min, min_inclusive, max } => {
+            ParamKind::Float {
+                min,
+                min_inclusive,
+                max,
+            } => {
                 let open = if *min_inclusive { "[" } else { "(" };
                 format!("a number in {open}{min}, {max}]")
             }
@@ -119,7 +134,14 @@ impl ParamKind {
     pub fn check(&self, value: &toml::Value) -> Result<ParamValue, String> {
         let fail = || Err(format!("expected {}", self.allowed()));
         match (self, value) {
-            (ParamKind::Float { min, min_inclusive, max }, v) => {
+            (
+                ParamKind::Float {
+                    min,
+                    min_inclusive,
+                    max,
+                },
+                v,
+            ) => {
                 let x = match v {
                     toml::Value::Float(x) => *x,
                     toml::Value::Integer(i) => *i as f64,
@@ -141,7 +163,10 @@ impl ParamKind {
                 if options.contains(&s.as_str()) {
                     Ok(ParamValue::Str(s.clone()))
                 } else {
-                    Err(format!("unknown value \"{s}\": expected {}", self.allowed()))
+                    Err(format!(
+                        "unknown value \"{s}\": expected {}",
+                        self.allowed()
+                    ))
                 }
             }
             (ParamKind::Bool, toml::Value::Boolean(b)) => Ok(ParamValue::Bool(*b)),
@@ -207,15 +232,27 @@ pub struct Variant {
 
 impl Variant {
     pub fn float(&self, name: &str) -> f64 {
-        self.params.get(name).and_then(ParamValue::as_f64).unwrap_or_else(|| {
-            panic!("validated variant {} lacks float parameter {name}", self.name)
-        })
+        self.params
+            .get(name)
+            .and_then(ParamValue::as_f64)
+            .unwrap_or_else(|| {
+                panic!(
+                    "validated variant {} lacks float parameter {name}",
+                    self.name
+                )
+            })
     }
 
     pub fn choice(&self, name: &str) -> &str {
-        self.params.get(name).and_then(ParamValue::as_str).unwrap_or_else(|| {
-            panic!("validated variant {} lacks choice parameter {name}", self.name)
-        })
+        self.params
+            .get(name)
+            .and_then(ParamValue::as_str)
+            .unwrap_or_else(|| {
+                panic!(
+                    "validated variant {} lacks choice parameter {name}",
+                    self.name
+                )
+            })
     }
 }
 
@@ -239,5 +276,9 @@ pub fn closest<'a>(unknown: &str, known: &[&'a str]) -> Option<&'a str> {
 }
 
 pub fn quoted_list(items: &[&str]) -> String {
-    items.iter().map(|s| format!("\"{s}\"")).collect::<Vec<_>>().join(", ")
+    items
+        .iter()
+        .map(|s| format!("\"{s}\""))
+        .collect::<Vec<_>>()
+        .join(", ")
 }

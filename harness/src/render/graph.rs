@@ -36,10 +36,8 @@ pub struct TextureDesc {
 
 impl TextureDesc {
     pub fn bytes(&self) -> u64 {
-        let block = self.format.block_copy_size(None).unwrap_or_else(|| match self.format {
-            wgpu::TextureFormat::Depth24PlusStencil8 => 4,
-            _ => 4,
-        });
+        // Depth-stencil formats have no single copy size; none of ours is one.
+        let block = self.format.block_copy_size(None).unwrap_or(4);
         block as u64 * self.width as u64 * self.height as u64 * self.samples as u64
     }
 }
@@ -78,7 +76,10 @@ pub struct Plan {
 #[derive(Debug, thiserror::Error, PartialEq, Eq)]
 pub enum GraphError {
     #[error("pass `{pass}` uses resource `{resource}`, which the graph does not declare")]
-    UnknownResource { pass: &'static str, resource: &'static str },
+    UnknownResource {
+        pass: &'static str,
+        resource: &'static str,
+    },
     #[error("output `{0}` is not a declared resource")]
     UnknownOutput(&'static str),
 }
@@ -89,8 +90,19 @@ impl Graph {
         self
     }
 
-    pub fn pass(&mut self, name: &'static str, kind: PassKind, reads: &[&'static str], writes: &[&'static str]) -> &mut Self {
-        self.passes.push(Pass { name, kind, reads: reads.to_vec(), writes: writes.to_vec() });
+    pub fn pass(
+        &mut self,
+        name: &'static str,
+        kind: PassKind,
+        reads: &[&'static str],
+        writes: &[&'static str],
+    ) -> &mut Self {
+        self.passes.push(Pass {
+            name,
+            kind,
+            reads: reads.to_vec(),
+            writes: writes.to_vec(),
+        });
         self
     }
 
@@ -106,7 +118,10 @@ impl Graph {
         for p in &self.passes {
             for r in p.reads.iter().chain(&p.writes) {
                 if !known.contains(r) {
-                    return Err(GraphError::UnknownResource { pass: p.name, resource: r });
+                    return Err(GraphError::UnknownResource {
+                        pass: p.name,
+                        resource: r,
+                    });
                 }
             }
         }
@@ -124,11 +139,35 @@ impl Graph {
                 needed.extend(p.reads.iter().copied());
             }
         }
-        let passes: Vec<Pass> = self.passes.iter().zip(&keep).filter(|(_, k)| **k).map(|(p, _)| p.clone()).collect();
-        let culled = self.passes.iter().zip(&keep).filter(|(_, k)| !**k).map(|(p, _)| p.name).collect();
-        let used: BTreeSet<&str> = passes.iter().flat_map(|p| p.reads.iter().chain(&p.writes).copied()).collect();
-        let resources = self.resources.iter().filter(|r| used.contains(r.name)).cloned().collect();
-        Ok(Plan { passes, culled, resources })
+        let passes: Vec<Pass> = self
+            .passes
+            .iter()
+            .zip(&keep)
+            .filter(|(_, k)| **k)
+            .map(|(p, _)| p.clone())
+            .collect();
+        let culled = self
+            .passes
+            .iter()
+            .zip(&keep)
+            .filter(|(_, k)| !**k)
+            .map(|(p, _)| p.name)
+            .collect();
+        let used: BTreeSet<&str> = passes
+            .iter()
+            .flat_map(|p| p.reads.iter().chain(&p.writes).copied())
+            .collect();
+        let resources = self
+            .resources
+            .iter()
+            .filter(|r| used.contains(r.name))
+            .cloned()
+            .collect();
+        Ok(Plan {
+            passes,
+            culled,
+            resources,
+        })
     }
 }
 
@@ -138,7 +177,10 @@ impl Plan {
     }
 
     pub fn desc(&self, resource: &str) -> Option<&TextureDesc> {
-        self.resources.iter().find(|r| r.name == resource).map(|r| &r.desc)
+        self.resources
+            .iter()
+            .find(|r| r.name == resource)
+            .map(|r| &r.desc)
     }
 
     pub fn records(&self) -> Vec<ResourceRecord> {
@@ -167,18 +209,36 @@ mod tests {
     use super::*;
 
     fn tex(w: u32) -> TextureDesc {
-        TextureDesc { format: wgpu::TextureFormat::Rgba16Float, width: w, height: w, samples: 1 }
+        TextureDesc {
+            format: wgpu::TextureFormat::Rgba16Float,
+            width: w,
+            height: w,
+            samples: 1,
+        }
     }
 
     fn graph(outputs: &[&'static str]) -> Graph {
         let mut g = Graph::default();
         g.resource("color", tex(4))
-            .resource("depth", TextureDesc { format: wgpu::TextureFormat::Depth32Float, width: 4, height: 4, samples: 1 })
+            .resource(
+                "depth",
+                TextureDesc {
+                    format: wgpu::TextureFormat::Depth32Float,
+                    width: 4,
+                    height: 4,
+                    samples: 1,
+                },
+            )
             .resource("velocity", tex(4))
             .resource("resolved", tex(4))
             .pass("scene", PassKind::Render, &[], &["color", "depth"])
             .pass("velocity", PassKind::Render, &["depth"], &["velocity"])
-            .pass("resolve", PassKind::Compute, &["color", "velocity"], &["resolved"]);
+            .pass(
+                "resolve",
+                PassKind::Compute,
+                &["color", "velocity"],
+                &["resolved"],
+            );
         for o in outputs {
             g.output(o);
         }
@@ -188,18 +248,27 @@ mod tests {
     #[test]
     fn passes_nothing_reads_are_culled_with_their_resources() {
         let plan = graph(&["color"]).plan().unwrap();
-        assert_eq!(plan.passes.iter().map(|p| p.name).collect::<Vec<_>>(), ["scene"]);
+        assert_eq!(
+            plan.passes.iter().map(|p| p.name).collect::<Vec<_>>(),
+            ["scene"]
+        );
         assert_eq!(plan.culled, ["velocity", "resolve"]);
         let names: Vec<&str> = plan.resources.iter().map(|r| r.name).collect();
         assert_eq!(names, ["color", "depth"]);
         // 4x4 Rgba16Float (8 B) + 4x4 Depth32Float (4 B).
-        assert_eq!(plan.records().iter().map(|r| r.bytes).sum::<u64>(), 16 * 8 + 16 * 4);
+        assert_eq!(
+            plan.records().iter().map(|r| r.bytes).sum::<u64>(),
+            16 * 8 + 16 * 4
+        );
     }
 
     #[test]
     fn reads_pull_in_their_producers_in_order() {
         let plan = graph(&["resolved"]).plan().unwrap();
-        assert_eq!(plan.passes.iter().map(|p| p.name).collect::<Vec<_>>(), ["scene", "velocity", "resolve"]);
+        assert_eq!(
+            plan.passes.iter().map(|p| p.name).collect::<Vec<_>>(),
+            ["scene", "velocity", "resolve"]
+        );
         assert!(plan.culled.is_empty());
         assert_eq!(plan.resources.len(), 4);
     }
@@ -207,8 +276,16 @@ mod tests {
     #[test]
     fn undeclared_resources_are_errors() {
         let mut g = Graph::default();
-        g.resource("color", tex(1)).pass("scene", PassKind::Render, &["history"], &["color"]).output("color");
-        assert_eq!(g.plan().unwrap_err(), GraphError::UnknownResource { pass: "scene", resource: "history" });
+        g.resource("color", tex(1))
+            .pass("scene", PassKind::Render, &["history"], &["color"])
+            .output("color");
+        assert_eq!(
+            g.plan().unwrap_err(),
+            GraphError::UnknownResource {
+                pass: "scene",
+                resource: "history"
+            }
+        );
         let mut g = Graph::default();
         g.resource("color", tex(1)).output("colour");
         assert_eq!(g.plan().unwrap_err(), GraphError::UnknownOutput("colour"));
@@ -216,7 +293,12 @@ mod tests {
 
     #[test]
     fn multisampled_bytes_count_samples() {
-        let d = TextureDesc { format: wgpu::TextureFormat::Rgba8Unorm, width: 1280, height: 720, samples: 2 };
+        let d = TextureDesc {
+            format: wgpu::TextureFormat::Rgba8Unorm,
+            width: 1280,
+            height: 720,
+            samples: 2,
+        };
         assert_eq!(d.bytes(), 1280 * 720 * 4 * 2);
     }
 }

@@ -25,7 +25,10 @@ pub struct Mesh {
 
 impl Mesh {
     fn push(&mut self, p: Vec3, n: Vec3) -> u32 {
-        self.vertices.push(Vertex { position: p.into(), normal: n.into() });
+        self.vertices.push(Vertex {
+            position: p.into(),
+            normal: n.into(),
+        });
         (self.vertices.len() - 1) as u32
     }
 
@@ -34,7 +37,9 @@ impl Mesh {
         let base = self.vertices.len() as u32;
         for v in &other.vertices {
             let p = m.transform_point3(Vec3::from(v.position));
-            let n = m.transform_vector3(Vec3::from(v.normal)).normalize_or_zero();
+            let n = m
+                .transform_vector3(Vec3::from(v.normal))
+                .normalize_or_zero();
             self.push(p, n);
         }
         self.indices.extend(other.indices.iter().map(|i| i + base));
@@ -95,7 +100,10 @@ pub fn cylinder(radius: f32, height: f32, segments: u32) -> Mesh {
     for s in 0..segments {
         let a0 = std::f32::consts::TAU * s as f32 / segments as f32;
         let a1 = std::f32::consts::TAU * (s + 1) as f32 / segments as f32;
-        let (d0, d1) = (Vec3::new(a0.cos(), 0.0, a0.sin()), Vec3::new(a1.cos(), 0.0, a1.sin()));
+        let (d0, d1) = (
+            Vec3::new(a0.cos(), 0.0, a0.sin()),
+            Vec3::new(a1.cos(), 0.0, a1.sin()),
+        );
         let top = Vec3::Y * height;
         let i = [
             m.push(d0 * radius, d0),
@@ -118,7 +126,10 @@ pub fn fence(end: Vec3, height: f32, posts: u32, rails: u32, thickness: f32) -> 
     let post = cuboid(Vec3::new(thickness, height, thickness));
     for i in 0..posts {
         let t = i as f32 / (posts - 1) as f32;
-        m.append(&post, Mat4::from_translation(end * t + Vec3::Y * height * 0.5));
+        m.append(
+            &post,
+            Mat4::from_translation(end * t + Vec3::Y * height * 0.5),
+        );
     }
     let length = end.length();
     if length > 0.0 && rails > 0 {
@@ -126,7 +137,10 @@ pub fn fence(end: Vec3, height: f32, posts: u32, rails: u32, thickness: f32) -> 
         let yaw = (-end.z).atan2(end.x);
         for r in 0..rails {
             let y = height * (r + 1) as f32 / (rails + 1) as f32;
-            m.append(&rail, Mat4::from_translation(end * 0.5 + Vec3::Y * y) * Mat4::from_rotation_y(yaw));
+            m.append(
+                &rail,
+                Mat4::from_translation(end * 0.5 + Vec3::Y * y) * Mat4::from_rotation_y(yaw),
+            );
         }
     }
     m
@@ -154,12 +168,20 @@ pub struct MeshError {
 /// Every triangle primitive of every node of the default scene, flattened with node transforms and
 /// scaled. Missing normals are replaced by flat face normals.
 pub fn load_gltf(path: &Path, scale: f32) -> Result<Mesh, MeshError> {
-    let err = |message: String| MeshError { path: path.display().to_string(), message };
+    let err = |message: String| MeshError {
+        path: path.display().to_string(),
+        message,
+    };
     let (doc, buffers, _images) = gltf::import(path).map_err(|e| err(e.to_string()))?;
     let mut out = Mesh::default();
-    let scene = doc.default_scene().or_else(|| doc.scenes().next()).ok_or_else(|| err("the file has no scene".into()))?;
-    let mut stack: Vec<(gltf::Node, Mat4)> =
-        scene.nodes().map(|n| (n, Mat4::from_scale(Vec3::splat(scale)))).collect();
+    let scene = doc
+        .default_scene()
+        .or_else(|| doc.scenes().next())
+        .ok_or_else(|| err("the file has no scene".into()))?;
+    let mut stack: Vec<(gltf::Node, Mat4)> = scene
+        .nodes()
+        .map(|n| (n, Mat4::from_scale(Vec3::splat(scale))))
+        .collect();
     while let Some((node, parent)) = stack.pop() {
         let m = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
         if let Some(mesh) = node.mesh() {
@@ -168,7 +190,9 @@ pub fn load_gltf(path: &Path, scale: f32) -> Result<Mesh, MeshError> {
                     continue;
                 }
                 let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
-                let Some(positions) = reader.read_positions() else { continue };
+                let Some(positions) = reader.read_positions() else {
+                    continue;
+                };
                 let positions: Vec<Vec3> = positions.map(Vec3::from).collect();
                 let indices: Vec<u32> = match reader.read_indices() {
                     Some(i) => i.into_u32().collect(),
@@ -177,7 +201,8 @@ pub fn load_gltf(path: &Path, scale: f32) -> Result<Mesh, MeshError> {
                 if indices.iter().any(|&i| i as usize >= positions.len()) {
                     return Err(err("an index is out of range".into()));
                 }
-                let normals: Option<Vec<Vec3>> = reader.read_normals().map(|n| n.map(Vec3::from).collect());
+                let normals: Option<Vec<Vec3>> =
+                    reader.read_normals().map(|n| n.map(Vec3::from).collect());
                 let normal_matrix = m.inverse().transpose();
                 match normals {
                     Some(normals) if normals.len() == positions.len() => {
@@ -190,7 +215,10 @@ pub fn load_gltf(path: &Path, scale: f32) -> Result<Mesh, MeshError> {
                     }
                     _ => {
                         for tri in indices.chunks_exact(3) {
-                            let p: Vec<Vec3> = tri.iter().map(|&i| m.transform_point3(positions[i as usize])).collect();
+                            let p: Vec<Vec3> = tri
+                                .iter()
+                                .map(|&i| m.transform_point3(positions[i as usize]))
+                                .collect();
                             let n = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero();
                             for q in p {
                                 let i = out.push(q, n);
@@ -217,7 +245,13 @@ pub fn build(shape: &Shape) -> Result<Mesh, MeshError> {
         Shape::Box { size } => cuboid(*size),
         Shape::Sphere { radius } => sphere(*radius, 48, 24),
         Shape::Pole { radius, height } => cylinder(*radius, *height, 12),
-        Shape::Fence { end, height, posts, rails, thickness } => fence(*end, *height, *posts, *rails, *thickness),
+        Shape::Fence {
+            end,
+            height,
+            posts,
+            rails,
+            thickness,
+        } => fence(*end, *height, *posts, *rails, *thickness),
         Shape::Mesh { path, scale } => load_gltf(path, *scale)?,
     })
 }
@@ -228,10 +262,18 @@ mod tests {
 
     #[test]
     fn shapes_are_closed_triangle_lists() {
-        for m in [cuboid(Vec3::ONE), sphere(1.0, 8, 4), cylinder(0.1, 2.0, 6), fence(Vec3::X * 4.0, 1.0, 3, 2, 0.05)] {
+        for m in [
+            cuboid(Vec3::ONE),
+            sphere(1.0, 8, 4),
+            cylinder(0.1, 2.0, 6),
+            fence(Vec3::X * 4.0, 1.0, 3, 2, 0.05),
+        ] {
             assert_eq!(m.indices.len() % 3, 0);
             assert!(m.indices.iter().all(|&i| (i as usize) < m.vertices.len()));
-            assert!(m.vertices.iter().all(|v| v.position.iter().all(|x| x.is_finite())));
+            assert!(m
+                .vertices
+                .iter()
+                .all(|v| v.position.iter().all(|x| x.is_finite())));
         }
         assert_eq!(cuboid(Vec3::ONE).triangles(), 12);
         // Fence: 3 posts and 2 rails, 12 triangles each.
@@ -242,12 +284,18 @@ mod tests {
     fn cuboid_faces_point_outwards() {
         let m = cuboid(Vec3::new(2.0, 1.0, 3.0));
         for tri in m.indices.chunks_exact(3) {
-            let p: Vec<Vec3> = tri.iter().map(|&i| Vec3::from(m.vertices[i as usize].position)).collect();
+            let p: Vec<Vec3> = tri
+                .iter()
+                .map(|&i| Vec3::from(m.vertices[i as usize].position))
+                .collect();
             let face_normal = (p[1] - p[0]).cross(p[2] - p[0]);
             let centroid = (p[0] + p[1] + p[2]) / 3.0;
             assert!(face_normal.dot(centroid) < 0.0 || face_normal.dot(centroid) > 0.0);
             let n = Vec3::from(m.vertices[tri[0] as usize].normal);
-            assert!(n.dot(centroid) > 0.0, "normal {n} points inwards at {centroid}");
+            assert!(
+                n.dot(centroid) > 0.0,
+                "normal {n} points inwards at {centroid}"
+            );
         }
     }
 }

@@ -2,7 +2,7 @@
 
 pub mod graph;
 pub mod mesh;
-pub mod scene;
 pub mod readback;
+pub mod scene;
 pub mod technique;
 pub mod timers;

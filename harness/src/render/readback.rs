@@ -22,14 +22,20 @@ pub struct CpuFrame {
 impl Readback {
     pub fn new(device: &wgpu::Device, width: u32, height: u32) -> Readback {
         let row = width * 8;
-        let padded_row = row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+        let padded_row =
+            row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
         let buffer = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("frame readback"),
             size: padded_row as u64 * height as u64,
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        Readback { buffer, width, height, padded_row }
+        Readback {
+            buffer,
+            width,
+            height,
+            padded_row,
+        }
     }
 
     pub fn bytes(&self) -> u64 {
@@ -48,7 +54,11 @@ impl Readback {
                     rows_per_image: Some(self.height),
                 },
             },
-            wgpu::Extent3d { width: self.width, height: self.height, depth_or_array_layers: 1 },
+            wgpu::Extent3d {
+                width: self.width,
+                height: self.height,
+                depth_or_array_layers: 1,
+            },
         );
     }
 
@@ -59,15 +69,21 @@ impl Readback {
         slice.map_async(wgpu::MapMode::Read, move |r| {
             let _ = tx.send(r);
         });
-        let _ = device.poll(wgpu::PollType::Wait { submission_index: None, timeout: None });
+        let _ = device.poll(wgpu::PollType::Wait {
+            submission_index: None,
+            timeout: None,
+        });
         rx.recv().unwrap_or(Err(wgpu::BufferAsyncError))?;
         let mut data = Vec::with_capacity(self.width as usize * self.height as usize * 3);
         let mut non_finite = 0u64;
         {
-            let mapped = slice.get_mapped_range().map_err(|_| wgpu::BufferAsyncError)?;
+            let mapped = slice
+                .get_mapped_range()
+                .map_err(|_| wgpu::BufferAsyncError)?;
             for y in 0..self.height as usize {
                 let start = y * self.padded_row as usize;
-                let row: &[half::f16] = bytemuck::cast_slice(&mapped[start..start + self.width as usize * 8]);
+                let row: &[half::f16] =
+                    bytemuck::cast_slice(&mapped[start..start + self.width as usize * 8]);
                 for px in row.chunks_exact(4) {
                     for c in &px[..3] {
                         let v = c.to_f32();
@@ -80,6 +96,13 @@ impl Readback {
             }
         }
         self.buffer.unmap();
-        Ok(CpuFrame { image: HdrImage { width: self.width, height: self.height, data }, non_finite })
+        Ok(CpuFrame {
+            image: HdrImage {
+                width: self.width,
+                height: self.height,
+                data,
+            },
+            non_finite,
+        })
     }
 }

@@ -118,7 +118,10 @@ impl SceneGpu {
         let triangles = indices.len() / 3;
         // Empty scenes still need valid (non-zero-sized) buffers.
         if vertices.is_empty() {
-            vertices.push(Vertex { position: [0.0; 3], normal: [0.0, 1.0, 0.0] });
+            vertices.push(Vertex {
+                position: [0.0; 3],
+                normal: [0.0, 1.0, 0.0],
+            });
             indices.extend([0, 0, 0]);
         }
         use wgpu::util::DeviceExt;
@@ -154,7 +157,9 @@ impl SceneGpu {
                     ty: wgpu::BindingType::Buffer {
                         ty: wgpu::BufferBindingType::Uniform,
                         has_dynamic_offset: true,
-                        min_binding_size: wgpu::BufferSize::new(std::mem::size_of::<GpuFrame>() as u64),
+                        min_binding_size: wgpu::BufferSize::new(
+                            std::mem::size_of::<GpuFrame>() as u64
+                        ),
                     },
                     count: None,
                 },
@@ -182,7 +187,10 @@ impl SceneGpu {
                         size: wgpu::BufferSize::new(std::mem::size_of::<GpuFrame>() as u64),
                     }),
                 },
-                wgpu::BindGroupEntry { binding: 1, resource: object_buffer.as_entire_binding() },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: object_buffer.as_entire_binding(),
+                },
             ],
         });
         let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -194,7 +202,8 @@ impl SceneGpu {
             label: Some("scene.wgsl"),
             source: wgpu::ShaderSource::Wgsl(SCENE_WGSL.into()),
         });
-        let buffer_bytes = vertex_buffer.size() + index_buffer.size() + frame_buffer.size() + object_buffer.size();
+        let buffer_bytes =
+            vertex_buffer.size() + index_buffer.size() + frame_buffer.size() + object_buffer.size();
         Ok(SceneGpu {
             scenario: scenario.clone(),
             vertex_buffer,
@@ -234,7 +243,10 @@ impl SceneGpu {
                     compilation_options: Default::default(),
                     targets: &[Some(COLOR_FORMAT.into())],
                 }),
-                primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
+                primitive: wgpu::PrimitiveState {
+                    cull_mode: None,
+                    ..Default::default()
+                },
                 depth_stencil: Some(wgpu::DepthStencilState {
                     format: DEPTH_FORMAT,
                     depth_write_enabled: Some(true),
@@ -242,7 +254,10 @@ impl SceneGpu {
                     stencil: Default::default(),
                     bias: Default::default(),
                 }),
-                multisample: wgpu::MultisampleState { count: samples, ..Default::default() },
+                multisample: wgpu::MultisampleState {
+                    count: samples,
+                    ..Default::default()
+                },
                 multiview_mask: None,
                 cache: None,
             })
@@ -253,7 +268,11 @@ impl SceneGpu {
     pub fn write_objects(&self, queue: &wgpu::Queue, time: f64, prev_time: f64) {
         let pose = self.scenario.camera.pose_at(time);
         let eye = pose.position.as_dvec3();
-        let rel = |m: DMat4| (DMat4::from_translation(-eye) * m).as_mat4().to_cols_array_2d();
+        let rel = |m: DMat4| {
+            (DMat4::from_translation(-eye) * m)
+                .as_mat4()
+                .to_cols_array_2d()
+        };
         let mut objects = Vec::new();
         if let Some(g) = &self.scenario.scene.ground {
             // The quad follows the camera in x and z; the pattern is anchored in world space.
@@ -288,27 +307,61 @@ impl SceneGpu {
         let prev = s.camera.pose_at(view.prev_time);
         let aspect = s.width as f64 / s.height as f64;
         let vp = |p: &CameraPose| -> DMat4 {
-            let proj = reversed_z_projection(p.fov_degrees as f64, aspect, s.camera.near as f64, s.camera.far as f64);
+            let proj = reversed_z_projection(
+                p.fov_degrees as f64,
+                aspect,
+                s.camera.near as f64,
+                s.camera.far as f64,
+            );
             proj * rotation_view(p)
         };
         // Jitter in NDC: one pixel is 2 / size.
-        let jitter = Vec4::new(2.0 * view.jitter_px.x / view.width as f32, -2.0 * view.jitter_px.y / view.height as f32, 0.0, 0.0);
+        let jitter = Vec4::new(
+            2.0 * view.jitter_px.x / view.width as f32,
+            -2.0 * view.jitter_px.y / view.height as f32,
+            0.0,
+            0.0,
+        );
         let eye = pose.position.as_dvec3();
         let prev_vp = vp(&prev) * DMat4::from_translation(eye - prev.position.as_dvec3());
         let (ground, filter, checker) = match &s.scene.ground {
-            Some(g) => (Some(g), if g.filter == GroundFilter::Box { 1.0 } else { 0.0 }, g.checker_size as f64),
+            Some(g) => (
+                Some(g),
+                if g.filter == GroundFilter::Box {
+                    1.0
+                } else {
+                    0.0
+                },
+                g.checker_size as f64,
+            ),
             None => (None, 0.0, 1.0),
         };
         let period = 2.0 * checker;
-        let camera_mod = [eye.x.rem_euclid(period) as f32, 0.0, eye.z.rem_euclid(period) as f32, 0.0];
-        let mut lights = [GpuLight { position_or_direction: [0.0; 4], radiance: [0.0; 4] }; MAX_LIGHTS];
+        let camera_mod = [
+            eye.x.rem_euclid(period) as f32,
+            0.0,
+            eye.z.rem_euclid(period) as f32,
+            0.0,
+        ];
+        let mut lights = [GpuLight {
+            position_or_direction: [0.0; 4],
+            radiance: [0.0; 4],
+        }; MAX_LIGHTS];
         for (i, l) in s.scene.lights.iter().take(MAX_LIGHTS).enumerate() {
             lights[i] = match l {
-                Light::Directional { direction, color, intensity } => GpuLight {
+                Light::Directional {
+                    direction,
+                    color,
+                    intensity,
+                } => GpuLight {
                     position_or_direction: direction.extend(0.0).into(),
                     radiance: (*color * *intensity).extend(0.0).into(),
                 },
-                Light::Point { position, color, intensity } => GpuLight {
+                Light::Point {
+                    position,
+                    color,
+                    intensity,
+                } => GpuLight {
                     position_or_direction: (position.as_dvec3() - eye).as_vec3().extend(1.0).into(),
                     radiance: (*color * *intensity).extend(0.0).into(),
                 },
@@ -320,31 +373,63 @@ impl SceneGpu {
             jitter: jitter.into(),
             camera_mod,
             background: s.scene.background.extend(1.0).into(),
-            params: [s.scene.ambient, s.scene.shading_cost as f32, view.gradient_scale, filter],
-            ground: [checker as f32, ground.map(|g| g.filter_epsilon).unwrap_or(0.0), 0.0, 0.0],
-            ground_a: ground.map(|g| g.colors[0].extend(1.0).into()).unwrap_or([0.0; 4]),
-            ground_b: ground.map(|g| g.colors[1].extend(1.0).into()).unwrap_or([0.0; 4]),
+            params: [
+                s.scene.ambient,
+                s.scene.shading_cost as f32,
+                view.gradient_scale,
+                filter,
+            ],
+            ground: [
+                checker as f32,
+                ground.map(|g| g.filter_epsilon).unwrap_or(0.0),
+                0.0,
+                0.0,
+            ],
+            ground_a: ground
+                .map(|g| g.colors[0].extend(1.0).into())
+                .unwrap_or([0.0; 4]),
+            ground_b: ground
+                .map(|g| g.colors[1].extend(1.0).into())
+                .unwrap_or([0.0; 4]),
             counts: [s.scene.lights.len().min(MAX_LIGHTS) as u32, 0, 0, 0],
             lights,
         };
-        queue.write_buffer(&self.frame_buffer, slot as u64 * SLOT_STRIDE, bytemuck::bytes_of(&frame));
+        queue.write_buffer(
+            &self.frame_buffer,
+            slot as u64 * SLOT_STRIDE,
+            bytemuck::bytes_of(&frame),
+        );
     }
 
     /// Clear colour of the scene pass (linear radiance).
     pub fn clear_color(&self) -> wgpu::Color {
         let b = self.scenario.scene.background;
-        wgpu::Color { r: b.x as f64, g: b.y as f64, b: b.z as f64, a: 1.0 }
+        wgpu::Color {
+            r: b.x as f64,
+            g: b.y as f64,
+            b: b.z as f64,
+            a: 1.0,
+        }
     }
 
     /// Draws every object with view `slot` into the current render pass.
-    pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>, pipeline: &wgpu::RenderPipeline, slot: u32) {
+    pub fn draw(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        pipeline: &wgpu::RenderPipeline,
+        slot: u32,
+    ) {
         pass.set_pipeline(pipeline);
         pass.set_bind_group(0, &self.bind_group, &[(slot as u64 * SLOT_STRIDE) as u32]);
         pass.set_vertex_buffer(0, self.vertex_buffer.slice(..));
         pass.set_index_buffer(self.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
         for (i, d) in self.draws.iter().enumerate() {
             let i = i as u32;
-            pass.draw_indexed(d.first_index..d.first_index + d.index_count, d.base_vertex, i..i + 1);
+            pass.draw_indexed(
+                d.first_index..d.first_index + d.index_count,
+                d.base_vertex,
+                i..i + 1,
+            );
         }
     }
 }
@@ -352,7 +437,11 @@ impl SceneGpu {
 /// Camera rotation only (the translation is applied per object in f64).
 fn rotation_view(p: &CameraPose) -> DMat4 {
     let dir = (p.target.as_dvec3() - p.position.as_dvec3()).normalize();
-    let up = if dir.y.abs() > 0.999 { DVec3::Z } else { DVec3::Y };
+    let up = if dir.y.abs() > 0.999 {
+        DVec3::Z
+    } else {
+        DVec3::Y
+    };
     DMat4::look_to_rh(DVec3::ZERO, dir, up)
 }
 

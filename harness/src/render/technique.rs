@@ -33,11 +33,23 @@ pub trait Technique {
     fn plan(&self) -> &Plan;
     /// The full-resolution Rgba16Float output of the frame.
     fn output(&self) -> &wgpu::Texture;
-    fn record(&mut self, gpu: &Gpu, scene: &mut SceneGpu, timers: &Timers, encoder: &mut wgpu::CommandEncoder, frame: FrameInfo);
+    fn record(
+        &mut self,
+        gpu: &Gpu,
+        scene: &mut SceneGpu,
+        timers: &Timers,
+        encoder: &mut wgpu::CommandEncoder,
+        frame: FrameInfo,
+    );
 }
 
 /// Builds the GPU side of a variant at `width` x `height`.
-pub fn build(gpu: &Gpu, variant: &Variant, width: u32, height: u32) -> Result<Box<dyn Technique>, Unsupported> {
+pub fn build(
+    gpu: &Gpu,
+    variant: &Variant,
+    width: u32,
+    height: u32,
+) -> Result<Box<dyn Technique>, Unsupported> {
     check_size(gpu, width, height)?;
     Ok(match variant.technique {
         TechniqueKind::Native => Box::new(Forward::new(gpu, width, height, Resolve::None)),
@@ -49,21 +61,51 @@ pub fn build(gpu: &Gpu, variant: &Variant, width: u32, height: u32) -> Result<Bo
                 "nearest" => wgpu::FilterMode::Nearest,
                 _ => wgpu::FilterMode::Linear,
             };
-            Box::new(Forward::new(gpu, lw, lh, Resolve::Upscale { width, height, filter }))
+            Box::new(Forward::new(
+                gpu,
+                lw,
+                lh,
+                Resolve::Upscale {
+                    width,
+                    height,
+                    filter,
+                },
+            ))
         }
     })
 }
 
 /// The ground-truth reference: native at `supersample`x the resolution per axis, box-downsampled.
-pub fn ground_truth(gpu: &Gpu, width: u32, height: u32, supersample: u32) -> Result<Box<dyn Technique>, Unsupported> {
-    check_size(gpu, width * supersample, height * supersample).map_err(|u| Unsupported(format!("ground-truth reference ({supersample}x{supersample} supersampled): {}", u.0)))?;
-    Ok(Box::new(Forward::new(gpu, width * supersample, height * supersample, Resolve::Downsample { width, height, factor: supersample })))
+pub fn ground_truth(
+    gpu: &Gpu,
+    width: u32,
+    height: u32,
+    supersample: u32,
+) -> Result<Box<dyn Technique>, Unsupported> {
+    check_size(gpu, width * supersample, height * supersample).map_err(|u| {
+        Unsupported(format!(
+            "ground-truth reference ({supersample}x{supersample} supersampled): {}",
+            u.0
+        ))
+    })?;
+    Ok(Box::new(Forward::new(
+        gpu,
+        width * supersample,
+        height * supersample,
+        Resolve::Downsample {
+            width,
+            height,
+            factor: supersample,
+        },
+    )))
 }
 
 fn check_size(gpu: &Gpu, width: u32, height: u32) -> Result<(), Unsupported> {
     let max = gpu.max_dimension();
     if width > max || height > max {
-        return Err(Unsupported(format!("{width}x{height} exceeds the adapter's maximum texture size {max}")));
+        return Err(Unsupported(format!(
+            "{width}x{height} exceeds the adapter's maximum texture size {max}"
+        )));
     }
     Ok(())
 }
@@ -73,8 +115,16 @@ fn check_size(gpu: &Gpu, width: u32, height: u32) -> Result<(), Unsupported> {
 enum Resolve {
     /// Rendered at output resolution.
     None,
-    Upscale { width: u32, height: u32, filter: wgpu::FilterMode },
-    Downsample { width: u32, height: u32, factor: u32 },
+    Upscale {
+        width: u32,
+        height: u32,
+        filter: wgpu::FilterMode,
+    },
+    Downsample {
+        width: u32,
+        height: u32,
+        factor: u32,
+    },
 }
 
 /// Forward rendering at some resolution, optionally followed by a resampling compute pass.
@@ -90,7 +140,12 @@ struct Forward {
 
 impl Forward {
     fn new(gpu: &Gpu, width: u32, height: u32, resolve: Resolve) -> Forward {
-        let tex = |format, width, height| TextureDesc { format, width, height, samples: 1 };
+        let tex = |format, width, height| TextureDesc {
+            format,
+            width,
+            height,
+            samples: 1,
+        };
         let mut g = Graph::default();
         let output = match resolve {
             Resolve::None => {
@@ -100,7 +155,11 @@ impl Forward {
                     .output("color");
                 "color"
             }
-            Resolve::Upscale { width: ow, height: oh, .. } => {
+            Resolve::Upscale {
+                width: ow,
+                height: oh,
+                ..
+            } => {
                 g.resource("color_low", tex(COLOR_FORMAT, width, height))
                     .resource("depth_low", tex(DEPTH_FORMAT, width, height))
                     .resource("color", tex(COLOR_FORMAT, ow, oh))
@@ -109,7 +168,11 @@ impl Forward {
                     .output("color");
                 "color"
             }
-            Resolve::Downsample { width: ow, height: oh, .. } => {
+            Resolve::Downsample {
+                width: ow,
+                height: oh,
+                ..
+            } => {
                 g.resource("color_ss", tex(COLOR_FORMAT, width, height))
                     .resource("depth_ss", tex(DEPTH_FORMAT, width, height))
                     .resource("color", tex(COLOR_FORMAT, ow, oh))
@@ -124,10 +187,38 @@ impl Forward {
         let out_width = plan.desc(output).map(|d| d.width).unwrap_or(width);
         let resample = match resolve {
             Resolve::None => None,
-            Resolve::Upscale { width: ow, height: oh, filter } => Some(upscale_pipeline(gpu, &textures["color_low"], &textures["color"], filter, [ow, oh])),
-            Resolve::Downsample { width: ow, height: oh, factor } => Some(downsample_pipeline(gpu, &textures["color_ss"], &textures["color"], factor, [ow, oh])),
+            Resolve::Upscale {
+                width: ow,
+                height: oh,
+                filter,
+            } => Some(upscale_pipeline(
+                gpu,
+                &textures["color_low"],
+                &textures["color"],
+                filter,
+                [ow, oh],
+            )),
+            Resolve::Downsample {
+                width: ow,
+                height: oh,
+                factor,
+            } => Some(downsample_pipeline(
+                gpu,
+                &textures["color_ss"],
+                &textures["color"],
+                factor,
+                [ow, oh],
+            )),
         };
-        Forward { plan, textures, resample, width, height, out_width, output }
+        Forward {
+            plan,
+            textures,
+            resample,
+            width,
+            height,
+            out_width,
+            output,
+        }
     }
 }
 
@@ -140,7 +231,14 @@ impl Technique for Forward {
         &self.textures[self.output]
     }
 
-    fn record(&mut self, gpu: &Gpu, scene: &mut SceneGpu, timers: &Timers, encoder: &mut wgpu::CommandEncoder, frame: FrameInfo) {
+    fn record(
+        &mut self,
+        gpu: &Gpu,
+        scene: &mut SceneGpu,
+        timers: &Timers,
+        encoder: &mut wgpu::CommandEncoder,
+        frame: FrameInfo,
+    ) {
         let view = View {
             time: frame.time,
             prev_time: frame.prev_time,
@@ -151,7 +249,10 @@ impl Technique for Forward {
         };
         scene.write_view(&gpu.queue, 0, &view);
         let pass = &self.plan.passes[0];
-        let (color, depth) = (&self.textures[pass.writes[0]], &self.textures[pass.writes[1]]);
+        let (color, depth) = (
+            &self.textures[pass.writes[0]],
+            &self.textures[pass.writes[1]],
+        );
         record_scene_pass(gpu, scene, timers, encoder, "scene", color, depth, 0);
         if let Some((pipeline, bind_group, [w, h])) = &self.resample {
             let name = self.plan.passes[1].name;
@@ -177,13 +278,19 @@ pub fn allocate(device: &wgpu::Device, plan: &Plan) -> HashMap<&'static str, wgp
         .iter()
         .map(|r| {
             let d = &r.desc;
-            let mut usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_SRC;
+            let mut usage = wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::COPY_SRC;
             if !d.format.is_depth_stencil_format() && d.samples == 1 {
                 usage |= wgpu::TextureUsages::STORAGE_BINDING;
             }
             let t = device.create_texture(&wgpu::TextureDescriptor {
                 label: Some(r.name),
-                size: wgpu::Extent3d { width: d.width, height: d.height, depth_or_array_layers: 1 },
+                size: wgpu::Extent3d {
+                    width: d.width,
+                    height: d.height,
+                    depth_or_array_layers: 1,
+                },
                 mip_level_count: 1,
                 sample_count: d.samples,
                 dimension: wgpu::TextureDimension::D2,
@@ -221,11 +328,17 @@ pub fn record_scene_pass(
                 view: &color_view,
                 depth_slice: None,
                 resolve_target: None,
-                ops: wgpu::Operations { load: wgpu::LoadOp::Clear(clear), store: wgpu::StoreOp::Store },
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(clear),
+                    store: wgpu::StoreOp::Store,
+                },
             })],
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                 view: &depth_view,
-                depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(0.0), store: wgpu::StoreOp::Store }),
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(0.0),
+                    store: wgpu::StoreOp::Store,
+                }),
                 stencil_ops: None,
             }),
             timestamp_writes: q.render_pass_timestamp_writes(),
@@ -242,9 +355,18 @@ pub fn record_scene_pass(
 static UPSCALE_WGSL: &str = include_str!("../../../shaders/upscale.wgsl");
 static DOWNSAMPLE_WGSL: &str = include_str!("../../../shaders/downsample.wgsl");
 
-fn upscale_pipeline(gpu: &Gpu, src: &wgpu::Texture, dst: &wgpu::Texture, filter: wgpu::FilterMode, size: [u32; 2]) -> (wgpu::ComputePipeline, wgpu::BindGroup, [u32; 2]) {
+fn upscale_pipeline(
+    gpu: &Gpu,
+    src: &wgpu::Texture,
+    dst: &wgpu::Texture,
+    filter: wgpu::FilterMode,
+    size: [u32; 2],
+) -> (wgpu::ComputePipeline, wgpu::BindGroup, [u32; 2]) {
     let device = &gpu.device;
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor { label: Some("upscale.wgsl"), source: wgpu::ShaderSource::Wgsl(UPSCALE_WGSL.into()) });
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("upscale.wgsl"),
+        source: wgpu::ShaderSource::Wgsl(UPSCALE_WGSL.into()),
+    });
     let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
         label: Some("upscale"),
         layout: None,
@@ -265,18 +387,36 @@ fn upscale_pipeline(gpu: &Gpu, src: &wgpu::Texture, dst: &wgpu::Texture, filter:
         label: Some("upscale"),
         layout: &pipeline.get_bind_group_layout(0),
         entries: &[
-            wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&src.create_view(&Default::default())) },
-            wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::Sampler(&sampler) },
-            wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(&dst.create_view(&Default::default())) },
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::TextureView(&src.create_view(&Default::default())),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: wgpu::BindingResource::Sampler(&sampler),
+            },
+            wgpu::BindGroupEntry {
+                binding: 2,
+                resource: wgpu::BindingResource::TextureView(&dst.create_view(&Default::default())),
+            },
         ],
     });
     (pipeline, bind_group, size)
 }
 
-fn downsample_pipeline(gpu: &Gpu, src: &wgpu::Texture, dst: &wgpu::Texture, factor: u32, size: [u32; 2]) -> (wgpu::ComputePipeline, wgpu::BindGroup, [u32; 2]) {
+fn downsample_pipeline(
+    gpu: &Gpu,
+    src: &wgpu::Texture,
+    dst: &wgpu::Texture,
+    factor: u32,
+    size: [u32; 2],
+) -> (wgpu::ComputePipeline, wgpu::BindGroup, [u32; 2]) {
     use wgpu::util::DeviceExt;
     let device = &gpu.device;
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor { label: Some("downsample.wgsl"), source: wgpu::ShaderSource::Wgsl(DOWNSAMPLE_WGSL.into()) });
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("downsample.wgsl"),
+        source: wgpu::ShaderSource::Wgsl(DOWNSAMPLE_WGSL.into()),
+    });
     let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
         label: Some("downsample"),
         layout: None,
@@ -294,9 +434,18 @@ fn downsample_pipeline(gpu: &Gpu, src: &wgpu::Texture, dst: &wgpu::Texture, fact
         label: Some("downsample"),
         layout: &pipeline.get_bind_group_layout(0),
         entries: &[
-            wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&src.create_view(&Default::default())) },
-            wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&dst.create_view(&Default::default())) },
-            wgpu::BindGroupEntry { binding: 2, resource: params.as_entire_binding() },
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::TextureView(&src.create_view(&Default::default())),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: wgpu::BindingResource::TextureView(&dst.create_view(&Default::default())),
+            },
+            wgpu::BindGroupEntry {
+                binding: 2,
+                resource: params.as_entire_binding(),
+            },
         ],
     });
     (pipeline, bind_group, size)
@@ -304,5 +453,9 @@ fn downsample_pipeline(gpu: &Gpu, src: &wgpu::Texture, dst: &wgpu::Texture, fact
 
 /// Every WGSL file the harness ships, for validation without a GPU.
 pub fn shader_sources() -> [(&'static str, &'static str); 3] {
-    [("scene.wgsl", super::scene::SCENE_WGSL), ("upscale.wgsl", UPSCALE_WGSL), ("downsample.wgsl", DOWNSAMPLE_WGSL)]
+    [
+        ("scene.wgsl", super::scene::SCENE_WGSL),
+        ("upscale.wgsl", UPSCALE_WGSL),
+        ("downsample.wgsl", DOWNSAMPLE_WGSL),
+    ]
 }

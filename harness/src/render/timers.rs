@@ -37,7 +37,10 @@ pub struct TimerError(String);
 
 impl Timers {
     /// `render_passes`: the render passes that may record pipeline statistics, in a fixed order.
-    pub fn new(device: &wgpu::Device, render_passes: &[&'static str]) -> Result<Timers, TimerError> {
+    pub fn new(
+        device: &wgpu::Device,
+        render_passes: &[&'static str],
+    ) -> Result<Timers, TimerError> {
         let timestamps = device.features().contains(wgpu::Features::TIMESTAMP_QUERY);
         let settings = GpuProfilerSettings {
             enable_timer_queries: timestamps,
@@ -45,13 +48,19 @@ impl Timers {
             max_num_pending_frames: 4,
         };
         let profiler = GpuProfiler::new(device, settings).map_err(|e| TimerError(e.to_string()))?;
-        let stats = (device.features().contains(wgpu::Features::PIPELINE_STATISTICS_QUERY) && !render_passes.is_empty()).then(|| {
+        let stats = (device
+            .features()
+            .contains(wgpu::Features::PIPELINE_STATISTICS_QUERY)
+            && !render_passes.is_empty())
+        .then(|| {
             let n = render_passes.len() as u32;
             let size = n as u64 * 8;
             Stats {
                 set: device.create_query_set(&wgpu::QuerySetDescriptor {
                     label: Some("fragment invocations"),
-                    ty: wgpu::QueryType::PipelineStatistics(wgpu::PipelineStatisticsTypes::FRAGMENT_SHADER_INVOCATIONS),
+                    ty: wgpu::QueryType::PipelineStatistics(
+                        wgpu::PipelineStatisticsTypes::FRAGMENT_SHADER_INVOCATIONS,
+                    ),
                     count: n,
                 }),
                 resolve: device.create_buffer(&wgpu::BufferDescriptor {
@@ -69,7 +78,11 @@ impl Timers {
                 passes: render_passes.to_vec(),
             }
         });
-        Ok(Timers { profiler, timestamps, stats })
+        Ok(Timers {
+            profiler,
+            timestamps,
+            stats,
+        })
     }
 
     pub fn has_timestamps(&self) -> bool {
@@ -78,7 +91,11 @@ impl Timers {
 
     /// Opens a timer for a pass; use its `render_pass_timestamp_writes` or
     /// `compute_pass_timestamp_writes` in the pass descriptor, then [`Timers::end`].
-    pub fn begin(&self, name: &'static str, encoder: &mut wgpu::CommandEncoder) -> GpuProfilerQuery {
+    pub fn begin(
+        &self,
+        name: &'static str,
+        encoder: &mut wgpu::CommandEncoder,
+    ) -> GpuProfilerQuery {
         self.profiler.begin_pass_query(name, encoder)
     }
 
@@ -120,8 +137,14 @@ impl Timers {
         if self.profiler.end_frame().is_err() {
             return out;
         }
-        let _ = device.poll(wgpu::PollType::Wait { submission_index: None, timeout: None });
-        if let Some(results) = self.profiler.process_finished_frame(queue.get_timestamp_period()) {
+        let _ = device.poll(wgpu::PollType::Wait {
+            submission_index: None,
+            timeout: None,
+        });
+        if let Some(results) = self
+            .profiler
+            .process_finished_frame(queue.get_timestamp_period())
+        {
             for r in results {
                 if let Some(t) = r.time {
                     *out.gpu_ms.entry(r.label.clone()).or_default() += (t.end - t.start) * 1000.0;
@@ -131,7 +154,10 @@ impl Timers {
         if let Some(s) = &self.stats {
             let slice = s.readback.slice(..);
             slice.map_async(wgpu::MapMode::Read, |_| {});
-            let _ = device.poll(wgpu::PollType::Wait { submission_index: None, timeout: None });
+            let _ = device.poll(wgpu::PollType::Wait {
+                submission_index: None,
+                timeout: None,
+            });
             if let Ok(data) = slice.get_mapped_range() {
                 let counts: &[u64] = bytemuck::cast_slice(&data);
                 for (name, c) in s.passes.iter().zip(counts) {

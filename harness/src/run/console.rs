@@ -9,7 +9,8 @@ use tessera_results::{GateLevel, ScenarioResult, Status, VariantResult};
 use super::gates;
 
 fn ms(v: Option<f64>) -> String {
-    v.map(|v| format!("{v:.3}")).unwrap_or_else(|| "-".to_string())
+    v.map(|v| format!("{v:.3}"))
+        .unwrap_or_else(|| "-".to_string())
 }
 
 fn psnr(r: &VariantResult) -> String {
@@ -21,7 +22,12 @@ fn psnr(r: &VariantResult) -> String {
 }
 
 fn status(r: &VariantResult) -> String {
-    let gate = r.gates.iter().map(|g| g.level).max().unwrap_or(GateLevel::Pass);
+    let gate = r
+        .gates
+        .iter()
+        .map(|g| g.level)
+        .max()
+        .unwrap_or(GateLevel::Pass);
     match &r.status {
         Status::Ok => match gate {
             GateLevel::Pass => "ok".to_string(),
@@ -34,12 +40,19 @@ fn status(r: &VariantResult) -> String {
 }
 
 fn gate_messages(r: &VariantResult, level: GateLevel) -> String {
-    r.gates.iter().filter(|g| g.level == level).map(|g| g.message.as_str()).collect::<Vec<_>>().join("; ")
+    r.gates
+        .iter()
+        .filter(|g| g.level == level)
+        .map(|g| g.message.as_str())
+        .collect::<Vec<_>>()
+        .join("; ")
 }
 
 /// The table of one scenario.
 pub fn scenario_table(s: &ScenarioResult) -> String {
-    let header = ["variant", "GPU ms", "CPU ms", "speedup", "PSNR dB", "status"];
+    let header = [
+        "variant", "GPU ms", "CPU ms", "speedup", "PSNR dB", "status",
+    ];
     let rows: Vec<[String; 6]> = s
         .results
         .iter()
@@ -47,9 +60,19 @@ pub fn scenario_table(s: &ScenarioResult) -> String {
             let ok = r.status == Status::Ok;
             [
                 r.variant.clone(),
-                if ok { ms(gates::frame_ms(r)) } else { "-".into() },
-                if ok { ms(Some(r.cpu_frame_ms.median)) } else { "-".into() },
-                gates::speedup(&s.results, r).map(|v| format!("{v:.2}x")).unwrap_or_else(|| "-".into()),
+                if ok {
+                    ms(gates::frame_ms(r))
+                } else {
+                    "-".into()
+                },
+                if ok {
+                    ms(Some(r.cpu_frame_ms.median))
+                } else {
+                    "-".into()
+                },
+                gates::speedup(&s.results, r)
+                    .map(|v| format!("{v:.2}x"))
+                    .unwrap_or_else(|| "-".into()),
                 psnr(r),
                 status(r),
             ]
@@ -62,7 +85,11 @@ pub fn scenario_table(s: &ScenarioResult) -> String {
         }
     }
     let mut out = String::new();
-    let _ = writeln!(out, "{} ({}x{}, {} measured frames, reference: {})", s.scenario, s.width, s.height, s.measured_frames, s.reference);
+    let _ = writeln!(
+        out,
+        "{} ({}x{}, {} measured frames, reference: {})",
+        s.scenario, s.width, s.height, s.measured_frames, s.reference
+    );
     let line = |cells: &[String]| {
         let mut l = format!("  {:<w0$}", cells[0], w0 = widths[0]);
         for i in 1..5 {
@@ -96,15 +123,26 @@ pub fn tally(scenarios: &[ScenarioResult]) -> Tally {
             Status::Skipped { .. } => t.skipped += 1,
             Status::Failed { .. } => t.failed += 1,
         }
-        t.gate_warnings += r.gates.iter().filter(|g| g.level == GateLevel::Warn).count();
-        t.gate_failures += r.gates.iter().filter(|g| g.level == GateLevel::Fail).count();
+        t.gate_warnings += r
+            .gates
+            .iter()
+            .filter(|g| g.level == GateLevel::Warn)
+            .count();
+        t.gate_failures += r
+            .gates
+            .iter()
+            .filter(|g| g.level == GateLevel::Fail)
+            .count();
     }
     t
 }
 
 /// The one verdict line.
 pub fn verdict(t: &Tally) -> String {
-    let counts = format!("{} ok, {} skipped, {} failed; gates: {} failed, {} warned", t.ok, t.skipped, t.failed, t.gate_failures, t.gate_warnings);
+    let counts = format!(
+        "{} ok, {} skipped, {} failed; gates: {} failed, {} warned",
+        t.ok, t.skipped, t.failed, t.gate_failures, t.gate_warnings
+    );
     if t.failed > 0 || t.gate_failures > 0 {
         format!("FAILED: {counts}")
     } else if t.gate_warnings > 0 {
@@ -120,9 +158,30 @@ mod tests {
 
     #[test]
     fn verdict_lines() {
-        assert_eq!(verdict(&Tally { ok: 3, skipped: 1, ..Default::default() }), "PASSED: 3 ok, 1 skipped, 0 failed; gates: 0 failed, 0 warned");
-        assert!(verdict(&Tally { ok: 3, gate_warnings: 1, ..Default::default() }).starts_with("PASSED with warnings"));
-        assert!(verdict(&Tally { ok: 3, gate_failures: 1, ..Default::default() }).starts_with("FAILED"));
-        assert!(verdict(&Tally { failed: 1, ..Default::default() }).starts_with("FAILED"));
+        assert_eq!(
+            verdict(&Tally {
+                ok: 3,
+                skipped: 1,
+                ..Default::default()
+            }),
+            "PASSED: 3 ok, 1 skipped, 0 failed; gates: 0 failed, 0 warned"
+        );
+        assert!(verdict(&Tally {
+            ok: 3,
+            gate_warnings: 1,
+            ..Default::default()
+        })
+        .starts_with("PASSED with warnings"));
+        assert!(verdict(&Tally {
+            ok: 3,
+            gate_failures: 1,
+            ..Default::default()
+        })
+        .starts_with("FAILED"));
+        assert!(verdict(&Tally {
+            failed: 1,
+            ..Default::default()
+        })
+        .starts_with("FAILED"));
     }
 }

@@ -48,8 +48,13 @@ pub fn render(
     keep_hdr: bool,
     on_frame: &mut dyn FnMut(),
 ) -> Result<Rendered, RenderError> {
-    let render_passes: Vec<&'static str> =
-        technique.plan().passes.iter().filter(|p| p.kind == PassKind::Render).map(|p| p.name).collect();
+    let render_passes: Vec<&'static str> = technique
+        .plan()
+        .passes
+        .iter()
+        .filter(|p| p.kind == PassKind::Render)
+        .map(|p| p.name)
+        .collect();
     let mut timers = Timers::new(&gpu.device, &render_passes)?;
     let out = technique.output();
     let readback = Readback::new(&gpu.device, out.width(), out.height());
@@ -65,21 +70,45 @@ pub fn render(
     for index in 0..scenario.total_frames() {
         let measured = index >= scenario.warmup_frames;
         let time = scenario.frame_time(index);
-        let prev_time = if index == 0 { time } else { scenario.frame_time(index - 1) };
+        let prev_time = if index == 0 {
+            time
+        } else {
+            scenario.frame_time(index - 1)
+        };
         let start = Instant::now();
         scene.write_objects(&gpu.queue, time, prev_time);
-        let mut encoder = gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
-        technique.record(gpu, scene, &timers, &mut encoder, FrameInfo { index, time, prev_time });
+        let mut encoder = gpu
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("frame"),
+            });
+        technique.record(
+            gpu,
+            scene,
+            &timers,
+            &mut encoder,
+            FrameInfo {
+                index,
+                time,
+                prev_time,
+            },
+        );
         timers.resolve(&mut encoder);
         gpu.queue.submit([encoder.finish()]);
         let m = timers.collect(&gpu.device, &gpu.queue);
         let cpu_ms = start.elapsed().as_secs_f64() * 1000.0;
         if measured {
             // The copy is its own submission, after the frame's timings are complete.
-            let mut encoder = gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("readback") });
+            let mut encoder = gpu
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some("readback"),
+                });
             readback.copy(&mut encoder, technique.output());
             gpu.queue.submit([encoder.finish()]);
-            let frame = readback.read(&gpu.device).map_err(|_| RenderError::Readback)?;
+            let frame = readback
+                .read(&gpu.device)
+                .map_err(|_| RenderError::Readback)?;
             rendered.non_finite += frame.non_finite;
             if keep_frames {
                 rendered.frames.push(encode_srgb8(&frame.image));

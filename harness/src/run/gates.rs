@@ -12,7 +12,9 @@ pub fn frame_ms(r: &VariantResult) -> Option<f64> {
 
 /// Speed-up of `r` against the `native` variant of the same scenario on the same adapter.
 pub fn speedup(results: &[VariantResult], r: &VariantResult) -> Option<f64> {
-    let native = results.iter().find(|v| v.variant == "native" && v.status == Status::Ok)?;
+    let native = results
+        .iter()
+        .find(|v| v.variant == "native" && v.status == Status::Ok)?;
     if r.status != Status::Ok {
         return None;
     }
@@ -32,12 +34,16 @@ pub fn matches(pattern: &str, name: &str) -> bool {
     let mut rest = name;
     for (i, part) in parts.iter().enumerate() {
         if i == 0 {
-            let Some(r) = rest.strip_prefix(part) else { return false };
+            let Some(r) = rest.strip_prefix(part) else {
+                return false;
+            };
             rest = r;
         } else if i == parts.len() - 1 {
             return rest.ends_with(part);
         } else {
-            let Some(pos) = rest.find(part) else { return false };
+            let Some(pos) = rest.find(part) else {
+                return false;
+            };
             rest = &rest[pos + part.len()..];
         }
     }
@@ -74,12 +80,26 @@ pub fn evaluate(gate: &Gate, value: f64) -> (GateLevel, String) {
             let crossed = if below { value < b } else { value > b };
             if crossed {
                 let rel = if below { "below" } else { "above" };
-                let verb = if level == GateLevel::Fail { "fails" } else { "warns" };
-                return (level, format!("{} = {} is {rel} {b}: {verb}", gate.measure, fmt_value(value)));
+                let verb = if level == GateLevel::Fail {
+                    "fails"
+                } else {
+                    "warns"
+                };
+                return (
+                    level,
+                    format!(
+                        "{} = {} is {rel} {b}: {verb}",
+                        gate.measure,
+                        fmt_value(value)
+                    ),
+                );
             }
         }
     }
-    (GateLevel::Pass, format!("{} = {} passes", gate.measure, fmt_value(value)))
+    (
+        GateLevel::Pass,
+        format!("{} = {} passes", gate.measure, fmt_value(value)),
+    )
 }
 
 fn fmt_value(v: f64) -> String {
@@ -95,7 +115,11 @@ fn fmt_value(v: f64) -> String {
 pub fn apply(scenario: &Scenario, results: &mut [VariantResult]) {
     let snapshot = results.to_vec();
     for r in results.iter_mut() {
-        let gates: Vec<&Gate> = scenario.gates.iter().filter(|g| applies(g, scenario, r)).collect();
+        let gates: Vec<&Gate> = scenario
+            .gates
+            .iter()
+            .filter(|g| applies(g, scenario, r))
+            .collect();
         for gate in gates {
             let outcome = match (&r.status, measure(&snapshot, r, &gate.measure)) {
                 (Status::Skipped { .. }, _) => continue,
@@ -107,7 +131,12 @@ pub fn apply(scenario: &Scenario, results: &mut [VariantResult]) {
                 },
                 (_, Some(v)) => {
                     let (level, message) = evaluate(gate, v);
-                    GateOutcome { measure: gate.measure.clone(), value: v, level, message }
+                    GateOutcome {
+                        measure: gate.measure.clone(),
+                        value: v,
+                        level,
+                        message,
+                    }
                 }
                 (_, None) => GateOutcome {
                     measure: gate.measure.clone(),
@@ -126,7 +155,14 @@ mod tests {
     use super::*;
 
     fn gate() -> Gate {
-        Gate { measure: "psnr".into(), variants: None, warn_below: Some(35.0), fail_below: Some(30.0), warn_above: None, fail_above: None }
+        Gate {
+            measure: "psnr".into(),
+            variants: None,
+            warn_below: Some(35.0),
+            fail_below: Some(30.0),
+            warn_above: None,
+            fail_above: None,
+        }
     }
 
     #[test]

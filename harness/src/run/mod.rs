@@ -14,7 +14,9 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
-use tessera_results::{CommitInfo, HostInfo, RunInfo, RunStatus, ScenarioResult, Status, SCHEMA_VERSION};
+use tessera_results::{
+    CommitInfo, HostInfo, RunInfo, RunStatus, ScenarioResult, Status, SCHEMA_VERSION,
+};
 
 use crate::gpu::{self, Gpu, GpuError};
 use crate::scenario::Scenario;
@@ -50,7 +52,11 @@ pub fn run_suite(scenarios: &[Scenario], opts: &Options) -> Result<SuiteOutcome,
 }
 
 /// Runs every scenario on an open device.
-pub fn run_on(gpu: &Gpu, scenarios: &[Scenario], opts: &Options) -> Result<SuiteOutcome, SuiteError> {
+pub fn run_on(
+    gpu: &Gpu,
+    scenarios: &[Scenario],
+    opts: &Options,
+) -> Result<SuiteOutcome, SuiteError> {
     let lost = Arc::new(AtomicBool::new(false));
     {
         let lost = lost.clone();
@@ -60,7 +66,9 @@ pub fn run_on(gpu: &Gpu, scenarios: &[Scenario], opts: &Options) -> Result<Suite
         });
     }
     // Errors outside an error scope are reported, not turned into a panic.
-    gpu.device.on_uncaptured_error(Arc::new(|e| eprintln!("warning: uncaptured GPU error: {e}")));
+    gpu.device.on_uncaptured_error(Arc::new(|e| {
+        eprintln!("warning: uncaptured GPU error: {e}")
+    }));
 
     let started = chrono::Utc::now();
     let commit = git_commit();
@@ -77,16 +85,24 @@ pub fn run_on(gpu: &Gpu, scenarios: &[Scenario], opts: &Options) -> Result<Suite
         adapter: gpu.info.clone(),
         host: host_info(),
         command_line: opts.command_line.clone(),
-        scenarios: scenarios.iter().map(|s| s.file.display().to_string()).collect(),
+        scenarios: scenarios
+            .iter()
+            .map(|s| s.file.display().to_string())
+            .collect(),
     };
     write_atomic(&run_dir.join("run.json"), &output::run_json(&run))?;
 
-    let total: u64 = scenarios.iter().map(|s| s.total_frames() as u64 * (s.variants.len() as u64 + 1)).sum();
+    let total: u64 = scenarios
+        .iter()
+        .map(|s| s.total_frames() as u64 * (s.variants.len() as u64 + 1))
+        .sum();
     let bar = if opts.progress {
         let b = indicatif::ProgressBar::new(total);
         b.set_style(
-            indicatif::ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} frames  {msg}")
-                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+            indicatif::ProgressStyle::with_template(
+                "{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} frames  {msg}",
+            )
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
         );
         b
     } else {
@@ -101,10 +117,21 @@ pub fn run_on(gpu: &Gpu, scenarios: &[Scenario], opts: &Options) -> Result<Suite
         } else {
             scenario::run(gpu, s, &run_id, &run_dir, &mut || bar.inc(1))
         };
-        write_atomic(&run_dir.join("scenarios").join(format!("{}.json", s.name)), &output::scenario_json(&result))?;
+        write_atomic(
+            &run_dir.join("scenarios").join(format!("{}.json", s.name)),
+            &output::scenario_json(&result),
+        )?;
         results.push(result);
-        write_atomic(&run_dir.join("results.csv"), &output::results_csv(&run, &results))?;
-        bar.suspend(|| print!("{}", console::scenario_table(results.last().expect("just pushed"))));
+        write_atomic(
+            &run_dir.join("results.csv"),
+            &output::results_csv(&run, &results),
+        )?;
+        bar.suspend(|| {
+            print!(
+                "{}",
+                console::scenario_table(results.last().expect("just pushed"))
+            )
+        });
     }
     bar.finish_and_clear();
 
@@ -114,21 +141,35 @@ pub fn run_on(gpu: &Gpu, scenarios: &[Scenario], opts: &Options) -> Result<Suite
     if let Some(path) = &opts.junit {
         write_atomic(path, &output::junit(&run, &results))?;
     }
-    Ok(SuiteOutcome { run_dir, scenarios: results, device_lost: lost.load(Ordering::SeqCst) })
+    Ok(SuiteOutcome {
+        run_dir,
+        scenarios: results,
+        device_lost: lost.load(Ordering::SeqCst),
+    })
 }
 
 fn device_lost_result(s: &Scenario, run_id: &str) -> ScenarioResult {
     let mut r = scenario::run_failed(s, run_id, "the GPU device was lost earlier in the run");
     for v in &mut r.results {
-        v.status = Status::Failed { error: "the GPU device was lost earlier in the run".into() };
+        v.status = Status::Failed {
+            error: "the GPU device was lost earlier in the run".into(),
+        };
     }
     r
 }
 
 /// `20261122T031500Z-<sha7>`, with a counter appended if that folder exists.
-fn unique_run_id(out: &Path, t: &chrono::DateTime<chrono::Utc>, commit: Option<&CommitInfo>) -> String {
+fn unique_run_id(
+    out: &Path,
+    t: &chrono::DateTime<chrono::Utc>,
+    commit: Option<&CommitInfo>,
+) -> String {
     let base = match commit {
-        Some(c) => format!("{}-{}", t.format("%Y%m%dT%H%M%SZ"), &c.sha[..c.sha.len().min(7)]),
+        Some(c) => format!(
+            "{}-{}",
+            t.format("%Y%m%dT%H%M%SZ"),
+            &c.sha[..c.sha.len().min(7)]
+        ),
         None => t.format("%Y%m%dT%H%M%SZ").to_string(),
     };
     let mut id = base.clone();
@@ -142,7 +183,10 @@ fn unique_run_id(out: &Path, t: &chrono::DateTime<chrono::Utc>, commit: Option<&
 
 /// The commit of the current directory's git checkout, if any.
 fn git_commit() -> Option<CommitInfo> {
-    let sha = std::process::Command::new("git").args(["rev-parse", "HEAD"]).output().ok()?;
+    let sha = std::process::Command::new("git")
+        .args(["rev-parse", "HEAD"])
+        .output()
+        .ok()?;
     if !sha.status.success() {
         return None;
     }
@@ -151,7 +195,10 @@ fn git_commit() -> Option<CommitInfo> {
         .output()
         .map(|o| !o.stdout.is_empty())
         .unwrap_or(false);
-    Some(CommitInfo { sha: String::from_utf8_lossy(&sha.stdout).trim().to_string(), dirty })
+    Some(CommitInfo {
+        sha: String::from_utf8_lossy(&sha.stdout).trim().to_string(),
+        dirty,
+    })
 }
 
 fn host_info() -> HostInfo {
@@ -164,6 +211,8 @@ fn host_info() -> HostInfo {
         hostname,
         os: std::env::consts::OS.to_string(),
         arch: std::env::consts::ARCH.to_string(),
-        cpu_cores: std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1),
+        cpu_cores: std::thread::available_parallelism()
+            .map(|n| n.get())
+            .unwrap_or(1),
     }
 }

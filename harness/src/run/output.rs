@@ -20,11 +20,17 @@ pub struct WriteError {
 
 /// Writes `bytes` to `path` via a sibling temporary file and a rename.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), WriteError> {
-    let err = |source| WriteError { path: path.to_path_buf(), source };
+    let err = |source| WriteError {
+        path: path.to_path_buf(),
+        source,
+    };
     if let Some(parent) = path.parent() {
         std::fs::create_dir_all(parent).map_err(err)?;
     }
-    let tmp = path.with_extension(format!("{}.tmp", path.extension().and_then(|e| e.to_str()).unwrap_or("")));
+    let tmp = path.with_extension(format!(
+        "{}.tmp",
+        path.extension().and_then(|e| e.to_str()).unwrap_or("")
+    ));
     std::fs::write(&tmp, bytes).map_err(err)?;
     std::fs::rename(&tmp, path).map_err(err)
 }
@@ -94,14 +100,26 @@ pub fn results_csv(run: &RunInfo, scenarios: &[ScenarioResult]) -> Vec<u8> {
             }
             for p in &r.passes {
                 if let Some(t) = p.gpu_ms {
-                    row(&format!("pass.{}.gpu_ms.median", p.name), num(t.median), "ms");
+                    row(
+                        &format!("pass.{}.gpu_ms.median", p.name),
+                        num(t.median),
+                        "ms",
+                    );
                 }
                 if let Some(f) = p.fragment_invocations {
-                    row(&format!("pass.{}.fragment_invocations", p.name), f.to_string(), "count");
+                    row(
+                        &format!("pass.{}.fragment_invocations", p.name),
+                        f.to_string(),
+                        "count",
+                    );
                 }
             }
             row("allocated_bytes", r.allocated_bytes.to_string(), "bytes");
-            row("non_finite_values", r.non_finite_values.to_string(), "count");
+            row(
+                "non_finite_values",
+                r.non_finite_values.to_string(),
+                "count",
+            );
             for m in &r.metrics {
                 let unit = if m.name.starts_with("psnr") { "dB" } else { "" };
                 row(&m.name, num(m.value), unit);
@@ -112,7 +130,10 @@ pub fn results_csv(run: &RunInfo, scenarios: &[ScenarioResult]) -> Vec<u8> {
 }
 
 fn xml(s: &str) -> String {
-    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
 }
 
 /// JUnit XML: one test suite per scenario, one test case per variant. Failed variants and failed
@@ -120,10 +141,18 @@ fn xml(s: &str) -> String {
 pub fn junit(run: &RunInfo, scenarios: &[ScenarioResult]) -> Vec<u8> {
     let mut out = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
     let tests: usize = scenarios.iter().map(|s| s.results.len()).sum();
-    let _ = writeln!(out, "<testsuites name=\"tessera {}\" tests=\"{tests}\">", xml(&run.run_id));
+    let _ = writeln!(
+        out,
+        "<testsuites name=\"tessera {}\" tests=\"{tests}\">",
+        xml(&run.run_id)
+    );
     for s in scenarios {
         let failures = s.results.iter().filter(|r| failed(r)).count();
-        let skipped = s.results.iter().filter(|r| matches!(r.status, Status::Skipped { .. })).count();
+        let skipped = s
+            .results
+            .iter()
+            .filter(|r| matches!(r.status, Status::Skipped { .. }))
+            .count();
         let _ = writeln!(
             out,
             "  <testsuite name=\"{}\" tests=\"{}\" failures=\"{failures}\" skipped=\"{skipped}\" time=\"{:.3}\">",
@@ -133,7 +162,12 @@ pub fn junit(run: &RunInfo, scenarios: &[ScenarioResult]) -> Vec<u8> {
         );
         for r in &s.results {
             let time = r.cpu_frame_ms.mean * r.cpu_frame_ms.count as f64 / 1000.0;
-            let _ = write!(out, "    <testcase classname=\"{}\" name=\"{}\" time=\"{time:.3}\"", xml(&s.scenario), xml(&r.variant));
+            let _ = write!(
+                out,
+                "    <testcase classname=\"{}\" name=\"{}\" time=\"{time:.3}\"",
+                xml(&s.scenario),
+                xml(&r.variant)
+            );
             let mut body = String::new();
             match &r.status {
                 Status::Skipped { reason } => {
@@ -148,9 +182,18 @@ pub fn junit(run: &RunInfo, scenarios: &[ScenarioResult]) -> Vec<u8> {
                     }
                 }
             }
-            let warnings: Vec<&str> = r.gates.iter().filter(|g| g.level == GateLevel::Warn).map(|g| g.message.as_str()).collect();
+            let warnings: Vec<&str> = r
+                .gates
+                .iter()
+                .filter(|g| g.level == GateLevel::Warn)
+                .map(|g| g.message.as_str())
+                .collect();
             if !warnings.is_empty() {
-                let _ = writeln!(body, "      <system-out>{}</system-out>", xml(&warnings.join("\n")));
+                let _ = writeln!(
+                    body,
+                    "      <system-out>{}</system-out>",
+                    xml(&warnings.join("\n"))
+                );
             }
             if body.is_empty() {
                 out.push_str("/>\n");

@@ -10,7 +10,9 @@ use std::path::Path;
 use std::time::Instant;
 
 use tessera_metrics::{HdrImage, Rgb8Image};
-use tessera_results::{ImageRecord, MetricRecord, PassRecord, ScenarioResult, Status, Summary, VariantResult};
+use tessera_results::{
+    ImageRecord, MetricRecord, PassRecord, ScenarioResult, Status, Summary, VariantResult,
+};
 
 use super::frames::{self, Rendered};
 use super::gates;
@@ -28,7 +30,13 @@ struct ReferenceFrames {
 }
 
 /// Runs `scenario`. Images go under `run_dir/images/<scenario>/`. `on_frame` ticks progress.
-pub fn run(gpu: &Gpu, scenario: &Scenario, run_id: &str, run_dir: &Path, on_frame: &mut dyn FnMut()) -> ScenarioResult {
+pub fn run(
+    gpu: &Gpu,
+    scenario: &Scenario,
+    run_id: &str,
+    run_dir: &Path,
+    on_frame: &mut dyn FnMut(),
+) -> ScenarioResult {
     let start = Instant::now();
     let mut results: Vec<VariantResult> = Vec::new();
     let scene = SceneGpu::new(&gpu.device, scenario);
@@ -36,20 +44,31 @@ pub fn run(gpu: &Gpu, scenario: &Scenario, run_id: &str, run_dir: &Path, on_fram
         Ok(s) => s,
         Err(e) => {
             for v in &scenario.variants {
-                results.push(empty_result(v, Status::Failed { error: e.to_string() }));
+                results.push(empty_result(
+                    v,
+                    Status::Failed {
+                        error: e.to_string(),
+                    },
+                ));
             }
             return finish(scenario, run_id, results, start);
         }
     };
 
     let needs_reference = scenario.reference != Reference::None && !scenario.metrics.is_empty();
-    let native_is_reference = |v: &Variant| v.technique == TechniqueKind::Native && scenario.reference == Reference::Native;
+    let native_is_reference = |v: &Variant| {
+        v.technique == TechniqueKind::Native && scenario.reference == Reference::Native
+    };
     // The reference renders first; when it is the native variant itself, that render is reused.
     let mut reference: Option<Result<ReferenceFrames, String>> = None;
     if needs_reference && !scenario.variants.iter().any(native_is_reference) {
         reference = Some(render_reference(gpu, &mut scene, scenario, on_frame));
     }
-    let mut order: Vec<&Variant> = scenario.variants.iter().filter(|v| native_is_reference(v)).collect();
+    let mut order: Vec<&Variant> = scenario
+        .variants
+        .iter()
+        .filter(|v| native_is_reference(v))
+        .collect();
     order.extend(scenario.variants.iter().filter(|v| !native_is_reference(v)));
 
     let image_dir = run_dir.join("images").join(&scenario.name);
@@ -71,16 +90,29 @@ pub fn run(gpu: &Gpu, scenario: &Scenario, run_id: &str, run_dir: &Path, on_fram
             Err(error) => {
                 result.status = Status::Failed { error };
                 if is_reference {
-                    reference = Some(Err(format!("the native reference failed: {}", variant.name)));
+                    reference = Some(Err(format!(
+                        "the native reference failed: {}",
+                        variant.name
+                    )));
                 }
                 results.push(result);
                 continue;
             }
         };
         result.non_finite_values = rendered.non_finite;
-        save_images(&mut result, &rendered.frames, scenario, &image_dir, run_dir, "output");
+        save_images(
+            &mut result,
+            &rendered.frames,
+            scenario,
+            &image_dir,
+            run_dir,
+            "output",
+        );
         if is_reference {
-            reference = Some(Ok(ReferenceFrames { frames: rendered.frames.clone(), hdr: rendered.hdr_frames.clone() }));
+            reference = Some(Ok(ReferenceFrames {
+                frames: rendered.frames.clone(),
+                hdr: rendered.hdr_frames.clone(),
+            }));
         }
         if needs_reference {
             match reference.as_ref() {
@@ -88,7 +120,11 @@ pub fn run(gpu: &Gpu, scenario: &Scenario, run_id: &str, run_dir: &Path, on_fram
                     result.reference = Some(scenario.reference.name().to_string());
                     match compute_metrics(scenario, &r.frames, &rendered.frames) {
                         Ok(m) => result.metrics = m,
-                        Err(e) => result.status = Status::Failed { error: format!("metrics: {e}") },
+                        Err(e) => {
+                            result.status = Status::Failed {
+                                error: format!("metrics: {e}"),
+                            }
+                        }
                     }
                 }
                 Some(Err(e)) => result.status = Status::Failed { error: e.clone() },
@@ -99,17 +135,31 @@ pub fn run(gpu: &Gpu, scenario: &Scenario, run_id: &str, run_dir: &Path, on_fram
     }
     // Reference images once per scenario, next to the variants'.
     if let Some(Ok(r)) = &reference {
-        if let Some(first) = results.iter_mut().find(|r| r.status == Status::Ok && r.technique != "native") {
+        if let Some(first) = results
+            .iter_mut()
+            .find(|r| r.status == Status::Ok && r.technique != "native")
+        {
             save_images(first, &r.frames, scenario, &image_dir, run_dir, "reference");
         }
     }
     // Put results back in the scenario's declaration order.
-    results.sort_by_key(|r| scenario.variants.iter().position(|v| v.name == r.variant).unwrap_or(usize::MAX));
+    results.sort_by_key(|r| {
+        scenario
+            .variants
+            .iter()
+            .position(|v| v.name == r.variant)
+            .unwrap_or(usize::MAX)
+    });
     gates::apply(scenario, &mut results);
     finish(scenario, run_id, results, start)
 }
 
-fn finish(scenario: &Scenario, run_id: &str, results: Vec<VariantResult>, start: Instant) -> ScenarioResult {
+fn finish(
+    scenario: &Scenario,
+    run_id: &str,
+    results: Vec<VariantResult>,
+    start: Instant,
+) -> ScenarioResult {
     ScenarioResult {
         schema_version: tessera_results::SCHEMA_VERSION,
         run_id: run_id.to_string(),
@@ -130,13 +180,25 @@ fn empty_result(v: &Variant, status: Status) -> VariantResult {
     VariantResult {
         variant: v.name.clone(),
         technique: v.technique.name().to_string(),
-        params: v.params.iter().map(|(k, p)| (k.clone(), p.to_json())).collect(),
+        params: v
+            .params
+            .iter()
+            .map(|(k, p)| (k.clone(), p.to_json()))
+            .collect(),
         status,
         reference: None,
         passes: Vec::new(),
         culled_passes: Vec::new(),
         gpu_frame_ms: None,
-        cpu_frame_ms: Summary { count: 0, median: 0.0, p5: 0.0, p95: 0.0, min: 0.0, max: 0.0, mean: 0.0 },
+        cpu_frame_ms: Summary {
+            count: 0,
+            median: 0.0,
+            p5: 0.0,
+            p95: 0.0,
+            min: 0.0,
+            max: 0.0,
+            mean: 0.0,
+        },
         resources: Vec::new(),
         allocated_bytes: 0,
         metrics: Vec::new(),
@@ -156,7 +218,14 @@ struct PlanRecord {
 type VariantOutcome = Result<Result<(Rendered, PlanRecord), Unsupported>, String>;
 
 /// Builds and renders a variant inside a GPU error scope. Outer error: the GPU failed.
-fn render_variant(gpu: &Gpu, scene: &mut SceneGpu, scenario: &Scenario, variant: &Variant, keep: bool, on_frame: &mut dyn FnMut()) -> VariantOutcome {
+fn render_variant(
+    gpu: &Gpu,
+    scene: &mut SceneGpu,
+    scenario: &Scenario,
+    variant: &Variant,
+    keep: bool,
+    on_frame: &mut dyn FnMut(),
+) -> VariantOutcome {
     let validation = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
     let oom = gpu.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
     let built = technique::build(gpu, variant, scenario.width, scenario.height);
@@ -179,7 +248,12 @@ fn render_variant(gpu: &Gpu, scene: &mut SceneGpu, scenario: &Scenario, variant:
 }
 
 fn first_line(s: &str) -> String {
-    s.lines().map(str::trim).filter(|l| !l.is_empty()).take(3).collect::<Vec<_>>().join(" ")
+    s.lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty())
+        .take(3)
+        .collect::<Vec<_>>()
+        .join(" ")
 }
 
 fn plan_record(t: &dyn Technique) -> PlanRecord {
@@ -202,23 +276,40 @@ fn plan_record(t: &dyn Technique) -> PlanRecord {
     }
 }
 
-fn render_reference(gpu: &Gpu, scene: &mut SceneGpu, scenario: &Scenario, on_frame: &mut dyn FnMut()) -> Result<ReferenceFrames, String> {
+fn render_reference(
+    gpu: &Gpu,
+    scene: &mut SceneGpu,
+    scenario: &Scenario,
+    on_frame: &mut dyn FnMut(),
+) -> Result<ReferenceFrames, String> {
     let validation = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
     let built: Result<Box<dyn Technique>, Unsupported> = match scenario.reference {
-        Reference::GroundTruth { supersample } => technique::ground_truth(gpu, scenario.width, scenario.height, supersample),
+        Reference::GroundTruth { supersample } => {
+            technique::ground_truth(gpu, scenario.width, scenario.height, supersample)
+        }
         _ => {
-            let native = Variant { name: "native".into(), technique: TechniqueKind::Native, params: BTreeMap::new() };
+            let native = Variant {
+                name: "native".into(),
+                technique: TechniqueKind::Native,
+                params: BTreeMap::new(),
+            };
             technique::build(gpu, &native, scenario.width, scenario.height)
         }
     };
     let result = match built {
         Err(Unsupported(reason)) => Err(format!("no reference: {reason}")),
         Ok(mut t) => frames::render(gpu, scene, scenario, t.as_mut(), true, false, on_frame)
-            .map(|r| ReferenceFrames { frames: r.frames, hdr: r.hdr_frames })
+            .map(|r| ReferenceFrames {
+                frames: r.frames,
+                hdr: r.hdr_frames,
+            })
             .map_err(|e| format!("reference render failed: {e}")),
     };
     if let Some(e) = pollster::block_on(validation.pop()) {
-        return Err(format!("reference render failed: GPU error: {}", first_line(&e.to_string())));
+        return Err(format!(
+            "reference render failed: GPU error: {}",
+            first_line(&e.to_string())
+        ));
     }
     result
 }
@@ -226,12 +317,18 @@ fn render_reference(gpu: &Gpu, scene: &mut SceneGpu, scenario: &Scenario, on_fra
 fn fill_timings(result: &mut VariantResult, r: &Rendered, plan: PlanRecord) {
     for (name, kind, reads, writes) in plan.passes {
         let samples: Vec<f64> = if r.timestamps {
-            r.measurements.iter().filter_map(|m| m.gpu_ms.get(&name).copied()).collect()
+            r.measurements
+                .iter()
+                .filter_map(|m| m.gpu_ms.get(&name).copied())
+                .collect()
         } else {
             Vec::new()
         };
-        let mut invocations: Vec<f64> =
-            r.measurements.iter().filter_map(|m| m.fragment_invocations.get(&name).map(|c| *c as f64)).collect();
+        let mut invocations: Vec<f64> = r
+            .measurements
+            .iter()
+            .filter_map(|m| m.fragment_invocations.get(&name).map(|c| *c as f64))
+            .collect();
         invocations.sort_by(|a, b| a.total_cmp(b));
         result.passes.push(PassRecord {
             name,
@@ -240,11 +337,16 @@ fn fill_timings(result: &mut VariantResult, r: &Rendered, plan: PlanRecord) {
             writes,
             gpu_ms: Summary::of(&samples),
             samples_ms: samples,
-            fragment_invocations: (!invocations.is_empty()).then(|| invocations[invocations.len() / 2] as u64),
+            fragment_invocations: (!invocations.is_empty())
+                .then(|| invocations[invocations.len() / 2] as u64),
         });
     }
     if r.timestamps {
-        let per_frame: Vec<f64> = r.measurements.iter().map(|m| m.gpu_ms.values().sum()).collect();
+        let per_frame: Vec<f64> = r
+            .measurements
+            .iter()
+            .map(|m| m.gpu_ms.values().sum())
+            .collect();
         result.gpu_frame_ms = Summary::of(&per_frame);
     }
     if let Some(s) = Summary::of(&r.cpu_ms) {
@@ -256,7 +358,11 @@ fn fill_timings(result: &mut VariantResult, r: &Rendered, plan: PlanRecord) {
 }
 
 /// Metrics of every measured frame against the reference's frame of the same index.
-fn compute_metrics(scenario: &Scenario, reference: &[Rgb8Image], test: &[Rgb8Image]) -> Result<Vec<MetricRecord>, tessera_metrics::MetricsError> {
+fn compute_metrics(
+    scenario: &Scenario,
+    reference: &[Rgb8Image],
+    test: &[Rgb8Image],
+) -> Result<Vec<MetricRecord>, tessera_metrics::MetricsError> {
     let frames: Vec<u32> = (0..test.len().min(reference.len()) as u32).collect();
     let mut out = Vec::new();
     for &kind in &scenario.metrics {
@@ -269,7 +375,10 @@ fn compute_metrics(scenario: &Scenario, reference: &[Rgb8Image], test: &[Rgb8Ima
                 MetricKind::MaxAbsError => tessera_metrics::max_abs_error(r, t)? as f64,
                 MetricKind::Ssim => tessera_metrics::ssim_rgb(r, t)?,
                 MetricKind::SsimLuma => tessera_metrics::ssim_luma(r, t)?,
-                MetricKind::Flip => tessera_metrics::flip_ldr(r, t, tessera_metrics::DEFAULT_PIXELS_PER_DEGREE)?.mean,
+                MetricKind::Flip => {
+                    tessera_metrics::flip_ldr(r, t, tessera_metrics::DEFAULT_PIXELS_PER_DEGREE)?
+                        .mean
+                }
             };
             per_frame.push(v);
         }
@@ -277,7 +386,10 @@ fn compute_metrics(scenario: &Scenario, reference: &[Rgb8Image], test: &[Rgb8Ima
         let (per_frame, value) = match kind {
             MetricKind::Psnr | MetricKind::PsnrLuma => {
                 let mean_mse = per_frame.iter().sum::<f64>() / per_frame.len().max(1) as f64;
-                let psnr: Vec<f64> = per_frame.iter().map(|m| tessera_metrics::psnr_from_mse(*m, 255.0)).collect();
+                let psnr: Vec<f64> = per_frame
+                    .iter()
+                    .map(|m| tessera_metrics::psnr_from_mse(*m, 255.0))
+                    .collect();
                 (psnr, tessera_metrics::psnr_from_mse(mean_mse, 255.0))
             }
             MetricKind::MaxAbsError => {
@@ -289,34 +401,80 @@ fn compute_metrics(scenario: &Scenario, reference: &[Rgb8Image], test: &[Rgb8Ima
                 (per_frame, mean)
             }
         };
-        out.push(MetricRecord { name: kind.name().to_string(), per_frame, frames: frames.clone(), value, higher_is_better: kind.higher_is_better() });
+        out.push(MetricRecord {
+            name: kind.name().to_string(),
+            per_frame,
+            frames: frames.clone(),
+            value,
+            higher_is_better: kind.higher_is_better(),
+        });
     }
     Ok(out)
 }
 
-fn save_images(result: &mut VariantResult, frames: &[Rgb8Image], scenario: &Scenario, dir: &Path, run_dir: &Path, kind: &str) {
+fn save_images(
+    result: &mut VariantResult,
+    frames: &[Rgb8Image],
+    scenario: &Scenario,
+    dir: &Path,
+    run_dir: &Path,
+    kind: &str,
+) {
     if frames.is_empty() {
         return;
     }
     let _ = std::fs::create_dir_all(dir);
-    let stem = if kind == "reference" { "reference".to_string() } else { sanitize(&result.variant) };
+    let stem = if kind == "reference" {
+        "reference".to_string()
+    } else {
+        sanitize(&result.variant)
+    };
     for &f in &scenario.save_frames {
-        let Some(img) = frames.get(f as usize) else { continue };
+        let Some(img) = frames.get(f as usize) else {
+            continue;
+        };
         let path = dir.join(format!("{stem}-f{f:03}.png"));
         if tessera_metrics::save_png(&path, img).is_ok() {
-            let rel = path.strip_prefix(run_dir).unwrap_or(&path).to_string_lossy().replace('\\', "/");
-            result.images.push(ImageRecord { frame: f, kind: kind.to_string(), path: rel });
+            let rel = path
+                .strip_prefix(run_dir)
+                .unwrap_or(&path)
+                .to_string_lossy()
+                .replace('\\', "/");
+            result.images.push(ImageRecord {
+                frame: f,
+                kind: kind.to_string(),
+                path: rel,
+            });
         }
     }
 }
 
 /// A variant name as a file name: `upscale[scale=0.5]` → `upscale_scale=0.5_`.
 pub fn sanitize(name: &str) -> String {
-    name.chars().map(|c| if c.is_ascii_alphanumeric() || "-_.=".contains(c) { c } else { '_' }).collect()
+    name.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || "-_.=".contains(c) {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
 }
 
 /// A scenario result whose every variant failed with `error` (e.g. after a lost device).
 pub fn run_failed(scenario: &Scenario, run_id: &str, error: &str) -> ScenarioResult {
-    let results = scenario.variants.iter().map(|v| empty_result(v, Status::Failed { error: error.to_string() })).collect();
+    let results = scenario
+        .variants
+        .iter()
+        .map(|v| {
+            empty_result(
+                v,
+                Status::Failed {
+                    error: error.to_string(),
+                },
+            )
+        })
+        .collect();
     finish(scenario, run_id, results, Instant::now())
 }

@@ -93,8 +93,11 @@ impl MetricKind {
         MetricKind::SsimLuma,
         MetricKind::Flip,
     ];
-    pub const DEFAULT: [MetricKind; 3] =
-        [MetricKind::Psnr, MetricKind::PsnrLuma, MetricKind::MaxAbsError];
+    pub const DEFAULT: [MetricKind; 3] = [
+        MetricKind::Psnr,
+        MetricKind::PsnrLuma,
+        MetricKind::MaxAbsError,
+    ];
 
     pub fn name(self) -> &'static str {
         match self {
@@ -108,7 +111,10 @@ impl MetricKind {
     }
 
     pub fn higher_is_better(self) -> bool {
-        matches!(self, MetricKind::Psnr | MetricKind::PsnrLuma | MetricKind::Ssim | MetricKind::SsimLuma)
+        matches!(
+            self,
+            MetricKind::Psnr | MetricKind::PsnrLuma | MetricKind::Ssim | MetricKind::SsimLuma
+        )
     }
 }
 
@@ -151,8 +157,16 @@ pub enum GroundFilter {
 
 #[derive(Clone, Debug)]
 pub enum Light {
-    Directional { direction: Vec3, color: Vec3, intensity: f32 },
-    Point { position: Vec3, color: Vec3, intensity: f32 },
+    Directional {
+        direction: Vec3,
+        color: Vec3,
+        intensity: f32,
+    },
+    Point {
+        position: Vec3,
+        color: Vec3,
+        intensity: f32,
+    },
 }
 
 #[derive(Clone, Debug)]
@@ -169,14 +183,30 @@ pub struct Object {
 #[derive(Clone, Debug)]
 pub enum Shape {
     /// Full extents.
-    Box { size: Vec3 },
-    Sphere { radius: f32 },
+    Box {
+        size: Vec3,
+    },
+    Sphere {
+        radius: f32,
+    },
     /// A thin vertical cylinder standing on `position`.
-    Pole { radius: f32, height: f32 },
+    Pole {
+        radius: f32,
+        height: f32,
+    },
     /// Posts from `position` to `end` with horizontal rails.
-    Fence { end: Vec3, height: f32, posts: u32, rails: u32, thickness: f32 },
+    Fence {
+        end: Vec3,
+        height: f32,
+        posts: u32,
+        rails: u32,
+        thickness: f32,
+    },
     /// A glTF 2.0 file, resolved against the scenario's folder.
-    Mesh { path: PathBuf, scale: f32 },
+    Mesh {
+        path: PathBuf,
+        scale: f32,
+    },
 }
 
 impl Shape {
@@ -206,7 +236,10 @@ impl Object {
             * DMat4::from_rotation_y((self.yaw_degrees as f64).to_radians());
         match &self.animation {
             None => base,
-            Some(Animation::Rotate { axis, degrees_per_second }) => {
+            Some(Animation::Rotate {
+                axis,
+                degrees_per_second,
+            }) => {
                 let angle = (*degrees_per_second as f64 * t).to_radians();
                 base * DMat4::from_axis_angle(axis.as_dvec3().normalize(), angle)
             }
@@ -287,11 +320,31 @@ impl CameraTrack {
             ),
             Interpolation::Smooth => {
                 // Neighbours across a cut do not shape the curve.
-                let before = if prev > 0 && !k[prev].cut { prev - 1 } else { prev };
-                let after = if next + 1 < k.len() && !k[next + 1].cut { next + 1 } else { next };
+                let before = if prev > 0 && !k[prev].cut {
+                    prev - 1
+                } else {
+                    prev
+                };
+                let after = if next + 1 < k.len() && !k[next + 1].cut {
+                    next + 1
+                } else {
+                    next
+                };
                 (
-                    catmull_rom(k[before].position, k[prev].position, k[next].position, k[after].position, s),
-                    catmull_rom(k[before].target, k[prev].target, k[next].target, k[after].target, s),
+                    catmull_rom(
+                        k[before].position,
+                        k[prev].position,
+                        k[next].position,
+                        k[after].position,
+                        s,
+                    ),
+                    catmull_rom(
+                        k[before].target,
+                        k[prev].target,
+                        k[next].target,
+                        k[after].target,
+                        s,
+                    ),
                 )
             }
         };
@@ -413,7 +466,9 @@ pub fn collect(inputs: &[PathBuf]) -> Result<Vec<PathBuf>, ScenarioError> {
                 .filter(|p| p.extension().is_some_and(|x| x == "toml"))
                 .collect();
             if found.is_empty() {
-                return Err(err("the folder holds no scenario (*.toml) files".to_string()));
+                return Err(err(
+                    "the folder holds no scenario (*.toml) files".to_string()
+                ));
             }
             found.sort();
             files.extend(found);

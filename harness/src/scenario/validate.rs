@@ -35,7 +35,10 @@ impl Ctx {
 
     fn positive(&mut self, path: &KeyPath, v: f64) -> f32 {
         if !(v.is_finite() && v > 0.0) {
-            self.err(path, format!("{v} is not allowed: expected a finite number > 0"));
+            self.err(
+                path,
+                format!("{v} is not allowed: expected a finite number > 0"),
+            );
             return 1.0;
         }
         v as f32
@@ -43,7 +46,10 @@ impl Ctx {
 
     fn non_negative(&mut self, path: &KeyPath, v: f64) -> f32 {
         if !(v.is_finite() && v >= 0.0) {
-            self.err(path, format!("{v} is not allowed: expected a finite number >= 0"));
+            self.err(
+                path,
+                format!("{v} is not allowed: expected a finite number >= 0"),
+            );
             return 0.0;
         }
         v as f32
@@ -51,7 +57,10 @@ impl Ctx {
 
     fn vec3(&mut self, path: &KeyPath, v: &[f64]) -> Vec3 {
         if v.len() != 3 {
-            self.err(path, format!("expected 3 numbers [x, y, z], found {}", v.len()));
+            self.err(
+                path,
+                format!("expected 3 numbers [x, y, z], found {}", v.len()),
+            );
             return Vec3::ZERO;
         }
         let mut out = [0.0f32; 3];
@@ -65,7 +74,10 @@ impl Ctx {
         let c = self.vec3(path, v);
         for (i, x) in v.iter().enumerate().take(3) {
             if *x < 0.0 {
-                self.err(&path.index(i), format!("{x} is negative: colours are linear and >= 0"));
+                self.err(
+                    &path.index(i),
+                    format!("{x} is negative: colours are linear and >= 0"),
+                );
             }
         }
         c
@@ -73,19 +85,36 @@ impl Ctx {
 
     fn count(&mut self, path: &KeyPath, v: i64, min: i64, max: i64) -> u32 {
         if v < min || v > max {
-            self.err(path, format!("{v} is out of range: expected an integer from {min} to {max}"));
+            self.err(
+                path,
+                format!("{v} is out of range: expected an integer from {min} to {max}"),
+            );
             return min.max(0) as u32;
         }
         v as u32
     }
 
     /// A string that must be one of `allowed`.
-    fn choice<'a>(&mut self, path: &KeyPath, what: &str, v: &str, allowed: &[&'a str]) -> Option<&'a str> {
+    fn choice<'a>(
+        &mut self,
+        path: &KeyPath,
+        what: &str,
+        v: &str,
+        allowed: &[&'a str],
+    ) -> Option<&'a str> {
         if let Some(found) = allowed.iter().find(|a| **a == v) {
             return Some(found);
         }
-        let hint = closest(v, allowed).map(|c| format!(" (did you mean \"{c}\"?)")).unwrap_or_default();
-        self.err(path, format!("unknown {what} \"{v}\"{hint}: expected one of {}", quoted_list(allowed)));
+        let hint = closest(v, allowed)
+            .map(|c| format!(" (did you mean \"{c}\"?)"))
+            .unwrap_or_default();
+        self.err(
+            path,
+            format!(
+                "unknown {what} \"{v}\"{hint}: expected one of {}",
+                quoted_list(allowed)
+            ),
+        );
         None
     }
 
@@ -95,7 +124,10 @@ impl Ctx {
             if *present && !used.contains(key) {
                 self.err(
                     &path.key(key),
-                    format!("`{key}` is not used by {kind}: allowed keys are {}", quoted_list(used)),
+                    format!(
+                        "`{key}` is not used by {kind}: allowed keys are {}",
+                        quoted_list(used)
+                    ),
                 );
             }
         }
@@ -111,15 +143,35 @@ pub fn parse_and_validate(path: &Path, source: &str) -> Result<Scenario, Scenari
         message,
     };
     let deserializer = toml::de::Deserializer::parse(source).map_err(|e| {
-        let (line, col) = e.span().map(|s| line_col(source, s.start)).unwrap_or((1, 1));
-        ScenarioErrors(vec![located(line, col, String::new(), first_line(e.message()))])
+        let (line, col) = e
+            .span()
+            .map(|s| line_col(source, s.start))
+            .unwrap_or((1, 1));
+        ScenarioErrors(vec![located(
+            line,
+            col,
+            String::new(),
+            first_line(e.message()),
+        )])
     })?;
     let raw: RawScenario = serde_path_to_error::deserialize(deserializer).map_err(|e| {
         let key = KeyPath::parse(&e.path().to_string()).to_string();
         let inner = e.inner();
-        let (line, col) = inner.span().map(|s| line_col(source, s.start)).unwrap_or((1, 1));
-        let key = if key == "(top level)" { String::new() } else { key };
-        ScenarioErrors(vec![located(line, col, key, describe_serde(inner.message()))])
+        let (line, col) = inner
+            .span()
+            .map(|s| line_col(source, s.start))
+            .unwrap_or((1, 1));
+        let key = if key == "(top level)" {
+            String::new()
+        } else {
+            key
+        };
+        ScenarioErrors(vec![located(
+            line,
+            col,
+            key,
+            describe_serde(inner.message()),
+        )])
     })?;
 
     let mut ctx = Ctx { errors: Vec::new() };
@@ -139,7 +191,9 @@ pub fn parse_and_validate(path: &Path, source: &str) -> Result<Scenario, Scenari
                 .unwrap_or((1, 1));
             located(line, col, key.to_string(), message)
         })
-        .collect();
+        .collect::<Vec<_>>();
+    let mut errors = errors;
+    errors.sort_by_key(|e| (e.line, e.column));
     Err(ScenarioErrors(errors))
 }
 
@@ -167,18 +221,42 @@ fn describe_serde(message: &str) -> String {
 fn build(ctx: &mut Ctx, path: &Path, raw: RawScenario) -> Scenario {
     let root = KeyPath::root();
     let name = raw.name.clone().unwrap_or_else(|| {
-        path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default()
+        path.file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default()
     });
-    if name.is_empty() || !name.chars().all(|c| c.is_ascii_alphanumeric() || "-_.".contains(c)) {
-        ctx.err(&root.key("name"), format!("\"{name}\" is not allowed: use letters, digits, '-', '_' and '.'"));
+    if name.is_empty()
+        || !name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || "-_.".contains(c))
+    {
+        ctx.err(
+            &root.key("name"),
+            format!("\"{name}\" is not allowed: use letters, digits, '-', '_' and '.'"),
+        );
     }
 
     let (width, height) = resolution(ctx, &root.key("resolution"), &raw.resolution);
 
     let frames = root.key("frames");
-    let warmup_frames = ctx.count(&frames.key("warmup"), raw.frames.warmup.unwrap_or(2), 0, 100_000);
-    let measured_frames = ctx.count(&frames.key("measured"), raw.frames.measured.unwrap_or(8), 1, 100_000);
-    let save_frames = save_frames(ctx, &frames.key("save"), raw.frames.save.as_deref(), measured_frames);
+    let warmup_frames = ctx.count(
+        &frames.key("warmup"),
+        raw.frames.warmup.unwrap_or(2),
+        0,
+        100_000,
+    );
+    let measured_frames = ctx.count(
+        &frames.key("measured"),
+        raw.frames.measured.unwrap_or(8),
+        1,
+        100_000,
+    );
+    let save_frames = save_frames(
+        ctx,
+        &frames.key("save"),
+        raw.frames.save.as_deref(),
+        measured_frames,
+    );
 
     let time_step = raw.time_step.unwrap_or(1.0 / 60.0);
     ctx.positive(&root.key("time_step"), time_step);
@@ -211,7 +289,10 @@ fn build(ctx: &mut Ctx, path: &Path, raw: RawScenario) -> Scenario {
 
 fn resolution(ctx: &mut Ctx, path: &KeyPath, v: &[i64]) -> (u32, u32) {
     if v.len() != 2 {
-        ctx.err(path, format!("expected [width, height], found {} numbers", v.len()));
+        ctx.err(
+            path,
+            format!("expected [width, height], found {} numbers", v.len()),
+        );
         return (1, 1);
     }
     let w = ctx.count(&path.index(0), v[0], 1, MAX_DIMENSION as i64);
@@ -229,7 +310,11 @@ fn save_frames(ctx: &mut Ctx, path: &KeyPath, v: Option<&[i64]>, measured: u32) 
         if index < 0 || index >= measured as i64 {
             ctx.err(
                 &path.index(i),
-                format!("frame {f} does not exist: expected a measured-frame index from {} to {}", -(measured as i64), measured as i64 - 1),
+                format!(
+                    "frame {f} does not exist: expected a measured-frame index from {} to {}",
+                    -(measured as i64),
+                    measured as i64 - 1
+                ),
             );
         } else if !out.contains(&(index as u32)) {
             out.push(index as u32);
@@ -241,7 +326,12 @@ fn save_frames(ctx: &mut Ctx, path: &KeyPath, v: Option<&[i64]>, measured: u32) 
 
 fn reference(ctx: &mut Ctx, path: &KeyPath, raw: &RawReference) -> Reference {
     let kind = raw.kind.as_deref().unwrap_or("native");
-    let kind = ctx.choice(&path.key("kind"), "reference", kind, &["native", "ground-truth", "none"]);
+    let kind = ctx.choice(
+        &path.key("kind"),
+        "reference",
+        kind,
+        &["native", "ground-truth", "none"],
+    );
     match kind {
         Some("ground-truth") => {
             let n = ctx.count(&path.key("supersample"), raw.supersample.unwrap_or(4), 2, 8);
@@ -249,7 +339,10 @@ fn reference(ctx: &mut Ctx, path: &KeyPath, raw: &RawReference) -> Reference {
         }
         other => {
             if raw.supersample.is_some() {
-                ctx.err(&path.key("supersample"), "`supersample` applies only to kind = \"ground-truth\"");
+                ctx.err(
+                    &path.key("supersample"),
+                    "`supersample` applies only to kind = \"ground-truth\"",
+                );
             }
             if other == Some("none") {
                 Reference::None
@@ -260,13 +353,25 @@ fn reference(ctx: &mut Ctx, path: &KeyPath, raw: &RawReference) -> Reference {
     }
 }
 
-fn metrics(ctx: &mut Ctx, path: &KeyPath, v: Option<&[String]>, reference: Reference) -> Vec<MetricKind> {
+fn metrics(
+    ctx: &mut Ctx,
+    path: &KeyPath,
+    v: Option<&[String]>,
+    reference: Reference,
+) -> Vec<MetricKind> {
     let names: Vec<&str> = MetricKind::ALL.iter().map(|m| m.name()).collect();
     let Some(v) = v else {
-        return if reference == Reference::None { Vec::new() } else { MetricKind::DEFAULT.to_vec() };
+        return if reference == Reference::None {
+            Vec::new()
+        } else {
+            MetricKind::DEFAULT.to_vec()
+        };
     };
     if reference == Reference::None && !v.is_empty() {
-        ctx.err(path, "metrics need a reference: set [reference] kind to \"native\" or \"ground-truth\"");
+        ctx.err(
+            path,
+            "metrics need a reference: set [reference] kind to \"native\" or \"ground-truth\"",
+        );
     }
     let mut out = Vec::new();
     for (i, name) in v.iter().enumerate() {
@@ -287,28 +392,62 @@ fn scene(ctx: &mut Ctx, path: &KeyPath, file: &Path, raw: &RawScene) -> Scene {
         .map(|c| ctx.color(&path.key("background"), c))
         .unwrap_or(Vec3::new(0.55, 0.65, 0.8));
     let ambient = ctx.non_negative(&path.key("ambient"), raw.ambient.unwrap_or(0.08));
-    let shading_cost = ctx.count(&path.key("shading_cost"), raw.shading_cost.unwrap_or(0), 0, 100_000);
-    let ground = raw.ground.as_ref().map(|g| ground(ctx, &path.key("ground"), g));
-    let lights = raw.lights.iter().enumerate().map(|(i, l)| light(ctx, &path.key("lights").index(i), l)).collect();
+    let shading_cost = ctx.count(
+        &path.key("shading_cost"),
+        raw.shading_cost.unwrap_or(0),
+        0,
+        100_000,
+    );
+    let ground = raw
+        .ground
+        .as_ref()
+        .map(|g| ground(ctx, &path.key("ground"), g));
+    let lights = raw
+        .lights
+        .iter()
+        .enumerate()
+        .map(|(i, l)| light(ctx, &path.key("lights").index(i), l))
+        .collect();
     let objects = raw
         .objects
         .iter()
         .enumerate()
         .map(|(i, o)| object(ctx, &path.key("objects").index(i), file, o))
         .collect();
-    Scene { background, ambient, shading_cost, ground, lights, objects }
+    Scene {
+        background,
+        ambient,
+        shading_cost,
+        ground,
+        lights,
+        objects,
+    }
 }
 
 fn ground(ctx: &mut Ctx, path: &KeyPath, g: &RawGround) -> Ground {
     let colors = match g.colors.as_deref() {
         None => [Vec3::splat(0.8), Vec3::splat(0.1)],
-        Some([a, b]) => [ctx.color(&path.key("colors").index(0), a), ctx.color(&path.key("colors").index(1), b)],
+        Some([a, b]) => [
+            ctx.color(&path.key("colors").index(0), a),
+            ctx.color(&path.key("colors").index(1), b),
+        ],
         Some(other) => {
-            ctx.err(&path.key("colors"), format!("expected two colours [[r, g, b], [r, g, b]], found {}", other.len()));
+            ctx.err(
+                &path.key("colors"),
+                format!(
+                    "expected two colours [[r, g, b], [r, g, b]], found {}",
+                    other.len()
+                ),
+            );
             [Vec3::ONE, Vec3::ZERO]
         }
     };
-    let filter = match ctx.choice(&path.key("filter"), "filter", g.filter.as_deref().unwrap_or("box"), &["box", "none"]) {
+    let filter = match ctx.choice(
+        &path.key("filter"),
+        "filter",
+        g.filter.as_deref().unwrap_or("box"),
+        &["box", "none"],
+    ) {
         Some("none") => GroundFilter::None,
         _ => GroundFilter::Box,
     };
@@ -318,30 +457,59 @@ fn ground(ctx: &mut Ctx, path: &KeyPath, g: &RawGround) -> Ground {
         checker_size: ctx.positive(&path.key("checker_size"), g.checker_size.unwrap_or(1.0)),
         colors,
         filter,
-        filter_epsilon: ctx.non_negative(&path.key("filter_epsilon"), g.filter_epsilon.unwrap_or(0.0)),
+        filter_epsilon: ctx
+            .non_negative(&path.key("filter_epsilon"), g.filter_epsilon.unwrap_or(0.0)),
     }
 }
 
 fn light(ctx: &mut Ctx, path: &KeyPath, l: &RawLight) -> Light {
-    let color = l.color.as_deref().map(|c| ctx.color(&path.key("color"), c)).unwrap_or(Vec3::ONE);
+    let color = l
+        .color
+        .as_deref()
+        .map(|c| ctx.color(&path.key("color"), c))
+        .unwrap_or(Vec3::ONE);
     let intensity = ctx.non_negative(&path.key("intensity"), l.intensity.unwrap_or(1.0));
-    let set = [("direction", l.direction.is_some()), ("position", l.position.is_some())];
-    match ctx.choice(&path.key("type"), "light type", &l.kind, &["directional", "point"]) {
+    let set = [
+        ("direction", l.direction.is_some()),
+        ("position", l.position.is_some()),
+    ];
+    match ctx.choice(
+        &path.key("type"),
+        "light type",
+        &l.kind,
+        &["directional", "point"],
+    ) {
         Some("point") => {
             ctx.unused(path, "a point light", &set, &["position"]);
             let Some(p) = l.position.as_deref() else {
                 ctx.err(path, "a point light needs `position`");
-                return Light::Point { position: Vec3::ZERO, color, intensity };
+                return Light::Point {
+                    position: Vec3::ZERO,
+                    color,
+                    intensity,
+                };
             };
-            Light::Point { position: ctx.vec3(&path.key("position"), p), color, intensity }
+            Light::Point {
+                position: ctx.vec3(&path.key("position"), p),
+                color,
+                intensity,
+            }
         }
         _ => {
             ctx.unused(path, "a directional light", &set, &["direction"]);
-            let d = l.direction.as_deref().map(|d| ctx.vec3(&path.key("direction"), d)).unwrap_or(Vec3::new(-0.4, -1.0, -0.3));
+            let d = l
+                .direction
+                .as_deref()
+                .map(|d| ctx.vec3(&path.key("direction"), d))
+                .unwrap_or(Vec3::new(-0.4, -1.0, -0.3));
             if d.length_squared() == 0.0 {
                 ctx.err(&path.key("direction"), "the direction must not be zero");
             }
-            Light::Directional { direction: d.normalize_or(Vec3::NEG_Y), color, intensity }
+            Light::Directional {
+                direction: d.normalize_or(Vec3::NEG_Y),
+                color,
+                intensity,
+            }
         }
     }
 }
@@ -363,7 +531,11 @@ fn object(ctx: &mut Ctx, path: &KeyPath, file: &Path, o: &RawObject) -> Object {
     let shape = match shape_name {
         Some("box") => {
             ctx.unused(path, "shape \"box\"", &set, &["size"]);
-            let size = o.size.as_deref().map(|s| ctx.vec3(&path.key("size"), s)).unwrap_or(Vec3::ONE);
+            let size = o
+                .size
+                .as_deref()
+                .map(|s| ctx.vec3(&path.key("size"), s))
+                .unwrap_or(Vec3::ONE);
             if size.min_element() <= 0.0 {
                 ctx.err(&path.key("size"), "every extent must be > 0");
             }
@@ -371,7 +543,9 @@ fn object(ctx: &mut Ctx, path: &KeyPath, file: &Path, o: &RawObject) -> Object {
         }
         Some("sphere") => {
             ctx.unused(path, "shape \"sphere\"", &set, &["radius"]);
-            Shape::Sphere { radius: ctx.positive(&path.key("radius"), o.radius.unwrap_or(0.5)) }
+            Shape::Sphere {
+                radius: ctx.positive(&path.key("radius"), o.radius.unwrap_or(0.5)),
+            }
         }
         Some("pole") => {
             ctx.unused(path, "shape \"pole\"", &set, &["radius", "height"]);
@@ -381,7 +555,12 @@ fn object(ctx: &mut Ctx, path: &KeyPath, file: &Path, o: &RawObject) -> Object {
             }
         }
         Some("fence") => {
-            ctx.unused(path, "shape \"fence\"", &set, &["end", "height", "posts", "rails", "thickness"]);
+            ctx.unused(
+                path,
+                "shape \"fence\"",
+                &set,
+                &["end", "height", "posts", "rails", "thickness"],
+            );
             let end = match o.end.as_deref() {
                 Some(e) => ctx.vec3(&path.key("end"), e),
                 None => {
@@ -410,20 +589,41 @@ fn object(ctx: &mut Ctx, path: &KeyPath, file: &Path, o: &RawObject) -> Object {
             if !rel.is_empty() && !resolved.is_file() {
                 ctx.err(
                     &path.key("path"),
-                    format!("no such file: {} (run ci/setup.sh to install the test models)", resolved.display()),
+                    format!(
+                        "no such file: {} (run ci/setup.sh to install the test models)",
+                        resolved.display()
+                    ),
                 );
             }
-            Shape::Mesh { path: resolved, scale: ctx.positive(&path.key("scale"), o.scale.unwrap_or(1.0)) }
+            Shape::Mesh {
+                path: resolved,
+                scale: ctx.positive(&path.key("scale"), o.scale.unwrap_or(1.0)),
+            }
         }
         _ => Shape::Sphere { radius: 1.0 },
     };
-    let animation = o.animation.as_ref().map(|a| animation(ctx, &path.key("animation"), a));
+    let animation = o
+        .animation
+        .as_ref()
+        .map(|a| animation(ctx, &path.key("animation"), a));
     Object {
         shape,
-        position: o.position.as_deref().map(|p| ctx.vec3(&path.key("position"), p)).unwrap_or(Vec3::ZERO),
+        position: o
+            .position
+            .as_deref()
+            .map(|p| ctx.vec3(&path.key("position"), p))
+            .unwrap_or(Vec3::ZERO),
         yaw_degrees: ctx.finite(&path.key("yaw"), o.yaw.unwrap_or(0.0)),
-        color: o.color.as_deref().map(|c| ctx.color(&path.key("color"), c)).unwrap_or(Vec3::splat(0.7)),
-        emissive: o.emissive.as_deref().map(|c| ctx.color(&path.key("emissive"), c)).unwrap_or(Vec3::ZERO),
+        color: o
+            .color
+            .as_deref()
+            .map(|c| ctx.color(&path.key("color"), c))
+            .unwrap_or(Vec3::splat(0.7)),
+        emissive: o
+            .emissive
+            .as_deref()
+            .map(|c| ctx.color(&path.key("emissive"), c))
+            .unwrap_or(Vec3::ZERO),
         specular: ctx.non_negative(&path.key("specular"), o.specular.unwrap_or(0.25)),
         animation,
     }
@@ -437,26 +637,59 @@ fn animation(ctx: &mut Ctx, path: &KeyPath, a: &RawAnimation) -> Animation {
         ("amplitude", a.amplitude.is_some()),
         ("period", a.period.is_some()),
     ];
-    match ctx.choice(&path.key("kind"), "animation", &a.kind, &["rotate", "translate", "oscillate"]) {
+    match ctx.choice(
+        &path.key("kind"),
+        "animation",
+        &a.kind,
+        &["rotate", "translate", "oscillate"],
+    ) {
         Some("translate") => {
             ctx.unused(path, "a translate animation", &set, &["velocity"]);
-            let v = a.velocity.as_deref().map(|v| ctx.vec3(&path.key("velocity"), v)).unwrap_or(Vec3::X);
+            let v = a
+                .velocity
+                .as_deref()
+                .map(|v| ctx.vec3(&path.key("velocity"), v))
+                .unwrap_or(Vec3::X);
             Animation::Translate { velocity: v }
         }
         Some("oscillate") => {
-            ctx.unused(path, "an oscillate animation", &set, &["amplitude", "period"]);
-            let amp = a.amplitude.as_deref().map(|v| ctx.vec3(&path.key("amplitude"), v)).unwrap_or(Vec3::X);
-            Animation::Oscillate { amplitude: amp, period: ctx.positive(&path.key("period"), a.period.unwrap_or(2.0)) }
+            ctx.unused(
+                path,
+                "an oscillate animation",
+                &set,
+                &["amplitude", "period"],
+            );
+            let amp = a
+                .amplitude
+                .as_deref()
+                .map(|v| ctx.vec3(&path.key("amplitude"), v))
+                .unwrap_or(Vec3::X);
+            Animation::Oscillate {
+                amplitude: amp,
+                period: ctx.positive(&path.key("period"), a.period.unwrap_or(2.0)),
+            }
         }
         _ => {
-            ctx.unused(path, "a rotate animation", &set, &["axis", "degrees_per_second"]);
-            let axis = a.axis.as_deref().map(|v| ctx.vec3(&path.key("axis"), v)).unwrap_or(Vec3::Y);
+            ctx.unused(
+                path,
+                "a rotate animation",
+                &set,
+                &["axis", "degrees_per_second"],
+            );
+            let axis = a
+                .axis
+                .as_deref()
+                .map(|v| ctx.vec3(&path.key("axis"), v))
+                .unwrap_or(Vec3::Y);
             if axis.length_squared() == 0.0 {
                 ctx.err(&path.key("axis"), "the axis must not be zero");
             }
             Animation::Rotate {
                 axis: axis.normalize_or(Vec3::Y),
-                degrees_per_second: ctx.finite(&path.key("degrees_per_second"), a.degrees_per_second.unwrap_or(90.0)),
+                degrees_per_second: ctx.finite(
+                    &path.key("degrees_per_second"),
+                    a.degrees_per_second.unwrap_or(90.0),
+                ),
             }
         }
     }
@@ -467,12 +700,23 @@ fn camera(ctx: &mut Ctx, path: &KeyPath, raw: &RawCamera) -> CameraTrack {
     let far = raw.far.unwrap_or(1000.0);
     let near_ok = near.is_finite() && near > 0.0;
     if !near_ok {
-        ctx.err(&path.key("near"), format!("{near} is not allowed: expected 0 < near < far"));
+        ctx.err(
+            &path.key("near"),
+            format!("{near} is not allowed: expected 0 < near < far"),
+        );
     }
     if !(far.is_finite() && (!near_ok || far > near)) {
-        ctx.err(&path.key("far"), format!("{far} is not allowed: expected 0 < near < far (near = {near})"));
+        ctx.err(
+            &path.key("far"),
+            format!("{far} is not allowed: expected 0 < near < far (near = {near})"),
+        );
     }
-    let interpolation = match ctx.choice(&path.key("interpolation"), "interpolation", raw.interpolation.as_deref().unwrap_or("linear"), &["linear", "smooth"]) {
+    let interpolation = match ctx.choice(
+        &path.key("interpolation"),
+        "interpolation",
+        raw.interpolation.as_deref().unwrap_or("linear"),
+        &["linear", "smooth"],
+    ) {
         Some("smooth") => Interpolation::Smooth,
         _ => Interpolation::Linear,
     };
@@ -501,25 +745,57 @@ fn camera(ctx: &mut Ctx, path: &KeyPath, raw: &RawCamera) -> CameraTrack {
         if k.cut && i == 0 {
             ctx.err(&p.key("cut"), "the first keyframe cannot be a cut");
         }
-        keyframes.push(Keyframe { time: if time.is_finite() { k.time } else { 0.0 }, position, target, fov_degrees: fov as f32, cut: k.cut });
+        keyframes.push(Keyframe {
+            time: if time.is_finite() { k.time } else { 0.0 },
+            position,
+            target,
+            fov_degrees: fov as f32,
+            cut: k.cut,
+        });
     }
     if keyframes.is_empty() {
-        keyframes.push(Keyframe { time: 0.0, position: Vec3::new(0.0, 1.0, 5.0), target: Vec3::ZERO, fov_degrees: 60.0, cut: false });
+        keyframes.push(Keyframe {
+            time: 0.0,
+            position: Vec3::new(0.0, 1.0, 5.0),
+            target: Vec3::ZERO,
+            fov_degrees: 60.0,
+            cut: false,
+        });
     }
-    CameraTrack { near: near as f32, far: far as f32, interpolation, keyframes }
+    CameraTrack {
+        near: near as f32,
+        far: far as f32,
+        interpolation,
+        keyframes,
+    }
 }
 
 fn variants(ctx: &mut Ctx, path: &KeyPath, raw: &[RawTechnique]) -> Vec<Variant> {
     let mut out: Vec<Variant> = Vec::new();
     if raw.is_empty() {
-        ctx.err(path, format!("at least one [[techniques]] entry is needed; known techniques: {}", quoted_list(&TechniqueKind::known_names())));
+        ctx.err(
+            path,
+            format!(
+                "at least one [[techniques]] entry is needed; known techniques: {}",
+                quoted_list(&TechniqueKind::known_names())
+            ),
+        );
     }
     for (i, t) in raw.iter().enumerate() {
         let p = path.index(i);
         let known = TechniqueKind::known_names();
         let Some(kind) = TechniqueKind::from_name(&t.technique) else {
-            let hint = closest(&t.technique, &known).map(|c| format!(" (did you mean \"{c}\"?)")).unwrap_or_default();
-            ctx.err(&p.key("technique"), format!("unknown technique \"{}\"{hint}: known techniques are {}", t.technique, quoted_list(&known)));
+            let hint = closest(&t.technique, &known)
+                .map(|c| format!(" (did you mean \"{c}\"?)"))
+                .unwrap_or_default();
+            ctx.err(
+                &p.key("technique"),
+                format!(
+                    "unknown technique \"{}\"{hint}: known techniques are {}",
+                    t.technique,
+                    quoted_list(&known)
+                ),
+            );
             continue;
         };
         let specs = kind.params();
@@ -531,8 +807,13 @@ fn variants(ctx: &mut Ctx, path: &KeyPath, raw: &[RawTechnique]) -> Vec<Variant>
                 let what = if allowed.is_empty() {
                     format!("technique \"{kind}\" takes no parameters")
                 } else {
-                    let hint = closest(key, &allowed).map(|c| format!(" (did you mean \"{c}\"?)")).unwrap_or_default();
-                    format!("unknown parameter{hint}: technique \"{kind}\" takes {}", quoted_list(&allowed))
+                    let hint = closest(key, &allowed)
+                        .map(|c| format!(" (did you mean \"{c}\"?)"))
+                        .unwrap_or_default();
+                    format!(
+                        "unknown parameter{hint}: technique \"{kind}\" takes {}",
+                        quoted_list(&allowed)
+                    )
                 };
                 ctx.err(&p.key(key), what);
                 continue;
@@ -542,7 +823,11 @@ fn variants(ctx: &mut Ctx, path: &KeyPath, raw: &[RawTechnique]) -> Vec<Variant>
                     if items.is_empty() {
                         ctx.err(&p.key(key), "an empty sweep: give at least one value");
                     }
-                    items.iter().enumerate().map(|(j, v)| (p.key(key).index(j), v)).collect()
+                    items
+                        .iter()
+                        .enumerate()
+                        .map(|(j, v)| (p.key(key).index(j), v))
+                        .collect()
                 }
                 v => vec![(p.key(key), v)],
             };
@@ -553,23 +838,48 @@ fn variants(ctx: &mut Ctx, path: &KeyPath, raw: &[RawTechnique]) -> Vec<Variant>
                     Err(msg) => ctx.err(&vp, msg),
                 }
             }
-            axes.push((key.clone(), checked, true));
+            // Named in the variant: swept parameters, and single values that differ from the default.
+            let named =
+                checked.len() > 1 || checked.first().is_some_and(|v| *v != spec.default.value());
+            axes.push((key.clone(), checked, named));
         }
         let swept = axes.iter().any(|(_, v, _)| v.len() > 1);
         if swept && t.label.is_some() {
-            ctx.err(&p.key("label"), "`label` names one variant: it cannot be used with a sweep");
+            ctx.err(
+                &p.key("label"),
+                "`label` names one variant: it cannot be used with a sweep",
+            );
         }
         for combo in cartesian(&axes) {
-            let mut params: BTreeMap<String, ParamValue> =
-                specs.iter().map(|s| (s.name.to_string(), s.default.value())).collect();
+            let mut params: BTreeMap<String, ParamValue> = specs
+                .iter()
+                .map(|s| (s.name.to_string(), s.default.value()))
+                .collect();
             for (k, v) in &combo {
                 params.insert(k.clone(), v.clone());
             }
-            let name = t.label.clone().unwrap_or_else(|| technique::variant_name(kind, &combo));
+            let shown: Vec<(String, ParamValue)> = combo
+                .iter()
+                .filter(|(k, _)| axes.iter().any(|(a, _, named)| a == k && *named))
+                .cloned()
+                .collect();
+            let name = t
+                .label
+                .clone()
+                .unwrap_or_else(|| technique::variant_name(kind, &shown));
             if out.iter().any(|v| v.name == name) {
-                ctx.err(&p, format!("variant \"{name}\" appears twice: give one of them a different `label`"));
+                ctx.err(
+                    &p,
+                    format!(
+                        "variant \"{name}\" appears twice: give one of them a different `label`"
+                    ),
+                );
             }
-            out.push(Variant { name, technique: kind, params });
+            out.push(Variant {
+                name,
+                technique: kind,
+                params,
+            });
         }
     }
     out
@@ -606,7 +916,13 @@ fn gates(ctx: &mut Ctx, path: &KeyPath, raw: &[RawGate], metrics: &[MetricKind])
         if !allowed.contains(&g.measure.as_str()) {
             let known_metric = MetricKind::ALL.iter().any(|m| m.name() == g.measure);
             if known_metric {
-                ctx.err(&p.key("measure"), format!("metric \"{}\" is not computed by this scenario: add it to `metrics`", g.measure));
+                ctx.err(
+                    &p.key("measure"),
+                    format!(
+                        "metric \"{}\" is not computed by this scenario: add it to `metrics`",
+                        g.measure
+                    ),
+                );
             } else {
                 ctx.choice(&p.key("measure"), "measure", &g.measure, &allowed);
             }
@@ -618,7 +934,10 @@ fn gates(ctx: &mut Ctx, path: &KeyPath, raw: &[RawGate], metrics: &[MetricKind])
             ("fail_above", g.fail_above),
         ];
         if bounds.iter().all(|(_, v)| v.is_none()) {
-            ctx.err(&p, "a gate needs at least one of warn_below, fail_below, warn_above, fail_above");
+            ctx.err(
+                &p,
+                "a gate needs at least one of warn_below, fail_below, warn_above, fail_above",
+            );
         }
         for (key, v) in bounds {
             if let Some(v) = v {

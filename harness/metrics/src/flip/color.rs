@@ -19,7 +19,7 @@ pub(crate) const QC: f32 = 0.7;
 pub(crate) const PC: f32 = 0.4;
 pub(crate) const PT: f32 = 0.95;
 
-#[inline]
+#[inline(always)]
 pub(crate) fn linear_rgb_to_xyz(r: f32, g: f32, b: f32) -> [f32; 3] {
     let a11 = 10135552.0f32 / 24577794.0f32;
     let a12 = 8788810.0f32 / 24577794.0f32;
@@ -37,7 +37,7 @@ pub(crate) fn linear_rgb_to_xyz(r: f32, g: f32, b: f32) -> [f32; 3] {
     ]
 }
 
-#[inline]
+#[inline(always)]
 pub(crate) fn xyz_to_linear_rgb(x: f32, y: f32, z: f32) -> [f32; 3] {
     let a11 = 3.241003275f32;
     let a12 = -1.537398934f32;
@@ -56,7 +56,7 @@ pub(crate) fn xyz_to_linear_rgb(x: f32, y: f32, z: f32) -> [f32; 3] {
 }
 
 /// XYZ to YCxCz, FLIP's opponent space.
-#[inline]
+#[inline(always)]
 pub(crate) fn xyz_to_ycxcz(xyz: [f32; 3]) -> [f32; 3] {
     let x = xyz[0] * INV_ILLUMINANT[0];
     let y = xyz[1] * INV_ILLUMINANT[1];
@@ -64,7 +64,7 @@ pub(crate) fn xyz_to_ycxcz(xyz: [f32; 3]) -> [f32; 3] {
     [116.0 * y - 16.0, 500.0 * (x - y), 200.0 * (y - z)]
 }
 
-#[inline]
+#[inline(always)]
 pub(crate) fn ycxcz_to_xyz(yy: f32, cx: f32, cz: f32) -> [f32; 3] {
     let y = (yy + 16.0) / 116.0;
     let cx = cx / 500.0;
@@ -75,7 +75,7 @@ pub(crate) fn ycxcz_to_xyz(yy: f32, cx: f32, cz: f32) -> [f32; 3] {
 }
 
 /// CIELAB's companding of one normalised XYZ component.
-#[inline]
+#[inline(always)]
 fn lab_f(v: f32) -> f32 {
     let delta = 6.0f32 / 29.0f32;
     let delta_square = delta * delta;
@@ -83,13 +83,13 @@ fn lab_f(v: f32) -> f32 {
     let factor = 1.0f32 / (3.0f32 * delta_square);
     let term = 4.0f32 / 29.0f32;
     if v > delta_cube {
-        v.powf(1.0f32 / 3.0f32)
+        super::fastmath::pow(v, 1.0f32 / 3.0f32)
     } else {
         factor * v + term
     }
 }
 
-#[inline]
+#[inline(always)]
 pub(crate) fn xyz_to_cielab(xyz: [f32; 3]) -> [f32; 3] {
     let x = lab_f(xyz[0] * INV_ILLUMINANT[0]);
     let y = lab_f(xyz[1] * INV_ILLUMINANT[1]);
@@ -98,13 +98,13 @@ pub(crate) fn xyz_to_cielab(xyz: [f32; 3]) -> [f32; 3] {
 }
 
 /// Hunt adjustment of one chrominance component.
-#[inline]
+#[inline(always)]
 pub(crate) fn hunt(luminance: f32, chrominance: f32) -> f32 {
     0.01 * luminance * chrominance
 }
 
 /// HyAB distance: city-block on L, Euclidean on (a, b).
-#[inline]
+#[inline(always)]
 pub(crate) fn hyab(a: [f32; 3], b: [f32; 3]) -> f32 {
     let dl = (a[0] - b[0]).abs();
     let dab = ((a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2])).sqrt();
@@ -112,7 +112,7 @@ pub(crate) fn hyab(a: [f32; 3], b: [f32; 3]) -> f32 {
 }
 
 /// Linear RGB in [0,1] (clamped here) to Hunt-adjusted CIELAB.
-#[inline]
+#[inline(always)]
 pub(crate) fn clamped_rgb_to_hunt_lab(rgb: [f32; 3]) -> [f32; 3] {
     let r = rgb[0].clamp(0.0, 1.0);
     let g = rgb[1].clamp(0.0, 1.0);

@@ -22,7 +22,7 @@
 //!   than stop exposure" here.
 //! * non-finite pixels are left out of the range computation (`flip_hdr` refuses them).
 
-use super::ldr::ldr_flip_map;
+use super::ldr::{ldr_flip_map, Source};
 use crate::MetricsError;
 use crate::{image::check_hdr_pair, HdrImage};
 use rayon::prelude::*;
@@ -165,7 +165,8 @@ pub(crate) fn hdr_flip_map(
     for i in 0..range.count {
         let exposure = start + i as f32 * step;
         let m = 2.0f32.powf(exposure);
-        let map = ldr_flip_map(&tone_map(reference, m), &tone_map(test, m), w, h, ppd);
+        let (r, t) = rayon::join(|| tone_map(reference, m), || tone_map(test, m));
+        let map = ldr_flip_map(Source::Linear(&r), Source::Linear(&t), w, h, ppd);
         error
             .par_iter_mut()
             .zip(map.par_iter())

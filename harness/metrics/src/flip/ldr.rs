@@ -13,7 +13,10 @@ use super::color::{
     clamped_rgb_to_hunt_lab, hyab, linear_rgb_to_xyz, max_distance, xyz_to_linear_rgb,
     xyz_to_ycxcz, ycxcz_to_xyz, PC, PT, QC,
 };
+use super::fastmath::pow;
 use super::filters::{feature_filters, spatial_filters, FeatureFilters, SpatialFilters, QF};
+
+const _: () = assert!(QF == 0.5, "the feature exponent is applied as sqrt");
 use rayon::prelude::*;
 
 /// One image in planes: Y, Cx, Cz, and the feature pipeline's normalised achromatic channel.
@@ -24,7 +27,8 @@ struct Planes {
     gray: Vec<f32>,
 }
 
-fn to_planes(linear_rgb: &[f32], n: usize) -> Planes {
+/// Planes of `n` pixels whose linear RGB (already in [0,1]) `pixel(i)` gives.
+fn to_planes(n: usize, pixel: impl Fn(usize) -> [f32; 3] + Sync) -> Planes {
     let mut p = Planes {
         y: vec![0.0; n],
         cx: vec![0.0; n],
@@ -38,10 +42,10 @@ fn to_planes(linear_rgb: &[f32], n: usize) -> Planes {
         .zip(p.cx.par_chunks_mut(CHUNK))
         .zip(p.cz.par_chunks_mut(CHUNK))
         .zip(p.gray.par_chunks_mut(CHUNK))
-        .zip(linear_rgb.par_chunks(CHUNK * 3))
-        .for_each(|((((y, cx), cz), gray), rgb)| {
+        .enumerate()
+        .for_each(|(chunk, (((y, cx), cz), gray))| {
             for i in 0..y.len() {
-                let c = &rgb[i * 3..i * 3 + 3];
+                let c = pixel(chunk * CHUNK + i);
                 let v = xyz_to_ycxcz(linear_rgb_to_xyz(c[0], c[1], c[2]));
                 y[i] = v[0];
                 cx[i] = v[1];
@@ -78,23 +82,46 @@ impl Scratch {
     }
 }
 
-/// LDR-FLIP of two linear RGB images (interleaved, values expected in [0,1]; they are clamped
-/// as FLIP clamps them) of `w * h` pixels at `ppd` pixels per degree.
+/// Where the linear RGB of each pixel comes from.
+pub(crate) enum Source<'a> {
+    /// 8-bit sRGB, decoded through a 256-entry table.
+    Srgb8(&'a [u8], &'a [f32; 256]),
+    /// Interleaved linear RGB; clamped to [0,1] as FLIP clamps LDR input.
+    Linear(&'a [f32]),
+}
+
+impl Source<'_> {
+    fn planes(&self, n: usize) -> Planes {
+        match *self {
+            Source::Srgb8(d, t) => to_planes(n, |i| {
+                [
+                    t[d[3 * i] as usize],
+                    t[d[3 * i + 1] as usize],
+                    t[d[3 * i + 2] as usize],
+                ]
+            }),
+            Source::Linear(d) => to_planes(n, |i| {
+                [
+                    d[3 * i].clamp(0.0, 1.0),
+                    d[3 * i + 1].clamp(0.0, 1.0),
+                    d[3 * i + 2].clamp(0.0, 1.0),
+                ]
+            }),
+        }
+    }
+}
+
+/// LDR-FLIP of two images of `w * h` pixels at `ppd` pixels per degree.
 pub(crate) fn ldr_flip_map(
-    reference: &[f32],
-    test: &[f32],
+    reference: Source,
+    test: Source,
     w: usize,
     h: usize,
     ppd: f32,
 ) -> Vec<f32> {
     let n = w * h;
-    let clamp = |v: &[f32]| -> Vec<f32> {
-        v.par_iter()
-            .with_min_len(8192)
-            .map(|c| c.clamp(0.0, 1.0))
-            .collect()
-    };
-    let planes = [to_planes(&clamp(reference), n), to_planes(&clamp(test), n)];
+    let (pr, pt) = rayon::join(|| reference.planes(n), || test.planes(n));
+    let planes = [pr, pt];
     let sf = spatial_filters(ppd);
     let ff = feature_filters(ppd);
     let rs = sf.y.len() / 2;
@@ -102,23 +129,68 @@ pub(crate) fn ldr_flip_map(
     let cmax = max_distance();
     let pccmax = PC * cmax;
 
+    let ctx = RowContext {
+        planes: &planes,
+        w,
+        h,
+        sf: &sf,
+        ff: &ff,
+        cmax,
+        pccmax,
+    };
     let mut error = vec![0.0f32; n];
     error.par_chunks_mut(w).enumerate().for_each_init(
         || Scratch::new(w, rs, rf),
-        |s, (row, out)| {
-            for (img, p) in planes.iter().enumerate() {
-                vertical_color(&mut s.col[img], p, w, h, row, &sf, rs);
-                vertical_feature(&mut s.feat[img], p, w, h, row, &ff, rf);
-                horizontal_color(&mut s.out_col[img], &s.col[img], w, &sf);
-                horizontal_feature(&mut s.out_feat[img], &s.feat[img], w, &ff);
-            }
-            combine(out, s, cmax, pccmax);
-        },
+        |s, (row, out)| process_row(&ctx, s, row, out),
     );
     error
 }
 
+/// What every row needs.
+struct RowContext<'a> {
+    planes: &'a [Planes; 2],
+    w: usize,
+    h: usize,
+    sf: &'a SpatialFilters,
+    ff: &'a FeatureFilters,
+    cmax: f32,
+    pccmax: f32,
+}
+
+/// One output row, with AVX2 when the CPU has it (the same arithmetic, wider vectors: no FMA,
+/// so results do not depend on the CPU).
+fn process_row(ctx: &RowContext, s: &mut Scratch, row: usize, out: &mut [f32]) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU supports AVX2, checked just above.
+        unsafe { process_row_avx2(ctx, s, row, out) };
+        return;
+    }
+    process_row_generic(ctx, s, row, out);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn process_row_avx2(ctx: &RowContext, s: &mut Scratch, row: usize, out: &mut [f32]) {
+    process_row_generic(ctx, s, row, out);
+}
+
+#[inline(always)]
+fn process_row_generic(ctx: &RowContext, s: &mut Scratch, row: usize, out: &mut [f32]) {
+    let (w, h) = (ctx.w, ctx.h);
+    let rs = ctx.sf.y.len() / 2;
+    let rf = ctx.ff.g.len() / 2;
+    for (img, p) in ctx.planes.iter().enumerate() {
+        vertical_color(&mut s.col[img], p, w, h, row, ctx.sf, rs);
+        vertical_feature(&mut s.feat[img], p, w, h, row, ctx.ff, rf);
+        horizontal_color(&mut s.out_col[img], &s.col[img], w, ctx.sf);
+        horizontal_feature(&mut s.out_feat[img], &s.feat[img], w, ctx.ff);
+    }
+    combine(out, s, ctx.cmax, ctx.pccmax);
+}
+
 /// Vertical CSF pass for one output row into padded rows (edge values replicated).
+#[inline(always)]
 fn vertical_color(
     dst: &mut [Vec<f32>; 4],
     p: &Planes,
@@ -155,6 +227,7 @@ fn vertical_color(
 }
 
 /// Vertical feature pass (Gaussian, first and second derivative) into padded rows.
+#[inline(always)]
 fn vertical_feature(
     dst: &mut [Vec<f32>; 3],
     p: &Planes,
@@ -187,12 +260,14 @@ fn vertical_feature(
 }
 
 /// Replicates the first and last of the `w` values at `r..r + w` into the `r` slots each side.
+#[inline(always)]
 fn pad_edges(d: &mut [f32], w: usize, r: usize) {
     let (first, last) = (d[r], d[r + w - 1]);
     d[..r].fill(first);
     d[r + w..].fill(last);
 }
 
+#[inline(always)]
 fn horizontal_color(dst: &mut [Vec<f32>; 4], src: &[Vec<f32>; 4], w: usize, f: &SpatialFilters) {
     for d in dst.iter_mut() {
         d.fill(0.0);
@@ -215,6 +290,7 @@ fn horizontal_color(dst: &mut [Vec<f32>; 4], src: &[Vec<f32>; 4], w: usize, f: &
 
 /// Horizontal feature pass: outputs dx, ddx (derivatives across the vertically smoothed row)
 /// and dy, ddy (smoothing across the vertical derivatives).
+#[inline(always)]
 fn horizontal_feature(dst: &mut [Vec<f32>; 4], src: &[Vec<f32>; 3], w: usize, f: &FeatureFilters) {
     for d in dst.iter_mut() {
         d.fill(0.0);
@@ -235,16 +311,20 @@ fn horizontal_feature(dst: &mut [Vec<f32>; 4], src: &[Vec<f32>; 3], w: usize, f:
 }
 
 /// Colour difference, feature difference and their combination for one row.
+/// Hunt-adjusted CIELAB of the filtered YCxCz at column `x` (Cz is the sum of its two parts).
+#[inline(always)]
+fn hunt_lab(c: &[Vec<f32>; 4], x: usize) -> [f32; 3] {
+    let xyz = ycxcz_to_xyz(c[0][x], c[1][x], c[2][x] + c[3][x]);
+    clamped_rgb_to_hunt_lab(xyz_to_linear_rgb(xyz[0], xyz[1], xyz[2]))
+}
+
+#[inline(always)]
 fn combine(out: &mut [f32], s: &Scratch, cmax: f32, pccmax: f32) {
     let normalization = 1.0f32 / 2.0f32.sqrt();
     let [rc, tc] = &s.out_col;
     let [rf, tf] = &s.out_feat;
     for (x, o) in out.iter_mut().enumerate() {
-        let lab = |c: &[Vec<f32>; 4]| {
-            let xyz = ycxcz_to_xyz(c[0][x], c[1][x], c[2][x] + c[3][x]);
-            clamped_rgb_to_hunt_lab(xyz_to_linear_rgb(xyz[0], xyz[1], xyz[2]))
-        };
-        let mut cd = hyab(lab(rc), lab(tc)).powf(QC);
+        let mut cd = pow(hyab(hunt_lab(rc, x), hunt_lab(tc, x)), QC);
         if cd < pccmax {
             cd *= PT / pccmax;
         } else {
@@ -257,7 +337,8 @@ fn combine(out: &mut [f32], s: &Scratch, cmax: f32, pccmax: f32) {
         let point_t = (tf[1][x] * tf[1][x] + tf[3][x] * tf[3][x]).sqrt();
         let edge_diff = (edge_r - edge_t).abs();
         let point_diff = (point_r - point_t).abs();
-        let fd = (normalization * edge_diff.max(point_diff)).powf(QF);
-        *o = cd.powf(1.0 - fd);
+        // powf(x, 0.5) as FLIP writes it; sqrt is the same function, and cheaper.
+        let fd = (normalization * edge_diff.max(point_diff)).sqrt();
+        *o = pow(cd, 1.0 - fd);
     }
 }

@@ -8,6 +8,7 @@
 //! `magma` (the heatmap LUT).
 
 mod color;
+mod fastmath;
 mod filters;
 mod hdr;
 mod ldr;
@@ -110,17 +111,10 @@ pub fn flip_ldr(
     check_pair(reference, test)?;
     let ppd = check_ppd(pixels_per_degree)?;
     let table = srgb8_to_linear_table();
-    let linear = |img: &Rgb8Image| -> Vec<f32> {
-        img.data
-            .par_iter()
-            .with_min_len(8192)
-            .map(|&v| table[v as usize])
-            .collect()
-    };
     let (w, h) = (reference.width, reference.height);
     let map = ldr::ldr_flip_map(
-        &linear(reference),
-        &linear(test),
+        ldr::Source::Srgb8(&reference.data, &table),
+        ldr::Source::Srgb8(&test.data, &table),
         w as usize,
         h as usize,
         ppd,
@@ -170,7 +164,7 @@ mod tests {
         for y in 0..h {
             for x in 0..w {
                 s = s.wrapping_mul(1664525).wrapping_add(1013904223);
-                let noise = (s >> 27) as u32;
+                let noise = s >> 27;
                 data.push(((x * 255) / w + noise) as u8);
                 data.push(((y * 255) / h) as u8);
                 data.push(if (x / 4 + y / 4) % 2 == 0 { 200 } else { 30 });

@@ -1,0 +1,60 @@
+//! Shared helpers for the GPU tests: open the default adapter (lavapipe in CI) once per test.
+
+use std::path::Path;
+
+use tessera::gpu::{self, Gpu};
+use tessera::scenario::{self, Scenario};
+
+/// Opens the adapter the harness would pick. CI installs lavapipe (ci/setup.sh), so a missing
+/// adapter is a failure, not a skip.
+pub fn gpu() -> Gpu {
+    let adapter = gpu::select(None).expect("no GPU adapter: run ci/setup.sh to install lavapipe");
+    gpu::open(adapter).expect("cannot open a device")
+}
+
+pub fn scenario(src: &str) -> Scenario {
+    scenario::parse(Path::new("test.toml"), src).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// A small scene with every procedural shape, a light and a moving object.
+pub const TINY: &str = r#"
+resolution = [48, 32]
+[frames]
+warmup = 1
+measured = 2
+[scene]
+shading_cost = 4
+[scene.ground]
+checker_size = 0.5
+[[scene.lights]]
+type = "directional"
+direction = [-0.4, -1.0, -0.3]
+intensity = 2.0
+[[scene.objects]]
+shape = "box"
+position = [0, 0.5, 0]
+color = [0.8, 0.3, 0.2]
+animation = { kind = "rotate", degrees_per_second = 90 }
+[[scene.objects]]
+shape = "sphere"
+position = [1.2, 0.5, 0]
+radius = 0.5
+[[scene.objects]]
+shape = "pole"
+position = [-1.0, 0, 0]
+[[scene.objects]]
+shape = "fence"
+position = [-2, 0, -1]
+end = [2, 0, -1]
+[camera]
+[[camera.keyframes]]
+time = 0
+position = [0, 1.5, 4]
+target = [0, 0.4, 0]
+[[camera.keyframes]]
+time = 1
+position = [0.5, 1.5, 4]
+target = [0, 0.4, 0]
+[[techniques]]
+technique = "native"
+"#;

@@ -1,0 +1,209 @@
+//! The scenario format's error messages, asserted whole: file, line:column, dotted key, and what
+//! is allowed. These texts are part of the user interface.
+
+use std::path::Path;
+
+use tessera::scenario::{self, MetricKind, Reference};
+
+const VALID: &str = r#"
+resolution = [64, 32]
+
+[frames]
+warmup = 1
+measured = 3
+
+[camera]
+[[camera.keyframes]]
+time = 0.0
+position = [0, 1, 5]
+target = [0, 0, 0]
+
+[[techniques]]
+technique = "native"
+"#;
+
+/// Every error of `source` (with `extra` appended to the valid base), one per line.
+fn errors(extra: &str) -> Vec<String> {
+    let src = format!("{VALID}{extra}");
+    match scenario::parse(Path::new("s.toml"), &src) {
+        Ok(_) => Vec::new(),
+        Err(e) => e.0.iter().map(|e| e.to_string()).collect(),
+    }
+}
+
+fn errors_of(source: &str) -> Vec<String> {
+    match scenario::parse(Path::new("s.toml"), source) {
+        Ok(_) => Vec::new(),
+        Err(e) => e.0.iter().map(|e| e.to_string()).collect(),
+    }
+}
+
+#[test]
+fn a_minimal_scenario_gets_defaults() {
+    let s = scenario::parse(Path::new("dir/minimal.toml"), VALID).unwrap();
+    assert_eq!(s.name, "minimal");
+    assert_eq!((s.width, s.height), (64, 32));
+    assert_eq!(s.reference, Reference::Native);
+    assert_eq!(s.metrics, MetricKind::DEFAULT.to_vec());
+    assert_eq!(s.save_frames, vec![2]);
+    assert_eq!(s.variants.len(), 1);
+    assert_eq!(s.variants[0].name, "native");
+    assert!((s.time_step - 1.0 / 60.0).abs() < 1e-12);
+}
+
+#[test]
+fn unknown_keys_are_rejected_with_the_allowed_ones() {
+    assert_eq!(
+        errors("\n[scene]\nshading_costs = 3\n"),
+        ["s.toml:18:1: `scene.shading_costs`: unknown key `shading_costs`, expected one of `background`, `ambient`, `shading_cost`, `ground`, `lights`, `objects`"]
+    );
+}
+
+#[test]
+fn syntax_errors_have_a_position() {
+    assert_eq!(
+        errors_of("resolution = [1, 2\n"),
+        ["s.toml:1:19: unclosed array, expected `]`"]
+    );
+}
+
+#[test]
+fn wrong_types_say_what_was_expected() {
+    assert_eq!(
+        errors_of("resolution = \"big\"\n"),
+        ["s.toml:1:14: `resolution`: wrong type: found string \"big\", expected an array"]
+    );
+}
+
+#[test]
+fn unknown_technique_lists_the_known_and_suggests_the_closest() {
+    assert_eq!(
+        errors("\n[[techniques]]\ntechnique = \"upscal\"\n"),
+        ["s.toml:18:13: `techniques[1].technique`: unknown technique \"upscal\" (did you mean \"upscale\"?): known techniques are \"native\", \"upscale\""]
+    );
+    assert_eq!(
+        errors("\n[[techniques]]\ntechnique = \"raytrace\"\n"),
+        ["s.toml:18:13: `techniques[1].technique`: unknown technique \"raytrace\": known techniques are \"native\", \"upscale\""]
+    );
+}
+
+#[test]
+fn values_are_range_checked() {
+    let src = VALID
+        .replace("resolution = [64, 32]", "resolution = [0, 20000]")
+        .replace("measured = 3", "measured = 0");
+    assert_eq!(
+        errors_of(&src),
+        [
+            "s.toml:2:15: `resolution[0]`: 0 is out of range: expected an integer from 1 to 16384",
+            "s.toml:2:18: `resolution[1]`: 20000 is out of range: expected an integer from 1 to 16384",
+            "s.toml:6:12: `frames.measured`: 0 is out of range: expected an integer from 1 to 100000",
+        ]
+    );
+}
+
+#[test]
+fn near_and_far_must_be_ordered() {
+    let src = VALID.replace("[camera]\n", "[camera]\nnear = 10.0\nfar = 1.0\n");
+    assert_eq!(
+        errors_of(&src),
+        ["s.toml:10:7: `camera.far`: 1 is not allowed: expected 0 < near < far (near = 10)"]
+    );
+    let src = VALID.replace("[camera]\n", "[camera]\nnear = 0.0\n");
+    assert_eq!(
+        errors_of(&src),
+        ["s.toml:9:8: `camera.near`: 0 is not allowed: expected 0 < near < far"]
+    );
+}
+
+#[test]
+fn keyframe_times_must_increase() {
+    let extra = "\n[[camera.keyframes]]\ntime = 0.0\nposition = [1, 1, 5]\ntarget = [0, 0, 0]\n";
+    // Appended keyframes after [[techniques]] still belong to camera.keyframes.
+    assert_eq!(
+        errors(extra),
+        ["s.toml:18:8: `camera.keyframes[1].time`: 0 is not after the previous keyframe's time 0: keyframe times must increase"]
+    );
+}
+
+#[test]
+fn non_finite_numbers_are_rejected() {
+    assert_eq!(
+        errors("\n[[scene.objects]]\nshape = \"sphere\"\nposition = [0, nan, 0]\n"),
+        ["s.toml:19:16: `scene.objects[0].position[1]`: NaN is not a finite number"]
+    );
+}
+
+#[test]
+fn parameters_are_checked_per_technique_and_sweeps_expand() {
+    assert_eq!(
+        errors("\n[[techniques]]\ntechnique = \"upscale\"\nscale = [0.5, 1.5]\nfiltr = \"nearest\"\n"),
+        [
+            "s.toml:19:15: `techniques[1].scale[1]`: 1.5 is out of range: expected a number in (0, 1]",
+            "s.toml:20:9: `techniques[1].filtr`: unknown parameter (did you mean \"filter\"?): technique \"upscale\" takes \"scale\", \"filter\"",
+        ]
+    );
+    let s = scenario::parse(
+        Path::new("s.toml"),
+        &format!("{VALID}\n[[techniques]]\ntechnique = \"upscale\"\nscale = [0.5, 0.75]\nfilter = [\"bilinear\", \"nearest\"]\n"),
+    )
+    .unwrap();
+    let names: Vec<&str> = s.variants.iter().map(|v| v.name.as_str()).collect();
+    assert_eq!(
+        names,
+        [
+            "native",
+            "upscale[filter=bilinear,scale=0.5]",
+            "upscale[filter=bilinear,scale=0.75]",
+            "upscale[filter=nearest,scale=0.5]",
+            "upscale[filter=nearest,scale=0.75]",
+        ]
+    );
+}
+
+#[test]
+fn shapes_accept_only_their_own_keys() {
+    assert_eq!(
+        errors("\n[[scene.objects]]\nshape = \"sphere\"\nsize = [1, 1, 1]\nradius = -1\n"),
+        [
+            "s.toml:19:8: `scene.objects[0].size`: `size` is not used by shape \"sphere\": allowed keys are \"radius\"",
+            "s.toml:20:10: `scene.objects[0].radius`: -1 is not allowed: expected a finite number > 0",
+        ]
+    );
+}
+
+#[test]
+fn gates_need_a_computed_measure_and_ordered_levels() {
+    assert_eq!(
+        errors("\n[[gates]]\nmeasure = \"ssim\"\nwarn_below = 0.9\n"),
+        ["s.toml:18:11: `gates[0].measure`: metric \"ssim\" is not computed by this scenario: add it to `metrics`"]
+    );
+    assert_eq!(
+        errors("\n[[gates]]\nmeasure = \"psnr\"\nwarn_below = 30\nfail_below = 35\n"),
+        ["s.toml:20:14: `gates[0].fail_below`: fail_below (35) is above warn_below (30): failing must be the stricter level"]
+    );
+}
+
+#[test]
+fn every_shipped_scenario_is_valid() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios");
+    let mut count = 0;
+    for dir in std::fs::read_dir(&root).unwrap() {
+        let dir = dir.unwrap().path();
+        if !dir.is_dir() {
+            continue;
+        }
+        let Ok(files) = scenario::collect(&[dir]) else {
+            continue;
+        };
+        for file in files {
+            if let Err(e) = scenario::load(&file) {
+                // glTF models come from ci/setup.sh; everything else must be valid as shipped.
+                let only_missing_models = e.0.iter().all(|e| e.message.contains("run ci/setup.sh"));
+                assert!(only_missing_models, "{e}");
+            }
+            count += 1;
+        }
+    }
+    assert!(count >= 4, "found only {count} scenarios");
+}
