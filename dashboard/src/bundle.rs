@@ -65,9 +65,15 @@ fn check_schema(what: &str, value: &serde_json::Value) -> Result<(), BundleError
     }
 }
 
-fn parse<T: serde::de::DeserializeOwned>(what: &str, value: serde_json::Value) -> Result<T, BundleError> {
+fn parse<T: serde::de::DeserializeOwned>(
+    what: &str,
+    value: serde_json::Value,
+) -> Result<T, BundleError> {
     check_schema(what, &value)?;
-    serde_json::from_value(value).map_err(|source| BundleError::Invalid { what: what.to_string(), source })
+    serde_json::from_value(value).map_err(|source| BundleError::Invalid {
+        what: what.to_string(),
+        source,
+    })
 }
 
 /// Run ids appear in URLs: letters, digits, `.`, `_`, `-`, at most 128.
@@ -76,13 +82,17 @@ pub fn valid_run_id(id: &str) -> bool {
         && id.len() <= 128
         && id != "."
         && id != ".."
-        && id.chars().all(|c| c.is_ascii_alphanumeric() || matches!(c, '.' | '_' | '-'))
+        && id
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '.' | '_' | '-'))
 }
 
 /// An image path must stay inside the run folder: relative, no `..`, no root.
 pub fn safe_relative_path(path: &str) -> bool {
     let p = Path::new(path);
-    !path.is_empty() && p.components().all(|c| matches!(c, Component::Normal(_))) && !path.contains('\\')
+    !path.is_empty()
+        && p.components().all(|c| matches!(c, Component::Normal(_)))
+        && !path.contains('\\')
 }
 
 const PNG_SIGNATURE: &[u8] = b"\x89PNG\r\n\x1a\n";
@@ -104,7 +114,11 @@ impl RunBundle {
         }
         let mut parsed: Vec<ScenarioResult> = Vec::with_capacity(scenarios.len());
         for (i, s) in scenarios.into_iter().enumerate() {
-            let name = s.get("scenario").and_then(|v| v.as_str()).unwrap_or("?").to_string();
+            let name = s
+                .get("scenario")
+                .and_then(|v| v.as_str())
+                .unwrap_or("?")
+                .to_string();
             let s: ScenarioResult = parse(&format!("scenario result {i} ({name})"), s)?;
             if s.run_id != run.run_id {
                 return Err(BundleError::Inconsistent(format!(
@@ -113,7 +127,10 @@ impl RunBundle {
                 )));
             }
             if parsed.iter().any(|p| p.scenario == s.scenario) {
-                return Err(BundleError::Inconsistent(format!("scenario {} appears twice", s.scenario)));
+                return Err(BundleError::Inconsistent(format!(
+                    "scenario {} appears twice",
+                    s.scenario
+                )));
             }
             let mut seen = std::collections::BTreeSet::new();
             for v in &s.results {
@@ -128,7 +145,11 @@ impl RunBundle {
         }
         let referenced: std::collections::BTreeSet<&str> = parsed
             .iter()
-            .flat_map(|s| s.results.iter().flat_map(|v| v.images.iter().map(|i| i.path.as_str())))
+            .flat_map(|s| {
+                s.results
+                    .iter()
+                    .flat_map(|v| v.images.iter().map(|i| i.path.as_str()))
+            })
             .collect();
         for (path, bytes) in &images {
             let problem = if !safe_relative_path(path) {
@@ -136,26 +157,39 @@ impl RunBundle {
             } else if !referenced.contains(path.as_str()) {
                 Some("is not listed in any result's images".to_string())
             } else if bytes.len() > MAX_IMAGE_BYTES {
-                Some(format!("is {} bytes; the limit is {MAX_IMAGE_BYTES}", bytes.len()))
+                Some(format!(
+                    "is {} bytes; the limit is {MAX_IMAGE_BYTES}",
+                    bytes.len()
+                ))
             } else if !bytes.starts_with(PNG_SIGNATURE) {
                 Some("is not a PNG file".to_string())
             } else {
                 None
             };
             if let Some(problem) = problem {
-                return Err(BundleError::Image { path: path.clone(), problem });
+                return Err(BundleError::Image {
+                    path: path.clone(),
+                    problem,
+                });
             }
         }
-        Ok(RunBundle { run, scenarios: parsed, images })
+        Ok(RunBundle {
+            run,
+            scenarios: parsed,
+            images,
+        })
     }
 
     /// Decodes an upload body.
     pub fn from_upload(body: UploadBody) -> Result<RunBundle, BundleError> {
         let mut images = BTreeMap::new();
         for (path, b64) in body.images {
-            let bytes = base64::engine::general_purpose::STANDARD.decode(b64.as_bytes()).map_err(|e| {
-                BundleError::Image { path: path.clone(), problem: format!("is not valid base64: {e}") }
-            })?;
+            let bytes = base64::engine::general_purpose::STANDARD
+                .decode(b64.as_bytes())
+                .map_err(|e| BundleError::Image {
+                    path: path.clone(),
+                    problem: format!("is not valid base64: {e}"),
+                })?;
             images.insert(path, bytes);
         }
         RunBundle::from_parts(body.run, body.scenarios, images)
@@ -164,9 +198,17 @@ impl RunBundle {
     /// Reads a run folder: `run.json`, `scenarios/*.json` (in name order) and every listed image
     /// that exists (a missing image is left out, not an error: runs may be saved without them).
     pub fn read_folder(dir: &Path) -> Result<RunBundle, BundleError> {
-        let read = |p: &Path| std::fs::read(p).map_err(|source| BundleError::Io { path: p.display().to_string(), source });
+        let read = |p: &Path| {
+            std::fs::read(p).map_err(|source| BundleError::Io {
+                path: p.display().to_string(),
+                source,
+            })
+        };
         let json = |p: &Path| -> Result<serde_json::Value, BundleError> {
-            serde_json::from_slice(&read(p)?).map_err(|source| BundleError::Invalid { what: p.display().to_string(), source })
+            serde_json::from_slice(&read(p)?).map_err(|source| BundleError::Invalid {
+                what: p.display().to_string(),
+                source,
+            })
         };
         let run = json(&dir.join("run.json"))?;
         let scen_dir = dir.join("scenarios");
@@ -176,14 +218,26 @@ impl RunBundle {
                 .filter(|p| p.extension().is_some_and(|x| x == "json"))
                 .collect(),
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => Vec::new(),
-            Err(source) => return Err(BundleError::Io { path: scen_dir.display().to_string(), source }),
+            Err(source) => {
+                return Err(BundleError::Io {
+                    path: scen_dir.display().to_string(),
+                    source,
+                })
+            }
         };
         files.sort();
-        let scenarios = files.iter().map(|p| json(p)).collect::<Result<Vec<_>, _>>()?;
+        let scenarios = files
+            .iter()
+            .map(|p| json(p))
+            .collect::<Result<Vec<_>, _>>()?;
         let mut images = BTreeMap::new();
         for s in &scenarios {
             let paths = s["results"].as_array().into_iter().flatten().flat_map(|v| {
-                v["images"].as_array().into_iter().flatten().filter_map(|i| i["path"].as_str())
+                v["images"]
+                    .as_array()
+                    .into_iter()
+                    .flatten()
+                    .filter_map(|i| i["path"].as_str())
             });
             for path in paths {
                 if !safe_relative_path(path) || images.contains_key(path) {
@@ -202,11 +256,20 @@ impl RunBundle {
     pub fn to_upload(&self) -> UploadBody {
         UploadBody {
             run: serde_json::to_value(&self.run).expect("records serialise"),
-            scenarios: self.scenarios.iter().map(|s| serde_json::to_value(s).expect("records serialise")).collect(),
+            scenarios: self
+                .scenarios
+                .iter()
+                .map(|s| serde_json::to_value(s).expect("records serialise"))
+                .collect(),
             images: self
                 .images
                 .iter()
-                .map(|(p, b)| (p.clone(), base64::engine::general_purpose::STANDARD.encode(b)))
+                .map(|(p, b)| {
+                    (
+                        p.clone(),
+                        base64::engine::general_purpose::STANDARD.encode(b),
+                    )
+                })
                 .collect(),
         }
     }
@@ -234,8 +297,12 @@ mod tests {
 
     #[test]
     fn unknown_schema_version_is_named() {
-        let err = RunBundle::from_parts(serde_json::json!({"schema_version": 99}), vec![], BTreeMap::new())
-            .unwrap_err();
+        let err = RunBundle::from_parts(
+            serde_json::json!({"schema_version": 99}),
+            vec![],
+            BTreeMap::new(),
+        )
+        .unwrap_err();
         assert_eq!(
             err.to_string(),
             "run.json has schema_version 99; this dashboard reads version 1 only: upgrade tessera-dashboard to store it"

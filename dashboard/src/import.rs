@@ -61,7 +61,10 @@ pub fn import(pool: &Pool, root: &Path, params: &Params) -> anyhow::Result<Impor
     let folders = find_run_folders(root)
         .map_err(|e| anyhow::anyhow!("cannot read {}: {e}", root.display()))?;
     if folders.is_empty() {
-        anyhow::bail!("{} holds no run folder (a folder with run.json, or folders of them)", root.display());
+        anyhow::bail!(
+            "{} holds no run folder (a folder with run.json, or folders of them)",
+            root.display()
+        );
     }
     let mut summary = ImportSummary::default();
     let mut touched = BTreeSet::new();
@@ -71,7 +74,9 @@ pub fn import(pool: &Pool, root: &Path, params: &Params) -> anyhow::Result<Impor
             .map_err(anyhow::Error::from)
             .and_then(|b| ingest(&mut *conn, &b).map_err(anyhow::Error::from));
         match outcome {
-            Ok(Ingested::Stored { results, series, .. }) => {
+            Ok(Ingested::Stored {
+                results, series, ..
+            }) => {
                 summary.stored += 1;
                 summary.results += results;
                 touched.extend(series);

@@ -47,7 +47,11 @@ pub fn points(conn: &mut dyn Connection, series_id: i64) -> Result<Vec<SeriesPoi
 }
 
 /// Runs detection on one series and stores new change points; returns how many were new.
-pub fn update_series(conn: &mut dyn Connection, series_id: i64, params: &Params) -> Result<usize, StoreError> {
+pub fn update_series(
+    conn: &mut dyn Connection,
+    series_id: i64,
+    params: &Params,
+) -> Result<usize, StoreError> {
     let pts = points(conn, series_id)?;
     let values: Vec<f64> = pts.iter().map(|p| p.value).collect();
     let env: Vec<&str> = pts.iter().map(|p| p.environment.as_str()).collect();
@@ -56,14 +60,20 @@ pub fn update_series(conn: &mut dyn Connection, series_id: i64, params: &Params)
         return Ok(0);
     }
     let existing: Vec<usize> = conn
-        .query("SELECT run_pk_after FROM regressions WHERE series_id = $1", &[Value::Int(series_id)])?
+        .query(
+            "SELECT run_pk_after FROM regressions WHERE series_id = $1",
+            &[Value::Int(series_id)],
+        )?
         .iter()
         .filter_map(|r| r.i64(0).ok())
         .filter_map(|pk| pts.iter().position(|p| p.run_pk == pk))
         .collect();
     let mut added = 0;
     for cp in &analysis.change_points {
-        if existing.iter().any(|&i| i.abs_diff(cp.index) <= SAME_CHANGE_WITHIN) {
+        if existing
+            .iter()
+            .any(|&i| i.abs_diff(cp.index) <= SAME_CHANGE_WITHIN)
+        {
             continue;
         }
         let now = crate::now_rfc3339();
@@ -88,7 +98,11 @@ pub fn update_series(conn: &mut dyn Connection, series_id: i64, params: &Params)
 }
 
 /// Runs detection on the given series; returns how many change points were new.
-pub fn update(conn: &mut dyn Connection, series: &[i64], params: &Params) -> Result<usize, StoreError> {
+pub fn update(
+    conn: &mut dyn Connection,
+    series: &[i64],
+    params: &Params,
+) -> Result<usize, StoreError> {
     let mut added = 0;
     for &id in series {
         added += update_series(conn, id, params)?;
@@ -98,5 +112,9 @@ pub fn update(conn: &mut dyn Connection, series: &[i64], params: &Params) -> Res
 
 /// Every series in the store (for `tessera-dashboard detect`).
 pub fn all_series(conn: &mut dyn Connection) -> Result<Vec<i64>, StoreError> {
-    Ok(conn.query("SELECT id FROM series ORDER BY id", &[])?.iter().map(|r| r.i64(0)).collect::<Result<_, _>>()?)
+    Ok(conn
+        .query("SELECT id FROM series ORDER BY id", &[])?
+        .iter()
+        .map(|r| r.i64(0))
+        .collect::<Result<_, _>>()?)
 }

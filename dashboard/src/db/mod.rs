@@ -147,10 +147,15 @@ mod tests {
         conn.batch("CREATE TABLE t (x BIGINT)").unwrap();
         let r: Result<(), DbError> = transaction(&mut *conn, |c| {
             c.execute("INSERT INTO t (x) VALUES ($1)", &[Value::Int(1)])?;
-            Err(DbError::Column { column: 0, detail: "test".into() })
+            Err(DbError::Column {
+                column: 0,
+                detail: "test".into(),
+            })
         });
         assert!(r.is_err());
-        let n = conn.query("SELECT COUNT(*) FROM t", &[]).unwrap()[0].i64(0).unwrap();
+        let n = conn.query("SELECT COUNT(*) FROM t", &[]).unwrap()[0]
+            .i64(0)
+            .unwrap();
         assert_eq!(n, 0);
     }
 }

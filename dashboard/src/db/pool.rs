@@ -43,13 +43,19 @@ impl Pool {
         let mut guard = self.inner.idle.lock().unwrap_or_else(|e| e.into_inner());
         loop {
             if let Some(conn) = guard.0.pop() {
-                return Ok(PooledConnection { conn: Some(conn), pool: self.clone() });
+                return Ok(PooledConnection {
+                    conn: Some(conn),
+                    pool: self.clone(),
+                });
             }
             if guard.1 < self.inner.max {
                 guard.1 += 1;
                 drop(guard);
                 return match self.inner.factory.connect() {
-                    Ok(conn) => Ok(PooledConnection { conn: Some(conn), pool: self.clone() }),
+                    Ok(conn) => Ok(PooledConnection {
+                        conn: Some(conn),
+                        pool: self.clone(),
+                    }),
                     Err(e) => {
                         self.inner.idle.lock().unwrap_or_else(|e| e.into_inner()).1 -= 1;
                         self.inner.returned.notify_one();
@@ -57,7 +63,11 @@ impl Pool {
                     }
                 };
             }
-            guard = self.inner.returned.wait(guard).unwrap_or_else(|e| e.into_inner());
+            guard = self
+                .inner
+                .returned
+                .wait(guard)
+                .unwrap_or_else(|e| e.into_inner());
         }
     }
 }
@@ -84,7 +94,12 @@ impl DerefMut for PooledConnection {
 impl Drop for PooledConnection {
     fn drop(&mut self) {
         if let Some(conn) = self.conn.take() {
-            let mut guard = self.pool.inner.idle.lock().unwrap_or_else(|e| e.into_inner());
+            let mut guard = self
+                .pool
+                .inner
+                .idle
+                .lock()
+                .unwrap_or_else(|e| e.into_inner());
             // A connection dropped by a panic may be inside a transaction: close it instead.
             if std::thread::panicking() {
                 guard.1 -= 1;

@@ -18,7 +18,9 @@ pub struct Factory {
 
 impl Factory {
     pub fn new(url: &str) -> Factory {
-        Factory { url: url.to_string() }
+        Factory {
+            url: url.to_string(),
+        }
     }
 }
 
@@ -36,9 +38,15 @@ fn redact(url: &str) -> String {
 
 impl FactoryTrait for Factory {
     fn connect(&self) -> Result<Box<dyn Connection>, DbError> {
-        let client = Client::connect(&self.url, NoTls)
-            .map_err(|source| DbError::ConnectPostgres { url: redact(&self.url), source })?;
-        Ok(Box::new(PostgresConnection { client, statements: HashMap::new() }))
+        let client =
+            Client::connect(&self.url, NoTls).map_err(|source| DbError::ConnectPostgres {
+                url: redact(&self.url),
+                source,
+            })?;
+        Ok(Box::new(PostgresConnection {
+            client,
+            statements: HashMap::new(),
+        }))
     }
 
     fn describe(&self) -> String {
@@ -63,7 +71,11 @@ impl PostgresConnection {
 }
 
 impl ToSql for Value {
-    fn to_sql(&self, ty: &Type, out: &mut BytesMut) -> Result<IsNull, Box<dyn StdError + Sync + Send>> {
+    fn to_sql(
+        &self,
+        ty: &Type,
+        out: &mut BytesMut,
+    ) -> Result<IsNull, Box<dyn StdError + Sync + Send>> {
         match self {
             Value::Null => Ok(IsNull::Yes),
             Value::Int(v) => match *ty {
@@ -94,11 +106,19 @@ fn read_row(row: &::postgres::Row) -> Result<Row, DbError> {
     for (i, col) in row.columns().iter().enumerate() {
         let v = match *col.type_() {
             Type::INT8 => row.try_get::<_, Option<i64>>(i)?.map(Value::Int),
-            Type::INT4 => row.try_get::<_, Option<i32>>(i)?.map(|v| Value::Int(v.into())),
-            Type::INT2 => row.try_get::<_, Option<i16>>(i)?.map(|v| Value::Int(v.into())),
-            Type::BOOL => row.try_get::<_, Option<bool>>(i)?.map(|v| Value::Int(v.into())),
+            Type::INT4 => row
+                .try_get::<_, Option<i32>>(i)?
+                .map(|v| Value::Int(v.into())),
+            Type::INT2 => row
+                .try_get::<_, Option<i16>>(i)?
+                .map(|v| Value::Int(v.into())),
+            Type::BOOL => row
+                .try_get::<_, Option<bool>>(i)?
+                .map(|v| Value::Int(v.into())),
             Type::FLOAT8 => row.try_get::<_, Option<f64>>(i)?.map(Value::Real),
-            Type::FLOAT4 => row.try_get::<_, Option<f32>>(i)?.map(|v| Value::Real(v.into())),
+            Type::FLOAT4 => row
+                .try_get::<_, Option<f32>>(i)?
+                .map(|v| Value::Real(v.into())),
             Type::TEXT | Type::VARCHAR | Type::BPCHAR | Type::NAME => {
                 row.try_get::<_, Option<String>>(i)?.map(Value::Text)
             }
@@ -106,7 +126,9 @@ fn read_row(row: &::postgres::Row) -> Result<Row, DbError> {
             ref other => {
                 return Err(DbError::Column {
                     column: i,
-                    detail: format!("PostgreSQL type {other} is not supported; cast it in the query"),
+                    detail: format!(
+                        "PostgreSQL type {other} is not supported; cast it in the query"
+                    ),
                 })
             }
         };
@@ -131,7 +153,11 @@ impl Connection for PostgresConnection {
 
     fn query(&mut self, sql: &str, values: &[Value]) -> Result<Vec<Row>, DbError> {
         let stmt = self.statement(sql)?;
-        self.client.query(&stmt, &params(values))?.iter().map(read_row).collect()
+        self.client
+            .query(&stmt, &params(values))?
+            .iter()
+            .map(read_row)
+            .collect()
     }
 
     fn batch(&mut self, sql: &str) -> Result<(), DbError> {
@@ -147,6 +173,9 @@ mod tests {
             super::redact("postgres://tessera:secret@localhost:5432/db"),
             "postgres://tessera:***@localhost:5432/db"
         );
-        assert_eq!(super::redact("postgres://localhost/db"), "postgres://localhost/db");
+        assert_eq!(
+            super::redact("postgres://localhost/db"),
+            "postgres://localhost/db"
+        );
     }
 }

@@ -13,20 +13,29 @@ pub struct Factory {
 
 impl Factory {
     pub fn new(path: &str) -> Factory {
-        Factory { path: path.to_string() }
+        Factory {
+            path: path.to_string(),
+        }
     }
 }
 
 impl FactoryTrait for Factory {
     fn connect(&self) -> Result<Box<dyn Connection>, DbError> {
-        let open_err = |source| DbError::OpenSqlite { path: self.path.clone(), source };
+        let open_err = |source| DbError::OpenSqlite {
+            path: self.path.clone(),
+            source,
+        };
         let conn = rusqlite::Connection::open(&self.path).map_err(open_err)?;
-        conn.busy_timeout(std::time::Duration::from_secs(30)).map_err(open_err)?;
+        conn.busy_timeout(std::time::Duration::from_secs(30))
+            .map_err(open_err)?;
         if self.path != ":memory:" {
-            conn.pragma_update(None, "journal_mode", "WAL").map_err(open_err)?;
-            conn.pragma_update(None, "synchronous", "NORMAL").map_err(open_err)?;
+            conn.pragma_update(None, "journal_mode", "WAL")
+                .map_err(open_err)?;
+            conn.pragma_update(None, "synchronous", "NORMAL")
+                .map_err(open_err)?;
         }
-        conn.pragma_update(None, "foreign_keys", "ON").map_err(open_err)?;
+        conn.pragma_update(None, "foreign_keys", "ON")
+            .map_err(open_err)?;
         conn.set_prepared_statement_cache_capacity(64);
         Ok(Box::new(SqliteConnection { conn }))
     }
@@ -35,7 +44,6 @@ impl FactoryTrait for Factory {
         format!("SQLite {}", self.path)
     }
 }
-
 
 pub struct SqliteConnection {
     conn: rusqlite::Connection,

@@ -73,7 +73,10 @@ impl Row {
     }
 
     fn mismatch(&self, i: usize, want: &str) -> DbError {
-        DbError::Column { column: i, detail: format!("wanted {want}, found {:?}", self.0.get(i)) }
+        DbError::Column {
+            column: i,
+            detail: format!("wanted {want}, found {:?}", self.0.get(i)),
+        }
     }
 
     pub fn i64(&self, i: usize) -> Result<i64, DbError> {

@@ -6,9 +6,9 @@
 //! 2. In a segment, the noise σ is estimated robustly from successive differences
 //!    (1.4826 · MAD(Δx) / √2), which a step in the mean barely moves; values beyond 5σ of the
 //!    median are clipped so that a single outlier cannot make a step.
-//! 3. For every split k (at least `min_segment` points on each side) the standardised mean
-//!    difference T_k = |x̄_left − x̄_right| / (σ·√(1/n_left + 1/n_right)) is computed; the largest is
-//!    the candidate.
+//! 3. For every split k (at least `min_segment` points on each side) the two-sample t statistic
+//!    T_k = |x̄_left − x̄_right| / (s_k·√(1/n_left + 1/n_right)) is computed, s_k being the pooled
+//!    standard deviation of the clipped values around the two means; the largest is the candidate.
 //! 4. Its significance comes from a parametric bootstrap: the same statistic (with the same σ
 //!    estimator) on Gaussian series of the same length, fitted with a Gumbel law; the candidate is a
 //!    change point when its tail probability is below `alpha` and the relative change is at least
@@ -18,7 +18,7 @@
 //!
 //! Not for: reading series from the store or storing regressions (see [`crate::regressions`]).
 
-mod null;
+pub mod null;
 mod rng;
 
 pub use rng::Rng;
@@ -38,7 +38,12 @@ pub struct Params {
 
 impl Default for Params {
     fn default() -> Self {
-        Params { alpha: 0.001, min_segment: 3, min_relative_change: 0.01, clip_sigmas: 5.0 }
+        Params {
+            alpha: 0.002,
+            min_segment: 3,
+            min_relative_change: 0.01,
+            clip_sigmas: 5.0,
+        }
     }
 }
 
@@ -84,7 +89,10 @@ pub fn analyse<E: PartialEq>(values: &[f64], environment: &[E], params: &Params)
             change_points.push(cp);
         }
     }
-    Analysis { segment_starts, change_points }
+    Analysis {
+        segment_starts,
+        change_points,
+    }
 }
 
 /// Change points in one environment segment, in index order.
@@ -102,7 +110,7 @@ fn split(values: &[f64], offset: usize, params: &Params, found: &mut Vec<ChangeP
     }
     let sigma = noise_sigma(values);
     let clipped = clip(values, sigma, params.clip_sigmas);
-    let Some((k, t)) = max_statistic(&clipped, sigma, params.min_segment) else {
+    let Some((k, t)) = max_statistic(&clipped, sigma_floor(values), params.min_segment) else {
         return;
     };
     let p = null::tail_probability(n, params.min_segment, t);
@@ -111,11 +119,22 @@ fn split(values: &[f64], offset: usize, params: &Params, found: &mut Vec<ChangeP
     }
     let before = mean(&values[..k]);
     let after = mean(&values[k..]);
-    let relative_change = if before != 0.0 { (after - before) / before.abs() } else { f64::INFINITY };
+    let relative_change = if before != 0.0 {
+        (after - before) / before.abs()
+    } else {
+        f64::INFINITY
+    };
     if relative_change.abs() < params.min_relative_change {
         return;
     }
-    found.push(ChangePoint { index: offset + k, before, after, relative_change, confidence: 1.0 - p, sigma });
+    found.push(ChangePoint {
+        index: offset + k,
+        before,
+        after,
+        relative_change,
+        confidence: 1.0 - p,
+        sigma,
+    });
     split(&values[..k], offset, params, found);
     split(&values[k..], offset + k, params, found);
 }
@@ -155,31 +174,48 @@ pub fn noise_sigma(values: &[f64]) -> f64 {
 fn clip(values: &[f64], sigma: f64, k: f64) -> Vec<f64> {
     let mut sorted = values.to_vec();
     let med = median(&mut sorted);
-    values.iter().map(|v| v.clamp(med - k * sigma, med + k * sigma)).collect()
+    values
+        .iter()
+        .map(|v| v.clamp(med - k * sigma, med + k * sigma))
+        .collect()
 }
 
-/// The split with the largest standardised mean difference: (index of first point after, T).
-pub fn max_statistic(values: &[f64], sigma: f64, min_segment: usize) -> Option<(usize, f64)> {
+/// The split with the largest two-sample t statistic: (index of the first point after, T). The
+/// pooled σ of each split is floored at `sigma_floor` so that a constant series gives finite values.
+pub fn max_statistic(values: &[f64], sigma_floor: f64, min_segment: usize) -> Option<(usize, f64)> {
     let n = values.len();
-    if n < 2 * min_segment.max(1) {
+    let m = min_segment.max(1);
+    if n < 2 * m || n < 3 {
         return None;
     }
-    let total: f64 = values.iter().sum();
+    // Centre first so that sums of squares do not cancel catastrophically.
+    let centre = mean(values);
+    let total: f64 = values.iter().map(|v| v - centre).sum();
+    let total_sq: f64 = values.iter().map(|v| (v - centre).powi(2)).sum();
     let mut left = 0.0;
     let mut best: Option<(usize, f64)> = None;
     for k in 1..n {
-        left += values[k - 1];
-        if k < min_segment.max(1) || n - k < min_segment.max(1) {
+        left += values[k - 1] - centre;
+        if k < m || n - k < m {
             continue;
         }
         let (nl, nr) = (k as f64, (n - k) as f64);
-        let diff = left / nl - (total - left) / nr;
-        let t = diff.abs() / (sigma * (1.0 / nl + 1.0 / nr).sqrt());
+        let right = total - left;
+        let rss = (total_sq - left * left / nl - right * right / nr).max(0.0);
+        let s = (rss / (n - 2) as f64).sqrt().max(sigma_floor);
+        let t = (left / nl - right / nr).abs() / (s * (1.0 / nl + 1.0 / nr).sqrt());
         if best.is_none_or(|(_, b)| t > b) {
             best = Some((k, t));
         }
     }
     best
+}
+
+/// The smallest σ a split statistic uses: a millionth of the series' scale, so that a change of a
+/// deterministic value is still finite and very significant.
+pub fn sigma_floor(values: &[f64]) -> f64 {
+    let scale = values.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    (scale * 1e-9).max(f64::MIN_POSITIVE)
 }
 
 #[cfg(test)]

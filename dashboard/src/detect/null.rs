@@ -8,7 +8,7 @@
 use std::collections::HashMap;
 use std::sync::{Mutex, OnceLock};
 
-use super::{max_statistic, noise_sigma, Rng};
+use super::{max_statistic, Rng};
 
 /// Shortest segment tested at all: σ is not known well enough from fewer points.
 pub const MIN_POINTS: usize = 8;
@@ -38,8 +38,7 @@ fn fit(n: usize, min_segment: usize) -> Gumbel {
     let mut x = vec![0.0; n];
     for _ in 0..SIMULATIONS {
         x.iter_mut().for_each(|v| *v = rng.normal());
-        let sigma = noise_sigma(&x);
-        if let Some((_, t)) = max_statistic(&x, sigma, min_segment) {
+        if let Some((_, t)) = max_statistic(&x, 1e-12, min_segment) {
             maxima.push(t);
         }
     }
@@ -47,7 +46,10 @@ fn fit(n: usize, min_segment: usize) -> Gumbel {
     let var = maxima.iter().map(|t| (t - m).powi(2)).sum::<f64>() / (maxima.len() - 1) as f64;
     // Method of moments: variance = π²β²/6, mean = μ + γβ.
     let beta = (6.0 * var).sqrt() / std::f64::consts::PI;
-    Gumbel { mu: m - 0.577_215_664_9 * beta, beta }
+    Gumbel {
+        mu: m - 0.577_215_664_9 * beta,
+        beta,
+    }
 }
 
 fn model(n: usize, min_segment: usize) -> Gumbel {
@@ -58,7 +60,10 @@ fn model(n: usize, min_segment: usize) -> Gumbel {
         return *g;
     }
     let g = fit(key.0, min_segment);
-    cache.lock().unwrap_or_else(|e| e.into_inner()).insert(key, g);
+    cache
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .insert(key, g);
     g
 }
 

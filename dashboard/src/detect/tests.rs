@@ -5,23 +5,29 @@
 use super::*;
 
 fn noisy(rng: &mut Rng, n: usize, level: f64, noise: f64) -> Vec<f64> {
-    (0..n).map(|_| level * (1.0 + noise * rng.normal())).collect()
+    (0..n)
+        .map(|_| level * (1.0 + noise * rng.normal()))
+        .collect()
 }
 
 #[test]
 fn three_percent_step_at_one_percent_noise_is_found_within_five_points() {
     let mut rng = Rng::new(1);
-    let trials = 100;
+    let trials = 300;
     let mut found = 0;
     for _ in 0..trials {
-        // 40 points of history, the step, then only 5 points after it.
+        // 40 points of history, the step, then 5 points after it, checked as each one arrives
+        // (as the dashboard does on every import).
         let mut v = noisy(&mut rng, 40, 10.0, 0.01);
         v.extend(noisy(&mut rng, 5, 10.3, 0.01));
-        let cps = detect(&v, &Params::default());
-        if cps.iter().any(|c| c.index.abs_diff(40) <= 5 && c.relative_change > 0.0) {
-            found += 1;
-        }
+        let hit = (41..=45).any(|n| {
+            detect(&v[..n], &Params::default())
+                .iter()
+                .any(|c| c.index.abs_diff(40) <= 2 && c.relative_change > 0.0)
+        });
+        found += hit as usize;
     }
+    eprintln!("found {found} of {trials}");
     assert!(found * 10 >= trials * 9, "found {found} of {trials}");
 }
 
@@ -46,7 +52,11 @@ fn noise_alone_gives_at_most_one_alert_per_thousand_points() {
         let v = noisy(&mut rng, 1000, 10.0, 0.01);
         alerts += detect(&v, &Params::default()).len();
     }
-    assert!(alerts <= series, "{alerts} alerts in {series} series of 1000 points");
+    eprintln!("{alerts} alerts in {series} series");
+    assert!(
+        alerts <= series,
+        "{alerts} alerts in {series} series of 1000 points"
+    );
 }
 
 #[test]
@@ -60,6 +70,7 @@ fn noise_alone_rechecked_after_every_new_point_stays_quiet() {
             raised.insert(c.index);
         }
     }
+    eprintln!("raised {raised:?}");
     assert!(raised.len() <= 1, "raised at {raised:?}");
 }
 
@@ -78,13 +89,18 @@ fn driver_change_starts_a_segment_instead_of_an_alert() {
     let mut rng = Rng::new(6);
     let mut v = noisy(&mut rng, 30, 10.0, 0.01);
     v.extend(noisy(&mut rng, 30, 11.0, 0.01));
-    let env: Vec<&str> = (0..60).map(|i| if i < 30 { "Mesa 22.3.6" } else { "Mesa 23.0.0" }).collect();
+    let env: Vec<&str> = (0..60)
+        .map(|i| if i < 30 { "Mesa 22.3.6" } else { "Mesa 23.0.0" })
+        .collect();
     let a = analyse(&v, &env, &Params::default());
     assert_eq!(a.segment_starts, vec![0, 30]);
     assert_eq!(a.change_points, vec![]);
     // The same values with one environment: the step is an alert.
     let same = vec!["Mesa 22.3.6"; 60];
-    assert_eq!(analyse(&v, &same, &Params::default()).change_points.len(), 1);
+    assert_eq!(
+        analyse(&v, &same, &Params::default()).change_points.len(),
+        1
+    );
 }
 
 #[test]
@@ -98,5 +114,29 @@ fn deterministic_series_flags_any_real_change() {
 
 #[test]
 fn short_series_are_not_tested() {
-    assert_eq!(detect(&[1.0, 2.0, 3.0, 10.0, 10.0, 10.0, 10.0], &Params::default()), vec![]);
+    assert_eq!(
+        detect(&[1.0, 2.0, 3.0, 10.0, 10.0, 10.0, 10.0], &Params::default()),
+        vec![]
+    );
+}
+
+#[test]
+#[ignore]
+fn print_thresholds() {
+    for n in [8, 12, 20, 45, 100, 400, 1000] {
+        eprintln!(
+            "n={n} thr(0.001)={:.2} thr(0.005)={:.2}",
+            null::threshold(n, 3, 0.001),
+            null::threshold(n, 3, 0.005)
+        );
+    }
+    let mut rng = Rng::new(1);
+    let mut ts = vec![];
+    for _ in 0..100 {
+        let mut v = noisy(&mut rng, 40, 10.0, 0.01);
+        v.extend(noisy(&mut rng, 5, 10.3, 0.01));
+        ts.push((max_statistic(&v, 1e-12, 3).unwrap().1 * 10.0).round() / 10.0);
+    }
+    ts.sort_by(|a, b| a.total_cmp(b));
+    eprintln!("{ts:?}");
 }

@@ -18,7 +18,11 @@ use crate::db::{transaction, Connection, DbError, Value};
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Ingested {
     /// Newly stored; `series` are the ids of the series that got a point.
-    Stored { run_pk: i64, results: usize, series: Vec<i64> },
+    Stored {
+        run_pk: i64,
+        results: usize,
+        series: Vec<i64>,
+    },
     /// A run with this id was stored before; nothing changed.
     AlreadyStored { run_pk: i64 },
 }
@@ -63,13 +67,21 @@ pub fn adapter_id(conn: &mut dyn Connection, run: &RunInfo) -> Result<i64, DbErr
 }
 
 pub fn digest(bytes: &[u8]) -> String {
-    Sha256::digest(bytes).iter().map(|b| format!("{b:02x}")).collect()
+    Sha256::digest(bytes)
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
 }
 
 fn ingest_once(conn: &mut dyn Connection, bundle: &RunBundle) -> Result<Ingested, StoreError> {
     let run = &bundle.run;
-    if let Some(row) = conn.query_opt("SELECT id FROM runs WHERE run_id = $1", &[run.run_id.as_str().into()])? {
-        return Ok(Ingested::AlreadyStored { run_pk: row.i64(0)? });
+    if let Some(row) = conn.query_opt(
+        "SELECT id FROM runs WHERE run_id = $1",
+        &[run.run_id.as_str().into()],
+    )? {
+        return Ok(Ingested::AlreadyStored {
+            run_pk: row.i64(0)?,
+        });
     }
     let adapter = adapter_id(conn, run)?;
     let mut counts = [0i64; 3];
@@ -107,8 +119,13 @@ fn ingest_once(conn: &mut dyn Connection, bundle: &RunBundle) -> Result<Ingested
     )?;
     let Some(row) = inserted.first() else {
         // Another upload of the same run committed first.
-        let row = conn.query("SELECT id FROM runs WHERE run_id = $1", &[run.run_id.as_str().into()])?;
-        return Ok(Ingested::AlreadyStored { run_pk: row[0].i64(0)? });
+        let row = conn.query(
+            "SELECT id FROM runs WHERE run_id = $1",
+            &[run.run_id.as_str().into()],
+        )?;
+        return Ok(Ingested::AlreadyStored {
+            run_pk: row[0].i64(0)?,
+        });
     };
     let run_pk = row.i64(0)?;
 
@@ -185,14 +202,22 @@ fn ingest_once(conn: &mut dyn Connection, bundle: &RunBundle) -> Result<Ingested
                 }
             }
             for m in measures(v, native) {
-                points.insert((s.scenario.clone(), v.variant.clone(), m.name), (m.value, m.higher_is_better));
+                points.insert(
+                    (s.scenario.clone(), v.variant.clone(), m.name),
+                    (m.value, m.higher_is_better),
+                );
             }
         }
     }
 
     let mut series = Vec::with_capacity(points.len());
     for ((scenario, variant, measure), (value, hib)) in points {
-        let key = [scenario.into(), variant.into(), Value::Int(adapter), measure.into()];
+        let key = [
+            scenario.into(),
+            variant.into(),
+            Value::Int(adapter),
+            measure.into(),
+        ];
         let id = match conn.query_opt(
             "SELECT id FROM series WHERE scenario = $1 AND variant = $2 AND adapter_id = $3 AND measure = $4",
             &key,
@@ -219,5 +244,9 @@ fn ingest_once(conn: &mut dyn Connection, bundle: &RunBundle) -> Result<Ingested
         )?;
         series.push(id);
     }
-    Ok(Ingested::Stored { run_pk, results, series })
+    Ok(Ingested::Stored {
+        run_pk,
+        results,
+        series,
+    })
 }

@@ -36,7 +36,11 @@ pub fn measures(v: &VariantResult, native_gpu_ms: Option<f64>) -> Vec<Measure> {
     let mut out = Vec::new();
     let mut push = |name: String, value: f64, higher_is_better: bool| {
         if value.is_finite() {
-            out.push(Measure { name, value, higher_is_better });
+            out.push(Measure {
+                name,
+                value,
+                higher_is_better,
+            });
         }
     };
     if let Some(g) = v.gpu_frame_ms {

@@ -27,7 +27,8 @@ pub struct RunRow {
     pub failed: i64,
 }
 
-const RUN_COLUMNS: &str = "r.run_id, r.commit_sha, r.dirty, r.started_at, r.status, r.harness_version, r.adapter_id,
+const RUN_COLUMNS: &str =
+    "r.run_id, r.commit_sha, r.dirty, r.started_at, r.status, r.harness_version, r.adapter_id,
     a.name, a.backend, r.driver, r.driver_info, r.n_ok, r.n_skipped, r.n_failed";
 
 fn run_row(r: &Row) -> Result<RunRow, StoreError> {
@@ -50,7 +51,11 @@ fn run_row(r: &Row) -> Result<RunRow, StoreError> {
 }
 
 /// The newest runs first, optionally on one adapter.
-pub fn runs(conn: &mut dyn Connection, adapter: Option<i64>, limit: i64) -> Result<Vec<RunRow>, StoreError> {
+pub fn runs(
+    conn: &mut dyn Connection,
+    adapter: Option<i64>,
+    limit: i64,
+) -> Result<Vec<RunRow>, StoreError> {
     let rows = match adapter {
         Some(a) => conn.query(
             &format!(
@@ -144,7 +149,8 @@ pub fn run(conn: &mut dyn Connection, run_id: &str) -> Result<RunDetail, StoreEr
         &[Value::Int(pk)],
     )?;
     let run = run_row(&row[0])?;
-    let info: RunInfo = serde_json::from_str(row[0].str(14)?).map_err(|e| StoreError::Corrupt(e.to_string()))?;
+    let info: RunInfo =
+        serde_json::from_str(row[0].str(14)?).map_err(|e| StoreError::Corrupt(e.to_string()))?;
     let scenarios = scenarios_of(conn, pk)?;
     let images = images_of(conn, pk, None)?;
     let series = conn
@@ -158,17 +164,30 @@ pub fn run(conn: &mut dyn Connection, run_id: &str) -> Result<RunDetail, StoreEr
             Ok(SeriesLink { scenario: r.string(0)?, variant: r.string(1)?, measure: r.string(2)?, series_id: r.i64(3)? })
         })
         .collect::<Result<_, StoreError>>()?;
-    Ok(RunDetail { run, info, scenarios, images, series })
+    Ok(RunDetail {
+        run,
+        info,
+        scenarios,
+        images,
+        series,
+    })
 }
 
 fn scenarios_of(conn: &mut dyn Connection, pk: i64) -> Result<Vec<ScenarioResult>, StoreError> {
-    conn.query("SELECT record_json FROM scenario_results WHERE run_pk = $1 ORDER BY scenario", &[Value::Int(pk)])?
-        .iter()
-        .map(|r| serde_json::from_str(r.str(0)?).map_err(|e| StoreError::Corrupt(e.to_string())))
-        .collect()
+    conn.query(
+        "SELECT record_json FROM scenario_results WHERE run_pk = $1 ORDER BY scenario",
+        &[Value::Int(pk)],
+    )?
+    .iter()
+    .map(|r| serde_json::from_str(r.str(0)?).map_err(|e| StoreError::Corrupt(e.to_string())))
+    .collect()
 }
 
-fn images_of(conn: &mut dyn Connection, pk: i64, scenario: Option<&str>) -> Result<Vec<ImageRow>, StoreError> {
+fn images_of(
+    conn: &mut dyn Connection,
+    pk: i64,
+    scenario: Option<&str>,
+) -> Result<Vec<ImageRow>, StoreError> {
     let rows = match scenario {
         Some(s) => conn.query(
             "SELECT scenario, variant, frame, kind, digest FROM images WHERE run_pk = $1 AND scenario = $2
@@ -195,7 +214,11 @@ fn images_of(conn: &mut dyn Connection, pk: i64, scenario: Option<&str>) -> Resu
 }
 
 /// Images of one scenario of a run (the image viewer shows one variant with the reference).
-pub fn run_images(conn: &mut dyn Connection, run_id: &str, scenario: &str) -> Result<Vec<ImageRow>, StoreError> {
+pub fn run_images(
+    conn: &mut dyn Connection,
+    run_id: &str,
+    scenario: &str,
+) -> Result<Vec<ImageRow>, StoreError> {
     let pk = run_pk(conn, run_id)?;
     images_of(conn, pk, Some(scenario))
 }
@@ -203,7 +226,10 @@ pub fn run_images(conn: &mut dyn Connection, run_id: &str, scenario: &str) -> Re
 /// The bytes of a stored image by digest.
 pub fn blob(conn: &mut dyn Connection, digest: &str) -> Result<Vec<u8>, StoreError> {
     let row = conn
-        .query_opt("SELECT bytes FROM blobs WHERE digest = $1", &[digest.into()])?
+        .query_opt(
+            "SELECT bytes FROM blobs WHERE digest = $1",
+            &[digest.into()],
+        )?
         .ok_or_else(|| StoreError::NotFound(format!("image {digest}")))?;
     Ok(row.blob(0)?.to_vec())
 }
@@ -220,7 +246,8 @@ pub struct SeriesKey {
     pub higher_is_better: bool,
 }
 
-const SERIES_COLUMNS: &str = "s.id, s.scenario, s.variant, s.adapter_id, a.name, s.measure, s.higher_is_better";
+const SERIES_COLUMNS: &str =
+    "s.id, s.scenario, s.variant, s.adapter_id, a.name, s.measure, s.higher_is_better";
 
 fn series_key(r: &Row) -> Result<SeriesKey, StoreError> {
     Ok(SeriesKey {
@@ -310,7 +337,12 @@ pub fn series(conn: &mut dyn Connection, id: i64) -> Result<SeriesDetail, StoreE
         })
         .collect();
     let regressions = regressions(conn, None, Some(id), 1000)?;
-    Ok(SeriesDetail { series, points, segment_starts, regressions })
+    Ok(SeriesDetail {
+        series,
+        points,
+        segment_starts,
+        regressions,
+    })
 }
 
 /// A detected change with its triage.
@@ -399,7 +431,11 @@ pub fn latest_runs_with(
 }
 
 /// One scenario's record in a run.
-pub fn scenario_result(conn: &mut dyn Connection, run_id: &str, scenario: &str) -> Result<ScenarioResult, StoreError> {
+pub fn scenario_result(
+    conn: &mut dyn Connection,
+    run_id: &str,
+    scenario: &str,
+) -> Result<ScenarioResult, StoreError> {
     let pk = run_pk(conn, run_id)?;
     let row = conn
         .query_opt(
@@ -411,13 +447,19 @@ pub fn scenario_result(conn: &mut dyn Connection, run_id: &str, scenario: &str) 
 }
 
 /// Every scenario record of a run (the adapter comparison reads two runs).
-pub fn run_scenarios(conn: &mut dyn Connection, run_id: &str) -> Result<Vec<ScenarioResult>, StoreError> {
+pub fn run_scenarios(
+    conn: &mut dyn Connection,
+    run_id: &str,
+) -> Result<Vec<ScenarioResult>, StoreError> {
     let pk = run_pk(conn, run_id)?;
     scenarios_of(conn, pk)
 }
 
 /// Scenario names on an adapter, for pickers.
-pub fn scenarios_on(conn: &mut dyn Connection, adapter: Option<i64>) -> Result<Vec<String>, StoreError> {
+pub fn scenarios_on(
+    conn: &mut dyn Connection,
+    adapter: Option<i64>,
+) -> Result<Vec<String>, StoreError> {
     conn.query(
         "SELECT DISTINCT scenario FROM series WHERE ($1 IS NULL OR adapter_id = $1) ORDER BY scenario",
         &[adapter.into()],

@@ -19,7 +19,12 @@ pub fn set(conn: &mut dyn Connection, id: i64, state: &str, note: &str) -> Resul
     }
     let n = conn.execute(
         "UPDATE regressions SET state = $1, note = $2, updated_at = $3 WHERE id = $4",
-        &[state.into(), note.into(), crate::now_rfc3339().into(), Value::Int(id)],
+        &[
+            state.into(),
+            note.into(),
+            crate::now_rfc3339().into(),
+            Value::Int(id),
+        ],
     )?;
     if n == 0 {
         return Err(StoreError::NotFound(format!("regression {id}")));

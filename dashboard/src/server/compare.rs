@@ -1,0 +1,143 @@
+//! Adapter comparison (`/compare?a=&b=`, `/api/compare`): the newest run on each of two adapters,
+//! side by side per scenario and variant, by speedup against native on each adapter (raw
+//! milliseconds across vendors mix hardware with technique effects).
+
+use std::fmt::Write;
+
+use axum::extract::{Query, State};
+use axum::response::Html;
+use axum::Json;
+use serde::{Deserialize, Serialize};
+
+use super::{AppError, AppState};
+use crate::html::{enc, esc, ms, page as layout};
+use crate::store::measures::{native_gpu_ms, speedup};
+use crate::store::read::{self, AdapterRow};
+
+#[derive(Debug, Deserialize, Default)]
+pub struct CompareQuery {
+    pub a: Option<i64>,
+    pub b: Option<i64>,
+}
+
+#[derive(Debug, Serialize, Clone, PartialEq)]
+pub struct CompareRow {
+    pub scenario: String,
+    pub variant: String,
+    pub gpu_ms_a: Option<f64>,
+    pub gpu_ms_b: Option<f64>,
+    pub speedup_a: Option<f64>,
+    pub speedup_b: Option<f64>,
+    pub status_a: String,
+    pub status_b: String,
+}
+
+#[derive(Debug, Serialize)]
+pub struct Comparison {
+    pub adapters: Vec<AdapterRow>,
+    pub a: Option<i64>,
+    pub b: Option<i64>,
+    pub run_a: Option<String>,
+    pub run_b: Option<String>,
+    pub rows: Vec<CompareRow>,
+}
+
+async fn load(state: &AppState, q: CompareQuery) -> Result<Comparison, AppError> {
+    state
+        .db(move |c| {
+            let adapters = read::adapters(c)?;
+            let a = q.a.or_else(|| adapters.first().map(|x| x.id));
+            let b = q.b.or_else(|| adapters.iter().map(|x| x.id).find(|&id| Some(id) != a));
+            let newest = |c: &mut dyn crate::db::Connection, id: Option<i64>| -> Result<Option<String>, AppError> {
+                Ok(match id {
+                    Some(id) => read::latest_runs_with(c, id, None, 1)?.into_iter().next(),
+                    None => None,
+                })
+            };
+            let run_a = newest(c, a)?;
+            let run_b = newest(c, b)?;
+            let mut rows = Vec::new();
+            if let (Some(ra), Some(rb)) = (&run_a, &run_b) {
+                let sa = read::run_scenarios(c, ra)?;
+                let sb = read::run_scenarios(c, rb)?;
+                for s in &sa {
+                    let Some(t) = sb.iter().find(|t| t.scenario == s.scenario) else { continue };
+                    let (na, nb) = (native_gpu_ms(s), native_gpu_ms(t));
+                    for v in &s.results {
+                        let Some(w) = t.results.iter().find(|w| w.variant == v.variant) else { continue };
+                        rows.push(CompareRow {
+                            scenario: s.scenario.clone(),
+                            variant: v.variant.clone(),
+                            gpu_ms_a: v.gpu_frame_ms.map(|g| g.median),
+                            gpu_ms_b: w.gpu_frame_ms.map(|g| g.median),
+                            speedup_a: speedup(v, na),
+                            speedup_b: speedup(w, nb),
+                            status_a: v.status.label().into(),
+                            status_b: w.status.label().into(),
+                        });
+                    }
+                }
+            }
+            Ok(Comparison { adapters, a, b, run_a, run_b, rows })
+        })
+        .await
+}
+
+pub async fn api(State(state): State<AppState>, Query(q): Query<CompareQuery>) -> Result<Json<Comparison>, AppError> {
+    Ok(Json(load(&state, q).await?))
+}
+
+fn speed(v: Option<f64>) -> String {
+    v.map_or("–".into(), |x| format!("{x:.2}×"))
+}
+
+pub fn render(c: &Comparison) -> String {
+    let name = |id: Option<i64>| {
+        c.adapters.iter().find(|a| Some(a.id) == id).map_or("–".to_string(), |a| format!("{} ({})", a.name, a.backend))
+    };
+    let mut b = String::from("<form>");
+    for (field, sel) in [("a", c.a), ("b", c.b)] {
+        let _ = write!(b, "{field} <select name={field}>");
+        for a in &c.adapters {
+            let s = if Some(a.id) == sel { " selected" } else { "" };
+            let _ = write!(b, "<option value={}{s}>{} ({}, {} runs)</option>", a.id, esc(&a.name), esc(&a.backend), a.runs);
+        }
+        b.push_str("</select> ");
+    }
+    b.push_str("<button>compare</button></form>");
+    let link = |r: &Option<String>| r.as_ref().map_or("–".into(), |r| format!("<a href=\"/runs/{}\">{}</a>", enc(r), esc(r)));
+    let _ = write!(
+        b,
+        "<p>a: {} · newest run {}<br>b: {} · newest run {}</p><table id=compare><tr><th>scenario</th><th>variant</th><th class=n>speedup a</th><th class=n>speedup b</th><th class=n>b / a</th><th class=n>GPU ms a</th><th class=n>GPU ms b</th></tr>",
+        esc(&name(c.a)),
+        link(&c.run_a),
+        esc(&name(c.b)),
+        link(&c.run_b)
+    );
+    for r in &c.rows {
+        let ratio = match (r.speedup_a, r.speedup_b) {
+            (Some(x), Some(y)) => format!("{:.2}", y / x),
+            _ => "–".into(),
+        };
+        let _ = write!(
+            b,
+            "<tr><td>{}</td><td>{}</td><td class=n>{}</td><td class=n>{}</td><td class=n>{ratio}</td><td class=n>{}</td><td class=n>{}</td></tr>",
+            esc(&r.scenario),
+            esc(&r.variant),
+            if r.status_a == "ok" { speed(r.speedup_a) } else { esc(&r.status_a) },
+            if r.status_b == "ok" { speed(r.speedup_b) } else { esc(&r.status_b) },
+            ms(r.gpu_ms_a),
+            ms(r.gpu_ms_b)
+        );
+    }
+    b.push_str("</table>");
+    if c.adapters.len() < 2 {
+        b.push_str("<p>Only one adapter is stored: import runs from a second adapter to compare.</p>");
+    }
+    b
+}
+
+pub async fn page(State(state): State<AppState>, Query(q): Query<CompareQuery>) -> Result<Html<String>, AppError> {
+    let c = load(&state, q).await?;
+    Ok(Html(layout("Adapter comparison", "adapters", &render(&c))))
+}
