@@ -446,8 +446,8 @@ pub fn parse(path: &Path, source: &str) -> Result<Scenario, ScenarioErrors> {
     validate::parse_and_validate(path, source)
 }
 
-/// Expands files and folders into scenario files: folders are searched (not recursively) for
-/// `*.toml`, sorted by name so that runs are reproducible.
+/// Expands files and folders into scenario files: folders are searched recursively for `*.toml`,
+/// sorted by path so that runs are reproducible.
 pub fn collect(inputs: &[PathBuf]) -> Result<Vec<PathBuf>, ScenarioError> {
     let mut files = Vec::new();
     for input in inputs {
@@ -460,11 +460,9 @@ pub fn collect(inputs: &[PathBuf]) -> Result<Vec<PathBuf>, ScenarioError> {
         };
         let meta = std::fs::metadata(input).map_err(|e| err(format!("cannot read: {e}")))?;
         if meta.is_dir() {
-            let mut found: Vec<PathBuf> = std::fs::read_dir(input)
-                .map_err(|e| err(format!("cannot list the folder: {e}")))?
-                .filter_map(|entry| entry.ok().map(|e| e.path()))
-                .filter(|p| p.extension().is_some_and(|x| x == "toml"))
-                .collect();
+            let mut found = Vec::new();
+            find_toml(input, &mut found)
+                .map_err(|e| err(format!("cannot list the folder: {e}")))?;
             if found.is_empty() {
                 return Err(err(
                     "the folder holds no scenario (*.toml) files".to_string()
@@ -477,4 +475,16 @@ pub fn collect(inputs: &[PathBuf]) -> Result<Vec<PathBuf>, ScenarioError> {
         }
     }
     Ok(files)
+}
+
+fn find_toml(dir: &Path, out: &mut Vec<PathBuf>) -> std::io::Result<()> {
+    for entry in std::fs::read_dir(dir)? {
+        let path = entry?.path();
+        if path.is_dir() {
+            find_toml(&path, out)?;
+        } else if path.extension().is_some_and(|x| x == "toml") {
+            out.push(path);
+        }
+    }
+    Ok(())
 }
