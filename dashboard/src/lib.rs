@@ -14,6 +14,7 @@ pub mod regressions;
 pub mod server;
 pub mod store;
 pub mod svg;
+pub mod synth;
 
 /// The current time, RFC 3339 in UTC, as stored in the `*_at` columns.
 pub fn now_rfc3339() -> String {

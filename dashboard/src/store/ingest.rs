@@ -38,6 +38,11 @@ pub fn ingest(conn: &mut dyn Connection, bundle: &RunBundle) -> Result<Ingested,
     }
 }
 
+/// The body of [`ingest`] for a caller that already holds a transaction.
+pub fn ingest_in_transaction(conn: &mut dyn Connection, bundle: &RunBundle) -> Result<Ingested, StoreError> {
+    ingest_once(conn, bundle)
+}
+
 pub fn adapter_id(conn: &mut dyn Connection, run: &RunInfo) -> Result<i64, DbError> {
     let a = &run.adapter;
     let key = [

@@ -270,12 +270,13 @@ pub fn find_series(
     measure: Option<&str>,
     limit: i64,
 ) -> Result<Vec<SeriesKey>, StoreError> {
-    // Optional filters as bound parameters: `$n IS NULL OR column = $n`.
+    // Optional filters as bound parameters: `CAST($n AS type) IS NULL OR column = $n` (the cast
+    // tells PostgreSQL the parameter's type).
     conn.query(
         &format!(
             "SELECT {SERIES_COLUMNS} FROM series s JOIN adapters a ON a.id = s.adapter_id
-             WHERE ($1 IS NULL OR s.scenario = $1) AND ($2 IS NULL OR s.variant = $2)
-               AND ($3 IS NULL OR s.adapter_id = $3) AND ($4 IS NULL OR s.measure = $4)
+             WHERE (CAST($1 AS TEXT) IS NULL OR s.scenario = $1) AND (CAST($2 AS TEXT) IS NULL OR s.variant = $2)
+               AND (CAST($3 AS BIGINT) IS NULL OR s.adapter_id = $3) AND (CAST($4 AS TEXT) IS NULL OR s.measure = $4)
              ORDER BY s.scenario, s.variant, a.name, s.measure LIMIT $5"
         ),
         &[
@@ -381,7 +382,7 @@ pub fn regressions(
                 g.updated_at
              FROM regressions g JOIN series s ON s.id = g.series_id JOIN adapters a ON a.id = s.adapter_id
              JOIN runs rb ON rb.id = g.run_pk_before JOIN runs ra ON ra.id = g.run_pk_after
-             WHERE ($1 IS NULL OR g.state = $1) AND ($2 IS NULL OR g.series_id = $2)
+             WHERE (CAST($1 AS TEXT) IS NULL OR g.state = $1) AND (CAST($2 AS BIGINT) IS NULL OR g.series_id = $2)
              ORDER BY ra.started_at DESC, g.id DESC LIMIT $3"
         ),
         &[state.map(str::to_string).into(), series.into(), Value::Int(limit)],
@@ -421,7 +422,7 @@ pub fn latest_runs_with(
 ) -> Result<Vec<String>, StoreError> {
     conn.query(
         "SELECT r.run_id FROM runs r WHERE r.adapter_id = $1
-           AND ($2 IS NULL OR EXISTS (SELECT 1 FROM scenario_results s WHERE s.run_pk = r.id AND s.scenario = $2))
+           AND (CAST($2 AS TEXT) IS NULL OR EXISTS (SELECT 1 FROM scenario_results s WHERE s.run_pk = r.id AND s.scenario = $2))
          ORDER BY r.started_at DESC, r.id DESC LIMIT $3",
         &[Value::Int(adapter), scenario.map(str::to_string).into(), Value::Int(limit)],
     )?
@@ -461,7 +462,7 @@ pub fn scenarios_on(
     adapter: Option<i64>,
 ) -> Result<Vec<String>, StoreError> {
     conn.query(
-        "SELECT DISTINCT scenario FROM series WHERE ($1 IS NULL OR adapter_id = $1) ORDER BY scenario",
+        "SELECT DISTINCT scenario FROM series WHERE (CAST($1 AS BIGINT) IS NULL OR adapter_id = $1) ORDER BY scenario",
         &[adapter.into()],
     )?
     .iter()

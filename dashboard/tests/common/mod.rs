@@ -1,0 +1,71 @@
+//! Shared test helpers: the committed fixture runs, and stores to test against: a temporary SQLite
+//! file always, and PostgreSQL when `TESSERA_TEST_POSTGRES_URL` is set (each test in a schema of
+//! its own, dropped afterwards). Without the URL the PostgreSQL half says it was skipped.
+#![allow(dead_code)]
+
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use tessera_dashboard::bundle::RunBundle;
+use tessera_dashboard::db::{self, Pool};
+
+pub fn fixtures() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/runs")
+}
+
+/// The first fixture run (two real lavapipe runs of a 32x24 scenario are committed).
+pub fn template() -> RunBundle {
+    let first = std::fs::read_dir(fixtures()).unwrap().map(|e| e.unwrap().path()).min().unwrap();
+    RunBundle::read_folder(&first).unwrap()
+}
+
+pub struct TestStore {
+    pub name: &'static str,
+    pub pool: Pool,
+    _dir: Option<tempfile::TempDir>,
+    pg_schema: Option<(String, String)>,
+}
+
+impl Drop for TestStore {
+    fn drop(&mut self) {
+        if let Some((url, schema)) = &self.pg_schema {
+            if let Ok(mut c) = postgres::Client::connect(url, postgres::NoTls) {
+                let _ = c.batch_execute(&format!("DROP SCHEMA {schema} CASCADE"));
+            }
+        }
+    }
+}
+
+pub fn sqlite() -> TestStore {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("store.sqlite");
+    let pool = db::open(path.to_str().unwrap()).unwrap();
+    TestStore { name: "sqlite", pool, _dir: Some(dir), pg_schema: None }
+}
+
+pub fn postgres(test: &str) -> Option<TestStore> {
+    let Ok(url) = std::env::var("TESSERA_TEST_POSTGRES_URL") else {
+        eprintln!("{test}: skipped PostgreSQL: TESSERA_TEST_POSTGRES_URL is not set (dashboard/ci/setup-postgres.sh prints it)");
+        return None;
+    };
+    static N: AtomicUsize = AtomicUsize::new(0);
+    let schema = format!(
+        "t_{}_{}_{}",
+        std::process::id(),
+        N.fetch_add(1, Ordering::SeqCst),
+        std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap().subsec_nanos()
+    );
+    let mut c = postgres::Client::connect(&url, postgres::NoTls).expect("TESSERA_TEST_POSTGRES_URL is set but unreachable");
+    c.batch_execute(&format!("CREATE SCHEMA {schema}")).unwrap();
+    let sep = if url.contains('?') { '&' } else { '?' };
+    let scoped = format!("{url}{sep}options=-csearch_path%3D{schema}");
+    let pool = db::open(&scoped).unwrap();
+    Some(TestStore { name: "postgres", pool, _dir: None, pg_schema: Some((url, schema)) })
+}
+
+/// SQLite, and PostgreSQL when configured.
+pub fn stores(test: &str) -> Vec<TestStore> {
+    let mut v = vec![sqlite()];
+    v.extend(postgres(test));
+    v
+}

@@ -1,0 +1,180 @@
+//! Storage tests, run on SQLite and (when `TESSERA_TEST_POSTGRES_URL` is set) PostgreSQL: import of
+//! real run folders, idempotence, all-or-nothing transactions, concurrent uploads, regression
+//! detection on stored series and triage that persists.
+
+mod common;
+
+use tessera_dashboard::bundle::RunBundle;
+use tessera_dashboard::db::{transaction, DbError, Value};
+use tessera_dashboard::detect::{Params, Rng};
+use tessera_dashboard::import::import;
+use tessera_dashboard::store::ingest::{ingest, Ingested};
+use tessera_dashboard::store::{read, triage};
+use tessera_dashboard::{regressions, synth};
+
+fn count(store: &common::TestStore, table: &str) -> i64 {
+    let mut c = store.pool.get().unwrap();
+    c.query(&format!("SELECT COUNT(*) FROM {table}"), &[]).unwrap()[0].i64(0).unwrap()
+}
+
+#[test]
+fn imports_real_runs_once() {
+    for store in common::stores("imports_real_runs_once") {
+        let first = import(&store.pool, &common::fixtures(), &Params::default()).unwrap();
+        assert_eq!((first.stored, first.results, first.failed.len()), (2, 6, 0), "{}", store.name);
+        let again = import(&store.pool, &common::fixtures(), &Params::default()).unwrap();
+        assert_eq!((again.stored, again.already_stored), (0, 2), "{}", store.name);
+        assert_eq!(count(&store, "runs"), 2);
+        assert_eq!(count(&store, "results"), 6);
+        // Identical reference and native images are stored once (content-addressed).
+        assert!(count(&store, "blobs") < count(&store, "images"), "{}", store.name);
+        let mut c = store.pool.get().unwrap();
+        let runs = read::runs(&mut *c, None, 10).unwrap();
+        assert_eq!(runs.len(), 2);
+        assert_eq!((runs[0].ok, runs[0].skipped, runs[0].failed), (3, 0, 0));
+        assert!(runs[0].started_at >= runs[1].started_at, "newest first");
+        let detail = read::run(&mut *c, &runs[0].run_id).unwrap();
+        assert_eq!(detail.scenarios[0].results.len(), 3);
+        assert!(detail.series.iter().any(|s| s.measure == "speedup"));
+    }
+}
+
+#[test]
+fn failed_transaction_stores_nothing() {
+    for store in common::stores("failed_transaction_stores_nothing") {
+        let bundle = common::template();
+        let mut c = store.pool.get().unwrap();
+        let r: Result<Ingested, tessera_dashboard::store::StoreError> = transaction(&mut *c, |c| {
+            let out = ingest_inner(c, &bundle)?;
+            // Fail after everything was written.
+            c.execute("INSERT INTO no_such_table (x) VALUES ($1)", &[Value::Int(1)])?;
+            Ok(out)
+        });
+        assert!(r.is_err());
+        drop(c);
+        for table in ["runs", "results", "points", "images", "blobs", "series"] {
+            assert_eq!(count(&store, table), 0, "{} {table}", store.name);
+        }
+    }
+}
+
+/// `ingest` opens its own transaction; inside another one, run its body through a savepoint-free
+/// path: the nested BEGIN is what the outer transaction already did, so call the public API on a
+/// bundle and let the outer ROLLBACK undo it.
+fn ingest_inner(
+    c: &mut dyn tessera_dashboard::db::Connection,
+    bundle: &RunBundle,
+) -> Result<Ingested, tessera_dashboard::store::StoreError> {
+    tessera_dashboard::store::ingest::ingest_in_transaction(c, bundle)
+}
+
+#[test]
+fn concurrent_uploads_lose_nothing() {
+    for store in common::stores("concurrent_uploads_lose_nothing") {
+        let template = common::template();
+        let mut rng = Rng::new(7);
+        let bundles: Vec<RunBundle> =
+            (0..16).map(|i| synth::run_from(&template, "conc", i % 12, 1.0, 0.01, &mut rng)).collect();
+        std::thread::scope(|s| {
+            for chunk in bundles.chunks(2) {
+                let pool = store.pool.clone();
+                s.spawn(move || {
+                    for b in chunk {
+                        let mut c = pool.get().unwrap();
+                        ingest(&mut *c, b).unwrap();
+                    }
+                });
+            }
+        });
+        // 16 uploads of 12 distinct run ids.
+        assert_eq!(count(&store, "runs"), 12, "{}", store.name);
+        assert_eq!(count(&store, "results"), 36, "{}", store.name);
+        let mut c = store.pool.get().unwrap();
+        let n = c.query("SELECT COUNT(*) FROM series WHERE measure = 'gpu_ms.median'", &[]).unwrap()[0].i64(0).unwrap();
+        assert_eq!(n, 3);
+        let p = c.query("SELECT COUNT(*) FROM points", &[]).unwrap()[0].i64(0).unwrap();
+        let per_run = p / 12;
+        assert_eq!(p, per_run * 12, "{}", store.name);
+    }
+}
+
+#[test]
+fn step_in_stored_series_becomes_a_regression_with_persistent_triage() {
+    for store in common::stores("step_in_stored_series") {
+        let template = common::template();
+        let mut rng = Rng::new(11);
+        let mut c = store.pool.get().unwrap();
+        let mut touched = std::collections::BTreeSet::new();
+        for i in 0..40u64 {
+            let factor = if i < 30 { 1.0 } else { 1.10 };
+            let b = synth::run_from(&template, "step", i, factor, 0.01, &mut rng);
+            if let Ingested::Stored { series, .. } = ingest(&mut *c, &b).unwrap() {
+                touched.extend(series);
+            }
+        }
+        let touched: Vec<i64> = touched.into_iter().collect();
+        let added = regressions::update(&mut *c, &touched, &Params::default()).unwrap();
+        assert!(added >= 3, "{}: {added}", store.name);
+        let rows = read::regressions(&mut *c, None, None, 100).unwrap();
+        let gpu: Vec<_> = rows.iter().filter(|r| r.series.measure == "gpu_ms.median").collect();
+        assert_eq!(gpu.len(), 3, "{}: one per variant", store.name);
+        assert!(gpu.iter().all(|r| r.run_after == "step-000030" && r.is_regression && r.state == "new"));
+        // Speedup does not move: every variant, native included, got 10% slower.
+        assert!(!rows.iter().any(|r| r.series.measure == "speedup"), "{}", store.name);
+
+        triage::set(&mut *c, gpu[0].id, "acknowledged", "driver update on the runner").unwrap();
+        assert!(triage::set(&mut *c, gpu[0].id, "bogus", "").is_err());
+        // Running detection again adds nothing and keeps the triage.
+        assert_eq!(regressions::update(&mut *c, &touched, &Params::default()).unwrap(), 0);
+        let again = read::regressions(&mut *c, Some("acknowledged"), None, 100).unwrap();
+        assert_eq!(again.len(), 1);
+        assert_eq!(again[0].note, "driver update on the runner");
+        let series = read::series(&mut *c, gpu[0].series.id).unwrap();
+        assert_eq!(series.points.len(), 40);
+        assert_eq!(series.segment_starts, vec![0]);
+    }
+}
+
+#[test]
+fn driver_change_in_stored_series_is_a_segment_not_a_regression() {
+    for store in common::stores("driver_change_in_stored_series") {
+        let template = common::template();
+        let mut rng = Rng::new(12);
+        let mut c = store.pool.get().unwrap();
+        for i in 0..40u64 {
+            let factor = if i < 30 { 1.0 } else { 1.10 };
+            let mut b = synth::run_from(&template, "drv", i, factor, 0.01, &mut rng);
+            if i >= 30 {
+                b.run.adapter.driver_info = "Mesa 24.0.0".into();
+            }
+            ingest(&mut *c, &b).unwrap();
+        }
+        let all = regressions::all_series(&mut *c).unwrap();
+        regressions::update(&mut *c, &all, &Params::default()).unwrap();
+        let rows = read::regressions(&mut *c, None, None, 100).unwrap();
+        assert!(rows.is_empty(), "{}: {rows:?}", store.name);
+        let gpu = read::find_series(&mut *c, None, Some("native"), None, Some("gpu_ms.median"), 10).unwrap();
+        assert_eq!(read::series(&mut *c, gpu[0].id).unwrap().segment_starts, vec![0, 30]);
+    }
+}
+
+#[test]
+fn store_newer_than_binary_is_refused() {
+    let store = common::sqlite();
+    let mut c = store.pool.get().unwrap();
+    c.execute("INSERT INTO schema_migrations (version, applied_at) VALUES ($1, $2)", &[Value::Int(999), "x".into()])
+        .unwrap();
+    drop(c);
+    let path = {
+        let mut c = store.pool.get().unwrap();
+        c.query("PRAGMA database_list", &[]).unwrap()[0].string(2).unwrap()
+    };
+    match tessera_dashboard::db::open(&path) {
+        Err(e @ DbError::SchemaTooNew { .. }) => assert_eq!(
+            e.to_string(),
+            "the store has schema version 999, newer than this dashboard knows (1); upgrade tessera-dashboard"
+        ),
+        Err(e) => panic!("{e}"),
+        Ok(_) => panic!("opened a newer store"),
+    }
+}
