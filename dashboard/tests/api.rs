@@ -1,0 +1,286 @@
+//! API tests with `oneshot` on the router: every page and JSON endpoint, status codes and JSON
+//! error bodies, uploads (auth, idempotence, bad and oversized input, nothing partial stored),
+//! triage, and image routes that cannot leave the store.
+
+mod common;
+
+use axum::body::Body;
+use axum::http::{header, Request, StatusCode};
+use axum::Router;
+use http_body_util::BodyExt;
+use tessera_dashboard::detect::Params;
+use tessera_dashboard::import::import;
+use tessera_dashboard::server::{app, AppState};
+use tower::ServiceExt;
+
+const TOKEN: &str = "test-token";
+
+fn setup(imported: bool) -> (common::TestStore, Router) {
+    let store = common::sqlite();
+    if imported {
+        import(&store.pool, &common::fixtures(), &Params::default()).unwrap();
+    }
+    let mut state = AppState::new(store.pool.clone(), Some(TOKEN.into()));
+    state.max_upload_bytes = 1 << 20;
+    let router = app(state);
+    (store, router)
+}
+
+async fn send(app: &Router, req: Request<Body>) -> (StatusCode, String, String) {
+    let res = app.clone().oneshot(req).await.unwrap();
+    let status = res.status();
+    let ctype = res.headers().get(header::CONTENT_TYPE).map(|v| v.to_str().unwrap().to_string()).unwrap_or_default();
+    let body = res.into_body().collect().await.unwrap().to_bytes();
+    (status, ctype, String::from_utf8_lossy(&body).into_owned())
+}
+
+async fn get(app: &Router, uri: &str) -> (StatusCode, String, String) {
+    send(app, Request::get(uri).body(Body::empty()).unwrap()).await
+}
+
+fn upload(body: String, token: Option<&str>) -> Request<Body> {
+    let mut r = Request::post("/api/runs").header(header::CONTENT_TYPE, "application/json");
+    if let Some(t) = token {
+        r = r.header(header::AUTHORIZATION, format!("Bearer {t}"));
+    }
+    r.body(Body::from(body)).unwrap()
+}
+
+fn json(body: &str) -> serde_json::Value {
+    serde_json::from_str(body).unwrap_or_else(|e| panic!("not JSON ({e}): {body}"))
+}
+
+fn template_body() -> serde_json::Value {
+    serde_json::to_value(common::template().to_upload()).unwrap()
+}
+
+#[tokio::test]
+async fn every_page_renders_with_imported_runs() {
+    let (_store, app) = setup(true);
+    let (s, ctype, body) = get(&app, "/").await;
+    assert_eq!(s, StatusCode::OK);
+    assert!(ctype.starts_with("text/html"));
+    assert!(body.contains("llvmpipe") && body.contains("Mesa"), "{body}");
+    let runs = json(&get(&app, "/api/runs").await.2);
+    let run_id = runs[0]["run_id"].as_str().unwrap().to_string();
+    assert_eq!(runs.as_array().unwrap().len(), 2);
+
+    let (s, _, body) = get(&app, &format!("/runs/{run_id}")).await;
+    assert_eq!(s, StatusCode::OK);
+    assert!(body.contains("upscale[scale=0.5]") && body.contains("class='bar'"), "stacked bars drawn");
+    let detail = json(&get(&app, &format!("/api/runs/{run_id}")).await.2);
+    assert_eq!(detail["scenarios"][0]["results"].as_array().unwrap().len(), 3);
+
+    let series = json(&get(&app, "/api/series?scenario=tiny&measure=gpu_ms.median").await.2);
+    assert_eq!(series.as_array().unwrap().len(), 3);
+    let id = series[0]["id"].as_i64().unwrap();
+    let (s, _, body) = get(&app, &format!("/series/{id}")).await;
+    assert_eq!(s, StatusCode::OK);
+    assert_eq!(body.matches("class='point'").count(), 2, "two runs, two points");
+    assert_eq!(json(&get(&app, &format!("/api/series/{id}")).await.2)["points"].as_array().unwrap().len(), 2);
+    assert_eq!(get(&app, "/series").await.0, StatusCode::OK);
+
+    for uri in ["/regressions", "/api/regressions", "/compare", "/api/compare", "/pareto", "/api/pareto?metric=psnr"] {
+        assert_eq!(get(&app, uri).await.0, StatusCode::OK, "{uri}");
+    }
+    let pareto = json(&get(&app, "/api/pareto?scenario=tiny&metric=flip").await.2);
+    assert!(pareto["points"].as_array().unwrap().len() >= 2, "{pareto}");
+    assert!(pareto["base"].is_string(), "the older run is the base");
+    let (_, _, body) = get(&app, "/pareto?scenario=tiny").await;
+    assert!(body.contains("class='front'"));
+
+    let images = json(&get(&app, &format!("/api/runs/{run_id}/images/tiny")).await.2);
+    let digest = images[0]["digest"].as_str().unwrap();
+    let (s, ctype, _) = get(&app, &format!("/images/{digest}")).await;
+    assert_eq!((s, ctype.as_str()), (StatusCode::OK, "image/png"));
+    let (s, _, body) = get(&app, &format!("/runs/{run_id}/images/tiny/upscale%5Bscale%3D0.5%5D")).await;
+    assert_eq!(s, StatusCode::OK, "{body}");
+    assert!(body.contains("id=\"img-reference\" src=\"/images/") && body.contains("type=range"));
+}
+
+#[tokio::test]
+async fn missing_things_are_json_404s() {
+    let (_store, app) = setup(true);
+    for uri in [
+        "/runs/nope",
+        "/api/runs/nope",
+        "/series/999999",
+        "/api/series/999999",
+        "/images/0000000000000000000000000000000000000000000000000000000000000000",
+        "/images/..%2F..%2Fetc%2Fpasswd",
+        "/runs/x/images/..%2F..%2Fetc/passwd/y",
+        "/no/such/page",
+    ] {
+        let (s, ctype, body) = get(&app, uri).await;
+        assert_eq!(s, StatusCode::NOT_FOUND, "{uri}: {body}");
+        assert_eq!(ctype, "application/json", "{uri}");
+        assert!(json(&body)["error"].is_string());
+    }
+    assert_eq!(get(&app, "/api/regressions?state=bogus").await.0, StatusCode::BAD_REQUEST);
+    assert_eq!(get(&app, "/api/series/abc").await.0, StatusCode::BAD_REQUEST);
+}
+
+#[tokio::test]
+async fn upload_needs_the_token_and_is_idempotent() {
+    let (store, app) = setup(false);
+    let body = template_body().to_string();
+
+    let (s, _, err) = send(&app, upload(body.clone(), None)).await;
+    assert_eq!(s, StatusCode::UNAUTHORIZED);
+    assert!(json(&err)["error"].as_str().unwrap().contains("Bearer"));
+    assert_eq!(send(&app, upload(body.clone(), Some("wrong"))).await.0, StatusCode::UNAUTHORIZED);
+
+    let (s, _, ok) = send(&app, upload(body.clone(), Some(TOKEN))).await;
+    assert_eq!(s, StatusCode::CREATED, "{ok}");
+    assert_eq!(json(&ok)["stored"], true);
+    assert_eq!(json(&ok)["results"], 3);
+    let (s, _, again) = send(&app, upload(body, Some(TOKEN))).await;
+    assert_eq!(s, StatusCode::OK);
+    assert_eq!(json(&again)["stored"], false);
+    let runs = json(&get(&app, "/api/runs").await.2);
+    assert_eq!(runs.as_array().unwrap().len(), 1);
+    let detail = json(&get(&app, &format!("/api/runs/{}", runs[0]["run_id"].as_str().unwrap())).await.2);
+    assert_eq!(detail["images"].as_array().unwrap().len(), 4, "uploaded images are stored");
+    drop(store);
+}
+
+#[tokio::test]
+async fn writes_are_refused_without_a_configured_token() {
+    let store = common::sqlite();
+    let app = app(AppState::new(store.pool.clone(), None));
+    let (s, _, body) = send(&app, upload(template_body().to_string(), Some("anything"))).await;
+    assert_eq!(s, StatusCode::FORBIDDEN);
+    assert!(json(&body)["error"].as_str().unwrap().contains("TESSERA_DASHBOARD_TOKEN"));
+}
+
+#[tokio::test]
+async fn bad_uploads_get_4xx_and_store_nothing() {
+    let (store, app) = setup(false);
+    let mut cases: Vec<(&str, String, StatusCode, &str)> = vec![
+        ("not json", "{".into(), StatusCode::BAD_REQUEST, "not an upload bundle"),
+        ("empty object", "{}".into(), StatusCode::BAD_REQUEST, "not an upload bundle"),
+    ];
+    let mut future = template_body();
+    future["run"]["schema_version"] = 2.into();
+    cases.push(("future schema", future.to_string(), StatusCode::UNPROCESSABLE_ENTITY, "reads version 1 only"));
+    let mut bad_id = template_body();
+    bad_id["run"]["run_id"] = "../../x".into();
+    cases.push(("bad run id", bad_id.to_string(), StatusCode::UNPROCESSABLE_ENTITY, "run_id"));
+    let mut mismatched = template_body();
+    mismatched["scenarios"][0]["run_id"] = "other".into();
+    cases.push(("mismatched run id", mismatched.to_string(), StatusCode::UNPROCESSABLE_ENTITY, "has run_id"));
+    let mut traversal = template_body();
+    traversal["images"]["../../etc/passwd"] = "iVBORw0KGgo=".into();
+    cases.push(("image path", traversal.to_string(), StatusCode::UNPROCESSABLE_ENTITY, "relative path"));
+    let mut not_png = template_body();
+    let first = not_png["images"].as_object().unwrap().keys().next().unwrap().clone();
+    not_png["images"][&first] = "aGVsbG8=".into();
+    cases.push(("not a png", not_png.to_string(), StatusCode::UNPROCESSABLE_ENTITY, "not a PNG"));
+    let mut bad_b64 = template_body();
+    bad_b64["images"][&first] = "%%%".into();
+    cases.push(("bad base64", bad_b64.to_string(), StatusCode::UNPROCESSABLE_ENTITY, "base64"));
+    let mut missing_field = template_body();
+    missing_field["scenarios"][0].as_object_mut().unwrap().remove("results");
+    cases.push(("missing field", missing_field.to_string(), StatusCode::UNPROCESSABLE_ENTITY, "results"));
+    let mut huge = template_body();
+    huge["images"][&first] = "A".repeat(2 << 20).into();
+    cases.push(("oversized", huge.to_string(), StatusCode::PAYLOAD_TOO_LARGE, "larger than"));
+
+    for (what, body, status, text) in cases {
+        let (s, ctype, err) = send(&app, upload(body, Some(TOKEN))).await;
+        assert_eq!(s, status, "{what}: {err}");
+        assert_eq!(ctype, "application/json", "{what}");
+        let msg = json(&err)["error"].as_str().unwrap().to_string();
+        assert!(msg.contains(text), "{what}: {msg}");
+    }
+    let mut c = store.pool.get().unwrap();
+    for table in ["runs", "results", "blobs", "points"] {
+        let n = c.query(&format!("SELECT COUNT(*) FROM {table}"), &[]).unwrap()[0].i64(0).unwrap();
+        assert_eq!(n, 0, "{table}");
+    }
+}
+
+#[tokio::test]
+async fn triage_is_stored_and_needs_the_token() {
+    let (store, app) = setup(false);
+    // 40 generated runs with a 10% step at run 30 give regressions to triage.
+    let template = common::template();
+    let mut rng = tessera_dashboard::detect::Rng::new(3);
+    for i in 0..40 {
+        let b = tessera_dashboard::synth::run_from(&template, "t", i, if i < 30 { 1.0 } else { 1.1 }, 0.01, &mut rng);
+        let body = serde_json::to_string(&b.to_upload()).unwrap();
+        assert_eq!(send(&app, upload(body, Some(TOKEN))).await.0, StatusCode::CREATED);
+    }
+    let regs = json(&get(&app, "/api/regressions?state=new").await.2);
+    let id = regs[0]["id"].as_i64().unwrap();
+    let (_, _, page) = get(&app, "/regressions").await;
+    assert!(page.contains(&format!("id=r{id}")) && page.contains("worse"));
+
+    let triage = |token: Option<&str>, body: &str| {
+        let mut r = Request::post(format!("/api/regressions/{id}")).header(header::CONTENT_TYPE, "application/json");
+        if let Some(t) = token {
+            r = r.header(header::AUTHORIZATION, format!("Bearer {t}"));
+        }
+        r.body(Body::from(body.to_string())).unwrap()
+    };
+    let ack = r#"{"state":"acknowledged","note":"known: new shadow pass"}"#;
+    assert_eq!(send(&app, triage(None, ack)).await.0, StatusCode::UNAUTHORIZED);
+    assert_eq!(send(&app, triage(Some(TOKEN), r#"{"state":"bogus"}"#)).await.0, StatusCode::UNPROCESSABLE_ENTITY);
+    assert_eq!(send(&app, triage(Some(TOKEN), "nope")).await.0, StatusCode::BAD_REQUEST);
+    assert_eq!(send(&app, triage(Some(TOKEN), ack)).await.0, StatusCode::OK);
+    let acked = json(&get(&app, "/api/regressions?state=acknowledged").await.2);
+    assert_eq!(acked[0]["note"], "known: new shadow pass");
+
+    // The page's form, with the token as a field.
+    let form = |token: &str| {
+        Request::post(format!("/regressions/{id}"))
+            .header(header::CONTENT_TYPE, "application/x-www-form-urlencoded")
+            .body(Body::from(format!("state=fixed&note=reverted&token={token}")))
+            .unwrap()
+    };
+    assert_eq!(send(&app, form("wrong")).await.0, StatusCode::UNAUTHORIZED);
+    assert_eq!(send(&app, form(TOKEN)).await.0, StatusCode::SEE_OTHER);
+    assert_eq!(json(&get(&app, "/api/regressions?state=fixed").await.2)[0]["note"], "reverted");
+    let missing = Request::post("/api/regressions/999999")
+        .header(header::AUTHORIZATION, format!("Bearer {TOKEN}"))
+        .header(header::CONTENT_TYPE, "application/json")
+        .body(Body::from(ack))
+        .unwrap();
+    assert_eq!(send(&app, missing).await.0, StatusCode::NOT_FOUND);
+    drop(store);
+}
+
+#[test]
+fn regression_summary_text() {
+    use tessera_dashboard::store::read::{RegressionRow, SeriesKey};
+    let r = RegressionRow {
+        id: 1,
+        series: SeriesKey {
+            id: 1,
+            scenario: "tiny".into(),
+            variant: "upscale[scale=0.5]".into(),
+            adapter_id: 1,
+            adapter: "llvmpipe (LLVM 15.0.6, 256 bits)".into(),
+            measure: "gpu_ms.median".into(),
+            higher_is_better: false,
+        },
+        run_before: "a".into(),
+        commit_before: None,
+        run_after: "b".into(),
+        commit_after: None,
+        started_at: String::new(),
+        value_before: 3.476,
+        value_after: 3.8236,
+        relative_change: 0.1,
+        is_regression: true,
+        confidence: 0.9995,
+        state: "new".into(),
+        note: String::new(),
+        detected_at: String::new(),
+        updated_at: String::new(),
+    };
+    assert_eq!(
+        tessera_dashboard::server::regressions::summary(&r),
+        "tiny · upscale[scale=0.5] · llvmpipe (LLVM 15.0.6, 256 bits) · gpu_ms.median: 3.476 → 3.824 (+10.0%, worse), 100.0% confidence"
+    );
+}
