@@ -24,7 +24,11 @@ pub fn esc(s: &str) -> String {
     out
 }
 
-const COMPONENT: &AsciiSet = &NON_ALPHANUMERIC.remove(b'-').remove(b'_').remove(b'.').remove(b'~');
+const COMPONENT: &AsciiSet = &NON_ALPHANUMERIC
+    .remove(b'-')
+    .remove(b'_')
+    .remove(b'.')
+    .remove(b'~');
 
 /// Encodes one URL path segment or query value.
 pub fn enc(s: &str) -> String {
@@ -68,7 +72,10 @@ pub fn bytes(b: u64) -> String {
 
 /// A commit for display: the first 10 characters, or `(no commit)`.
 pub fn commit(c: Option<&str>) -> String {
-    c.map_or_else(|| "(no commit)".to_string(), |c| c.chars().take(10).collect())
+    c.map_or_else(
+        || "(no commit)".to_string(),
+        |c| c.chars().take(10).collect(),
+    )
 }
 
 const STYLE: &str = "body{font:14px/1.4 system-ui,sans-serif;margin:0;color:#222}
@@ -97,7 +104,11 @@ pub fn page(title: &str, active: &str, body: &str) -> String {
         let class = if label == active { " class=on" } else { "" };
         let _ = write!(out, "<a href=\"{href}\"{class}>{label}</a>");
     }
-    let _ = write!(out, "</nav><main><h1>{}</h1>{body}</main></body></html>", esc(title));
+    let _ = write!(
+        out,
+        "</nav><main><h1>{}</h1>{body}</main></body></html>",
+        esc(title)
+    );
     out
 }
 
@@ -107,7 +118,10 @@ mod tests {
 
     #[test]
     fn escapes_and_encodes() {
-        assert_eq!(esc("<a href=\"x\">'&'</a>"), "&lt;a href=&quot;x&quot;&gt;&#39;&amp;&#39;&lt;/a&gt;");
+        assert_eq!(
+            esc("<a href=\"x\">'&'</a>"),
+            "&lt;a href=&quot;x&quot;&gt;&#39;&amp;&#39;&lt;/a&gt;"
+        );
         assert_eq!(enc("upscale[scale=0.5]"), "upscale%5Bscale%3D0.5%5D");
         assert_eq!(enc("../x"), "..%2Fx");
     }

@@ -59,15 +59,25 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             }
             println!("{}", summary.line());
             if !summary.failed.is_empty() {
-                anyhow::bail!("{} run folder(s) could not be imported", summary.failed.len());
+                anyhow::bail!(
+                    "{} run folder(s) could not be imported",
+                    summary.failed.len()
+                );
             }
         }
-        Command::Serve { db, listen, token, max_upload_mib } => {
+        Command::Serve {
+            db,
+            listen,
+            token,
+            max_upload_mib,
+        } => {
             let pool = db::open(&db)?;
             let mut state = server::AppState::new(pool, token.filter(|t| !t.is_empty()));
             state.max_upload_bytes = max_upload_mib << 20;
             if state.token.is_none() {
-                eprintln!("note: no --token or TESSERA_DASHBOARD_TOKEN: uploads and triage are refused");
+                eprintln!(
+                    "note: no --token or TESSERA_DASHBOARD_TOKEN: uploads and triage are refused"
+                );
             }
             let rt = tokio::runtime::Runtime::new()?;
             rt.block_on(async move {

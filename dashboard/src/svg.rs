@@ -9,8 +9,10 @@ use std::fmt::Write;
 
 use crate::html::{esc, num};
 
-const PALETTE: [&str; 10] =
-    ["#4e79a7", "#f28e2b", "#59a14f", "#e15759", "#76b7b2", "#edc948", "#b07aa1", "#ff9da7", "#9c755f", "#bab0ac"];
+const PALETTE: [&str; 10] = [
+    "#4e79a7", "#f28e2b", "#59a14f", "#e15759", "#76b7b2", "#edc948", "#b07aa1", "#ff9da7",
+    "#9c755f", "#bab0ac",
+];
 
 /// A colour per index, repeating.
 pub fn colour(i: usize) -> &'static str {
@@ -24,7 +26,11 @@ pub fn ticks(lo: f64, hi: f64) -> Vec<f64> {
     }
     let raw = (hi - lo) / 5.0;
     let mag = 10f64.powf(raw.log10().floor());
-    let step = [1.0, 2.0, 5.0, 10.0].iter().map(|m| m * mag).find(|s| *s >= raw).unwrap_or(10.0 * mag);
+    let step = [1.0, 2.0, 5.0, 10.0]
+        .iter()
+        .map(|m| m * mag)
+        .find(|s| *s >= raw)
+        .unwrap_or(10.0 * mag);
     let mut t = (lo / step).ceil() * step;
     let mut out = Vec::new();
     while t <= hi + step * 1e-9 {
@@ -45,7 +51,11 @@ struct Scale {
 
 impl Scale {
     fn new(d0: f64, d1: f64, p0: f64, p1: f64) -> Scale {
-        let (d0, d1) = if d1 > d0 { (d0, d1) } else { (d0 - 0.5, d0 + 0.5) };
+        let (d0, d1) = if d1 > d0 {
+            (d0, d1)
+        } else {
+            (d0 - 0.5, d0 + 0.5)
+        };
         Scale { d0, d1, p0, p1 }
     }
     fn at(&self, v: f64) -> f64 {
@@ -59,7 +69,11 @@ fn padded(lo: f64, hi: f64) -> (f64, f64) {
 }
 
 fn y_axis(out: &mut String, y: Scale, left: f64, right: f64, label: &str) {
-    let (lo, hi) = if y.d0 < y.d1 { (y.d0, y.d1) } else { (y.d1, y.d0) };
+    let (lo, hi) = if y.d0 < y.d1 {
+        (y.d0, y.d1)
+    } else {
+        (y.d1, y.d0)
+    };
     for t in ticks(lo, hi) {
         let py = y.at(t);
         let _ = write!(
@@ -70,7 +84,11 @@ fn y_axis(out: &mut String, y: Scale, left: f64, right: f64, label: &str) {
             num(t)
         );
     }
-    let _ = write!(out, "<text x='4' y='12' font-size='11'>{}</text>", esc(label));
+    let _ = write!(
+        out,
+        "<text x='4' y='12' font-size='11'>{}</text>",
+        esc(label)
+    );
 }
 
 /// One point of a series chart.
@@ -95,7 +113,10 @@ pub fn series_chart(
         return out;
     }
     let lo = marks.iter().map(|m| m.value).fold(f64::INFINITY, f64::min);
-    let hi = marks.iter().map(|m| m.value).fold(f64::NEG_INFINITY, f64::max);
+    let hi = marks
+        .iter()
+        .map(|m| m.value)
+        .fold(f64::NEG_INFINITY, f64::max);
     let (lo, hi) = padded(lo, hi);
     let x = Scale::new(0.0, (marks.len().max(2) - 1) as f64, left + 8.0, w - 12.0);
     let y = Scale::new(lo, hi, h - bottom, top);
@@ -121,9 +142,16 @@ pub fn series_chart(
             esc(label)
         );
     }
-    let path: Vec<String> =
-        marks.iter().enumerate().map(|(i, m)| format!("{:.1},{:.1}", x.at(i as f64), y.at(m.value))).collect();
-    let _ = write!(out, "<polyline fill='none' stroke='#4e79a7' stroke-width='1.5' points='{}'/>", path.join(" "));
+    let path: Vec<String> = marks
+        .iter()
+        .enumerate()
+        .map(|(i, m)| format!("{:.1},{:.1}", x.at(i as f64), y.at(m.value)))
+        .collect();
+    let _ = write!(
+        out,
+        "<polyline fill='none' stroke='#4e79a7' stroke-width='1.5' points='{}'/>",
+        path.join(" ")
+    );
     let r = if marks.len() > 300 { 1.5 } else { 3.0 };
     for (i, m) in marks.iter().enumerate() {
         let _ = write!(
@@ -157,17 +185,36 @@ pub fn stacked_bars(bars: &[Bar], unit: &str) -> String {
     }
     let (w, left, bar_h) = (900.0, 200.0, 18.0);
     let h = 30.0 + bars.len() as f64 * (bar_h + 6.0) + 24.0;
-    let max = bars.iter().map(|b| b.parts.iter().map(|p| p.1).sum::<f64>()).fold(0.0, f64::max);
-    let x = Scale::new(0.0, if max > 0.0 { max * 1.05 } else { 1.0 }, left, w - 20.0);
+    let max = bars
+        .iter()
+        .map(|b| b.parts.iter().map(|p| p.1).sum::<f64>())
+        .fold(0.0, f64::max);
+    let x = Scale::new(
+        0.0,
+        if max > 0.0 { max * 1.05 } else { 1.0 },
+        left,
+        w - 20.0,
+    );
     let mut out = format!("<svg xmlns='http://www.w3.org/2000/svg' width='{w}' height='{h}' viewBox='0 0 {w} {h}' role=img>");
     for t in ticks(0.0, x.d1) {
         let px = x.at(t);
         let _ = write!(out, "<line x1='{px:.1}' x2='{px:.1}' y1='20' y2='{:.1}' stroke='#eee'/><text x='{px:.1}' y='14' font-size='10' text-anchor='middle'>{}</text>", h - 24.0, num(t));
     }
-    let _ = write!(out, "<text x='{:.1}' y='14' font-size='10'>{}</text>", w - 18.0, esc(unit));
+    let _ = write!(
+        out,
+        "<text x='{:.1}' y='14' font-size='10'>{}</text>",
+        w - 18.0,
+        esc(unit)
+    );
     for (i, b) in bars.iter().enumerate() {
         let py = 24.0 + i as f64 * (bar_h + 6.0);
-        let _ = write!(out, "<text x='{:.1}' y='{:.1}' font-size='11' text-anchor='end'>{}</text>", left - 6.0, py + 13.0, esc(&b.label));
+        let _ = write!(
+            out,
+            "<text x='{:.1}' y='{:.1}' font-size='11' text-anchor='end'>{}</text>",
+            left - 6.0,
+            py + 13.0,
+            esc(&b.label)
+        );
         let mut acc = 0.0;
         for (name, v) in &b.parts {
             let ci = names.iter().position(|n| n == name).unwrap_or(0);
@@ -223,19 +270,48 @@ pub fn scatter(points: &[ScatterPoint], x_label: &str, y_label: &str) -> String 
     let y = Scale::new(yl, yh, h - bottom, top);
     y_axis(&mut out, y, left, w - 20.0, y_label);
     for t in ticks(x.d0, x.d1) {
-        let _ = write!(out, "<text x='{:.1}' y='{:.1}' font-size='10' text-anchor='middle'>{}</text>", x.at(t), h - bottom + 14.0, num(t));
+        let _ = write!(
+            out,
+            "<text x='{:.1}' y='{:.1}' font-size='10' text-anchor='middle'>{}</text>",
+            x.at(t),
+            h - bottom + 14.0,
+            num(t)
+        );
     }
-    let _ = write!(out, "<text x='{:.1}' y='{:.1}' font-size='11' text-anchor='end'>{}</text>", w - 20.0, h - 4.0, esc(x_label));
+    let _ = write!(
+        out,
+        "<text x='{:.1}' y='{:.1}' font-size='11' text-anchor='end'>{}</text>",
+        w - 20.0,
+        h - 4.0,
+        esc(x_label)
+    );
     for g in [1, 0] {
-        let mut front: Vec<&ScatterPoint> = points.iter().filter(|p| p.group == g && p.on_front).collect();
+        let mut front: Vec<&ScatterPoint> = points
+            .iter()
+            .filter(|p| p.group == g && p.on_front)
+            .collect();
         front.sort_by(|a, b| a.x.total_cmp(&b.x));
-        let path: Vec<String> = front.iter().map(|p| format!("{:.1},{:.1}", x.at(p.x), y.at(p.y))).collect();
-        let (stroke, dash) = if g == 0 { ("#e15759", "") } else { ("#bbb", " stroke-dasharray='4 3'") };
+        let path: Vec<String> = front
+            .iter()
+            .map(|p| format!("{:.1},{:.1}", x.at(p.x), y.at(p.y)))
+            .collect();
+        let (stroke, dash) = if g == 0 {
+            ("#e15759", "")
+        } else {
+            ("#bbb", " stroke-dasharray='4 3'")
+        };
         let _ = write!(out, "<polyline class='front' fill='none' stroke='{stroke}' stroke-width='1.5'{dash} points='{}'/>", path.join(" "));
     }
     for p in points.iter().filter(|p| p.group == 1) {
         if let Some(q) = points.iter().find(|q| q.group == 0 && q.label == p.label) {
-            let _ = write!(out, "<line x1='{:.1}' y1='{:.1}' x2='{:.1}' y2='{:.1}' stroke='#aaa'/>", x.at(p.x), y.at(p.y), x.at(q.x), y.at(q.y));
+            let _ = write!(
+                out,
+                "<line x1='{:.1}' y1='{:.1}' x2='{:.1}' y2='{:.1}' stroke='#aaa'/>",
+                x.at(p.x),
+                y.at(p.y),
+                x.at(q.x),
+                y.at(q.y)
+            );
         }
     }
     for (i, p) in points.iter().enumerate() {
@@ -252,7 +328,13 @@ pub fn scatter(points: &[ScatterPoint], x_label: &str, y_label: &str) -> String 
             num(p.y)
         );
         if p.group == 0 {
-            let _ = write!(out, "<text x='{:.1}' y='{:.1}' font-size='10'>{}</text>", x.at(p.x) + 6.0, y.at(p.y) - 4.0, esc(&p.label));
+            let _ = write!(
+                out,
+                "<text x='{:.1}' y='{:.1}' font-size='10'>{}</text>",
+                x.at(p.x) + 6.0,
+                y.at(p.y) - 4.0,
+                esc(&p.label)
+            );
         }
     }
     out.push_str("</svg>");
@@ -281,7 +363,17 @@ mod tests {
     #[test]
     fn ticks_are_round() {
         assert_eq!(ticks(0.0, 10.0), vec![0.0, 2.0, 4.0, 6.0, 8.0, 10.0]);
-        assert_eq!(ticks(3.2, 3.9), vec![3.3000000000000003, 3.4000000000000004, 3.5000000000000004, 3.6000000000000005, 3.7000000000000006, 3.8000000000000007]);
+        assert_eq!(
+            ticks(3.2, 3.9),
+            vec![
+                3.3000000000000003,
+                3.4000000000000004,
+                3.5000000000000004,
+                3.6000000000000005,
+                3.7000000000000006,
+                3.8000000000000007
+            ]
+        );
     }
 
     #[test]
@@ -297,9 +389,18 @@ mod tests {
     #[test]
     fn charts_draw_marks() {
         let marks: Vec<SeriesMark> = (0..5)
-            .map(|i| SeriesMark { value: i as f64, label: format!("p{i}"), href: format!("/runs/{i}") })
+            .map(|i| SeriesMark {
+                value: i as f64,
+                label: format!("p{i}"),
+                href: format!("/runs/{i}"),
+            })
             .collect();
-        let svg = series_chart(&marks, &[(3, "+10%".into(), "/regressions".into())], &[(0, "Mesa".into())], "ms");
+        let svg = series_chart(
+            &marks,
+            &[(3, "+10%".into(), "/regressions".into())],
+            &[(0, "Mesa".into())],
+            "ms",
+        );
         assert_eq!(svg.matches("class='point'").count(), 5);
         assert_eq!(svg.matches("class='change-point'").count(), 1);
         assert!(svg.starts_with("<svg") && svg.ends_with("</svg>"));

@@ -21,11 +21,22 @@ pub fn time_after(minutes: u64) -> String {
         }
         (m + 1, d + 1)
     };
-    format!("2026-{month:02}-{day:02}T{:02}:{:02}:00Z", rem / 60, rem % 60)
+    format!(
+        "2026-{month:02}-{day:02}T{:02}:{:02}:00Z",
+        rem / 60,
+        rem % 60
+    )
 }
 
 fn scale(s: &mut Summary, f: f64) {
-    for v in [&mut s.median, &mut s.p5, &mut s.p95, &mut s.min, &mut s.max, &mut s.mean] {
+    for v in [
+        &mut s.median,
+        &mut s.p5,
+        &mut s.p95,
+        &mut s.min,
+        &mut s.max,
+        &mut s.mean,
+    ] {
         *v *= f;
     }
 }
@@ -33,13 +44,23 @@ fn scale(s: &mut Summary, f: f64) {
 /// Run `index` made from `template`: run id `<prefix>-<index>`, start time `index` minutes after
 /// the epoch above, commit `c<index>`, and every GPU time multiplied by `factor · (1 + noise·N(0,1))`
 /// (one draw per variant).
-pub fn run_from(template: &RunBundle, prefix: &str, index: u64, factor: f64, noise: f64, rng: &mut Rng) -> RunBundle {
+pub fn run_from(
+    template: &RunBundle,
+    prefix: &str,
+    index: u64,
+    factor: f64,
+    noise: f64,
+    rng: &mut Rng,
+) -> RunBundle {
     let mut b = template.clone();
     let id = format!("{prefix}-{index:06}");
     b.run.run_id = id.clone();
     b.run.started_at = time_after(index);
     b.run.finished_at = Some(time_after(index));
-    b.run.commit = Some(tessera_results::CommitInfo { sha: format!("{:040x}", index + 1), dirty: false });
+    b.run.commit = Some(tessera_results::CommitInfo {
+        sha: format!("{:040x}", index + 1),
+        dirty: false,
+    });
     for s in &mut b.scenarios {
         s.run_id = id.clone();
         for v in &mut s.results {

@@ -29,7 +29,11 @@ fn setup(imported: bool) -> (common::TestStore, Router) {
 async fn send(app: &Router, req: Request<Body>) -> (StatusCode, String, String) {
     let res = app.clone().oneshot(req).await.unwrap();
     let status = res.status();
-    let ctype = res.headers().get(header::CONTENT_TYPE).map(|v| v.to_str().unwrap().to_string()).unwrap_or_default();
+    let ctype = res
+        .headers()
+        .get(header::CONTENT_TYPE)
+        .map(|v| v.to_str().unwrap().to_string())
+        .unwrap_or_default();
     let body = res.into_body().collect().await.unwrap().to_bytes();
     (status, ctype, String::from_utf8_lossy(&body).into_owned())
 }
@@ -67,20 +71,47 @@ async fn every_page_renders_with_imported_runs() {
 
     let (s, _, body) = get(&app, &format!("/runs/{run_id}")).await;
     assert_eq!(s, StatusCode::OK);
-    assert!(body.contains("upscale[scale=0.5]") && body.contains("class='bar'"), "stacked bars drawn");
+    assert!(
+        body.contains("upscale[scale=0.5]") && body.contains("class='bar'"),
+        "stacked bars drawn"
+    );
     let detail = json(&get(&app, &format!("/api/runs/{run_id}")).await.2);
-    assert_eq!(detail["scenarios"][0]["results"].as_array().unwrap().len(), 3);
+    assert_eq!(
+        detail["scenarios"][0]["results"].as_array().unwrap().len(),
+        3
+    );
 
-    let series = json(&get(&app, "/api/series?scenario=tiny&measure=gpu_ms.median").await.2);
+    let series = json(
+        &get(&app, "/api/series?scenario=tiny&measure=gpu_ms.median")
+            .await
+            .2,
+    );
     assert_eq!(series.as_array().unwrap().len(), 3);
     let id = series[0]["id"].as_i64().unwrap();
     let (s, _, body) = get(&app, &format!("/series/{id}")).await;
     assert_eq!(s, StatusCode::OK);
-    assert_eq!(body.matches("class='point'").count(), 2, "two runs, two points");
-    assert_eq!(json(&get(&app, &format!("/api/series/{id}")).await.2)["points"].as_array().unwrap().len(), 2);
+    assert_eq!(
+        body.matches("class='point'").count(),
+        2,
+        "two runs, two points"
+    );
+    assert_eq!(
+        json(&get(&app, &format!("/api/series/{id}")).await.2)["points"]
+            .as_array()
+            .unwrap()
+            .len(),
+        2
+    );
     assert_eq!(get(&app, "/series").await.0, StatusCode::OK);
 
-    for uri in ["/regressions", "/api/regressions", "/compare", "/api/compare", "/pareto", "/api/pareto?metric=psnr"] {
+    for uri in [
+        "/regressions",
+        "/api/regressions",
+        "/compare",
+        "/api/compare",
+        "/pareto",
+        "/api/pareto?metric=psnr",
+    ] {
         assert_eq!(get(&app, uri).await.0, StatusCode::OK, "{uri}");
     }
     let pareto = json(&get(&app, "/api/pareto?scenario=tiny&metric=flip").await.2);
@@ -89,11 +120,19 @@ async fn every_page_renders_with_imported_runs() {
     let (_, _, body) = get(&app, "/pareto?scenario=tiny").await;
     assert!(body.contains("class='front'"));
 
-    let images = json(&get(&app, &format!("/api/runs/{run_id}/images/tiny")).await.2);
+    let images = json(
+        &get(&app, &format!("/api/runs/{run_id}/images/tiny"))
+            .await
+            .2,
+    );
     let digest = images[0]["digest"].as_str().unwrap();
     let (s, ctype, _) = get(&app, &format!("/images/{digest}")).await;
     assert_eq!((s, ctype.as_str()), (StatusCode::OK, "image/png"));
-    let (s, _, body) = get(&app, &format!("/runs/{run_id}/images/tiny/upscale%5Bscale%3D0.5%5D")).await;
+    let (s, _, body) = get(
+        &app,
+        &format!("/runs/{run_id}/images/tiny/upscale%5Bscale%3D0.5%5D"),
+    )
+    .await;
     assert_eq!(s, StatusCode::OK, "{body}");
     assert!(body.contains("id=\"img-reference\" src=\"/images/") && body.contains("type=range"));
 }
@@ -116,8 +155,14 @@ async fn missing_things_are_json_404s() {
         assert_eq!(ctype, "application/json", "{uri}");
         assert!(json(&body)["error"].is_string());
     }
-    assert_eq!(get(&app, "/api/regressions?state=bogus").await.0, StatusCode::BAD_REQUEST);
-    assert_eq!(get(&app, "/api/series/abc").await.0, StatusCode::BAD_REQUEST);
+    assert_eq!(
+        get(&app, "/api/regressions?state=bogus").await.0,
+        StatusCode::BAD_REQUEST
+    );
+    assert_eq!(
+        get(&app, "/api/series/abc").await.0,
+        StatusCode::BAD_REQUEST
+    );
 }
 
 #[tokio::test]
@@ -128,7 +173,10 @@ async fn upload_needs_the_token_and_is_idempotent() {
     let (s, _, err) = send(&app, upload(body.clone(), None)).await;
     assert_eq!(s, StatusCode::UNAUTHORIZED);
     assert!(json(&err)["error"].as_str().unwrap().contains("Bearer"));
-    assert_eq!(send(&app, upload(body.clone(), Some("wrong"))).await.0, StatusCode::UNAUTHORIZED);
+    assert_eq!(
+        send(&app, upload(body.clone(), Some("wrong"))).await.0,
+        StatusCode::UNAUTHORIZED
+    );
 
     let (s, _, ok) = send(&app, upload(body.clone(), Some(TOKEN))).await;
     assert_eq!(s, StatusCode::CREATED, "{ok}");
@@ -139,8 +187,19 @@ async fn upload_needs_the_token_and_is_idempotent() {
     assert_eq!(json(&again)["stored"], false);
     let runs = json(&get(&app, "/api/runs").await.2);
     assert_eq!(runs.as_array().unwrap().len(), 1);
-    let detail = json(&get(&app, &format!("/api/runs/{}", runs[0]["run_id"].as_str().unwrap())).await.2);
-    assert_eq!(detail["images"].as_array().unwrap().len(), 4, "uploaded images are stored");
+    let detail = json(
+        &get(
+            &app,
+            &format!("/api/runs/{}", runs[0]["run_id"].as_str().unwrap()),
+        )
+        .await
+        .2,
+    );
+    assert_eq!(
+        detail["images"].as_array().unwrap().len(),
+        4,
+        "uploaded images are stored"
+    );
     drop(store);
 }
 
@@ -150,41 +209,103 @@ async fn writes_are_refused_without_a_configured_token() {
     let app = app(AppState::new(store.pool.clone(), None));
     let (s, _, body) = send(&app, upload(template_body().to_string(), Some("anything"))).await;
     assert_eq!(s, StatusCode::FORBIDDEN);
-    assert!(json(&body)["error"].as_str().unwrap().contains("TESSERA_DASHBOARD_TOKEN"));
+    assert!(json(&body)["error"]
+        .as_str()
+        .unwrap()
+        .contains("TESSERA_DASHBOARD_TOKEN"));
 }
 
 #[tokio::test]
 async fn bad_uploads_get_4xx_and_store_nothing() {
     let (store, app) = setup(false);
     let mut cases: Vec<(&str, String, StatusCode, &str)> = vec![
-        ("not json", "{".into(), StatusCode::BAD_REQUEST, "not an upload bundle"),
-        ("empty object", "{}".into(), StatusCode::BAD_REQUEST, "not an upload bundle"),
+        (
+            "not json",
+            "{".into(),
+            StatusCode::BAD_REQUEST,
+            "not an upload bundle",
+        ),
+        (
+            "empty object",
+            "{}".into(),
+            StatusCode::BAD_REQUEST,
+            "not an upload bundle",
+        ),
     ];
     let mut future = template_body();
     future["run"]["schema_version"] = 2.into();
-    cases.push(("future schema", future.to_string(), StatusCode::UNPROCESSABLE_ENTITY, "reads version 1 only"));
+    cases.push((
+        "future schema",
+        future.to_string(),
+        StatusCode::UNPROCESSABLE_ENTITY,
+        "reads version 1 only",
+    ));
     let mut bad_id = template_body();
     bad_id["run"]["run_id"] = "../../x".into();
-    cases.push(("bad run id", bad_id.to_string(), StatusCode::UNPROCESSABLE_ENTITY, "run_id"));
+    cases.push((
+        "bad run id",
+        bad_id.to_string(),
+        StatusCode::UNPROCESSABLE_ENTITY,
+        "run_id",
+    ));
     let mut mismatched = template_body();
     mismatched["scenarios"][0]["run_id"] = "other".into();
-    cases.push(("mismatched run id", mismatched.to_string(), StatusCode::UNPROCESSABLE_ENTITY, "has run_id"));
+    cases.push((
+        "mismatched run id",
+        mismatched.to_string(),
+        StatusCode::UNPROCESSABLE_ENTITY,
+        "has run_id",
+    ));
     let mut traversal = template_body();
     traversal["images"]["../../etc/passwd"] = "iVBORw0KGgo=".into();
-    cases.push(("image path", traversal.to_string(), StatusCode::UNPROCESSABLE_ENTITY, "relative path"));
+    cases.push((
+        "image path",
+        traversal.to_string(),
+        StatusCode::UNPROCESSABLE_ENTITY,
+        "relative path",
+    ));
     let mut not_png = template_body();
-    let first = not_png["images"].as_object().unwrap().keys().next().unwrap().clone();
+    let first = not_png["images"]
+        .as_object()
+        .unwrap()
+        .keys()
+        .next()
+        .unwrap()
+        .clone();
     not_png["images"][&first] = "aGVsbG8=".into();
-    cases.push(("not a png", not_png.to_string(), StatusCode::UNPROCESSABLE_ENTITY, "not a PNG"));
+    cases.push((
+        "not a png",
+        not_png.to_string(),
+        StatusCode::UNPROCESSABLE_ENTITY,
+        "not a PNG",
+    ));
     let mut bad_b64 = template_body();
     bad_b64["images"][&first] = "%%%".into();
-    cases.push(("bad base64", bad_b64.to_string(), StatusCode::UNPROCESSABLE_ENTITY, "base64"));
+    cases.push((
+        "bad base64",
+        bad_b64.to_string(),
+        StatusCode::UNPROCESSABLE_ENTITY,
+        "base64",
+    ));
     let mut missing_field = template_body();
-    missing_field["scenarios"][0].as_object_mut().unwrap().remove("results");
-    cases.push(("missing field", missing_field.to_string(), StatusCode::UNPROCESSABLE_ENTITY, "results"));
+    missing_field["scenarios"][0]
+        .as_object_mut()
+        .unwrap()
+        .remove("results");
+    cases.push((
+        "missing field",
+        missing_field.to_string(),
+        StatusCode::UNPROCESSABLE_ENTITY,
+        "results",
+    ));
     let mut huge = template_body();
     huge["images"][&first] = "A".repeat(2 << 20).into();
-    cases.push(("oversized", huge.to_string(), StatusCode::PAYLOAD_TOO_LARGE, "larger than"));
+    cases.push((
+        "oversized",
+        huge.to_string(),
+        StatusCode::PAYLOAD_TOO_LARGE,
+        "larger than",
+    ));
 
     for (what, body, status, text) in cases {
         let (s, ctype, err) = send(&app, upload(body, Some(TOKEN))).await;
@@ -195,7 +316,11 @@ async fn bad_uploads_get_4xx_and_store_nothing() {
     }
     let mut c = store.pool.get().unwrap();
     for table in ["runs", "results", "blobs", "points"] {
-        let n = c.query(&format!("SELECT COUNT(*) FROM {table}"), &[]).unwrap()[0].i64(0).unwrap();
+        let n = c
+            .query(&format!("SELECT COUNT(*) FROM {table}"), &[])
+            .unwrap()[0]
+            .i64(0)
+            .unwrap();
         assert_eq!(n, 0, "{table}");
     }
 }
@@ -207,9 +332,19 @@ async fn triage_is_stored_and_needs_the_token() {
     let template = common::template();
     let mut rng = tessera_dashboard::detect::Rng::new(3);
     for i in 0..40 {
-        let b = tessera_dashboard::synth::run_from(&template, "t", i, if i < 30 { 1.0 } else { 1.1 }, 0.01, &mut rng);
+        let b = tessera_dashboard::synth::run_from(
+            &template,
+            "t",
+            i,
+            if i < 30 { 1.0 } else { 1.1 },
+            0.01,
+            &mut rng,
+        );
         let body = serde_json::to_string(&b.to_upload()).unwrap();
-        assert_eq!(send(&app, upload(body, Some(TOKEN))).await.0, StatusCode::CREATED);
+        assert_eq!(
+            send(&app, upload(body, Some(TOKEN))).await.0,
+            StatusCode::CREATED
+        );
     }
     let regs = json(&get(&app, "/api/regressions?state=new").await.2);
     let id = regs[0]["id"].as_i64().unwrap();
@@ -217,16 +352,28 @@ async fn triage_is_stored_and_needs_the_token() {
     assert!(page.contains(&format!("id=r{id}")) && page.contains("worse"));
 
     let triage = |token: Option<&str>, body: &str| {
-        let mut r = Request::post(format!("/api/regressions/{id}")).header(header::CONTENT_TYPE, "application/json");
+        let mut r = Request::post(format!("/api/regressions/{id}"))
+            .header(header::CONTENT_TYPE, "application/json");
         if let Some(t) = token {
             r = r.header(header::AUTHORIZATION, format!("Bearer {t}"));
         }
         r.body(Body::from(body.to_string())).unwrap()
     };
     let ack = r#"{"state":"acknowledged","note":"known: new shadow pass"}"#;
-    assert_eq!(send(&app, triage(None, ack)).await.0, StatusCode::UNAUTHORIZED);
-    assert_eq!(send(&app, triage(Some(TOKEN), r#"{"state":"bogus"}"#)).await.0, StatusCode::UNPROCESSABLE_ENTITY);
-    assert_eq!(send(&app, triage(Some(TOKEN), "nope")).await.0, StatusCode::BAD_REQUEST);
+    assert_eq!(
+        send(&app, triage(None, ack)).await.0,
+        StatusCode::UNAUTHORIZED
+    );
+    assert_eq!(
+        send(&app, triage(Some(TOKEN), r#"{"state":"bogus"}"#))
+            .await
+            .0,
+        StatusCode::UNPROCESSABLE_ENTITY
+    );
+    assert_eq!(
+        send(&app, triage(Some(TOKEN), "nope")).await.0,
+        StatusCode::BAD_REQUEST
+    );
     assert_eq!(send(&app, triage(Some(TOKEN), ack)).await.0, StatusCode::OK);
     let acked = json(&get(&app, "/api/regressions?state=acknowledged").await.2);
     assert_eq!(acked[0]["note"], "known: new shadow pass");
@@ -235,12 +382,17 @@ async fn triage_is_stored_and_needs_the_token() {
     let form = |token: &str| {
         Request::post(format!("/regressions/{id}"))
             .header(header::CONTENT_TYPE, "application/x-www-form-urlencoded")
-            .body(Body::from(format!("state=fixed&note=reverted&token={token}")))
+            .body(Body::from(format!(
+                "state=fixed&note=reverted&token={token}"
+            )))
             .unwrap()
     };
     assert_eq!(send(&app, form("wrong")).await.0, StatusCode::UNAUTHORIZED);
     assert_eq!(send(&app, form(TOKEN)).await.0, StatusCode::SEE_OTHER);
-    assert_eq!(json(&get(&app, "/api/regressions?state=fixed").await.2)[0]["note"], "reverted");
+    assert_eq!(
+        json(&get(&app, "/api/regressions?state=fixed").await.2)[0]["note"],
+        "reverted"
+    );
     let missing = Request::post("/api/regressions/999999")
         .header(header::AUTHORIZATION, format!("Bearer {TOKEN}"))
         .header(header::CONTENT_TYPE, "application/json")

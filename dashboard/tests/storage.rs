@@ -14,20 +14,37 @@ use tessera_dashboard::{regressions, synth};
 
 fn count(store: &common::TestStore, table: &str) -> i64 {
     let mut c = store.pool.get().unwrap();
-    c.query(&format!("SELECT COUNT(*) FROM {table}"), &[]).unwrap()[0].i64(0).unwrap()
+    c.query(&format!("SELECT COUNT(*) FROM {table}"), &[])
+        .unwrap()[0]
+        .i64(0)
+        .unwrap()
 }
 
 #[test]
 fn imports_real_runs_once() {
     for store in common::stores("imports_real_runs_once") {
         let first = import(&store.pool, &common::fixtures(), &Params::default()).unwrap();
-        assert_eq!((first.stored, first.results, first.failed.len()), (2, 6, 0), "{}", store.name);
+        assert_eq!(
+            (first.stored, first.results, first.failed.len()),
+            (2, 6, 0),
+            "{}",
+            store.name
+        );
         let again = import(&store.pool, &common::fixtures(), &Params::default()).unwrap();
-        assert_eq!((again.stored, again.already_stored), (0, 2), "{}", store.name);
+        assert_eq!(
+            (again.stored, again.already_stored),
+            (0, 2),
+            "{}",
+            store.name
+        );
         assert_eq!(count(&store, "runs"), 2);
         assert_eq!(count(&store, "results"), 6);
         // Identical reference and native images are stored once (content-addressed).
-        assert!(count(&store, "blobs") < count(&store, "images"), "{}", store.name);
+        assert!(
+            count(&store, "blobs") < count(&store, "images"),
+            "{}",
+            store.name
+        );
         let mut c = store.pool.get().unwrap();
         let runs = read::runs(&mut *c, None, 10).unwrap();
         assert_eq!(runs.len(), 2);
@@ -47,7 +64,10 @@ fn failed_transaction_stores_nothing() {
         let r: Result<Ingested, tessera_dashboard::store::StoreError> = transaction(&mut *c, |c| {
             let out = ingest_inner(c, &bundle)?;
             // Fail after everything was written.
-            c.execute("INSERT INTO no_such_table (x) VALUES ($1)", &[Value::Int(1)])?;
+            c.execute(
+                "INSERT INTO no_such_table (x) VALUES ($1)",
+                &[Value::Int(1)],
+            )?;
             Ok(out)
         });
         assert!(r.is_err());
@@ -73,8 +93,9 @@ fn concurrent_uploads_lose_nothing() {
     for store in common::stores("concurrent_uploads_lose_nothing") {
         let template = common::template();
         let mut rng = Rng::new(7);
-        let bundles: Vec<RunBundle> =
-            (0..16).map(|i| synth::run_from(&template, "conc", i % 12, 1.0, 0.01, &mut rng)).collect();
+        let bundles: Vec<RunBundle> = (0..16)
+            .map(|i| synth::run_from(&template, "conc", i % 12, 1.0, 0.01, &mut rng))
+            .collect();
         std::thread::scope(|s| {
             for chunk in bundles.chunks(2) {
                 let pool = store.pool.clone();
@@ -90,9 +111,18 @@ fn concurrent_uploads_lose_nothing() {
         assert_eq!(count(&store, "runs"), 12, "{}", store.name);
         assert_eq!(count(&store, "results"), 36, "{}", store.name);
         let mut c = store.pool.get().unwrap();
-        let n = c.query("SELECT COUNT(*) FROM series WHERE measure = 'gpu_ms.median'", &[]).unwrap()[0].i64(0).unwrap();
+        let n = c
+            .query(
+                "SELECT COUNT(*) FROM series WHERE measure = 'gpu_ms.median'",
+                &[],
+            )
+            .unwrap()[0]
+            .i64(0)
+            .unwrap();
         assert_eq!(n, 3);
-        let p = c.query("SELECT COUNT(*) FROM points", &[]).unwrap()[0].i64(0).unwrap();
+        let p = c.query("SELECT COUNT(*) FROM points", &[]).unwrap()[0]
+            .i64(0)
+            .unwrap();
         let per_run = p / 12;
         assert_eq!(p, per_run * 12, "{}", store.name);
     }
@@ -116,16 +146,34 @@ fn step_in_stored_series_becomes_a_regression_with_persistent_triage() {
         let added = regressions::update(&mut *c, &touched, &Params::default()).unwrap();
         assert!(added >= 3, "{}: {added}", store.name);
         let rows = read::regressions(&mut *c, None, None, 100).unwrap();
-        let gpu: Vec<_> = rows.iter().filter(|r| r.series.measure == "gpu_ms.median").collect();
+        let gpu: Vec<_> = rows
+            .iter()
+            .filter(|r| r.series.measure == "gpu_ms.median")
+            .collect();
         assert_eq!(gpu.len(), 3, "{}: one per variant", store.name);
-        assert!(gpu.iter().all(|r| r.run_after == "step-000030" && r.is_regression && r.state == "new"));
+        assert!(gpu
+            .iter()
+            .all(|r| r.run_after == "step-000030" && r.is_regression && r.state == "new"));
         // Speedup does not move: every variant, native included, got 10% slower.
-        assert!(!rows.iter().any(|r| r.series.measure == "speedup"), "{}", store.name);
+        assert!(
+            !rows.iter().any(|r| r.series.measure == "speedup"),
+            "{}",
+            store.name
+        );
 
-        triage::set(&mut *c, gpu[0].id, "acknowledged", "driver update on the runner").unwrap();
+        triage::set(
+            &mut *c,
+            gpu[0].id,
+            "acknowledged",
+            "driver update on the runner",
+        )
+        .unwrap();
         assert!(triage::set(&mut *c, gpu[0].id, "bogus", "").is_err());
         // Running detection again adds nothing and keeps the triage.
-        assert_eq!(regressions::update(&mut *c, &touched, &Params::default()).unwrap(), 0);
+        assert_eq!(
+            regressions::update(&mut *c, &touched, &Params::default()).unwrap(),
+            0
+        );
         let again = read::regressions(&mut *c, Some("acknowledged"), None, 100).unwrap();
         assert_eq!(again.len(), 1);
         assert_eq!(again[0].note, "driver update on the runner");
@@ -153,8 +201,19 @@ fn driver_change_in_stored_series_is_a_segment_not_a_regression() {
         regressions::update(&mut *c, &all, &Params::default()).unwrap();
         let rows = read::regressions(&mut *c, None, None, 100).unwrap();
         assert!(rows.is_empty(), "{}: {rows:?}", store.name);
-        let gpu = read::find_series(&mut *c, None, Some("native"), None, Some("gpu_ms.median"), 10).unwrap();
-        assert_eq!(read::series(&mut *c, gpu[0].id).unwrap().segment_starts, vec![0, 30]);
+        let gpu = read::find_series(
+            &mut *c,
+            None,
+            Some("native"),
+            None,
+            Some("gpu_ms.median"),
+            10,
+        )
+        .unwrap();
+        assert_eq!(
+            read::series(&mut *c, gpu[0].id).unwrap().segment_starts,
+            vec![0, 30]
+        );
     }
 }
 
@@ -162,12 +221,17 @@ fn driver_change_in_stored_series_is_a_segment_not_a_regression() {
 fn store_newer_than_binary_is_refused() {
     let store = common::sqlite();
     let mut c = store.pool.get().unwrap();
-    c.execute("INSERT INTO schema_migrations (version, applied_at) VALUES ($1, $2)", &[Value::Int(999), "x".into()])
-        .unwrap();
+    c.execute(
+        "INSERT INTO schema_migrations (version, applied_at) VALUES ($1, $2)",
+        &[Value::Int(999), "x".into()],
+    )
+    .unwrap();
     drop(c);
     let path = {
         let mut c = store.pool.get().unwrap();
-        c.query("PRAGMA database_list", &[]).unwrap()[0].string(2).unwrap()
+        c.query("PRAGMA database_list", &[]).unwrap()[0]
+            .string(2)
+            .unwrap()
     };
     match tessera_dashboard::db::open(&path) {
         Err(e @ DbError::SchemaTooNew { .. }) => assert_eq!(

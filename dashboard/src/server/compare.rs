@@ -47,8 +47,11 @@ async fn load(state: &AppState, q: CompareQuery) -> Result<Comparison, AppError>
         .db(move |c| {
             let adapters = read::adapters(c)?;
             let a = q.a.or_else(|| adapters.first().map(|x| x.id));
-            let b = q.b.or_else(|| adapters.iter().map(|x| x.id).find(|&id| Some(id) != a));
-            let newest = |c: &mut dyn crate::db::Connection, id: Option<i64>| -> Result<Option<String>, AppError> {
+            let b =
+                q.b.or_else(|| adapters.iter().map(|x| x.id).find(|&id| Some(id) != a));
+            let newest = |c: &mut dyn crate::db::Connection,
+                          id: Option<i64>|
+             -> Result<Option<String>, AppError> {
                 Ok(match id {
                     Some(id) => read::latest_runs_with(c, id, None, 1)?.into_iter().next(),
                     None => None,
@@ -61,10 +64,14 @@ async fn load(state: &AppState, q: CompareQuery) -> Result<Comparison, AppError>
                 let sa = read::run_scenarios(c, ra)?;
                 let sb = read::run_scenarios(c, rb)?;
                 for s in &sa {
-                    let Some(t) = sb.iter().find(|t| t.scenario == s.scenario) else { continue };
+                    let Some(t) = sb.iter().find(|t| t.scenario == s.scenario) else {
+                        continue;
+                    };
                     let (na, nb) = (native_gpu_ms(s), native_gpu_ms(t));
                     for v in &s.results {
-                        let Some(w) = t.results.iter().find(|w| w.variant == v.variant) else { continue };
+                        let Some(w) = t.results.iter().find(|w| w.variant == v.variant) else {
+                            continue;
+                        };
                         rows.push(CompareRow {
                             scenario: s.scenario.clone(),
                             variant: v.variant.clone(),
@@ -78,12 +85,22 @@ async fn load(state: &AppState, q: CompareQuery) -> Result<Comparison, AppError>
                     }
                 }
             }
-            Ok(Comparison { adapters, a, b, run_a, run_b, rows })
+            Ok(Comparison {
+                adapters,
+                a,
+                b,
+                run_a,
+                run_b,
+                rows,
+            })
         })
         .await
 }
 
-pub async fn api(State(state): State<AppState>, Query(q): Query<CompareQuery>) -> Result<Json<Comparison>, AppError> {
+pub async fn api(
+    State(state): State<AppState>,
+    Query(q): Query<CompareQuery>,
+) -> Result<Json<Comparison>, AppError> {
     Ok(Json(load(&state, q).await?))
 }
 
@@ -93,19 +110,33 @@ fn speed(v: Option<f64>) -> String {
 
 pub fn render(c: &Comparison) -> String {
     let name = |id: Option<i64>| {
-        c.adapters.iter().find(|a| Some(a.id) == id).map_or("–".to_string(), |a| format!("{} ({})", a.name, a.backend))
+        c.adapters
+            .iter()
+            .find(|a| Some(a.id) == id)
+            .map_or("–".to_string(), |a| format!("{} ({})", a.name, a.backend))
     };
     let mut b = String::from("<form>");
     for (field, sel) in [("a", c.a), ("b", c.b)] {
         let _ = write!(b, "{field} <select name={field}>");
         for a in &c.adapters {
             let s = if Some(a.id) == sel { " selected" } else { "" };
-            let _ = write!(b, "<option value={}{s}>{} ({}, {} runs)</option>", a.id, esc(&a.name), esc(&a.backend), a.runs);
+            let _ = write!(
+                b,
+                "<option value={}{s}>{} ({}, {} runs)</option>",
+                a.id,
+                esc(&a.name),
+                esc(&a.backend),
+                a.runs
+            );
         }
         b.push_str("</select> ");
     }
     b.push_str("<button>compare</button></form>");
-    let link = |r: &Option<String>| r.as_ref().map_or("–".into(), |r| format!("<a href=\"/runs/{}\">{}</a>", enc(r), esc(r)));
+    let link = |r: &Option<String>| {
+        r.as_ref().map_or("–".into(), |r| {
+            format!("<a href=\"/runs/{}\">{}</a>", enc(r), esc(r))
+        })
+    };
     let _ = write!(
         b,
         "<p>a: {} · newest run {}<br>b: {} · newest run {}</p><table id=compare><tr><th>scenario</th><th>variant</th><th class=n>speedup a</th><th class=n>speedup b</th><th class=n>b / a</th><th class=n>GPU ms a</th><th class=n>GPU ms b</th></tr>",
@@ -132,12 +163,17 @@ pub fn render(c: &Comparison) -> String {
     }
     b.push_str("</table>");
     if c.adapters.len() < 2 {
-        b.push_str("<p>Only one adapter is stored: import runs from a second adapter to compare.</p>");
+        b.push_str(
+            "<p>Only one adapter is stored: import runs from a second adapter to compare.</p>",
+        );
     }
     b
 }
 
-pub async fn page(State(state): State<AppState>, Query(q): Query<CompareQuery>) -> Result<Html<String>, AppError> {
+pub async fn page(
+    State(state): State<AppState>,
+    Query(q): Query<CompareQuery>,
+) -> Result<Html<String>, AppError> {
     let c = load(&state, q).await?;
     Ok(Html(layout("Adapter comparison", "adapters", &render(&c))))
 }

@@ -20,7 +20,9 @@ pub enum AppError {
     Unprocessable(String),
     #[error("{0}")]
     PayloadTooLarge(String),
-    #[error("this request needs the header `Authorization: Bearer <token>` with the server's token")]
+    #[error(
+        "this request needs the header `Authorization: Bearer <token>` with the server's token"
+    )]
     Unauthorized,
     #[error("writes are disabled: start the server with --token or TESSERA_DASHBOARD_TOKEN")]
     WritesDisabled,
@@ -47,9 +49,16 @@ impl IntoResponse for AppError {
         if let AppError::Internal(detail) = &self {
             eprintln!("tessera-dashboard: internal error: {detail}");
         }
-        let mut res = (self.status(), Json(serde_json::json!({ "error": self.to_string() }))).into_response();
+        let mut res = (
+            self.status(),
+            Json(serde_json::json!({ "error": self.to_string() })),
+        )
+            .into_response();
         if matches!(self, AppError::Unauthorized) {
-            res.headers_mut().insert("www-authenticate", axum::http::HeaderValue::from_static("Bearer"));
+            res.headers_mut().insert(
+                "www-authenticate",
+                axum::http::HeaderValue::from_static("Bearer"),
+            );
         }
         res
     }

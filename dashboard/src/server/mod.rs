@@ -38,7 +38,12 @@ pub struct AppState {
 
 impl AppState {
     pub fn new(pool: Pool, token: Option<String>) -> AppState {
-        AppState { pool, token, max_upload_bytes: DEFAULT_MAX_UPLOAD_BYTES, detect: Params::default() }
+        AppState {
+            pool,
+            token,
+            max_upload_bytes: DEFAULT_MAX_UPLOAD_BYTES,
+            detect: Params::default(),
+        }
     }
 
     /// Runs blocking store work off the async threads.
@@ -63,7 +68,10 @@ pub fn app(state: AppState) -> Router {
         .route("/api/runs", get(runs::api).post(upload::api))
         .route("/runs/{run_id}", get(run::page))
         .route("/api/runs/{run_id}", get(run::api))
-        .route("/runs/{run_id}/images/{scenario}/{variant}", get(images::page))
+        .route(
+            "/runs/{run_id}/images/{scenario}/{variant}",
+            get(images::page),
+        )
         .route("/api/runs/{run_id}/images/{scenario}", get(images::api))
         .route("/images/{digest}", get(images::blob))
         .route("/series", get(series::list_page))

@@ -54,10 +54,17 @@ pub fn points(s: &ScenarioResult, metric: &str) -> (Vec<ParetoPoint>, bool) {
     let mut pts: Vec<ParetoPoint> = Vec::new();
     for v in s.results.iter().filter(|v| v.status == Status::Ok) {
         let Some(g) = v.gpu_frame_ms else { continue };
-        let Some(m) = v.metrics.iter().find(|m| m.name == metric) else { continue };
+        let Some(m) = v.metrics.iter().find(|m| m.name == metric) else {
+            continue;
+        };
         hib = m.higher_is_better;
         if m.value.is_finite() {
-            pts.push(ParetoPoint { variant: v.variant.clone(), gpu_ms: g.median, value: m.value, on_front: false });
+            pts.push(ParetoPoint {
+                variant: v.variant.clone(),
+                gpu_ms: g.median,
+                value: m.value,
+                on_front: false,
+            });
         }
     }
     let xy: Vec<(f64, f64)> = pts.iter().map(|p| (p.gpu_ms, p.value)).collect();
@@ -73,8 +80,14 @@ async fn load(state: &AppState, q: ParetoQuery) -> Result<ParetoView, AppError> 
             let adapters = read::adapters(c)?;
             let adapter = q.adapter.or_else(|| adapters.first().map(|a| a.id));
             let scenarios = read::scenarios_on(c, adapter)?;
-            let scenario = q.scenario.filter(|s| !s.is_empty()).or_else(|| scenarios.first().cloned());
-            let metric = q.metric.filter(|m| !m.is_empty()).unwrap_or_else(|| "flip".into());
+            let scenario = q
+                .scenario
+                .filter(|s| !s.is_empty())
+                .or_else(|| scenarios.first().cloned());
+            let metric = q
+                .metric
+                .filter(|m| !m.is_empty())
+                .unwrap_or_else(|| "flip".into());
             let mut view = ParetoView {
                 scenarios,
                 adapters,
@@ -87,10 +100,14 @@ async fn load(state: &AppState, q: ParetoQuery) -> Result<ParetoView, AppError> 
                 points: vec![],
                 base_points: vec![],
             };
-            let (Some(scenario), Some(adapter)) = (scenario, adapter) else { return Ok(view) };
+            let (Some(scenario), Some(adapter)) = (scenario, adapter) else {
+                return Ok(view);
+            };
             let recent = read::latest_runs_with(c, adapter, Some(&scenario), 2)?;
             let run = q.run.or_else(|| recent.first().cloned());
-            let base = q.base.or_else(|| recent.iter().find(|r| Some(*r) != run.as_ref()).cloned());
+            let base = q
+                .base
+                .or_else(|| recent.iter().find(|r| Some(*r) != run.as_ref()).cloned());
             if let Some(run) = &run {
                 let (p, hib) = points(&read::scenario_result(c, run, &scenario)?, &metric);
                 view.points = p;
@@ -106,23 +123,48 @@ async fn load(state: &AppState, q: ParetoQuery) -> Result<ParetoView, AppError> 
         .await
 }
 
-pub async fn api(State(state): State<AppState>, Query(q): Query<ParetoQuery>) -> Result<Json<ParetoView>, AppError> {
+pub async fn api(
+    State(state): State<AppState>,
+    Query(q): Query<ParetoQuery>,
+) -> Result<Json<ParetoView>, AppError> {
     Ok(Json(load(&state, q).await?))
 }
 
 pub fn render(v: &ParetoView) -> String {
     let mut b = String::from("<form>scenario <select name=scenario>");
     for s in &v.scenarios {
-        let sel = if Some(s) == v.scenario.as_ref() { " selected" } else { "" };
+        let sel = if Some(s) == v.scenario.as_ref() {
+            " selected"
+        } else {
+            ""
+        };
         let _ = write!(b, "<option{sel}>{}</option>", esc(s));
     }
     b.push_str("</select> adapter <select name=adapter>");
     for a in &v.adapters {
-        let sel = if Some(a.id) == v.adapter { " selected" } else { "" };
-        let _ = write!(b, "<option value={}{sel}>{} ({})</option>", a.id, esc(&a.name), esc(&a.backend));
+        let sel = if Some(a.id) == v.adapter {
+            " selected"
+        } else {
+            ""
+        };
+        let _ = write!(
+            b,
+            "<option value={}{sel}>{} ({})</option>",
+            a.id,
+            esc(&a.name),
+            esc(&a.backend)
+        );
     }
-    let _ = write!(b, "</select> metric <input name=metric size=10 value=\"{}\"> <button>show</button></form>", esc(&v.metric));
-    let link = |r: &Option<String>| r.as_ref().map_or("–".into(), |r| format!("<a href=\"/runs/{}\">{}</a>", enc(r), esc(r)));
+    let _ = write!(
+        b,
+        "</select> metric <input name=metric size=10 value=\"{}\"> <button>show</button></form>",
+        esc(&v.metric)
+    );
+    let link = |r: &Option<String>| {
+        r.as_ref().map_or("–".into(), |r| {
+            format!("<a href=\"/runs/{}\">{}</a>", enc(r), esc(r))
+        })
+    };
     let _ = write!(
         b,
         "<p>filled: run {} · hollow: run {} · {} ({} is better) against median GPU ms; the line joins the Pareto front</p>",
@@ -136,7 +178,13 @@ pub fn render(v: &ParetoView) -> String {
         .iter()
         .map(|p| (p, 0))
         .chain(v.base_points.iter().map(|p| (p, 1)))
-        .map(|(p, group)| ScatterPoint { label: p.variant.clone(), x: p.gpu_ms, y: p.value, group, on_front: p.on_front })
+        .map(|(p, group)| ScatterPoint {
+            label: p.variant.clone(),
+            x: p.gpu_ms,
+            y: p.value,
+            group,
+            on_front: p.on_front,
+        })
         .collect();
     b.push_str(&scatter(&pts, "GPU ms", &v.metric));
     b.push_str("<table><tr><th>variant</th><th class=n>GPU ms</th><th class=n>value</th><th>front</th><th class=n>before: GPU ms</th><th class=n>value</th></tr>");
@@ -157,7 +205,14 @@ pub fn render(v: &ParetoView) -> String {
     b
 }
 
-pub async fn page(State(state): State<AppState>, Query(q): Query<ParetoQuery>) -> Result<Html<String>, AppError> {
+pub async fn page(
+    State(state): State<AppState>,
+    Query(q): Query<ParetoQuery>,
+) -> Result<Html<String>, AppError> {
     let v = load(&state, q).await?;
-    Ok(Html(layout("Error against run time", "error vs time", &render(&v))))
+    Ok(Html(layout(
+        "Error against run time",
+        "error vs time",
+        &render(&v),
+    )))
 }

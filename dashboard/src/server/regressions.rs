@@ -27,10 +27,15 @@ async fn load(state: &AppState, q: RegressionsQuery) -> Result<Vec<RegressionRow
     let st = q.state.filter(|s| !s.is_empty());
     if let Some(s) = &st {
         if !STATES.contains(&s.as_str()) {
-            return Err(AppError::BadRequest(format!("state must be one of {}", STATES.join(", "))));
+            return Err(AppError::BadRequest(format!(
+                "state must be one of {}",
+                STATES.join(", ")
+            )));
         }
     }
-    state.db(move |c| Ok(read::regressions(c, st.as_deref(), None, limit)?)).await
+    state
+        .db(move |c| Ok(read::regressions(c, st.as_deref(), None, limit)?))
+        .await
 }
 
 pub async fn api(
@@ -62,7 +67,9 @@ pub fn render(rows: &[RegressionRow]) -> String {
     for s in STATES {
         let _ = write!(b, " <a href=\"?state={s}\">{s}</a>");
     }
-    b.push_str("</p><table id=regressions><tr><th>change</th><th>commits</th><th>state and note</th></tr>");
+    b.push_str(
+        "</p><table id=regressions><tr><th>change</th><th>commits</th><th>state and note</th></tr>",
+    );
     for r in rows {
         let _ = write!(
             b,
@@ -93,7 +100,10 @@ pub fn render(rows: &[RegressionRow]) -> String {
     b
 }
 
-pub async fn page(State(state): State<AppState>, Query(q): Query<RegressionsQuery>) -> Result<Html<String>, AppError> {
+pub async fn page(
+    State(state): State<AppState>,
+    Query(q): Query<RegressionsQuery>,
+) -> Result<Html<String>, AppError> {
     let rows = load(&state, q).await?;
     Ok(Html(layout("Regressions", "regressions", &render(&rows))))
 }
@@ -106,7 +116,9 @@ pub struct Triage {
 }
 
 async fn apply(state: &AppState, id: i64, t: Triage) -> Result<(), AppError> {
-    state.db(move |c| Ok(triage::set(c, id, &t.state, &t.note)?)).await
+    state
+        .db(move |c| Ok(triage::set(c, id, &t.state, &t.note)?))
+        .await
 }
 
 pub async fn triage_api(
@@ -136,6 +148,14 @@ pub async fn triage_form(
     Form(f): Form<TriageForm>,
 ) -> Result<Redirect, AppError> {
     auth::check_token(&state, Some(&f.token))?;
-    apply(&state, id, Triage { state: f.state, note: f.note }).await?;
+    apply(
+        &state,
+        id,
+        Triage {
+            state: f.state,
+            note: f.note,
+        },
+    )
+    .await?;
     Ok(Redirect::to(&format!("/regressions#r{id}")))
 }

@@ -19,7 +19,10 @@ async fn load(state: &AppState, run_id: String) -> Result<RunDetail, AppError> {
     state.db(move |c| Ok(read::run(c, &run_id)?)).await
 }
 
-pub async fn api(State(state): State<AppState>, Path(run_id): Path<String>) -> Result<Json<RunDetail>, AppError> {
+pub async fn api(
+    State(state): State<AppState>,
+    Path(run_id): Path<String>,
+) -> Result<Json<RunDetail>, AppError> {
     Ok(Json(load(&state, run_id).await?))
 }
 
@@ -42,7 +45,11 @@ fn scenario_section(d: &RunDetail, s: &ScenarioResult, out: &mut String) {
         .filter(|v| v.status == Status::Ok)
         .map(|v| Bar {
             label: v.variant.clone(),
-            parts: v.passes.iter().filter_map(|p| p.gpu_ms.map(|g| (p.name.clone(), g.median))).collect(),
+            parts: v
+                .passes
+                .iter()
+                .filter_map(|p| p.gpu_ms.map(|g| (p.name.clone(), g.median)))
+                .collect(),
         })
         .collect();
     if bars.iter().any(|b| !b.parts.is_empty()) {
@@ -64,12 +71,16 @@ fn scenario_section(d: &RunDetail, s: &ScenarioResult, out: &mut String) {
         let series_link = d
             .series
             .iter()
-            .find(|l| l.scenario == s.scenario && l.variant == v.variant && l.measure == "gpu_ms.median")
+            .find(|l| {
+                l.scenario == s.scenario && l.variant == v.variant && l.measure == "gpu_ms.median"
+            })
             .map(|l| format!("<a href=\"/series/{}\">history</a>", l.series_id))
             .unwrap_or_default();
         let status = match &v.status {
             Status::Ok => "<span class=ok>ok</span>".to_string(),
-            Status::Skipped { reason } => format!("<span class=skipped>skipped</span>: {}", esc(reason)),
+            Status::Skipped { reason } => {
+                format!("<span class=skipped>skipped</span>: {}", esc(reason))
+            }
             Status::Failed { error } => format!("<span class=failed>failed</span>: {}", esc(error)),
         };
         let sp = speedup(v, native).map_or("–".into(), |x| format!("{x:.2}×"));
@@ -81,7 +92,11 @@ fn scenario_section(d: &RunDetail, s: &ScenarioResult, out: &mut String) {
             ms(Some(v.cpu_frame_ms.median))
         );
         for name in &metric_names {
-            let val = v.metrics.iter().find(|m| m.name == *name).map_or("–".into(), |m| num(m.value));
+            let val = v
+                .metrics
+                .iter()
+                .find(|m| m.name == *name)
+                .map_or("–".into(), |m| num(m.value));
             let _ = write!(out, "<td class=n>{val}</td>");
         }
         let passes: Vec<String> = v
@@ -90,9 +105,16 @@ fn scenario_section(d: &RunDetail, s: &ScenarioResult, out: &mut String) {
             .map(|p| format!("{} {}", esc(&p.name), ms(p.gpu_ms.map(|g| g.median))))
             .chain(v.culled_passes.iter().map(|c| format!("<s>{}</s>", esc(c))))
             .collect();
-        let gates: Vec<String> =
-            v.gates.iter().map(|g| format!("{:?} {}", g.level, esc(&g.message)).to_lowercase()).collect();
-        let images = if d.images.iter().any(|i| i.scenario == s.scenario && i.variant == v.variant) {
+        let gates: Vec<String> = v
+            .gates
+            .iter()
+            .map(|g| format!("{:?} {}", g.level, esc(&g.message)).to_lowercase())
+            .collect();
+        let images = if d
+            .images
+            .iter()
+            .any(|i| i.scenario == s.scenario && i.variant == v.variant)
+        {
             format!(
                 " <a href=\"/runs/{}/images/{}/{}\">images</a>",
                 enc(&d.run.run_id),
@@ -148,7 +170,14 @@ pub fn render(d: &RunDetail) -> String {
     out
 }
 
-pub async fn page(State(state): State<AppState>, Path(run_id): Path<String>) -> Result<Html<String>, AppError> {
+pub async fn page(
+    State(state): State<AppState>,
+    Path(run_id): Path<String>,
+) -> Result<Html<String>, AppError> {
     let d = load(&state, run_id).await?;
-    Ok(Html(layout(&format!("Run {}", d.run.run_id), "runs", &render(&d))))
+    Ok(Html(layout(
+        &format!("Run {}", d.run.run_id),
+        "runs",
+        &render(&d),
+    )))
 }

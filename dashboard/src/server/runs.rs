@@ -20,10 +20,15 @@ pub struct RunsQuery {
 
 async fn load(state: &AppState, q: RunsQuery) -> Result<Vec<RunRow>, AppError> {
     let limit = q.limit.unwrap_or(100).clamp(1, 1000);
-    state.db(move |c| Ok(read::runs(c, q.adapter, limit)?)).await
+    state
+        .db(move |c| Ok(read::runs(c, q.adapter, limit)?))
+        .await
 }
 
-pub async fn api(State(state): State<AppState>, Query(q): Query<RunsQuery>) -> Result<Json<Vec<RunRow>>, AppError> {
+pub async fn api(
+    State(state): State<AppState>,
+    Query(q): Query<RunsQuery>,
+) -> Result<Json<Vec<RunRow>>, AppError> {
     Ok(Json(load(&state, q).await?))
 }
 
@@ -59,7 +64,10 @@ pub fn render(runs: &[RunRow]) -> String {
     b
 }
 
-pub async fn page(State(state): State<AppState>, Query(q): Query<RunsQuery>) -> Result<Html<String>, AppError> {
+pub async fn page(
+    State(state): State<AppState>,
+    Query(q): Query<RunsQuery>,
+) -> Result<Html<String>, AppError> {
     let runs = load(&state, q).await?;
     Ok(Html(layout("Runs", "runs", &render(&runs))))
 }

@@ -29,17 +29,36 @@ fn non_empty(s: &Option<String>) -> Option<String> {
 
 async fn find(state: &AppState, f: Filter) -> Result<Vec<SeriesKey>, AppError> {
     let limit = f.limit.unwrap_or(200).clamp(1, 2000);
-    let (s, v, m) = (non_empty(&f.scenario), non_empty(&f.variant), non_empty(&f.measure));
+    let (s, v, m) = (
+        non_empty(&f.scenario),
+        non_empty(&f.variant),
+        non_empty(&f.measure),
+    );
     state
-        .db(move |c| Ok(read::find_series(c, s.as_deref(), v.as_deref(), f.adapter, m.as_deref(), limit)?))
+        .db(move |c| {
+            Ok(read::find_series(
+                c,
+                s.as_deref(),
+                v.as_deref(),
+                f.adapter,
+                m.as_deref(),
+                limit,
+            )?)
+        })
         .await
 }
 
-pub async fn list_api(State(state): State<AppState>, Query(f): Query<Filter>) -> Result<Json<Vec<SeriesKey>>, AppError> {
+pub async fn list_api(
+    State(state): State<AppState>,
+    Query(f): Query<Filter>,
+) -> Result<Json<Vec<SeriesKey>>, AppError> {
     Ok(Json(find(&state, f).await?))
 }
 
-pub async fn list_page(State(state): State<AppState>, Query(f): Query<Filter>) -> Result<Html<String>, AppError> {
+pub async fn list_page(
+    State(state): State<AppState>,
+    Query(f): Query<Filter>,
+) -> Result<Html<String>, AppError> {
     let mut f = f;
     if f.measure.is_none() {
         f.measure = Some("gpu_ms.median".into());
@@ -78,7 +97,10 @@ async fn load(state: &AppState, id: i64) -> Result<SeriesDetail, AppError> {
     state.db(move |c| Ok(read::series(c, id)?)).await
 }
 
-pub async fn api(State(state): State<AppState>, Path(id): Path<i64>) -> Result<Json<SeriesDetail>, AppError> {
+pub async fn api(
+    State(state): State<AppState>,
+    Path(id): Path<i64>,
+) -> Result<Json<SeriesDetail>, AppError> {
     Ok(Json(load(&state, id).await?))
 }
 
@@ -90,7 +112,13 @@ pub fn render(d: &SeriesDetail, zoom: &Zoom) -> String {
         .iter()
         .map(|p| SeriesMark {
             value: p.value,
-            label: format!("{} {} {}: {}", commit(p.commit.as_deref()), p.run_id, p.started_at, num(p.value)),
+            label: format!(
+                "{} {} {}: {}",
+                commit(p.commit.as_deref()),
+                p.run_id,
+                p.started_at,
+                num(p.value)
+            ),
             href: format!("/runs/{}", enc(&p.run_id)),
         })
         .collect();
@@ -100,7 +128,16 @@ pub fn render(d: &SeriesDetail, zoom: &Zoom) -> String {
         .iter()
         .filter_map(|r| {
             index_of(&r.run_after).map(|i| {
-                (i, format!("{} ({:.1}% confidence) · {}", pct(r.relative_change), r.confidence * 100.0, r.state), format!("/regressions#r{}", r.id))
+                (
+                    i,
+                    format!(
+                        "{} ({:.1}% confidence) · {}",
+                        pct(r.relative_change),
+                        r.confidence * 100.0,
+                        r.state
+                    ),
+                    format!("/regressions#r{}", r.id),
+                )
             })
         })
         .collect();
@@ -147,6 +184,9 @@ pub async fn page(
     Query(zoom): Query<Zoom>,
 ) -> Result<Html<String>, AppError> {
     let d = load(&state, id).await?;
-    let title = format!("{} · {} · {}", d.series.scenario, d.series.variant, d.series.measure);
+    let title = format!(
+        "{} · {} · {}",
+        d.series.scenario, d.series.variant, d.series.measure
+    );
     Ok(Html(layout(&title, "series", &render(&d, &zoom))))
 }

@@ -31,16 +31,25 @@ pub async fn api(
     auth::require_bearer(&state, &headers)?;
     let body = body.map_err(|e| {
         if e.status() == StatusCode::PAYLOAD_TOO_LARGE {
-            AppError::PayloadTooLarge(format!("the upload is larger than {} bytes", state.max_upload_bytes))
+            AppError::PayloadTooLarge(format!(
+                "the upload is larger than {} bytes",
+                state.max_upload_bytes
+            ))
         } else {
             AppError::BadRequest(e.body_text())
         }
     })?;
     if body.len() > state.max_upload_bytes {
-        return Err(AppError::PayloadTooLarge(format!("the upload is larger than {} bytes", state.max_upload_bytes)));
+        return Err(AppError::PayloadTooLarge(format!(
+            "the upload is larger than {} bytes",
+            state.max_upload_bytes
+        )));
     }
-    let parsed: UploadBody = serde_json::from_slice(&body)
-        .map_err(|e| AppError::BadRequest(format!("the body is not an upload bundle (run, scenarios, images): {e}")))?;
+    let parsed: UploadBody = serde_json::from_slice(&body).map_err(|e| {
+        AppError::BadRequest(format!(
+            "the body is not an upload bundle (run, scenarios, images): {e}"
+        ))
+    })?;
     let bundle = tokio::task::spawn_blocking(move || RunBundle::from_upload(parsed))
         .await
         .map_err(|e| AppError::Internal(e.to_string()))??;
@@ -48,13 +57,29 @@ pub async fn api(
     let params = state.detect;
     let (status, response) = state
         .db(move |conn| match ingest(conn, &bundle)? {
-            Ingested::Stored { results, series, .. } => {
+            Ingested::Stored {
+                results, series, ..
+            } => {
                 let new_regressions = crate::regressions::update(conn, &series, &params)?;
-                Ok((StatusCode::CREATED, UploadResponse { run_id, stored: true, results, new_regressions }))
+                Ok((
+                    StatusCode::CREATED,
+                    UploadResponse {
+                        run_id,
+                        stored: true,
+                        results,
+                        new_regressions,
+                    },
+                ))
             }
-            Ingested::AlreadyStored { .. } => {
-                Ok((StatusCode::OK, UploadResponse { run_id, stored: false, results: 0, new_regressions: 0 }))
-            }
+            Ingested::AlreadyStored { .. } => Ok((
+                StatusCode::OK,
+                UploadResponse {
+                    run_id,
+                    stored: false,
+                    results: 0,
+                    new_regressions: 0,
+                },
+            )),
         })
         .await?;
     Ok((status, Json(response)).into_response())

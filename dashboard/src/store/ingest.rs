@@ -39,7 +39,10 @@ pub fn ingest(conn: &mut dyn Connection, bundle: &RunBundle) -> Result<Ingested,
 }
 
 /// The body of [`ingest`] for a caller that already holds a transaction.
-pub fn ingest_in_transaction(conn: &mut dyn Connection, bundle: &RunBundle) -> Result<Ingested, StoreError> {
+pub fn ingest_in_transaction(
+    conn: &mut dyn Connection,
+    bundle: &RunBundle,
+) -> Result<Ingested, StoreError> {
     ingest_once(conn, bundle)
 }
 

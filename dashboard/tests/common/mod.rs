@@ -15,7 +15,11 @@ pub fn fixtures() -> PathBuf {
 
 /// The first fixture run (two real lavapipe runs of a 32x24 scenario are committed).
 pub fn template() -> RunBundle {
-    let first = std::fs::read_dir(fixtures()).unwrap().map(|e| e.unwrap().path()).min().unwrap();
+    let first = std::fs::read_dir(fixtures())
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .min()
+        .unwrap();
     RunBundle::read_folder(&first).unwrap()
 }
 
@@ -40,7 +44,12 @@ pub fn sqlite() -> TestStore {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("store.sqlite");
     let pool = db::open(path.to_str().unwrap()).unwrap();
-    TestStore { name: "sqlite", pool, _dir: Some(dir), pg_schema: None }
+    TestStore {
+        name: "sqlite",
+        pool,
+        _dir: Some(dir),
+        pg_schema: None,
+    }
 }
 
 pub fn postgres(test: &str) -> Option<TestStore> {
@@ -53,14 +62,23 @@ pub fn postgres(test: &str) -> Option<TestStore> {
         "t_{}_{}_{}",
         std::process::id(),
         N.fetch_add(1, Ordering::SeqCst),
-        std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap().subsec_nanos()
+        std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .unwrap()
+            .subsec_nanos()
     );
-    let mut c = postgres::Client::connect(&url, postgres::NoTls).expect("TESSERA_TEST_POSTGRES_URL is set but unreachable");
+    let mut c = postgres::Client::connect(&url, postgres::NoTls)
+        .expect("TESSERA_TEST_POSTGRES_URL is set but unreachable");
     c.batch_execute(&format!("CREATE SCHEMA {schema}")).unwrap();
     let sep = if url.contains('?') { '&' } else { '?' };
     let scoped = format!("{url}{sep}options=-csearch_path%3D{schema}");
     let pool = db::open(&scoped).unwrap();
-    Some(TestStore { name: "postgres", pool, _dir: None, pg_schema: Some((url, schema)) })
+    Some(TestStore {
+        name: "postgres",
+        pool,
+        _dir: None,
+        pg_schema: Some((url, schema)),
+    })
 }
 
 /// SQLite, and PostgreSQL when configured.
