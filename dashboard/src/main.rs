@@ -6,7 +6,10 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
-use tessera_dashboard::{bundle::RunBundle, db, detect::Params, import, regressions, server};
+use tessera_dashboard::store::ingest::{ingest, Ingested};
+use tessera_dashboard::{
+    bundle::RunBundle, db, detect::Params, import, regressions, server, synth,
+};
 
 const DEFAULT_DB: &str = "tessera-dashboard.sqlite";
 
@@ -47,6 +50,18 @@ enum Command {
     },
     /// Print a run folder as the JSON body that `POST /api/runs` takes.
     Bundle { folder: PathBuf },
+    /// Store generated runs made from a real one (for benchmarks): timings scaled with 1% noise.
+    Generate {
+        /// The run folder to copy.
+        template: PathBuf,
+        #[arg(long, default_value_t = 100)]
+        runs: u64,
+        /// Copies of the template's scenarios in each run.
+        #[arg(long, default_value_t = 1)]
+        scenarios: usize,
+        #[arg(long, env = "TESSERA_DASHBOARD_DB", default_value = DEFAULT_DB)]
+        db: String,
+    },
 }
 
 fn run(cli: Cli) -> anyhow::Result<()> {
@@ -99,6 +114,39 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let series = regressions::all_series(&mut *conn)?;
             let added = regressions::update(&mut *conn, &series, &Params::default())?;
             println!("checked {} series; {added} new change points", series.len());
+        }
+        Command::Generate {
+            template,
+            runs,
+            scenarios,
+            db,
+        } => {
+            let pool = db::open(&db)?;
+            let template = synth::widen(&RunBundle::read_folder(&template)?, scenarios);
+            let mut rng = tessera_dashboard::detect::Rng::new(1);
+            let mut conn = pool.get()?;
+            let start = std::time::Instant::now();
+            let mut results = 0;
+            let mut touched = std::collections::BTreeSet::new();
+            for i in 0..runs {
+                let b = synth::run_from(&template, "gen", i, 1.0, 0.01, &mut rng);
+                if let Ingested::Stored {
+                    results: n, series, ..
+                } = ingest(&mut *conn, &b)?
+                {
+                    results += n;
+                    touched.extend(series);
+                }
+            }
+            let stored = start.elapsed().as_secs_f64();
+            let touched: Vec<i64> = touched.into_iter().collect();
+            let added = regressions::update(&mut *conn, &touched, &Params::default())?;
+            println!(
+                "stored {runs} runs ({results} results) in {stored:.1} s ({:.0} results/s); detection on {} series in {:.1} s: {added} change points",
+                results as f64 / stored,
+                touched.len(),
+                start.elapsed().as_secs_f64() - stored
+            );
         }
         Command::Bundle { folder } => {
             let bundle = RunBundle::read_folder(&folder)?;

@@ -87,3 +87,19 @@ mod tests {
         assert_eq!(super::time_after(1440 * 31 + 61), "2026-02-01T01:01:00Z");
     }
 }
+
+/// `template` with its scenarios repeated `copies` times under names `<scenario>-<k>`, to make
+/// runs with many results for the benchmark.
+pub fn widen(template: &RunBundle, copies: usize) -> RunBundle {
+    let mut b = template.clone();
+    b.scenarios = (0..copies)
+        .flat_map(|k| {
+            template.scenarios.iter().map(move |s| {
+                let mut s = s.clone();
+                s.scenario = format!("{}-{k:03}", s.scenario);
+                s
+            })
+        })
+        .collect();
+    b
+}
