@@ -31,12 +31,14 @@ pub fn ticks(lo: f64, hi: f64) -> Vec<f64> {
         .map(|m| m * mag)
         .find(|s| *s >= raw)
         .unwrap_or(10.0 * mag);
-    let mut t = (lo / step).ceil() * step;
-    let mut out = Vec::new();
-    while t <= hi + step * 1e-9 {
-        out.push(if t.abs() < step * 1e-9 { 0.0 } else { t });
-        t += step;
-    }
+    let first = (lo / step).ceil() as i64;
+    let last = (hi / step + 1e-9).floor() as i64;
+    // Integer multiples of the step, rounded to its decimals, so that labels print cleanly.
+    let decimals = (-step.log10().floor()).max(0.0) as i32;
+    let round = 10f64.powi(decimals);
+    let out: Vec<f64> = (first..=last)
+        .map(|k| (k as f64 * step * round).round() / round)
+        .collect();
     out
 }
 
@@ -363,17 +365,7 @@ mod tests {
     #[test]
     fn ticks_are_round() {
         assert_eq!(ticks(0.0, 10.0), vec![0.0, 2.0, 4.0, 6.0, 8.0, 10.0]);
-        assert_eq!(
-            ticks(3.2, 3.9),
-            vec![
-                3.3000000000000003,
-                3.4000000000000004,
-                3.5000000000000004,
-                3.6000000000000005,
-                3.7000000000000006,
-                3.8000000000000007
-            ]
-        );
+        assert_eq!(ticks(3.2, 3.9), vec![3.2, 3.4, 3.6, 3.8]);
     }
 
     #[test]

@@ -79,15 +79,6 @@ pub fn run_from(
     b
 }
 
-#[cfg(test)]
-mod tests {
-    #[test]
-    fn times_are_valid_rfc3339() {
-        assert_eq!(super::time_after(0), "2026-01-01T00:00:00Z");
-        assert_eq!(super::time_after(1440 * 31 + 61), "2026-02-01T01:01:00Z");
-    }
-}
-
 /// `template` with its scenarios repeated `copies` times under names `<scenario>-<k>`, to make
 /// runs with many results for the benchmark.
 pub fn widen(template: &RunBundle, copies: usize) -> RunBundle {
@@ -102,4 +93,13 @@ pub fn widen(template: &RunBundle, copies: usize) -> RunBundle {
         })
         .collect();
     b
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn times_are_valid_rfc3339() {
+        assert_eq!(super::time_after(0), "2026-01-01T00:00:00Z");
+        assert_eq!(super::time_after(1440 * 31 + 61), "2026-02-01T01:01:00Z");
+    }
 }
