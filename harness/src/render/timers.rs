@@ -21,7 +21,12 @@ pub struct Timers {
     profiler: GpuProfiler,
     timestamps: bool,
     stats: Option<Stats>,
+    /// Pipeline statistics are counted only while enabled (the capture phase, one frame at a time).
+    stats_enabled: bool,
 }
+
+/// Frames the profiler may have in flight before it drops the oldest; callers keep fewer.
+pub const MAX_PENDING_FRAMES: usize = 4;
 
 struct Stats {
     set: wgpu::QuerySet,
@@ -45,7 +50,7 @@ impl Timers {
         let settings = GpuProfilerSettings {
             enable_timer_queries: timestamps,
             enable_debug_groups: false,
-            max_num_pending_frames: 4,
+            max_num_pending_frames: MAX_PENDING_FRAMES,
         };
         let profiler = GpuProfiler::new(device, settings).map_err(|e| TimerError(e.to_string()))?;
         let stats = (device
@@ -82,11 +87,18 @@ impl Timers {
             profiler,
             timestamps,
             stats,
+            stats_enabled: false,
         })
     }
 
     pub fn has_timestamps(&self) -> bool {
         self.timestamps
+    }
+
+    /// Counts fragment-shader invocations from now on (frames must then be collected one by one
+    /// with [`Timers::read_stats`], since there is one readback buffer).
+    pub fn enable_stats(&mut self, enabled: bool) {
+        self.stats_enabled = enabled;
     }
 
     /// Opens a timer for a pass; use its `render_pass_timestamp_writes` or
@@ -105,7 +117,7 @@ impl Timers {
 
     /// Starts counting fragment-shader invocations of render pass `name`.
     pub fn begin_stats(&self, pass: &mut wgpu::RenderPass<'_>, name: &str) {
-        if let Some(s) = &self.stats {
+        if let Some(s) = self.stats.as_ref().filter(|_| self.stats_enabled) {
             if let Some(i) = s.passes.iter().position(|p| *p == name) {
                 pass.begin_pipeline_statistics_query(&s.set, i as u32);
             }
@@ -113,7 +125,7 @@ impl Timers {
     }
 
     pub fn end_stats(&self, pass: &mut wgpu::RenderPass<'_>, name: &str) {
-        if let Some(s) = &self.stats {
+        if let Some(s) = self.stats.as_ref().filter(|_| self.stats_enabled) {
             if s.passes.contains(&name) {
                 pass.end_pipeline_statistics_query();
             }
@@ -124,48 +136,53 @@ impl Timers {
     /// `recorded`: the render passes that actually ran with statistics this frame.
     pub fn resolve(&mut self, encoder: &mut wgpu::CommandEncoder) {
         self.profiler.resolve_queries(encoder);
-        if let Some(s) = &self.stats {
+        if let Some(s) = self.stats.as_ref().filter(|_| self.stats_enabled) {
             let n = s.passes.len() as u32;
             encoder.resolve_query_set(&s.set, 0..n, &s.resolve, 0);
             encoder.copy_buffer_to_buffer(&s.resolve, 0, &s.readback, 0, s.resolve.size());
         }
     }
 
-    /// After submit and a blocking poll: the frame's measurements.
-    pub fn collect(&mut self, device: &wgpu::Device, queue: &wgpu::Queue) -> FrameMeasurements {
-        let mut out = FrameMeasurements::default();
-        if self.profiler.end_frame().is_err() {
-            return out;
+    /// Call once after each frame's submission.
+    pub fn end_frame(&mut self) {
+        // Only fails on unclosed or unresolved queries, which `record` and `resolve` rule out.
+        let _ = self.profiler.end_frame();
+    }
+
+    /// Pass times of the oldest finished frame not yet collected, if its queries are readable
+    /// (after a poll). Empty when the adapter has no timestamps.
+    pub fn try_collect(&mut self, queue: &wgpu::Queue) -> Option<BTreeMap<String, f64>> {
+        let results = self
+            .profiler
+            .process_finished_frame(queue.get_timestamp_period())?;
+        let mut out = BTreeMap::new();
+        for r in results {
+            if let Some(t) = r.time {
+                *out.entry(r.label.clone()).or_default() += (t.end - t.start) * 1000.0;
+            }
         }
+        Some(out)
+    }
+
+    /// Fragment-shader invocations of the last frame (statistics enabled, frame submitted).
+    pub fn read_stats(&mut self, device: &wgpu::Device) -> BTreeMap<String, u64> {
+        let mut out = BTreeMap::new();
+        let Some(s) = self.stats.as_ref().filter(|_| self.stats_enabled) else {
+            return out;
+        };
+        let slice = s.readback.slice(..);
+        slice.map_async(wgpu::MapMode::Read, |_| {});
         let _ = device.poll(wgpu::PollType::Wait {
             submission_index: None,
             timeout: None,
         });
-        if let Some(results) = self
-            .profiler
-            .process_finished_frame(queue.get_timestamp_period())
-        {
-            for r in results {
-                if let Some(t) = r.time {
-                    *out.gpu_ms.entry(r.label.clone()).or_default() += (t.end - t.start) * 1000.0;
-                }
+        if let Ok(data) = slice.get_mapped_range() {
+            let counts: &[u64] = bytemuck::cast_slice(&data);
+            for (name, c) in s.passes.iter().zip(counts) {
+                out.insert(name.to_string(), *c);
             }
         }
-        if let Some(s) = &self.stats {
-            let slice = s.readback.slice(..);
-            slice.map_async(wgpu::MapMode::Read, |_| {});
-            let _ = device.poll(wgpu::PollType::Wait {
-                submission_index: None,
-                timeout: None,
-            });
-            if let Ok(data) = slice.get_mapped_range() {
-                let counts: &[u64] = bytemuck::cast_slice(&data);
-                for (name, c) in s.passes.iter().zip(counts) {
-                    out.fragment_invocations.insert(name.to_string(), *c);
-                }
-            }
-            s.readback.unmap();
-        }
+        s.readback.unmap();
         out
     }
 }

@@ -94,7 +94,7 @@ pub fn run_on(
 
     let total: u64 = scenarios
         .iter()
-        .map(|s| s.total_frames() as u64 * (s.variants.len() as u64 + 1))
+        .map(|s| 2 * s.total_frames() as u64 * (s.variants.len() as u64 + 1))
         .sum();
     let bar = if opts.progress {
         let b = indicatif::ProgressBar::new(total);

@@ -30,6 +30,8 @@ pub struct Scenario {
     pub width: u32,
     pub height: u32,
     pub warmup_frames: u32,
+    /// Minimum GPU-busy time before the timed frames (frame 0 repeated), in milliseconds.
+    pub warmup_ms: f64,
     pub measured_frames: u32,
     /// Measured-frame indices to save as PNG.
     pub save_frames: Vec<u32>,

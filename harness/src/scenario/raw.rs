@@ -39,6 +39,8 @@ pub struct RawScenario {
 pub struct RawFrames {
     /// Frames rendered before measuring; excluded from timings and metrics. Default 2.
     pub warmup: Option<i64>,
+    /// Clock warm-up: frame 0 repeated for at least this long before timing. Default 100.
+    pub warmup_ms: Option<f64>,
     /// Frames timed and compared. Default 8.
     pub measured: Option<i64>,
     /// Measured-frame indices saved as PNG; negative counts from the end. Default `[-1]`.

@@ -245,6 +245,16 @@ fn build(ctx: &mut Ctx, path: &Path, raw: RawScenario) -> Scenario {
         0,
         100_000,
     );
+    let warmup_ms = ctx.non_negative(
+        &frames.key("warmup_ms"),
+        raw.frames.warmup_ms.unwrap_or(100.0),
+    ) as f64;
+    if warmup_ms > 60_000.0 {
+        ctx.err(
+            &frames.key("warmup_ms"),
+            format!("{warmup_ms} is out of range: expected 0 to 60000 milliseconds"),
+        );
+    }
     let measured_frames = ctx.count(
         &frames.key("measured"),
         raw.frames.measured.unwrap_or(8),
@@ -275,6 +285,7 @@ fn build(ctx: &mut Ctx, path: &Path, raw: RawScenario) -> Scenario {
         width,
         height,
         warmup_frames,
+        warmup_ms,
         measured_frames,
         save_frames,
         time_step,
