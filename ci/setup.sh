@@ -2,7 +2,6 @@
 # Installs what Tessera needs on a fresh Debian/Ubuntu machine, idempotently:
 #   - lavapipe (Mesa's Vulkan driver on the CPU) and the Vulkan loader: the adapter of last resort;
 #   - assimp-testmodels: 2CylinderEngine.glb, the vertex-heavy glTF test scene;
-#   - PostgreSQL for the dashboard's storage tests (dashboard/ci/setup-postgres.sh, when present).
 # Needs root or sudo for apt-get. Prints what it installed; does nothing when all is present.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -24,8 +23,4 @@ model=/usr/share/assimp/models/glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine
 if [ ! -f "$model" ]; then
   echo "ci/setup.sh: $model is missing after installing assimp-testmodels" >&2
   exit 1
-fi
-
-if [ -x dashboard/ci/setup-postgres.sh ] && [ "${TESSERA_SKIP_POSTGRES:-}" != "1" ]; then
-  dashboard/ci/setup-postgres.sh
 fi

@@ -3,6 +3,6 @@
 # there is no GPU). Extra arguments go to `tessera run` (e.g. --adapter nvidia, --junit out.xml).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-TESSERA_SKIP_POSTGRES=1 ci/setup.sh
+ci/setup.sh
 cargo build --release -p tessera
 exec target/release/tessera run scenarios/smoke "$@"

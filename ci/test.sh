@@ -1,12 +1,11 @@
 #!/usr/bin/env bash
-# The tests: set up (lavapipe, test models, PostgreSQL), check formatting and lints, run every test.
+# The tests: set up (lavapipe, test models, a local PostgreSQL for the dashboard's storage tests),
+# check formatting and lints, run every test.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ci/setup.sh
-if [ -f dashboard/ci/postgres-url ]; then
-  TESSERA_TEST_POSTGRES_URL="$(cat dashboard/ci/postgres-url)"
-  export TESSERA_TEST_POSTGRES_URL
-fi
+# Prints `export TESSERA_TEST_POSTGRES_URL=...` for the server it starts (idempotent).
+eval "$(bash dashboard/ci/setup-postgres.sh)"
 cargo fmt --all -- --check
 cargo clippy --workspace --all-targets -- -D warnings
 cargo test --workspace

@@ -294,13 +294,24 @@ mod opt_f64_vec {
 
     pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<f64>, D::Error> {
         let opts = Vec::<Option<f64>>::deserialize(d)?;
-        Ok(opts.into_iter().map(|x| x.unwrap_or(f64::INFINITY)).collect())
+        Ok(opts
+            .into_iter()
+            .map(|x| x.unwrap_or(f64::INFINITY))
+            .collect())
     }
 }
 
 /// Columns of `results.csv`, in order. One row per (scenario, variant, measure).
 pub const CSV_COLUMNS: [&str; 10] = [
-    "run_id", "scenario", "variant", "technique", "adapter", "backend", "status", "measure", "value",
+    "run_id",
+    "scenario",
+    "variant",
+    "technique",
+    "adapter",
+    "backend",
+    "status",
+    "measure",
+    "value",
     "unit",
 ];
 
