@@ -173,6 +173,15 @@ fn shapes_accept_only_their_own_keys() {
 }
 
 #[test]
+fn ssim_needs_one_window_of_pixels() {
+    let src = VALID.replace("resolution = [64, 32]", "resolution = [64, 8]\nmetrics = [\"psnr\", \"ssim\"]");
+    assert_eq!(
+        errors_of(&src),
+        ["s.toml:3:20: `metrics[1]`: ssim needs at least 11x11 pixels (one Gaussian window); the resolution is 64x8"]
+    );
+}
+
+#[test]
 fn gates_need_a_computed_measure_and_ordered_levels() {
     assert_eq!(
         errors("\n[[gates]]\nmeasure = \"ssim\"\nwarn_below = 0.9\n"),

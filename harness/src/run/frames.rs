@@ -156,7 +156,8 @@ pub fn render(
     // Clock warm-up: frame 0 (which never reads history) repeated until the GPU has been busy for
     // `warmup_ms`, so that it reaches its working clocks before the first timed frame.
     let warm_start = Instant::now();
-    while warm_start.elapsed().as_secs_f64() * 1000.0 < scenario.warmup_ms {
+    let warmup_ms = scenario.clock_warmup_ms(&gpu.info.device_type);
+    while warm_start.elapsed().as_secs_f64() * 1000.0 < warmup_ms {
         pipelined(
             gpu,
             scene,

@@ -30,8 +30,9 @@ pub struct Scenario {
     pub width: u32,
     pub height: u32,
     pub warmup_frames: u32,
-    /// Minimum GPU-busy time before the timed frames (frame 0 repeated), in milliseconds.
-    pub warmup_ms: f64,
+    /// Minimum GPU-busy time before the timed frames (frame 0 repeated), in milliseconds; `None`
+    /// picks by adapter (see [`Scenario::clock_warmup_ms`]).
+    pub warmup_ms: Option<f64>,
     pub measured_frames: u32,
     /// Measured-frame indices to save as PNG.
     pub save_frames: Vec<u32>,
@@ -45,6 +46,13 @@ pub struct Scenario {
 }
 
 impl Scenario {
+    /// Clock warm-up for an adapter of `device_type`: as set, or 1000 ms on GPUs (an H200 took
+    /// several hundred milliseconds of load to reach its top clock) and 20 ms on CPU adapters.
+    pub fn clock_warmup_ms(&self, device_type: &str) -> f64 {
+        self.warmup_ms
+            .unwrap_or(if device_type == "cpu" { 20.0 } else { 1000.0 })
+    }
+
     pub fn total_frames(&self) -> u32 {
         self.warmup_frames + self.measured_frames
     }

@@ -245,16 +245,15 @@ fn build(ctx: &mut Ctx, path: &Path, raw: RawScenario) -> Scenario {
         0,
         100_000,
     );
-    let warmup_ms = ctx.non_negative(
-        &frames.key("warmup_ms"),
-        raw.frames.warmup_ms.unwrap_or(100.0),
-    ) as f64;
-    if warmup_ms > 60_000.0 {
-        ctx.err(
-            &frames.key("warmup_ms"),
-            format!("{warmup_ms} is out of range: expected 0 to 60000 milliseconds"),
-        );
-    }
+    let warmup_ms = raw.frames.warmup_ms.map(|ms| {
+        if !(ms.is_finite() && (0.0..=60_000.0).contains(&ms)) {
+            ctx.err(
+                &frames.key("warmup_ms"),
+                format!("{ms} is out of range: expected 0 to 60000 milliseconds"),
+            );
+        }
+        ms
+    });
     let measured_frames = ctx.count(
         &frames.key("measured"),
         raw.frames.measured.unwrap_or(8),
@@ -273,6 +272,15 @@ fn build(ctx: &mut Ctx, path: &Path, raw: RawScenario) -> Scenario {
 
     let reference = reference(ctx, &root.key("reference"), &raw.reference);
     let metrics = metrics(ctx, &root.key("metrics"), raw.metrics.as_deref(), reference);
+    for (i, m) in metrics.iter().enumerate() {
+        let min = tessera_metrics::SSIM_MIN_SIZE;
+        if matches!(m, MetricKind::Ssim | MetricKind::SsimLuma) && (width < min || height < min) {
+            ctx.err(
+                &root.key("metrics").index(i),
+                format!("{} needs at least {min}x{min} pixels (one Gaussian window); the resolution is {width}x{height}", m.name()),
+            );
+        }
+    }
     let scene = scene(ctx, &root.key("scene"), path, &raw.scene);
     let camera = camera(ctx, &root.key("camera"), &raw.camera);
     let variants = variants(ctx, &root.key("techniques"), &raw.techniques);
