@@ -245,15 +245,13 @@ fn build(ctx: &mut Ctx, path: &Path, raw: RawScenario) -> Scenario {
         0,
         100_000,
     );
-    let warmup_ms = raw.frames.warmup_ms.map(|ms| {
-        if !(ms.is_finite() && (0.0..=60_000.0).contains(&ms)) {
-            ctx.err(
-                &frames.key("warmup_ms"),
-                format!("{ms} is out of range: expected 0 to 60000 milliseconds"),
-            );
-        }
-        ms
-    });
+    let warmup_ms = raw.frames.warmup_ms;
+    if let Some(ms) = warmup_ms.filter(|ms| !(ms.is_finite() && (0.0..=60_000.0).contains(ms))) {
+        ctx.err(
+            &frames.key("warmup_ms"),
+            format!("{ms} is out of range: expected 0 to 60000 milliseconds"),
+        );
+    }
     let measured_frames = ctx.count(
         &frames.key("measured"),
         raw.frames.measured.unwrap_or(8),
