@@ -16,7 +16,9 @@ struct Frame {
     view_proj: mat4x4<f32>,
     // Previous frame's camera, applied to current camera-relative positions.
     prev_view_proj: mat4x4<f32>,
-    // xy: offset added to clip-space xy / w (NDC), for techniques that jitter the projection.
+    // Viewport remap applied after projection: ndc' = ndc * zw + xy. Identity is (0, 0, 1, 1).
+    // Techniques use it to jitter the projection and to render a part of the frame at another
+    // resolution (checkerboard's quarter-resolution targets).
     jitter: vec4<f32>,
     // xz: camera position modulo twice the checker size (f64 on the CPU), for the ground pattern.
     camera_mod: vec4<f32>,
@@ -27,7 +29,7 @@ struct Frame {
     ground: vec4<f32>,
     ground_a: vec4<f32>,
     ground_b: vec4<f32>,
-    // x: number of lights.
+    // x: number of lights; y, z: output width and height in pixels.
     counts: vec4<u32>,
     lights: array<Light, 8>,
 }
@@ -37,7 +39,7 @@ struct Object {
     prev_model: mat4x4<f32>,
     // rgb: albedo, a: specular.
     color: vec4<f32>,
-    // rgb: emitted radiance, a: 1 for the ground.
+    // rgb: emitted radiance; a: 0 static object, 1 the ground, 2 dynamic (animated) object.
     emissive: vec4<f32>,
 }
 
@@ -52,16 +54,20 @@ struct VsOut {
     @location(3) @interpolate(flat) object: u32,
 }
 
-@vertex
-fn vs_main(
-    @location(0) position: vec3<f32>,
-    @location(1) normal: vec3<f32>,
-    @builtin(instance_index) object: u32,
-) -> VsOut {
+// Per-sample interpolation for `fs_main_sample` (checkerboard's 2x MSAA sampling).
+struct VsOutSample {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) @interpolate(perspective, sample) rel_pos: vec3<f32>,
+    @location(1) @interpolate(perspective, sample) normal: vec3<f32>,
+    @location(2) @interpolate(perspective, sample) local: vec3<f32>,
+    @location(3) @interpolate(flat) object: u32,
+}
+
+fn transform(position: vec3<f32>, normal: vec3<f32>, object: u32) -> VsOut {
     let o = objects[object];
     let world = o.model * vec4<f32>(position, 1.0);
     var clip = frame.view_proj * world;
-    clip = vec4<f32>(clip.xy + frame.jitter.xy * clip.w, clip.zw);
+    clip = vec4<f32>(clip.xy * frame.jitter.zw + frame.jitter.xy * clip.w, clip.zw);
     var out: VsOut;
     out.clip = clip;
     out.rel_pos = world.xyz;
@@ -69,6 +75,25 @@ fn vs_main(
     out.local = position;
     out.object = object;
     return out;
+}
+
+@vertex
+fn vs_main(
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @builtin(instance_index) object: u32,
+) -> VsOut {
+    return transform(position, normal, object);
+}
+
+@vertex
+fn vs_main_sample(
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @builtin(instance_index) object: u32,
+) -> VsOutSample {
+    let v = transform(position, normal, object);
+    return VsOutSample(v.clip, v.rel_pos, v.normal, v.local, v.object);
 }
 
 // Triangular wave: the integral of the square wave of the checker pattern.
@@ -112,6 +137,19 @@ fn detail(seed: vec3<f32>, cost: u32) -> f32 {
 
 @fragment
 fn fs_main(in: VsOut) -> @location(0) vec4<f32> {
+    return shade(in);
+}
+
+// Shaded once per sample: reading `sample_index` makes the invocation per-sample (Intel's
+// SAMPLE_SHADING), and the varyings are interpolated at the sample positions.
+@fragment
+fn fs_main_sample(in: VsOutSample, @builtin(sample_index) sample: u32) -> @location(0) vec4<f32> {
+    let c = shade(VsOut(in.clip, in.rel_pos, in.normal, in.local, in.object));
+    // Keeps `sample` statically used; adds nothing visible (1e-30 underflows in Rgba16Float).
+    return vec4<f32>(c.rgb, c.a + f32(sample) * 1e-30);
+}
+
+fn shade(in: VsOut) -> vec4<f32> {
     let o = objects[in.object];
     // Derivatives in uniform control flow, for the ground pattern.
     let p = (in.rel_pos.xz + frame.camera_mod.xz) / frame.ground.x;
@@ -120,7 +158,7 @@ fn fs_main(in: VsOut) -> @location(0) vec4<f32> {
 
     var albedo = o.color.rgb;
     var seed = in.local;
-    if o.emissive.a > 0.5 {
+    if abs(o.emissive.a - 1.0) < 0.5 {
         var f = checkers_point(p);
         if frame.params.w > 0.5 {
             f = checkers_filtered(p, ddx, ddy, frame.ground.y);
@@ -156,4 +194,38 @@ fn fs_main(in: VsOut) -> @location(0) vec4<f32> {
     }
     color = color + o.emissive.rgb;
     return vec4<f32>(color, 1.0);
+}
+
+// Velocity pass (checkerboard): full-resolution screen motion in pixels (y down) of every
+// object, with z = 1 where the object is dynamic (moves by itself) and 0 where the camera alone
+// moves it (those pixels are reprojected through the cameras instead). Not jittered.
+struct VelocityOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) current: vec4<f32>,
+    @location(1) previous: vec4<f32>,
+    @location(2) @interpolate(flat) dynamic_object: u32,
+}
+
+@vertex
+fn vs_velocity(
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @builtin(instance_index) object: u32,
+) -> VelocityOut {
+    let o = objects[object];
+    var out: VelocityOut;
+    out.current = frame.view_proj * o.model * vec4<f32>(position, 1.0);
+    out.previous = frame.prev_view_proj * o.prev_model * vec4<f32>(position, 1.0);
+    out.clip = out.current;
+    out.dynamic_object = select(0u, 1u, o.emissive.a > 1.5);
+    return out;
+}
+
+@fragment
+fn fs_velocity(in: VelocityOut) -> @location(0) vec4<f32> {
+    let size = frame.counts.yz;
+    let ndc = in.current.xy / in.current.w;
+    let prev = in.previous.xy / in.previous.w;
+    let motion = (ndc - prev) * 0.5 * vec2<f32>(f32(size.x), -f32(size.y));
+    return vec4<f32>(motion, f32(in.dynamic_object), 1.0);
 }

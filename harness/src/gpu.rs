@@ -33,6 +33,8 @@ pub struct Gpu {
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,
     pub info: AdapterInfo,
+    /// 2x MSAA sample positions, probed on first use by `checkerboard` with `sampling = "msaa2x"`.
+    pub msaa2x_positions: std::sync::OnceLock<Result<[[f32; 2]; 2], String>>,
 }
 
 impl Gpu {
@@ -202,5 +204,6 @@ pub fn open(adapter: wgpu::Adapter) -> Result<Gpu, GpuError> {
         device,
         queue,
         info,
+        msaa2x_positions: std::sync::OnceLock::new(),
     })
 }

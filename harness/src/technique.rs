@@ -14,15 +14,22 @@ pub enum TechniqueKind {
     Native,
     /// Render at a scale factor, then upscale: what a user would pick instead of a technique.
     Upscale,
+    /// Checkerboard rendering: Intel CBR with mosaiikki's refinements.
+    Checkerboard,
 }
 
 impl TechniqueKind {
-    pub const ALL: [TechniqueKind; 2] = [TechniqueKind::Native, TechniqueKind::Upscale];
+    pub const ALL: [TechniqueKind; 3] = [
+        TechniqueKind::Native,
+        TechniqueKind::Upscale,
+        TechniqueKind::Checkerboard,
+    ];
 
     pub fn name(self) -> &'static str {
         match self {
             TechniqueKind::Native => "native",
             TechniqueKind::Upscale => "upscale",
+            TechniqueKind::Checkerboard => "checkerboard",
         }
     }
 
@@ -39,6 +46,7 @@ impl TechniqueKind {
         match self {
             TechniqueKind::Native => &[],
             TechniqueKind::Upscale => &UPSCALE_PARAMS,
+            TechniqueKind::Checkerboard => &CHECKERBOARD_PARAMS,
         }
     }
 }
@@ -65,6 +73,54 @@ static UPSCALE_PARAMS: [ParamSpec; 2] = [
         kind: ParamKind::Choice(&["bilinear", "nearest"]),
         default: Default::Str("bilinear"),
         doc: "upscaling filter",
+    },
+];
+
+/// Defaults trace to the sources: sampling portable; gradients as Intel's code (DDXY_BIAS 0.5);
+/// CSO with mosaiikki's tolerance (view units); mosaiikki's differential fill; Intel's unclamped
+/// history (mosaiikki's clamps are options); mosaiikki's velocity buffer.
+static CHECKERBOARD_PARAMS: [ParamSpec; 7] = [
+    ParamSpec {
+        name: "sampling",
+        kind: ParamKind::Choice(&["two-pass", "msaa2x"]),
+        default: Default::Str("two-pass"),
+        doc: "msaa2x: 2x MSAA quarter-res targets shaded per sample (needs MULTISAMPLE_X2 and standard sample positions); two-pass: two jittered single-sample quarter-res renders, any adapter",
+    },
+    ParamSpec {
+        name: "gradient_scale",
+        kind: ParamKind::Float { min: 0.0, min_inclusive: false, max: 1.0 },
+        default: Default::Float(0.5),
+        doc: "multiplies screen-space derivatives at quarter resolution: 0.5 as Intel's code (-1 LOD), 0.7071 as mosaiikki's -0.5 LOD bias, 1 uncorrected",
+    },
+    ParamSpec {
+        name: "occlusion",
+        kind: ParamKind::Choice(&["cso", "aso"]),
+        default: Default::Str("cso"),
+        doc: "cso: a pixel that moved to another 2x2 block is occluded when its old view depth differs from the mean of its neighbours by depth_tolerance or more; aso: it always is",
+    },
+    ParamSpec {
+        name: "depth_tolerance",
+        kind: ParamKind::Float { min: 0.0, min_inclusive: false, max: 1.0e9 },
+        default: Default::Float(0.01),
+        doc: "CSO tolerance in view-space units (mosaiikki's depthTolerance)",
+    },
+    ParamSpec {
+        name: "fill",
+        kind: ParamKind::Choice(&["plain", "tonemapped", "differential"]),
+        default: Default::Str("differential"),
+        doc: "how a missing pixel is filled from its 4 neighbours: plain mean, mean in reversible-tonemapped space, or mosaiikki's differential blend (tonemapped)",
+    },
+    ParamSpec {
+        name: "clamp",
+        kind: ParamKind::Choice(&["none", "min-max", "min-max-confidence"]),
+        default: Default::Str("none"),
+        doc: "history clamp to the neighbours' min/max (mosaiikki), optionally blended back by depth confidence; none as Intel",
+    },
+    ParamSpec {
+        name: "velocity",
+        kind: ParamKind::Bool,
+        default: Default::Bool(true),
+        doc: "full-resolution velocity pass for dynamic objects (recorded only when the scene has some)",
     },
 ];
 
@@ -241,6 +297,16 @@ impl Variant {
                     self.name
                 )
             })
+    }
+
+    pub fn flag(&self, name: &str) -> bool {
+        match self.params.get(name) {
+            Some(ParamValue::Bool(b)) => *b,
+            _ => panic!(
+                "validated variant {} lacks bool parameter {name}",
+                self.name
+            ),
+        }
     }
 
     pub fn choice(&self, name: &str) -> &str {

@@ -30,7 +30,7 @@ fn render(
     v: &Variant,
 ) -> frames::Rendered {
     let mut scene = SceneGpu::new(&gpu.device, s).unwrap();
-    let mut t = technique::build(gpu, v, s.width, s.height).unwrap();
+    let mut t = technique::build(gpu, v, s.width, s.height, s.scene.has_dynamic_objects()).unwrap();
     frames::render(gpu, &mut scene, s, t.as_mut(), true, true, &mut || {}).unwrap()
 }
 

@@ -64,10 +64,23 @@ pub struct View {
     /// Render target size (the aspect ratio comes from the scenario's resolution).
     pub width: u32,
     pub height: u32,
-    /// Offset in pixels of the render target, applied through the projection.
-    pub jitter_px: Vec2,
+    /// Viewport remap after projection, `ndc' = ndc * scale + offset`: the identity for a target
+    /// showing the whole frame; techniques use it to jitter and to render parts of the frame.
+    pub ndc_offset: Vec2,
+    pub ndc_scale: Vec2,
     /// Multiplies screen-space derivatives of the ground pattern (1 at native resolution).
     pub gradient_scale: f32,
+}
+
+/// The scene shader's pipelines.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum ScenePipeline {
+    /// `fs_main`, shaded once per pixel.
+    Forward { samples: u32 },
+    /// `fs_main_sample`, shaded once per sample (checkerboard's 2x MSAA sampling).
+    PerSample { samples: u32 },
+    /// `fs_velocity`: screen motion in pixels, z = 1 on dynamic objects.
+    Velocity,
 }
 
 /// A draw: one object's index range.
@@ -87,7 +100,7 @@ pub struct SceneGpu {
     bind_group: wgpu::BindGroup,
     layout: wgpu::PipelineLayout,
     module: wgpu::ShaderModule,
-    pipelines: HashMap<u32, wgpu::RenderPipeline>,
+    pipelines: HashMap<ScenePipeline, wgpu::RenderPipeline>,
     pub triangles: usize,
     /// Bytes of geometry and uniform buffers, shared by every variant.
     pub buffer_bytes: u64,
@@ -220,16 +233,30 @@ impl SceneGpu {
         })
     }
 
-    /// The forward pipeline for `samples` MSAA samples, built on first use.
-    pub fn pipeline(&mut self, device: &wgpu::Device, samples: u32) -> &wgpu::RenderPipeline {
+    /// A pipeline of the scene shader, built on first use.
+    pub fn pipeline(
+        &mut self,
+        device: &wgpu::Device,
+        kind: ScenePipeline,
+    ) -> &wgpu::RenderPipeline {
         let (layout, module) = (&self.layout, &self.module);
-        self.pipelines.entry(samples).or_insert_with(|| {
+        self.pipelines.entry(kind).or_insert_with(|| {
+            let (vs, fs, samples, label) = match kind {
+                ScenePipeline::Forward { samples } => ("vs_main", "fs_main", samples, "scene"),
+                ScenePipeline::PerSample { samples } => (
+                    "vs_main_sample",
+                    "fs_main_sample",
+                    samples,
+                    "scene per sample",
+                ),
+                ScenePipeline::Velocity => ("vs_velocity", "fs_velocity", 1, "velocity"),
+            };
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("scene"),
+                label: Some(label),
                 layout: Some(layout),
                 vertex: wgpu::VertexState {
                     module,
-                    entry_point: Some("vs_main"),
+                    entry_point: Some(vs),
                     compilation_options: Default::default(),
                     buffers: &[Some(wgpu::VertexBufferLayout {
                         array_stride: std::mem::size_of::<Vertex>() as u64,
@@ -239,7 +266,7 @@ impl SceneGpu {
                 },
                 fragment: Some(wgpu::FragmentState {
                     module,
-                    entry_point: Some("fs_main"),
+                    entry_point: Some(fs),
                     compilation_options: Default::default(),
                     targets: &[Some(COLOR_FORMAT.into())],
                 }),
@@ -262,6 +289,28 @@ impl SceneGpu {
                 cache: None,
             })
         })
+    }
+
+    /// Current and previous view-projection, both relative to the current camera position (f64).
+    pub fn view_projections(&self, time: f64, prev_time: f64) -> (DMat4, DMat4) {
+        let s = &self.scenario;
+        let pose = s.camera.pose_at(time);
+        let prev = s.camera.pose_at(prev_time);
+        let aspect = s.width as f64 / s.height as f64;
+        let vp = |p: &CameraPose| -> DMat4 {
+            let proj = reversed_z_projection(
+                p.fov_degrees as f64,
+                aspect,
+                s.camera.near as f64,
+                s.camera.far as f64,
+            );
+            proj * rotation_view(p)
+        };
+        let eye = pose.position.as_dvec3();
+        (
+            vp(&pose),
+            vp(&prev) * DMat4::from_translation(eye - prev.position.as_dvec3()),
+        )
     }
 
     /// Writes object matrices for `time` relative to the camera at `time`. Call once per frame.
@@ -291,7 +340,10 @@ impl SceneGpu {
                 model: rel(o.model_at(time)),
                 prev_model: rel(o.model_at(prev_time)),
                 color: o.color.extend(o.specular).into(),
-                emissive: o.emissive.extend(0.0).into(),
+                emissive: o
+                    .emissive
+                    .extend(if o.animation.is_some() { 2.0 } else { 0.0 })
+                    .into(),
             });
         }
         if !objects.is_empty() {
@@ -304,26 +356,14 @@ impl SceneGpu {
         assert!((slot as u64) < VIEW_SLOTS, "view slot {slot} out of range");
         let s = &self.scenario;
         let pose = s.camera.pose_at(view.time);
-        let prev = s.camera.pose_at(view.prev_time);
-        let aspect = s.width as f64 / s.height as f64;
-        let vp = |p: &CameraPose| -> DMat4 {
-            let proj = reversed_z_projection(
-                p.fov_degrees as f64,
-                aspect,
-                s.camera.near as f64,
-                s.camera.far as f64,
-            );
-            proj * rotation_view(p)
-        };
-        // Jitter in NDC: one pixel is 2 / size.
         let jitter = Vec4::new(
-            2.0 * view.jitter_px.x / view.width as f32,
-            -2.0 * view.jitter_px.y / view.height as f32,
-            0.0,
-            0.0,
+            view.ndc_offset.x,
+            view.ndc_offset.y,
+            view.ndc_scale.x,
+            view.ndc_scale.y,
         );
         let eye = pose.position.as_dvec3();
-        let prev_vp = vp(&prev) * DMat4::from_translation(eye - prev.position.as_dvec3());
+        let (cur_vp, prev_vp) = self.view_projections(view.time, view.prev_time);
         let (ground, filter, checker) = match &s.scene.ground {
             Some(g) => (
                 Some(g),
@@ -368,7 +408,7 @@ impl SceneGpu {
             };
         }
         let frame = GpuFrame {
-            view_proj: vp(&pose).as_mat4().to_cols_array_2d(),
+            view_proj: cur_vp.as_mat4().to_cols_array_2d(),
             prev_view_proj: prev_vp.as_mat4().to_cols_array_2d(),
             jitter: jitter.into(),
             camera_mod,
@@ -391,7 +431,12 @@ impl SceneGpu {
             ground_b: ground
                 .map(|g| g.colors[1].extend(1.0).into())
                 .unwrap_or([0.0; 4]),
-            counts: [s.scene.lights.len().min(MAX_LIGHTS) as u32, 0, 0, 0],
+            counts: [
+                s.scene.lights.len().min(MAX_LIGHTS) as u32,
+                s.width,
+                s.height,
+                0,
+            ],
             lights,
         };
         queue.write_buffer(
@@ -399,6 +444,11 @@ impl SceneGpu {
             slot as u64 * SLOT_STRIDE,
             bytemuck::bytes_of(&frame),
         );
+    }
+
+    /// The camera's near and far planes.
+    pub fn near_far(&self) -> (f32, f32) {
+        (self.scenario.camera.near, self.scenario.camera.far)
     }
 
     /// Clear colour of the scene pass (linear radiance).

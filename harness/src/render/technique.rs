@@ -11,7 +11,7 @@ use std::collections::HashMap;
 use glam::Vec2;
 
 use super::graph::{Graph, PassKind, Plan, TextureDesc};
-use super::scene::{SceneGpu, View, COLOR_FORMAT, DEPTH_FORMAT};
+use super::scene::{SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FORMAT};
 use super::timers::Timers;
 use crate::gpu::Gpu;
 use crate::technique::{TechniqueKind, Variant};
@@ -23,6 +23,8 @@ pub struct FrameInfo {
     pub index: u32,
     pub time: f64,
     pub prev_time: f64,
+    /// False on the first frame and after a camera cut: techniques must not read history.
+    pub history_valid: bool,
 }
 
 /// Why a variant cannot run on this adapter: reported as status `skipped`.
@@ -44,11 +46,13 @@ pub trait Technique {
 }
 
 /// Builds the GPU side of a variant at `width` x `height`.
+/// `dynamic_scene`: whether anything moves by itself (techniques that need motion add passes).
 pub fn build(
     gpu: &Gpu,
     variant: &Variant,
     width: u32,
     height: u32,
+    dynamic_scene: bool,
 ) -> Result<Box<dyn Technique>, Unsupported> {
     check_size(gpu, width, height)?;
     Ok(match variant.technique {
@@ -72,6 +76,13 @@ pub fn build(
                 },
             ))
         }
+        TechniqueKind::Checkerboard => Box::new(super::checkerboard::Checkerboard::new(
+            gpu,
+            variant,
+            width,
+            height,
+            dynamic_scene,
+        )?),
     })
 }
 
@@ -244,7 +255,8 @@ impl Technique for Forward {
             prev_time: frame.prev_time,
             width: self.width,
             height: self.height,
-            jitter_px: Vec2::ZERO,
+            ndc_offset: Vec2::ZERO,
+            ndc_scale: Vec2::ONE,
             gradient_scale: 1.0,
         };
         scene.write_view(&gpu.queue, 0, &view);
@@ -253,7 +265,17 @@ impl Technique for Forward {
             &self.textures[pass.writes[0]],
             &self.textures[pass.writes[1]],
         );
-        record_scene_pass(gpu, scene, timers, encoder, "scene", color, depth, 0);
+        record_scene_pass(
+            gpu,
+            scene,
+            timers,
+            encoder,
+            "scene",
+            color,
+            depth,
+            0,
+            ScenePipeline::Forward { samples: 1 },
+        );
         if let Some((pipeline, bind_group, [w, h])) = &self.resample {
             let name = self.plan.passes[1].name;
             let q = timers.begin(name, encoder);
@@ -278,11 +300,13 @@ pub fn allocate(device: &wgpu::Device, plan: &Plan) -> HashMap<&'static str, wgp
         .iter()
         .map(|r| {
             let d = &r.desc;
-            let mut usage = wgpu::TextureUsages::RENDER_ATTACHMENT
-                | wgpu::TextureUsages::TEXTURE_BINDING
-                | wgpu::TextureUsages::COPY_SRC;
-            if !d.format.is_depth_stencil_format() && d.samples == 1 {
-                usage |= wgpu::TextureUsages::STORAGE_BINDING;
+            let mut usage =
+                wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
+            if d.samples == 1 {
+                usage |= wgpu::TextureUsages::COPY_SRC;
+                if !d.format.is_depth_stencil_format() {
+                    usage |= wgpu::TextureUsages::STORAGE_BINDING;
+                }
             }
             let t = device.create_texture(&wgpu::TextureDescriptor {
                 label: Some(r.name),
@@ -314,10 +338,10 @@ pub fn record_scene_pass(
     color: &wgpu::Texture,
     depth: &wgpu::Texture,
     slot: u32,
+    kind: ScenePipeline,
 ) {
-    let samples = color.sample_count();
     let clear = scene.clear_color();
-    let pipeline = scene.pipeline(&gpu.device, samples).clone();
+    let pipeline = scene.pipeline(&gpu.device, kind).clone();
     let color_view = color.create_view(&Default::default());
     let depth_view = depth.create_view(&Default::default());
     let q = timers.begin(name, encoder);
@@ -451,11 +475,40 @@ fn downsample_pipeline(
     (pipeline, bind_group, size)
 }
 
-/// Every WGSL file the harness ships, for validation without a GPU.
-pub fn shader_sources() -> [(&'static str, &'static str); 3] {
-    [
-        ("scene.wgsl", super::scene::SCENE_WGSL),
-        ("upscale.wgsl", UPSCALE_WGSL),
-        ("downsample.wgsl", DOWNSAMPLE_WGSL),
+/// Every WGSL module the harness builds, composed as the GPU sees it (name, source), and the
+/// files under `shaders/` they are made of; for validation without a GPU.
+pub fn shader_sources() -> Vec<(String, String, Vec<&'static str>)> {
+    use super::checkerboard::{MSAA2X_WGSL, PROBE_WGSL, RESOLVE_WGSL, TWO_PASS_WGSL};
+    vec![
+        (
+            "scene.wgsl".into(),
+            super::scene::SCENE_WGSL.into(),
+            vec!["scene.wgsl"],
+        ),
+        (
+            "upscale.wgsl".into(),
+            UPSCALE_WGSL.into(),
+            vec!["upscale.wgsl"],
+        ),
+        (
+            "downsample.wgsl".into(),
+            DOWNSAMPLE_WGSL.into(),
+            vec!["downsample.wgsl"],
+        ),
+        (
+            "sample_positions.wgsl".into(),
+            PROBE_WGSL.into(),
+            vec!["sample_positions.wgsl"],
+        ),
+        (
+            "checkerboard two-pass".into(),
+            format!("{TWO_PASS_WGSL}\n{RESOLVE_WGSL}"),
+            vec!["checkerboard_two_pass.wgsl", "checkerboard_resolve.wgsl"],
+        ),
+        (
+            "checkerboard msaa2x".into(),
+            format!("{MSAA2X_WGSL}\n{RESOLVE_WGSL}"),
+            vec!["checkerboard_msaa2x.wgsl", "checkerboard_resolve.wgsl"],
+        ),
     ]
 }

@@ -64,6 +64,8 @@ fn submit_frame(
         .create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("frame"),
         });
+    let cam = &scenario.camera;
+    let history_valid = index > 0 && cam.pose_at(time).segment == cam.pose_at(prev_time).segment;
     technique.record(
         gpu,
         scene,
@@ -73,6 +75,7 @@ fn submit_frame(
             index,
             time,
             prev_time,
+            history_valid,
         },
     );
     timers.resolve(&mut encoder);

@@ -228,7 +228,13 @@ fn render_variant(
 ) -> VariantOutcome {
     let validation = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
     let oom = gpu.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
-    let built = technique::build(gpu, variant, scenario.width, scenario.height);
+    let built = technique::build(
+        gpu,
+        variant,
+        scenario.width,
+        scenario.height,
+        scenario.scene.has_dynamic_objects(),
+    );
     let result = match built {
         Err(u) => Ok(Err(u)),
         Ok(mut t) => {
@@ -293,7 +299,7 @@ fn render_reference(
                 technique: TechniqueKind::Native,
                 params: BTreeMap::new(),
             };
-            technique::build(gpu, &native, scenario.width, scenario.height)
+            technique::build(gpu, &native, scenario.width, scenario.height, false)
         }
     };
     let result = match built {

@@ -1,0 +1,619 @@
+//! Technique `checkerboard`: Intel's checkerboard rendering with mosaiikki's refinements.
+//!
+//! Each frame shades a quarter-resolution frame with two samples per pixel on the full-resolution
+//! pixel centres of one checkerboard parity (even frames quadrants {0 = TL, 3 = BR}, odd frames
+//! {1 = TR, 2 = BL}, the odd frames shifted one full-resolution pixel right through the
+//! projection); a compute pass rebuilds every full-resolution pixel from this frame's samples and
+//! the previous frame's (`shaders/checkerboard_resolve.wgsl`, CPU model in
+//! `checkerboard_model.rs`). Sampling is either a 2x MSAA target shaded per sample (Intel,
+//! mosaiikki) or two jittered single-sample renders (same samples on any adapter).
+//!
+//! The quarter-resolution targets are one pixel wider than `ceil(W / 2)`, so that odd frames also
+//! shade the top-right quadrant of the last block column: every full-resolution pixel is covered
+//! every two frames, with no border. The projection is remapped so that full-resolution pixel
+//! centres land exactly on the samples (`View::ndc_scale` / `ndc_offset`).
+
+use std::collections::HashMap;
+
+use glam::Vec2;
+
+use super::graph::{Graph, PassKind, Plan, TextureDesc};
+use super::scene::{SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FORMAT};
+use super::technique::{allocate, record_scene_pass, FrameInfo, Technique, Unsupported};
+use super::timers::Timers;
+use crate::gpu::Gpu;
+use crate::technique::Variant;
+
+pub static RESOLVE_WGSL: &str = include_str!("../../../shaders/checkerboard_resolve.wgsl");
+pub static TWO_PASS_WGSL: &str = include_str!("../../../shaders/checkerboard_two_pass.wgsl");
+pub static MSAA2X_WGSL: &str = include_str!("../../../shaders/checkerboard_msaa2x.wgsl");
+pub static PROBE_WGSL: &str = include_str!("../../../shaders/sample_positions.wgsl");
+
+/// The standard 2x positions (Vulkan/D3D, origin top-left): sample 0, sample 1.
+pub const STANDARD_2X: [[f32; 2]; 2] = [[0.75, 0.75], [0.25, 0.25]];
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Sampling {
+    TwoPass,
+    Msaa2x,
+}
+
+/// Reconstruction options, as the resolve shader's `mode` fields encode them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Options {
+    pub aso: bool,
+    /// 0 plain, 1 tonemapped, 2 differential.
+    pub fill: u32,
+    /// 0 none, 1 min-max, 2 min-max with depth confidence.
+    pub clamp: u32,
+    pub depth_tolerance: f32,
+}
+
+impl Options {
+    pub fn from_variant(v: &Variant) -> Options {
+        Options {
+            aso: v.choice("occlusion") == "aso",
+            fill: match v.choice("fill") {
+                "plain" => 0,
+                "tonemapped" => 1,
+                _ => 2,
+            },
+            clamp: match v.choice("clamp") {
+                "min-max" => 1,
+                "min-max-confidence" => 2,
+                _ => 0,
+            },
+            depth_tolerance: v.float("depth_tolerance") as f32,
+        }
+    }
+}
+
+/// Quarter-resolution texture size for a full resolution: one column wider than half (see the
+/// module doc).
+pub fn quarter_size(width: u32, height: u32) -> (u32, u32) {
+    (width.div_ceil(2) + 1, height.div_ceil(2))
+}
+
+/// NDC remap (scale, offset) of a quarter-resolution render for frame `parity`, with `jitter` in
+/// quarter-resolution pixels (content shift; y down).
+pub fn quarter_view(width: u32, height: u32, parity: u32, jitter: Vec2) -> (Vec2, Vec2) {
+    let (qw, qh) = quarter_size(width, height);
+    let sx = width as f32 / (2.0 * qw as f32);
+    let sy = height as f32 / (2.0 * qh as f32);
+    let offset = Vec2::new(
+        sx - 1.0 + parity as f32 / qw as f32 + 2.0 * jitter.x / qw as f32,
+        1.0 - sy - 2.0 * jitter.y / qh as f32,
+    );
+    (Vec2::new(sx, sy), offset)
+}
+
+/// Content shift that puts a single-sample pixel centre on sample `s`'s standard position.
+pub fn two_pass_jitter(sample: usize) -> Vec2 {
+    Vec2::new(0.5 - STANDARD_2X[sample][0], 0.5 - STANDARD_2X[sample][1])
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct ResolveParams {
+    reproject: [[f32; 4]; 4],
+    size: [u32; 4],
+    mode: [u32; 4],
+    mode2: [u32; 4],
+    depth: [f32; 4],
+}
+
+pub struct Checkerboard {
+    plan: Plan,
+    textures: HashMap<&'static str, wgpu::Texture>,
+    sampling: Sampling,
+    gradient_scale: f32,
+    options: Options,
+    width: u32,
+    height: u32,
+    pipeline: wgpu::ComputePipeline,
+    params: wgpu::Buffer,
+    /// Bind groups by the parity of the current frame.
+    bind_groups: [wgpu::BindGroup; 2],
+    _dummy_velocity: Option<wgpu::Texture>,
+}
+
+/// Resource names per sampling: (colour, depth) per parity and sample.
+fn sample_targets(sampling: Sampling) -> [[(&'static str, &'static str); 2]; 2] {
+    match sampling {
+        // [parity][sample]
+        Sampling::TwoPass => [
+            [
+                ("color_even_s0", "depth_even_s0"),
+                ("color_even_s1", "depth_even_s1"),
+            ],
+            [
+                ("color_odd_s0", "depth_odd_s0"),
+                ("color_odd_s1", "depth_odd_s1"),
+            ],
+        ],
+        Sampling::Msaa2x => [
+            [("color_even", "depth_even"); 2],
+            [("color_odd", "depth_odd"); 2],
+        ],
+    }
+}
+
+impl Checkerboard {
+    pub fn new(
+        gpu: &Gpu,
+        variant: &Variant,
+        width: u32,
+        height: u32,
+        dynamic_scene: bool,
+    ) -> Result<Checkerboard, Unsupported> {
+        let sampling = match variant.choice("sampling") {
+            "msaa2x" => Sampling::Msaa2x,
+            _ => Sampling::TwoPass,
+        };
+        if sampling == Sampling::Msaa2x {
+            check_msaa2x(gpu)?;
+        }
+        let (qw, qh) = quarter_size(width, height);
+        let samples = if sampling == Sampling::Msaa2x { 2 } else { 1 };
+        let q = |format| TextureDesc {
+            format,
+            width: qw,
+            height: qh,
+            samples,
+        };
+        let full = |format| TextureDesc {
+            format,
+            width,
+            height,
+            samples: 1,
+        };
+        let mut g = Graph::default();
+        let targets = sample_targets(sampling);
+        let mut reads: Vec<&'static str> = Vec::new();
+        let passes: &[(&'static str, usize)] = match sampling {
+            Sampling::TwoPass => &[("scene_sample0", 0), ("scene_sample1", 1)],
+            Sampling::Msaa2x => &[("scene", 0)],
+        };
+        for &(name, s) in passes {
+            let writes = [
+                targets[0][s].0,
+                targets[0][s].1,
+                targets[1][s].0,
+                targets[1][s].1,
+            ];
+            for (i, w) in writes.iter().enumerate() {
+                g.resource(
+                    w,
+                    q(if i % 2 == 0 {
+                        COLOR_FORMAT
+                    } else {
+                        DEPTH_FORMAT
+                    }),
+                );
+            }
+            g.pass(name, PassKind::Render, &[], &writes);
+            reads.extend(writes);
+        }
+        g.resource("velocity", full(COLOR_FORMAT))
+            .resource("velocity_depth", full(DEPTH_FORMAT));
+        g.pass(
+            "velocity",
+            PassKind::Render,
+            &[],
+            &["velocity", "velocity_depth"],
+        );
+        // Dynamic objects need the velocity buffer; without them, nothing reads it and it is culled.
+        let use_velocity = variant.flag("velocity") && dynamic_scene;
+        if use_velocity {
+            reads.push("velocity");
+        }
+        g.resource("color", full(COLOR_FORMAT));
+        g.pass("reconstruct", PassKind::Compute, &reads, &["color"])
+            .output("color");
+        let plan = g.plan().expect("built-in graphs are well formed");
+        let textures = allocate(&gpu.device, &plan);
+
+        let device = &gpu.device;
+        let prelude = if sampling == Sampling::Msaa2x {
+            MSAA2X_WGSL
+        } else {
+            TWO_PASS_WGSL
+        };
+        let source = format!("{prelude}\n{RESOLVE_WGSL}");
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("checkerboard_resolve.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(source.into()),
+        });
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("reconstruct"),
+            layout: None,
+            module: &module,
+            entry_point: Some("main"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        let params = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("reconstruct params"),
+            size: std::mem::size_of::<ResolveParams>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let dummy = (!use_velocity).then(|| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("no velocity"),
+                size: wgpu::Extent3d {
+                    width: 1,
+                    height: 1,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: COLOR_FORMAT,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            })
+        });
+        let velocity_view = match &dummy {
+            Some(t) => t.create_view(&Default::default()),
+            None => textures["velocity"].create_view(&Default::default()),
+        };
+        let output_view = textures["color"].create_view(&Default::default());
+        let layout = pipeline.get_bind_group_layout(0);
+        let bind_group = |parity: usize| {
+            let view = |name: &str| textures[name].create_view(&Default::default());
+            let (cur, prev) = (targets[parity], targets[1 - parity]);
+            let mut views: Vec<(u32, wgpu::TextureView)> = match sampling {
+                Sampling::TwoPass => vec![
+                    (1, view(cur[0].0)),
+                    (2, view(cur[1].0)),
+                    (3, view(prev[0].0)),
+                    (4, view(prev[1].0)),
+                    (5, view(cur[0].1)),
+                    (6, view(cur[1].1)),
+                    (7, view(prev[0].1)),
+                    (8, view(prev[1].1)),
+                ],
+                Sampling::Msaa2x => vec![
+                    (1, view(cur[0].0)),
+                    (3, view(prev[0].0)),
+                    (5, view(cur[0].1)),
+                    (7, view(prev[0].1)),
+                ],
+            };
+            views.push((9, velocity_view.clone()));
+            views.push((10, output_view.clone()));
+            let mut entries: Vec<wgpu::BindGroupEntry> = vec![wgpu::BindGroupEntry {
+                binding: 0,
+                resource: params.as_entire_binding(),
+            }];
+            for (binding, v) in &views {
+                entries.push(wgpu::BindGroupEntry {
+                    binding: *binding,
+                    resource: wgpu::BindingResource::TextureView(v),
+                });
+            }
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("reconstruct"),
+                layout: &layout,
+                entries: &entries,
+            })
+        };
+        let bind_groups = [bind_group(0), bind_group(1)];
+        Ok(Checkerboard {
+            plan,
+            textures,
+            sampling,
+            gradient_scale: variant.float("gradient_scale") as f32,
+            options: Options::from_variant(variant),
+            width,
+            height,
+            pipeline,
+            params,
+            bind_groups,
+            _dummy_velocity: dummy,
+        })
+    }
+}
+
+impl Technique for Checkerboard {
+    fn plan(&self) -> &Plan {
+        &self.plan
+    }
+
+    fn output(&self) -> &wgpu::Texture {
+        &self.textures["color"]
+    }
+
+    fn record(
+        &mut self,
+        gpu: &Gpu,
+        scene: &mut SceneGpu,
+        timers: &Timers,
+        encoder: &mut wgpu::CommandEncoder,
+        frame: FrameInfo,
+    ) {
+        let parity = (frame.index & 1) as usize;
+        let targets = sample_targets(self.sampling);
+        let (qw, qh) = quarter_size(self.width, self.height);
+        let base = View {
+            time: frame.time,
+            prev_time: frame.prev_time,
+            width: qw,
+            height: qh,
+            ndc_offset: Vec2::ZERO,
+            ndc_scale: Vec2::ONE,
+            gradient_scale: self.gradient_scale,
+        };
+        match self.sampling {
+            Sampling::TwoPass => {
+                for (s, name) in [(0usize, "scene_sample0"), (1, "scene_sample1")] {
+                    let (scale, offset) =
+                        quarter_view(self.width, self.height, parity as u32, two_pass_jitter(s));
+                    scene.write_view(
+                        &gpu.queue,
+                        s as u32,
+                        &View {
+                            ndc_scale: scale,
+                            ndc_offset: offset,
+                            ..base
+                        },
+                    );
+                    let (c, d) = targets[parity][s];
+                    record_scene_pass(
+                        gpu,
+                        scene,
+                        timers,
+                        encoder,
+                        name,
+                        &self.textures[c],
+                        &self.textures[d],
+                        s as u32,
+                        ScenePipeline::Forward { samples: 1 },
+                    );
+                }
+            }
+            Sampling::Msaa2x => {
+                let (scale, offset) =
+                    quarter_view(self.width, self.height, parity as u32, Vec2::ZERO);
+                scene.write_view(
+                    &gpu.queue,
+                    0,
+                    &View {
+                        ndc_scale: scale,
+                        ndc_offset: offset,
+                        ..base
+                    },
+                );
+                let (c, d) = targets[parity][0];
+                record_scene_pass(
+                    gpu,
+                    scene,
+                    timers,
+                    encoder,
+                    "scene",
+                    &self.textures[c],
+                    &self.textures[d],
+                    0,
+                    ScenePipeline::PerSample { samples: 2 },
+                );
+            }
+        }
+        let use_velocity = self.plan.runs("velocity");
+        if use_velocity {
+            let full = View {
+                width: self.width,
+                height: self.height,
+                gradient_scale: 1.0,
+                ..base
+            };
+            scene.write_view(&gpu.queue, 2, &full);
+            let (c, d) = (&self.textures["velocity"], &self.textures["velocity_depth"]);
+            record_scene_pass(
+                gpu,
+                scene,
+                timers,
+                encoder,
+                "velocity",
+                c,
+                d,
+                2,
+                ScenePipeline::Velocity,
+            );
+        }
+        let (cur, prev) = scene.view_projections(frame.time, frame.prev_time);
+        let near_far = scene.near_far();
+        let o = self.options;
+        let params = ResolveParams {
+            reproject: (cur * prev.inverse()).as_mat4().to_cols_array_2d(),
+            size: [self.width, self.height, qw, qh],
+            mode: [
+                parity as u32,
+                u32::from(!frame.history_valid),
+                u32::from(o.aso),
+                o.fill,
+            ],
+            mode2: [o.clamp, u32::from(use_velocity), 0, 0],
+            depth: [o.depth_tolerance, near_far.0, near_far.1, 0.0],
+        };
+        gpu.queue
+            .write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+        let q = timers.begin("reconstruct", encoder);
+        {
+            let mut cp = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("reconstruct"),
+                timestamp_writes: q.compute_pass_timestamp_writes(),
+            });
+            cp.set_pipeline(&self.pipeline);
+            cp.set_bind_group(0, &self.bind_groups[parity], &[]);
+            cp.dispatch_workgroups(self.width.div_ceil(8), self.height.div_ceil(8), 1);
+        }
+        timers.end(encoder, q);
+    }
+}
+
+/// Skips `msaa2x` unless the adapter renders 2x MSAA to the formats used at the standard sample
+/// positions (probed once per device).
+fn check_msaa2x(gpu: &Gpu) -> Result<(), Unsupported> {
+    for (format, name) in [
+        (COLOR_FORMAT, "rgba16float"),
+        (DEPTH_FORMAT, "depth32float"),
+    ] {
+        let counts = gpu
+            .adapter
+            .get_texture_format_features(format)
+            .flags
+            .supported_sample_counts();
+        let has_feature = gpu.has(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES);
+        if !has_feature || !counts.contains(&2) {
+            let list: Vec<String> = counts.iter().map(|c| format!("{c}x")).collect();
+            return Err(Unsupported(format!(
+                "needs MULTISAMPLE_X2 for {name} (the adapter has {})",
+                list.join(", ")
+            )));
+        }
+    }
+    let positions = gpu
+        .msaa2x_positions
+        .get_or_init(|| probe_sample_positions(gpu));
+    match positions {
+        Ok(p) if close(p, &STANDARD_2X) => Ok(()),
+        Ok(p) => Err(Unsupported(format!(
+            "2x MSAA sample positions are {p:?}, not the standard {STANDARD_2X:?}"
+        ))),
+        Err(e) => Err(Unsupported(format!(
+            "cannot probe 2x MSAA sample positions: {e}"
+        ))),
+    }
+}
+
+fn close(a: &[[f32; 2]; 2], b: &[[f32; 2]; 2]) -> bool {
+    a.iter()
+        .flatten()
+        .zip(b.iter().flatten())
+        .all(|(x, y)| (x - y).abs() < 1e-3)
+}
+
+/// Renders a 1x1 2x MSAA target whose samples record their own positions, and reads them back.
+pub fn probe_sample_positions(gpu: &Gpu) -> Result<[[f32; 2]; 2], String> {
+    let device = &gpu.device;
+    let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("sample_positions.wgsl"),
+        source: wgpu::ShaderSource::Wgsl(PROBE_WGSL.into()),
+    });
+    let target = device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("sample probe"),
+        size: wgpu::Extent3d {
+            width: 1,
+            height: 1,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 2,
+        dimension: wgpu::TextureDimension::D2,
+        format: COLOR_FORMAT,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+        view_formats: &[],
+    });
+    let render = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some("sample probe"),
+        layout: None,
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some("vs_main"),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        fragment: Some(wgpu::FragmentState {
+            module: &module,
+            entry_point: Some("fs_main"),
+            compilation_options: Default::default(),
+            targets: &[Some(COLOR_FORMAT.into())],
+        }),
+        primitive: Default::default(),
+        depth_stencil: None,
+        multisample: wgpu::MultisampleState {
+            count: 2,
+            ..Default::default()
+        },
+        multiview_mask: None,
+        cache: None,
+    });
+    let copy = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some("sample probe copy"),
+        layout: None,
+        module: &module,
+        entry_point: Some("copy_samples"),
+        compilation_options: Default::default(),
+        cache: None,
+    });
+    let storage = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("sample positions"),
+        size: 32,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    let readback = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("sample positions readback"),
+        size: 32,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let view = target.create_view(&Default::default());
+    let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("sample probe"),
+        layout: &copy.get_bind_group_layout(0),
+        entries: &[
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::TextureView(&view),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: storage.as_entire_binding(),
+            },
+        ],
+    });
+    let mut encoder = device.create_command_encoder(&Default::default());
+    {
+        let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("sample probe"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        rp.set_pipeline(&render);
+        rp.draw(0..3, 0..1);
+    }
+    {
+        let mut cp = encoder.begin_compute_pass(&Default::default());
+        cp.set_pipeline(&copy);
+        cp.set_bind_group(0, &bind_group, &[]);
+        cp.dispatch_workgroups(1, 1, 1);
+    }
+    encoder.copy_buffer_to_buffer(&storage, 0, &readback, 0, 32);
+    gpu.queue.submit([encoder.finish()]);
+    if let Some(e) = pollster::block_on(scope.pop()) {
+        return Err(e.to_string());
+    }
+    let slice = readback.slice(..);
+    slice.map_async(wgpu::MapMode::Read, |_| {});
+    let _ = device.poll(wgpu::PollType::Wait {
+        submission_index: None,
+        timeout: None,
+    });
+    let data = slice.get_mapped_range().map_err(|e| format!("{e:?}"))?;
+    let v: &[f32] = bytemuck::cast_slice(&data);
+    Ok([[v[0], v[1]], [v[4], v[5]]])
+}

@@ -1,0 +1,470 @@
+//! CPU model of the checkerboard reconstruction (`shaders/checkerboard_resolve.wgsl`), step for
+//! step, in f32: the oracle the GPU output is compared with in tests.
+//!
+//! Not used when rendering. Inputs are the quarter-resolution samples of the current and previous
+//! frame (as read back from the two-pass targets), the velocity buffer, and the parameters the
+//! shader receives.
+
+use glam::{Mat4, Vec2, Vec3, Vec4};
+
+use super::checkerboard::Options;
+
+/// One frame's quarter-resolution samples: colour and reversed-Z depth per sample index.
+#[derive(Clone, Debug)]
+pub struct Samples {
+    pub width: u32,
+    pub height: u32,
+    pub color: [Vec<Vec4>; 2],
+    pub depth: [Vec<f32>; 2],
+}
+
+/// Everything the shader reads.
+pub struct Inputs<'a> {
+    pub width: u32,
+    pub height: u32,
+    pub parity: u32,
+    pub reset: bool,
+    pub options: Options,
+    pub near: f32,
+    pub far: f32,
+    /// Previous frame's NDC to current clip space.
+    pub reproject: Mat4,
+    pub current: &'a Samples,
+    pub previous: &'a Samples,
+    /// Full-resolution velocity (pixels, y down; z = 1 on dynamic objects), if recorded.
+    pub velocity: Option<&'a [Vec4]>,
+}
+
+fn is_current(inp: &Inputs, q: u32) -> bool {
+    let even_quadrant = q == 0 || q == 3;
+    even_quadrant == (inp.parity == 0)
+}
+
+fn quadrant(x: i32, y: i32) -> u32 {
+    (x & 1) as u32 + 2 * (y & 1) as u32
+}
+
+/// Intel's readFromQuadrant: (quarter pixel, sample) of quadrant q of block (bx, by).
+fn quadrant_source(bx: i32, by: i32, q: u32) -> (i32, i32, usize) {
+    match q {
+        0 => (bx, by, 1),
+        1 => (bx + 1, by, 1),
+        _ => (bx, by, 0),
+    }
+}
+
+fn samples_for<'a>(inp: &'a Inputs, q: u32) -> &'a Samples {
+    if is_current(inp, q) {
+        inp.current
+    } else {
+        inp.previous
+    }
+}
+
+fn color_at(inp: &Inputs, x: i32, y: i32) -> Vec4 {
+    let q = quadrant(x, y);
+    let (sx, sy, s) = quadrant_source(x >> 1, y >> 1, q);
+    let set = samples_for(inp, q);
+    set.color[s][(sy as u32 * set.width + sx as u32) as usize]
+}
+
+fn depth_at(inp: &Inputs, x: i32, y: i32) -> f32 {
+    let q = quadrant(x, y);
+    let (sx, sy, s) = quadrant_source(x >> 1, y >> 1, q);
+    let set = samples_for(inp, q);
+    set.depth[s][(sy as u32 * set.width + sx as u32) as usize]
+}
+
+fn linear_depth(inp: &Inputs, d: f32) -> f32 {
+    inp.near * inp.far / (d * (inp.far - inp.near) + inp.near)
+}
+
+fn tonemap(c: Vec3) -> Vec3 {
+    c / (1.0 + c.max_element())
+}
+
+fn untonemap(c: Vec3) -> Vec3 {
+    c / (1.0 - c.max_element()).max(1e-6)
+}
+
+struct Neighbourhood {
+    c: [Vec3; 4],
+    valid: [bool; 4],
+    depth_sum: f32,
+    count: f32,
+    lo: Vec3,
+    hi: Vec3,
+}
+
+fn neighbourhood(inp: &Inputs, x: i32, y: i32, tonemapped: bool) -> Neighbourhood {
+    let mut n = Neighbourhood {
+        c: [Vec3::ZERO; 4],
+        valid: [false; 4],
+        depth_sum: 0.0,
+        count: 0.0,
+        lo: Vec3::splat(3.0e38),
+        hi: Vec3::splat(-3.0e38),
+    };
+    for (i, (dx, dy)) in [(0, -1), (0, 1), (-1, 0), (1, 0)].into_iter().enumerate() {
+        let (px, py) = (x + dx, y + dy);
+        let inside = px >= 0 && py >= 0 && px < inp.width as i32 && py < inp.height as i32;
+        n.valid[i] = inside;
+        if inside {
+            let mut c = color_at(inp, px, py).truncate();
+            if tonemapped {
+                c = tonemap(c);
+            }
+            n.c[i] = c;
+            n.lo = n.lo.min(c);
+            n.hi = n.hi.max(c);
+            n.depth_sum += linear_depth(inp, depth_at(inp, px, py));
+            n.count += 1.0;
+        }
+    }
+    n
+}
+
+fn fill(inp: &Inputs, n: &Neighbourhood) -> Vec3 {
+    if inp.options.fill == 2 && n.valid.iter().all(|v| *v) {
+        let wv = 1.0 / (n.c[0] - n.c[1]).length().max(0.001);
+        let wh = 1.0 / (n.c[2] - n.c[3]).length().max(0.001);
+        return 0.5 * (wv * (n.c[0] + n.c[1]) + wh * (n.c[2] + n.c[3])) / (wv + wh);
+    }
+    let mut sum = Vec3::ZERO;
+    for i in 0..4 {
+        if n.valid[i] {
+            sum += n.c[i];
+        }
+    }
+    sum / n.count.max(1.0)
+}
+
+fn finish(c: Vec3, tonemapped: bool) -> Vec4 {
+    if tonemapped {
+        untonemap(c).extend(1.0)
+    } else {
+        c.extend(1.0)
+    }
+}
+
+/// How a pixel was reconstructed (for tests and debugging).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Source {
+    Current,
+    /// Spatial fill: reset, off screen, jitter cancelled, or occluded.
+    Fill,
+    History,
+}
+
+/// The reconstructed colour of full-resolution pixel (x, y) and how it was made.
+pub fn reconstruct(inp: &Inputs, x: i32, y: i32) -> (Vec4, Source) {
+    let q = quadrant(x, y);
+    if is_current(inp, q) {
+        return (color_at(inp, x, y), Source::Current);
+    }
+    let tonemapped = inp.options.fill != 0;
+    let n = neighbourhood(inp, x, y, tonemapped);
+    let filled = || (finish(fill(inp, &n), tonemapped), Source::Fill);
+    if inp.reset {
+        return filled();
+    }
+    let size = Vec2::new(inp.width as f32, inp.height as f32);
+    let centre = Vec2::new(x as f32, y as f32) + 0.5;
+    let v = inp
+        .velocity
+        .map(|v| v[(y as u32 * inp.width + x as u32) as usize])
+        .unwrap_or(Vec4::ZERO);
+    let prev_pos = if inp.velocity.is_some() && v.z > 0.5 {
+        centre - v.truncate().truncate()
+    } else {
+        let d = depth_at(inp, x, y);
+        let ndc = Vec4::new(
+            centre.x / size.x * 2.0 - 1.0,
+            1.0 - centre.y / size.y * 2.0,
+            d,
+            1.0,
+        );
+        let now = inp.reproject * ndc;
+        let now_px = Vec2::new(
+            (now.x / now.w * 0.5 + 0.5) * size.x,
+            (0.5 - now.y / now.w * 0.5) * size.y,
+        );
+        centre - (now_px - centre)
+    };
+    let (px, py) = (prev_pos.x.floor() as i32, prev_pos.y.floor() as i32);
+    if px < 0 || py < 0 || px >= inp.width as i32 || py >= inp.height as i32 {
+        return filled();
+    }
+    if is_current(inp, quadrant(px, py)) {
+        return filled();
+    }
+    let old_depth = linear_depth(inp, depth_at(inp, px, py));
+    let avg_depth = n.depth_sum / n.count.max(1.0);
+    let moved_block = (px >> 1) != (x >> 1) || (py >> 1) != (y >> 1);
+    if moved_block
+        && (inp.options.aso || (avg_depth - old_depth).abs() >= inp.options.depth_tolerance)
+    {
+        return filled();
+    }
+    let history = color_at(inp, px, py);
+    if inp.options.clamp == 0 || n.count == 0.0 {
+        return (history, Source::History);
+    }
+    let mut h = history.truncate();
+    if tonemapped {
+        h = tonemap(h);
+    }
+    {
+        let clamped = h.clamp(n.lo, n.hi);
+        if inp.options.clamp == 2 {
+            let deviation = (avg_depth - old_depth).abs() - inp.options.depth_tolerance;
+            let confidence = (deviation * deviation).clamp(0.0, 1.0);
+            h = clamped.lerp(h, confidence);
+        } else {
+            h = clamped;
+        }
+    }
+    (finish(h, tonemapped), Source::History)
+}
+
+/// The whole frame, row-major.
+pub fn reconstruct_all(inp: &Inputs) -> Vec<(Vec4, Source)> {
+    let mut out = Vec::with_capacity((inp.width * inp.height) as usize);
+    for y in 0..inp.height as i32 {
+        for x in 0..inp.width as i32 {
+            out.push(reconstruct(inp, x, y));
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::checkerboard::{quarter_size, quarter_view, two_pass_jitter, STANDARD_2X};
+
+    /// Exhaustive coverage (notes section 2, "Coverage theorem"): with the quarter-resolution
+    /// remap, the odd-frame shift and the standard positions, every sample lands on a
+    /// full-resolution pixel centre, and two frames cover every pixel exactly once.
+    #[test]
+    fn two_frames_cover_every_full_resolution_pixel_once() {
+        for (w, h) in [(8u32, 6u32), (7, 5), (1, 1), (3, 2)] {
+            let (qw, qh) = quarter_size(w, h);
+            let mut hits = vec![0u32; (w * h) as usize];
+            for parity in 0..2 {
+                let (scale, offset) = quarter_view(w, h, parity, Vec2::ZERO);
+                for qy in 0..qh {
+                    for qx in 0..qw {
+                        for pos in STANDARD_2X {
+                            // Sample position in quarter NDC, mapped back to full-resolution pixels.
+                            let q_ndc = Vec2::new(
+                                (qx as f32 + pos[0]) / qw as f32 * 2.0 - 1.0,
+                                1.0 - (qy as f32 + pos[1]) / qh as f32 * 2.0,
+                            );
+                            let ndc = (q_ndc - offset) / scale;
+                            let px = (ndc.x + 1.0) * 0.5 * w as f32;
+                            let py = (1.0 - ndc.y) * 0.5 * h as f32;
+                            assert!(
+                                (px.rem_euclid(1.0) - 0.5).abs() < 1e-4
+                                    && (py.rem_euclid(1.0) - 0.5).abs() < 1e-4,
+                                "sample at ({px}, {py})"
+                            );
+                            let (x, y) = (px.floor() as i32, py.floor() as i32);
+                            if x >= 0 && y >= 0 && x < w as i32 && y < h as i32 {
+                                // It is the quadrant this parity shades, read back where Intel's map says.
+                                let q = quadrant(x, y);
+                                assert_eq!(
+                                    q == 0 || q == 3,
+                                    parity == 0,
+                                    "parity {parity} shaded quadrant {q}"
+                                );
+                                let s = if pos == STANDARD_2X[0] { 0 } else { 1 };
+                                assert_eq!(
+                                    quadrant_source(x >> 1, y >> 1, q),
+                                    (qx as i32, qy as i32, s)
+                                );
+                                hits[(y as u32 * w + x as u32) as usize] += 1;
+                            }
+                        }
+                    }
+                }
+            }
+            assert!(hits.iter().all(|&n| n == 1), "{w}x{h}: {hits:?}");
+        }
+    }
+
+    #[test]
+    fn two_pass_jitter_moves_the_pixel_centre_onto_each_standard_position() {
+        for s in 0..2 {
+            let centre_sees = Vec2::splat(0.5) - two_pass_jitter(s);
+            assert_eq!(centre_sees, Vec2::from(STANDARD_2X[s]));
+        }
+    }
+
+    fn flat(w: u32, h: u32, color: impl Fn(u32, u32, usize) -> Vec4, depth: f32) -> Samples {
+        let (qw, qh) = quarter_size(w, h);
+        let mk = |s: usize| {
+            (0..qh)
+                .flat_map(|y| (0..qw).map(move |x| (x, y)))
+                .map(|(x, y)| color(x, y, s))
+                .collect()
+        };
+        Samples {
+            width: qw,
+            height: qh,
+            color: [mk(0), mk(1)],
+            depth: [
+                vec![depth; (qw * qh) as usize],
+                vec![depth; (qw * qh) as usize],
+            ],
+        }
+    }
+
+    fn options(fill: u32, clamp: u32) -> Options {
+        Options {
+            aso: false,
+            fill,
+            clamp,
+            depth_tolerance: 0.01,
+        }
+    }
+
+    #[test]
+    fn static_history_fills_the_other_parity_exactly() {
+        let (w, h) = (6, 4);
+        // Every full-res pixel has its own colour; the samples hold them where the map says.
+        let truth = |x: u32, y: u32| Vec4::new(x as f32 / 8.0, y as f32 / 8.0, 0.25, 1.0);
+        let even = flat(
+            w,
+            h,
+            |qx, qy, s| {
+                if s == 1 {
+                    truth(2 * qx, 2 * qy)
+                } else {
+                    truth(2 * qx + 1, 2 * qy + 1)
+                }
+            },
+            0.5,
+        );
+        let odd = flat(
+            w,
+            h,
+            |qx, qy, s| {
+                if s == 1 {
+                    truth((2 * qx).wrapping_sub(1), 2 * qy)
+                } else {
+                    truth(2 * qx, 2 * qy + 1)
+                }
+            },
+            0.5,
+        );
+        for (parity, cur, prev) in [(0, &even, &odd), (1, &odd, &even)] {
+            let inp = Inputs {
+                width: w,
+                height: h,
+                parity,
+                reset: false,
+                options: options(2, 0),
+                near: 0.1,
+                far: 100.0,
+                reproject: Mat4::IDENTITY,
+                current: cur,
+                previous: prev,
+                velocity: None,
+            };
+            for (i, (c, src)) in reconstruct_all(&inp).into_iter().enumerate() {
+                let (x, y) = (i as u32 % w, i as u32 / w);
+                assert_eq!(
+                    c.truncate(),
+                    truth(x, y).truncate(),
+                    "pixel ({x}, {y}) parity {parity} from {src:?}"
+                );
+                assert_ne!(src, Source::Fill);
+            }
+        }
+    }
+
+    #[test]
+    fn reset_fills_from_neighbours_and_fill_modes_differ_at_edges() {
+        let (w, h) = (4, 4);
+        let white = flat(w, h, |_, _, _| Vec4::ONE, 0.5);
+        let inp = Inputs {
+            width: w,
+            height: h,
+            parity: 0,
+            reset: true,
+            options: options(0, 0),
+            near: 0.1,
+            far: 100.0,
+            reproject: Mat4::IDENTITY,
+            current: &white,
+            previous: &white,
+            velocity: None,
+        };
+        let (c, src) = reconstruct(&inp, 1, 0);
+        assert_eq!(src, Source::Fill);
+        assert_eq!(c, Vec4::ONE);
+        // A vertical edge: left neighbours black, right white. Differential blending favours the
+        // smoother (vertical) pair; the plain mean mixes across the edge.
+        let edge = flat(
+            w,
+            h,
+            |qx, _, s| {
+                if 2 * qx + (1 - s as u32) > 2 {
+                    Vec4::ONE
+                } else {
+                    Vec4::new(0.0, 0.0, 0.0, 1.0)
+                }
+            },
+            0.5,
+        );
+        let mut inp = Inputs {
+            current: &edge,
+            previous: &edge,
+            ..inp
+        };
+        let plain = reconstruct(&inp, 2, 1).0;
+        inp.options = options(2, 0);
+        let differential = reconstruct(&inp, 2, 1).0;
+        assert_ne!(plain, differential);
+    }
+
+    #[test]
+    fn motion_that_cancels_the_jitter_is_missing() {
+        let (w, h) = (8, 4);
+        let c = flat(w, h, |_, _, _| Vec4::new(0.5, 0.5, 0.5, 1.0), 0.5);
+        // Content moved one pixel right: the pixel was one to the left last frame, in a quadrant the
+        // previous (odd) frame did not shade.
+        let velocity: Vec<Vec4> = vec![Vec4::new(1.0, 0.0, 1.0, 0.0); (w * h) as usize];
+        let inp = Inputs {
+            width: w,
+            height: h,
+            parity: 0,
+            reset: false,
+            options: options(0, 0),
+            near: 0.1,
+            far: 100.0,
+            reproject: Mat4::IDENTITY,
+            current: &c,
+            previous: &c,
+            velocity: Some(&velocity),
+        };
+        assert_eq!(reconstruct(&inp, 3, 0).1, Source::Fill);
+        // Two pixels: the quadrant matches again, the block differs, depths agree: history.
+        let velocity: Vec<Vec4> = vec![Vec4::new(2.0, 0.0, 1.0, 0.0); (w * h) as usize];
+        let inp = Inputs {
+            velocity: Some(&velocity),
+            ..inp
+        };
+        assert_eq!(reconstruct(&inp, 3, 0).1, Source::History);
+        // ASO assumes the moved pixel occluded.
+        let inp = Inputs {
+            options: Options {
+                aso: true,
+                ..options(0, 0)
+            },
+            ..inp
+        };
+        assert_eq!(reconstruct(&inp, 3, 0).1, Source::Fill);
+    }
+}

@@ -1,0 +1,219 @@
+// `checkerboard` technique, pass `reconstruct`: one invocation per full-resolution pixel rebuilds
+// the frame from this frame's and the previous frame's quarter-resolution samples.
+//
+// Sources: Intel's CheckerboardColorResolveCS.hlsl (quadrant map, missing-shading rules, CSO/ASO)
+// and mosaiikki's ReconstructionShader.frag (order of the steps, velocity buffer, clamp,
+// confidence, reversible tonemap, differential blend); ../shared/notes/techniques.md sections 1a,
+// 1b. Pixel coordinates are y-down: quadrant 0 = top-left, 1 = top-right, 2 = bottom-left,
+// 3 = bottom-right of a 2x2 block. Even frames shade quadrants {0, 3}, odd frames {1, 2}.
+// The sample accessors `load_color` / `load_depth` come from a prelude (two-pass or 2x MSAA).
+// The CPU model in harness/src/render/checkerboard_model.rs mirrors this file step by step.
+
+struct Params {
+    // Previous frame's full-resolution NDC (unjittered) to current clip space.
+    reproject: mat4x4<f32>,
+    // xy: full resolution; zw: quarter-resolution texture size.
+    size: vec4<u32>,
+    // x: parity (0 even, 1 odd), y: reset history, z: occlusion (0 cso, 1 aso),
+    // w: fill (0 plain, 1 tonemapped, 2 differential).
+    mode: vec4<u32>,
+    // x: clamp (0 none, 1 min-max, 2 min-max with depth confidence), y: velocity buffer present.
+    mode2: vec4<u32>,
+    // x: depth tolerance (view units), y: near, z: far.
+    depth: vec4<f32>,
+}
+
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(9) var velocity: texture_2d<f32>;
+@group(0) @binding(10) var output: texture_storage_2d<rgba16float, write>;
+
+// Which set of samples holds quadrant `q`: the current frame's if this frame shaded it.
+fn is_current(q: u32) -> bool {
+    let even_quadrant = q == 0u || q == 3u;
+    return even_quadrant == (params.mode.x == 0u);
+}
+
+// Intel's readFromQuadrant: quadrant q of block b, from the frame that shaded it.
+// Returns the quarter-resolution pixel and the sample index.
+fn quadrant_source(b: vec2<i32>, q: u32) -> vec3<i32> {
+    switch q {
+        case 0u: { return vec3<i32>(b, 1); }
+        case 1u: { return vec3<i32>(b + vec2<i32>(1, 0), 1); }
+        case 2u: { return vec3<i32>(b, 0); }
+        default: { return vec3<i32>(b, 0); }
+    }
+}
+
+fn color_at(pixel: vec2<i32>) -> vec4<f32> {
+    let q = u32(pixel.x & 1) + 2u * u32(pixel.y & 1);
+    let s = quadrant_source(pixel >> vec2<u32>(1u), q);
+    return load_color(!is_current(q), s.xy, u32(s.z));
+}
+
+fn depth_at(pixel: vec2<i32>) -> f32 {
+    let q = u32(pixel.x & 1) + 2u * u32(pixel.y & 1);
+    let s = quadrant_source(pixel >> vec2<u32>(1u), q);
+    return load_depth(!is_current(q), s.xy, u32(s.z));
+}
+
+// View-space distance from reversed-Z depth (near -> 1, far -> 0).
+fn linear_depth(d: f32) -> f32 {
+    let near = params.depth.y;
+    let far = params.depth.z;
+    return near * far / (d * (far - near) + near);
+}
+
+// AMD's reversible tonemapper (mosaiikki): c / (1 + max(r, g, b)).
+fn tonemap(c: vec3<f32>) -> vec3<f32> {
+    return c / (1.0 + max(c.r, max(c.g, c.b)));
+}
+
+fn untonemap(c: vec3<f32>) -> vec3<f32> {
+    return c / max(1.0 - max(c.r, max(c.g, c.b)), 1e-6);
+}
+
+struct Neighbourhood {
+    // Up, down, left, right (tonemapped when the fill or clamp needs it).
+    c: array<vec3<f32>, 4>,
+    valid: array<bool, 4>,
+    depth_sum: f32,
+    count: f32,
+    lo: vec3<f32>,
+    hi: vec3<f32>,
+}
+
+fn neighbourhood(pixel: vec2<i32>, tonemapped: bool) -> Neighbourhood {
+    var n: Neighbourhood;
+    let offsets = array<vec2<i32>, 4>(vec2<i32>(0, -1), vec2<i32>(0, 1), vec2<i32>(-1, 0), vec2<i32>(1, 0));
+    let size = vec2<i32>(params.size.xy);
+    n.lo = vec3<f32>(3.0e38);
+    n.hi = vec3<f32>(-3.0e38);
+    n.depth_sum = 0.0;
+    n.count = 0.0;
+    for (var i = 0; i < 4; i = i + 1) {
+        let p = pixel + offsets[i];
+        let inside = all(p >= vec2<i32>(0)) && all(p < size);
+        n.valid[i] = inside;
+        n.c[i] = vec3<f32>(0.0);
+        if inside {
+            var c = color_at(p).rgb;
+            if tonemapped {
+                c = tonemap(c);
+            }
+            n.c[i] = c;
+            n.lo = min(n.lo, c);
+            n.hi = max(n.hi, c);
+            n.depth_sum = n.depth_sum + linear_depth(depth_at(p));
+            n.count = n.count + 1.0;
+        }
+    }
+    return n;
+}
+
+// The spatial fill of a missing pixel, in the neighbourhood's space (tonemapped or not).
+fn fill(n: Neighbourhood) -> vec3<f32> {
+    if params.mode.w == 2u && n.valid[0] && n.valid[1] && n.valid[2] && n.valid[3] {
+        // Differential blend (mosaiikki after Wihlidal/Jimenez): favour the smoother pair.
+        let wv = 1.0 / max(length(n.c[0] - n.c[1]), 0.001);
+        let wh = 1.0 / max(length(n.c[2] - n.c[3]), 0.001);
+        return 0.5 * (wv * (n.c[0] + n.c[1]) + wh * (n.c[2] + n.c[3])) / (wv + wh);
+    }
+    var sum = vec3<f32>(0.0);
+    for (var i = 0; i < 4; i = i + 1) {
+        if n.valid[i] {
+            sum = sum + n.c[i];
+        }
+    }
+    return sum / max(n.count, 1.0);
+}
+
+fn finish(c: vec3<f32>, tonemapped: bool) -> vec4<f32> {
+    if tonemapped {
+        return vec4<f32>(untonemap(c), 1.0);
+    }
+    return vec4<f32>(c, 1.0);
+}
+
+fn reconstruct(pixel: vec2<i32>) -> vec4<f32> {
+    let q = u32(pixel.x & 1) + 2u * u32(pixel.y & 1);
+    // 1. Shaded this frame: take it.
+    if is_current(q) {
+        return color_at(pixel);
+    }
+    let tonemapped = params.mode.w != 0u;
+    let n = neighbourhood(pixel, tonemapped);
+    // 2. No usable history (first frame, camera cut, resolution change): spatial fill.
+    if params.mode.y != 0u {
+        return finish(fill(n), tonemapped);
+    }
+    // 3. Where was this pixel last frame? Dynamic pixels: the velocity buffer. Static pixels:
+    //    the previous frame's sample here, unprojected with the previous camera and projected
+    //    with the current one (Intel; mosaiikki unprojects with the current inverse).
+    let size = vec2<f32>(params.size.xy);
+    let centre = vec2<f32>(pixel) + 0.5;
+    var prev_pos: vec2<f32>;
+    var dynamic_pixel = false;
+    var v = vec4<f32>(0.0);
+    if params.mode2.y != 0u {
+        v = textureLoad(velocity, pixel, 0);
+        dynamic_pixel = v.z > 0.5;
+    }
+    if dynamic_pixel {
+        prev_pos = centre - v.xy;
+    } else {
+        let d = depth_at(pixel);
+        let ndc = vec4<f32>(centre.x / size.x * 2.0 - 1.0, 1.0 - centre.y / size.y * 2.0, d, 1.0);
+        let now = params.reproject * ndc;
+        let now_px = vec2<f32>((now.x / now.w * 0.5 + 0.5) * size.x, (0.5 - now.y / now.w * 0.5) * size.y);
+        prev_pos = centre - (now_px - centre);
+    }
+    let prev_pixel = vec2<i32>(floor(prev_pos));
+    // 4. Off screen last frame.
+    if any(prev_pixel < vec2<i32>(0)) || any(prev_pixel >= vec2<i32>(params.size.xy)) {
+        return finish(fill(n), tonemapped);
+    }
+    // 5. The motion cancelled the jitter: last frame did not shade that quadrant.
+    let q_prev = u32(prev_pixel.x & 1) + 2u * u32(prev_pixel.y & 1);
+    if is_current(q_prev) {
+        return finish(fill(n), tonemapped);
+    }
+    // 6. Moved to another 2x2 block: possibly occluded. ASO assumes so; CSO compares the old
+    //    sample's view depth with the mean of the current neighbours'.
+    let old_depth = linear_depth(depth_at(prev_pixel));
+    let avg_depth = n.depth_sum / max(n.count, 1.0);
+    let moved_block = any((prev_pixel >> vec2<u32>(1u)) != (pixel >> vec2<u32>(1u)));
+    if moved_block {
+        if params.mode.z == 1u || abs(avg_depth - old_depth) >= params.depth.x {
+            return finish(fill(n), tonemapped);
+        }
+    }
+    // 7. History, clamped to the neighbourhood (mosaiikki after El Mansouri), optionally blended
+    //    back by depth confidence (large deviation = small-scale detail: trust the history).
+        let history = color_at(prev_pixel);
+    if params.mode2.x == 0u || n.count == 0.0 {
+        return history;
+    }
+    var h = history.rgb;
+    if tonemapped {
+        h = tonemap(h);
+    }
+    {
+        let clamped = clamp(h, n.lo, n.hi);
+        if params.mode2.x == 2u {
+            let deviation = abs(avg_depth - old_depth) - params.depth.x;
+            let confidence = clamp(deviation * deviation, 0.0, 1.0);
+            h = mix(clamped, h, confidence);
+        } else {
+            h = clamped;
+        }
+    }
+    return finish(h, tonemapped);
+}
+
+@compute @workgroup_size(8, 8)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= params.size.x || id.y >= params.size.y {
+        return;
+    }
+    textureStore(output, id.xy, reconstruct(vec2<i32>(id.xy)));
+}
