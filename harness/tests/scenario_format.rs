@@ -79,11 +79,11 @@ fn wrong_types_say_what_was_expected() {
 fn unknown_technique_lists_the_known_and_suggests_the_closest() {
     assert_eq!(
         errors("\n[[techniques]]\ntechnique = \"upscal\"\n"),
-        ["s.toml:18:13: `techniques[1].technique`: unknown technique \"upscal\" (did you mean \"upscale\"?): known techniques are \"native\", \"upscale\""]
+        ["s.toml:18:13: `techniques[1].technique`: unknown technique \"upscal\" (did you mean \"upscale\"?): known techniques are \"native\", \"upscale\", \"checkerboard\""]
     );
     assert_eq!(
         errors("\n[[techniques]]\ntechnique = \"raytrace\"\n"),
-        ["s.toml:18:13: `techniques[1].technique`: unknown technique \"raytrace\": known techniques are \"native\", \"upscale\""]
+        ["s.toml:18:13: `techniques[1].technique`: unknown technique \"raytrace\": known techniques are \"native\", \"upscale\", \"checkerboard\""]
     );
 }
 
@@ -174,7 +174,10 @@ fn shapes_accept_only_their_own_keys() {
 
 #[test]
 fn ssim_needs_one_window_of_pixels() {
-    let src = VALID.replace("resolution = [64, 32]", "resolution = [64, 8]\nmetrics = [\"psnr\", \"ssim\"]");
+    let src = VALID.replace(
+        "resolution = [64, 32]",
+        "resolution = [64, 8]\nmetrics = [\"psnr\", \"ssim\"]",
+    );
     assert_eq!(
         errors_of(&src),
         ["s.toml:3:20: `metrics[1]`: ssim needs at least 11x11 pixels (one Gaussian window); the resolution is 64x8"]

@@ -113,8 +113,21 @@ pub struct Checkerboard {
     pipeline: wgpu::ComputePipeline,
     params: wgpu::Buffer,
     /// Bind groups by the parity of the current frame.
-    bind_groups: [wgpu::BindGroup; 2],
+        bind_groups: [wgpu::BindGroup; 2],
     _dummy_velocity: Option<wgpu::Texture>,
+    last: Option<LastFrame>,
+}
+
+/// What the last recorded reconstruction was given (for the CPU model in tests).
+#[derive(Clone, Copy, Debug)]
+pub struct LastFrame {
+    pub parity: u32,
+    pub reset: bool,
+    pub reproject: glam::Mat4,
+    pub velocity: bool,
+    pub options: Options,
+    pub near: f32,
+    pub far: f32,
 }
 
 /// Resource names per sampling: (colour, depth) per parity and sample.
@@ -310,9 +323,21 @@ impl Checkerboard {
             height,
             pipeline,
             params,
-            bind_groups,
+                        bind_groups,
             _dummy_velocity: dummy,
+            last: None,
         })
+    }
+}
+
+impl Checkerboard {
+    /// A texture of the plan by resource name (`color_even_s0`, `velocity`, ...).
+    pub fn texture(&self, name: &str) -> Option<&wgpu::Texture> {
+        self.textures.get(name)
+    }
+
+    pub fn last_frame(&self) -> Option<LastFrame> {
+        self.last
     }
 }
 
@@ -436,8 +461,16 @@ impl Technique for Checkerboard {
             mode2: [o.clamp, u32::from(use_velocity), 0, 0],
             depth: [o.depth_tolerance, near_far.0, near_far.1, 0.0],
         };
-        gpu.queue
-            .write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+                gpu.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+        self.last = Some(LastFrame {
+            parity: parity as u32,
+            reset: !frame.history_valid,
+            reproject: glam::Mat4::from_cols_array_2d(&params.reproject),
+            velocity: use_velocity,
+            options: o,
+            near: near_far.0,
+            far: near_far.1,
+        });
         let q = timers.begin("reconstruct", encoder);
         {
             let mut cp = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
