@@ -3,8 +3,10 @@
 //! The binary (`main.rs`) is a thin command-line layer over this library so that tests can drive
 //! the same code paths.
 
+pub mod compare;
 pub mod gpu;
 pub mod render;
 pub mod run;
 pub mod scenario;
 pub mod technique;
+pub mod upload;

@@ -1,7 +1,8 @@
 //! `tessera`: the command line. Parses arguments, calls the library, prints, and picks the exit code.
 //!
 //! Exit codes (documented in README.md): 0 ok, 1 a gate failed or a variant failed, 2 bad input
-//! (scenario, arguments, images, output folder), 3 no usable adapter or a device failure.
+//! (scenario, arguments, images, output folder), 3 no usable adapter or a device failure, 4 the
+//! upload to a dashboard failed (results are on disk).
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -14,6 +15,7 @@ use tessera::scenario::{self, Scenario};
 const EXIT_GATE: u8 = 1;
 const EXIT_INPUT: u8 = 2;
 const EXIT_DEVICE: u8 = 3;
+const EXIT_UPLOAD: u8 = 4;
 
 #[derive(Parser)]
 #[command(
@@ -44,6 +46,9 @@ enum Command {
         /// No progress bar.
         #[arg(long)]
         quiet: bool,
+        /// Then send the run to this dashboard (token from TESSERA_DASHBOARD_TOKEN).
+        #[arg(long, value_name = "URL")]
+        upload: Option<String>,
     },
     /// Check scenarios without a GPU.
     Validate {
@@ -55,6 +60,23 @@ enum Command {
         /// Print JSON instead of text.
         #[arg(long)]
         json: bool,
+    },
+    /// Compare two run folders: the Markdown a pull request would show (exit 1 on a regression).
+    Compare {
+        /// The base run folder.
+        run_a: PathBuf,
+        /// The new run folder, compared against the base.
+        run_b: PathBuf,
+        /// Smallest median GPU-time change (percent) that can be a verdict.
+        #[arg(long, default_value_t = 5.0)]
+        threshold_pct: f64,
+    },
+    /// Send a run folder to a dashboard (`POST /api/runs`, token from TESSERA_DASHBOARD_TOKEN).
+    Upload {
+        run: PathBuf,
+        /// The dashboard, e.g. http://dashboard:8080.
+        #[arg(long)]
+        url: String,
     },
     /// Compare two images: PSNR, SSIM, FLIP and more.
     Diff {
@@ -86,9 +108,16 @@ fn main() -> ExitCode {
             out,
             junit,
             quiet,
-        } => run_command(&paths, adapter, out, junit, quiet),
+            upload,
+        } => run_command(&paths, adapter, out, junit, quiet, upload),
         Command::Validate { paths } => validate_command(&paths),
         Command::Adapters { json } => adapters_command(json),
+        Command::Compare {
+            run_a,
+            run_b,
+            threshold_pct,
+        } => compare_command(&run_a, &run_b, threshold_pct),
+        Command::Upload { run, url } => upload_command(&run, &url),
         Command::Diff {
             reference,
             test,
@@ -166,10 +195,18 @@ fn run_command(
     out: PathBuf,
     junit: Option<PathBuf>,
     quiet: bool,
+    upload: Option<String>,
 ) -> u8 {
     let Some(scenarios) = load_all(paths) else {
         return EXIT_INPUT;
     };
+    // Refuse a bad URL or a missing token before the run, not after it.
+    if let Some(url) = &upload {
+        if let Err(e) = tessera::upload::endpoint(url).and(tessera::upload::token_from_env()) {
+            eprintln!("error: --upload: {e}");
+            return EXIT_INPUT;
+        }
+    }
     let opts = run::Options {
         adapter,
         out,
@@ -191,9 +228,68 @@ fn run_command(
     let tally = console::tally(&outcome.scenarios);
     eprintln!("results: {}", outcome.run_dir.display());
     println!("{}", console::verdict(&tally));
-    if outcome.device_lost {
+    let code = if outcome.device_lost {
         EXIT_DEVICE
     } else if tally.failed > 0 || tally.gate_failures > 0 {
+        EXIT_GATE
+    } else {
+        0
+    };
+    match upload.map(|url| (tessera::upload::upload(&outcome.run_dir, &url), url)) {
+        Some((Err(e), url)) => {
+            eprintln!("error: {e}");
+            eprintln!(
+                "hint: the results are in {}; send them later with `tessera upload {} --url {url}`",
+                outcome.run_dir.display(),
+                outcome.run_dir.display()
+            );
+            if code == 0 {
+                EXIT_UPLOAD
+            } else {
+                code
+            }
+        }
+        Some((Ok(reply), _)) => {
+            eprintln!("{}", reply.summary());
+            code
+        }
+        None => code,
+    }
+}
+
+fn upload_command(run: &std::path::Path, url: &str) -> u8 {
+    match tessera::upload::upload(run, url) {
+        Ok(reply) => {
+            println!("{}", reply.summary());
+            0
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            if e.is_bad_input() {
+                EXIT_INPUT
+            } else {
+                EXIT_UPLOAD
+            }
+        }
+    }
+}
+
+fn compare_command(a: &std::path::Path, b: &std::path::Path, threshold_pct: f64) -> u8 {
+    use tessera::compare;
+    if !(threshold_pct.is_finite() && threshold_pct >= 0.0) {
+        eprintln!("error: --threshold-pct must be a number >= 0, not {threshold_pct}");
+        return EXIT_INPUT;
+    }
+    let (a, b) = match (compare::load_run(a), compare::load_run(b)) {
+        (Ok(a), Ok(b)) => (a, b),
+        (Err(e), _) | (_, Err(e)) => {
+            eprintln!("error: {e}");
+            return EXIT_INPUT;
+        }
+    };
+    let c = compare::compare(&a, &b, &compare::Options { threshold_pct });
+    print!("{}", compare::markdown::render(&c));
+    if c.regressed() {
         EXIT_GATE
     } else {
         0

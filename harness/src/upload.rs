@@ -1,0 +1,208 @@
+//! Sending a finished run folder to a Tessera dashboard: `POST <url>/api/runs` with
+//! `Authorization: Bearer $TESSERA_DASHBOARD_TOKEN` (used by `tessera upload` and
+//! `tessera run --upload`).
+//!
+//! The body is the dashboard's upload format (`dashboard/README.md`, "Uploading"): `run` (run.json
+//! as written), `scenarios` (every `scenarios/*.json`, by file name) and `images` (every PNG the
+//! results list and the folder holds, keyed by its path in the run folder, in base64). It is built
+//! here from the files, not with the dashboard's types: the harness and the dashboard share record
+//! types (`tessera-results`), never code paths. Nothing here changes the run folder: an upload
+//! that fails leaves the results on disk for a later `tessera upload`.
+
+use std::collections::BTreeMap;
+use std::path::{Component, Path, PathBuf};
+use std::time::Duration;
+
+use base64::Engine;
+
+use crate::compare::load::{read_raw, LoadError};
+
+/// Environment variable holding the dashboard's bearer token.
+pub const TOKEN_ENV: &str = "TESSERA_DASHBOARD_TOKEN";
+
+/// The whole request, connection to answer, may take this long (bundles with images are large).
+const TIMEOUT: Duration = Duration::from_secs(300);
+
+#[derive(Debug, thiserror::Error)]
+pub enum UploadError {
+    #[error(transparent)]
+    Load(#[from] LoadError),
+    #[error("cannot read {path}: {source}")]
+    Image {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{TOKEN_ENV} is not set: export the dashboard's token to upload")]
+    NoToken,
+    #[error("{0:?} is not a dashboard URL: give http://host:port or https://host")]
+    BadUrl(String),
+    #[error("cannot reach the dashboard at {url}: {source}")]
+    Transport {
+        url: String,
+        #[source]
+        source: ureq::Error,
+    },
+    #[error("the dashboard at {url} refused the run with HTTP {status}: {message}")]
+    Refused {
+        url: String,
+        status: u16,
+        message: String,
+    },
+}
+
+impl UploadError {
+    /// The run folder or the URL is unusable (as opposed to the token, the dashboard or the
+    /// network).
+    pub fn is_bad_input(&self) -> bool {
+        matches!(
+            self,
+            UploadError::Load(_) | UploadError::Image { .. } | UploadError::BadUrl(_)
+        )
+    }
+}
+
+/// What the dashboard answered to an accepted upload.
+#[derive(Clone, Debug, PartialEq, Eq, serde::Deserialize)]
+pub struct Reply {
+    pub run_id: String,
+    /// `false` when the dashboard already had this run id (nothing changed).
+    pub stored: bool,
+    #[serde(default)]
+    pub results: usize,
+    #[serde(default)]
+    pub new_regressions: usize,
+}
+
+impl Reply {
+    /// One line for the console.
+    pub fn summary(&self) -> String {
+        if self.stored {
+            format!(
+                "uploaded: {} stored ({} results, {} new regressions)",
+                self.run_id, self.results, self.new_regressions
+            )
+        } else {
+            format!("uploaded: {} was already stored", self.run_id)
+        }
+    }
+}
+
+/// An image path that stays inside the run folder (the dashboard refuses any other).
+fn inside_run_folder(path: &str) -> bool {
+    !path.is_empty()
+        && !path.contains('\\')
+        && Path::new(path)
+            .components()
+            .all(|c| matches!(c, Component::Normal(_)))
+}
+
+/// The upload body of a run folder. Listed images that are missing are left out (runs may be
+/// saved without them), as the dashboard's own `bundle` command does.
+pub fn bundle(dir: &Path) -> Result<serde_json::Value, UploadError> {
+    let raw = read_raw(dir)?;
+    let mut images = BTreeMap::new();
+    let listed = raw.scenarios.iter().flat_map(|s| {
+        s["results"].as_array().into_iter().flatten().flat_map(|v| {
+            v["images"]
+                .as_array()
+                .into_iter()
+                .flatten()
+                .filter_map(|i| i["path"].as_str())
+        })
+    });
+    for path in listed {
+        if !inside_run_folder(path) || images.contains_key(path) {
+            continue;
+        }
+        let full = dir.join(path);
+        if full.is_file() {
+            let bytes = std::fs::read(&full).map_err(|source| UploadError::Image {
+                path: full.clone(),
+                source,
+            })?;
+            let b64 = base64::engine::general_purpose::STANDARD.encode(bytes);
+            images.insert(path.to_string(), serde_json::Value::String(b64));
+        }
+    }
+    Ok(serde_json::json!({
+        "run": raw.run,
+        "scenarios": raw.scenarios,
+        "images": images,
+    }))
+}
+
+/// `<url>/api/runs`, unless `url` already ends with it.
+pub fn endpoint(url: &str) -> Result<String, UploadError> {
+    if !(url.starts_with("http://") || url.starts_with("https://")) {
+        return Err(UploadError::BadUrl(url.to_string()));
+    }
+    let base = url.trim_end_matches('/');
+    Ok(if base.ends_with("/api/runs") {
+        base.to_string()
+    } else {
+        format!("{base}/api/runs")
+    })
+}
+
+/// The token from [`TOKEN_ENV`]; empty counts as unset.
+pub fn token_from_env() -> Result<String, UploadError> {
+    match std::env::var(TOKEN_ENV) {
+        Ok(t) if !t.trim().is_empty() => Ok(t.trim().to_string()),
+        _ => Err(UploadError::NoToken),
+    }
+}
+
+/// POSTs `body` (JSON) and reads the answer: 200 and 201 are success, anything else is
+/// [`UploadError::Refused`] with the dashboard's `{"error"}` message.
+pub fn post(url: &str, token: &str, body: &[u8]) -> Result<Reply, UploadError> {
+    let url = endpoint(url)?;
+    let transport = |source| UploadError::Transport {
+        url: url.clone(),
+        source,
+    };
+    let agent: ureq::Agent = ureq::Agent::config_builder()
+        .http_status_as_error(false)
+        .timeout_global(Some(TIMEOUT))
+        .build()
+        .into();
+    let mut response = agent
+        .post(&url)
+        .header("Authorization", &format!("Bearer {token}"))
+        .header("Content-Type", "application/json")
+        .send(body)
+        .map_err(transport)?;
+    let status = response.status().as_u16();
+    let text = response.body_mut().read_to_string().map_err(transport)?;
+    if status == 200 || status == 201 {
+        return serde_json::from_str(&text).map_err(|e| UploadError::Refused {
+            url: url.clone(),
+            status,
+            message: format!("unexpected answer ({e}): {text}"),
+        });
+    }
+    let message = serde_json::from_str::<serde_json::Value>(&text)
+        .ok()
+        .and_then(|v| v["error"].as_str().map(str::to_string))
+        .unwrap_or_else(|| {
+            if text.is_empty() {
+                "no message".into()
+            } else {
+                text
+            }
+        });
+    Err(UploadError::Refused {
+        url,
+        status,
+        message,
+    })
+}
+
+/// Bundles the run folder `dir` and sends it to the dashboard at `url` with the token from the
+/// environment.
+pub fn upload(dir: &Path, url: &str) -> Result<Reply, UploadError> {
+    endpoint(url)?;
+    let token = token_from_env()?;
+    let body = serde_json::to_vec(&bundle(dir)?).expect("JSON values serialise");
+    post(url, &token, &body)
+}
