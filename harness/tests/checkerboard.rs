@@ -16,11 +16,19 @@ use tessera::technique::{ParamValue, TechniqueKind, Variant};
 
 fn variant(params: &[(&str, ParamValue)]) -> Variant {
     let t = TechniqueKind::Checkerboard;
-    let mut all: std::collections::BTreeMap<String, ParamValue> = t.params().iter().map(|p| (p.name.to_string(), p.default.value())).collect();
+    let mut all: std::collections::BTreeMap<String, ParamValue> = t
+        .params()
+        .iter()
+        .map(|p| (p.name.to_string(), p.default.value()))
+        .collect();
     for (k, v) in params {
         all.insert(k.to_string(), v.clone());
     }
-    Variant { name: "checkerboard".into(), technique: t, params: all }
+    Variant {
+        name: "checkerboard".into(),
+        technique: t,
+        params: all,
+    }
 }
 
 fn vec4s(v: Vec<f32>) -> Vec<Vec4> {
@@ -34,8 +42,15 @@ fn samples(gpu: &tessera::gpu::Gpu, cb: &Checkerboard, parity: u32) -> Samples {
     Samples {
         width: c0.width(),
         height: c0.height(),
-        color: [0, 1].map(|s| vec4s(read_texture(&gpu.device, &gpu.queue, tex(format!("color_{p}_s{s}"))))),
-        depth: [0, 1].map(|s| read_texture(&gpu.device, &gpu.queue, tex(format!("depth_{p}_s{s}")))),
+        color: [0, 1].map(|s| {
+            vec4s(read_texture(
+                &gpu.device,
+                &gpu.queue,
+                tex(format!("color_{p}_s{s}")),
+            ))
+        }),
+        depth: [0, 1]
+            .map(|s| read_texture(&gpu.device, &gpu.queue, tex(format!("depth_{p}_s{s}")))),
     }
 }
 
@@ -44,20 +59,40 @@ fn samples(gpu: &tessera::gpu::Gpu, cb: &Checkerboard, parity: u32) -> Samples {
 fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) -> Vec<Source> {
     let gpu = common::gpu();
     let mut scene = SceneGpu::new(&gpu.device, s).unwrap();
-    let mut cb = Checkerboard::new(&gpu, v, s.width, s.height, s.scene.has_dynamic_objects()).unwrap();
+    let mut cb =
+        Checkerboard::new(&gpu, v, s.width, s.height, s.scene.has_dynamic_objects()).unwrap();
     let mut timers = Timers::new(&gpu.device, &[]).unwrap();
     let mut sources = Vec::new();
     for index in 0..frames {
         let time = s.frame_time(index);
-        let prev_time = if index == 0 { time } else { s.frame_time(index - 1) };
-        let history_valid = index > 0 && s.camera.pose_at(time).segment == s.camera.pose_at(prev_time).segment;
+        let prev_time = if index == 0 {
+            time
+        } else {
+            s.frame_time(index - 1)
+        };
+        let history_valid =
+            index > 0 && s.camera.pose_at(time).segment == s.camera.pose_at(prev_time).segment;
         scene.write_objects(&gpu.queue, time, prev_time);
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        cb.record(&gpu, &mut scene, &timers, &mut encoder, FrameInfo { index, time, prev_time, history_valid });
+        cb.record(
+            &gpu,
+            &mut scene,
+            &timers,
+            &mut encoder,
+            FrameInfo {
+                index,
+                time,
+                prev_time,
+                history_valid,
+            },
+        );
         timers.resolve(&mut encoder);
         gpu.queue.submit([encoder.finish()]);
         timers.end_frame();
-        let _ = gpu.device.poll(wgpu::PollType::Wait { submission_index: None, timeout: None });
+        let _ = gpu.device.poll(wgpu::PollType::Wait {
+            submission_index: None,
+            timeout: None,
+        });
         let _ = timers.try_collect(&gpu.queue);
         if index == 0 {
             continue;
@@ -65,7 +100,13 @@ fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) -> Vec<Source> {
         let last = cb.last_frame().unwrap();
         let current = samples(&gpu, &cb, last.parity);
         let previous = samples(&gpu, &cb, 1 - last.parity);
-        let velocity = last.velocity.then(|| vec4s(read_texture(&gpu.device, &gpu.queue, cb.texture("velocity").unwrap())));
+        let velocity = last.velocity.then(|| {
+            vec4s(read_texture(
+                &gpu.device,
+                &gpu.queue,
+                cb.texture("velocity").unwrap(),
+            ))
+        });
         let inputs = Inputs {
             width: s.width,
             height: s.height,
@@ -87,7 +128,10 @@ fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) -> Vec<Source> {
             let d = (m16 - *g).abs().max_element();
             if d > 0.0 {
                 // Fills compute in f32 on both sides; rounding may differ in the last f16 bit.
-                assert!(d <= 2e-3 * m16.abs().max_element().max(1.0), "frame {index} pixel {i}: model {m16} ({src:?}) gpu {g}");
+                assert!(
+                    d <= 2e-3 * m16.abs().max_element().max(1.0),
+                    "frame {index} pixel {i}: model {m16} ({src:?}) gpu {g}"
+                );
             }
         }
         sources = model.iter().map(|(_, s)| *s).collect();
@@ -127,32 +171,46 @@ target = [0, 0.4, 0]
 "#;
 
 fn scenario(extra: &str) -> Scenario {
-    common::scenario(&format!("{SCENE}{extra}\n[[techniques]]\ntechnique = \"native\"\n"))
+    common::scenario(&format!(
+        "{SCENE}{extra}\n[[techniques]]\ntechnique = \"native\"\n"
+    ))
 }
 
 #[test]
 fn static_camera_matches_the_model_and_takes_the_other_parity_from_history() {
     let s = scenario("");
     for fill in ["plain", "differential"] {
-        let sources = compare_with_model(&s, &variant(&[("fill", ParamValue::Str(fill.into()))]), 4);
+        let sources =
+            compare_with_model(&s, &variant(&[("fill", ParamValue::Str(fill.into()))]), 4);
         let history = sources.iter().filter(|s| **s == Source::History).count();
         let current = sources.iter().filter(|s| **s == Source::Current).count();
-        assert_eq!(history, current, "static: every missing pixel comes from history");
+        assert_eq!(
+            history, current,
+            "static: every missing pixel comes from history"
+        );
     }
 }
 
 #[test]
 fn moving_camera_matches_the_model_with_every_option() {
     // Pans about 2.4 px per frame at 40x30 and 60 fps.
-    let s = scenario("[[camera.keyframes]]\ntime = 1\nposition = [3, 1.5, 4]\ntarget = [3, 0.4, 0]\n");
-    for (occlusion, fill, clamp) in [("cso", "differential", "none"), ("aso", "plain", "min-max"), ("cso", "tonemapped", "min-max-confidence")] {
+    let s =
+        scenario("[[camera.keyframes]]\ntime = 1\nposition = [3, 1.5, 4]\ntarget = [3, 0.4, 0]\n");
+    for (occlusion, fill, clamp) in [
+        ("cso", "differential", "none"),
+        ("aso", "plain", "min-max"),
+        ("cso", "tonemapped", "min-max-confidence"),
+    ] {
         let v = variant(&[
             ("occlusion", ParamValue::Str(occlusion.into())),
             ("fill", ParamValue::Str(fill.into())),
             ("clamp", ParamValue::Str(clamp.into())),
         ]);
         let sources = compare_with_model(&s, &v, 4);
-        assert!(sources.contains(&Source::History) && sources.contains(&Source::Fill), "{occlusion} {fill} {clamp}");
+        assert!(
+            sources.contains(&Source::History) && sources.contains(&Source::Fill),
+            "{occlusion} {fill} {clamp}"
+        );
     }
 }
 
@@ -166,7 +224,10 @@ fn dynamic_object_uses_the_velocity_buffer_and_a_cut_resets_history() {
     let sources = compare_with_model(&s, &variant(&[]), 2);
     assert!(sources.contains(&Source::History));
     let sources = compare_with_model(&s, &variant(&[]), 3);
-    assert!(!sources.contains(&Source::History), "a cut must not read history");
+    assert!(
+        !sources.contains(&Source::History),
+        "a cut must not read history"
+    );
 }
 
 #[test]
@@ -174,7 +235,13 @@ fn static_scene_reconstructs_native_within_one_level() {
     // The ground's box filter reads screen-space derivatives, which at quarter resolution span two
     // pixels: only a point-sampled ground can match native exactly (the filtered one reaches about
     // 41 dB with gradient_scale 0.5; see the closing note of issue 4).
-    let s = common::scenario(&format!("{}\n[[techniques]]\ntechnique = \"native\"\n", SCENE.replace("checker_size = 0.5", "checker_size = 0.5\nfilter = \"none\"")));
+    let s = common::scenario(&format!(
+        "{}\n[[techniques]]\ntechnique = \"native\"\n",
+        SCENE.replace(
+            "checker_size = 0.5",
+            "checker_size = 0.5\nfilter = \"none\""
+        )
+    ));
     let gpu = common::gpu();
     let render = |v: &Variant| {
         let mut scene = SceneGpu::new(&gpu.device, &s).unwrap();
@@ -182,13 +249,27 @@ fn static_scene_reconstructs_native_within_one_level() {
         let mut s2 = s.clone();
         s2.warmup_frames = 3;
         s2.measured_frames = 2;
-        tessera::run::frames::render(&gpu, &mut scene, &s2, t.as_mut(), true, false, &mut || {}).unwrap()
+        tessera::run::frames::render(&gpu, &mut scene, &s2, t.as_mut(), true, false, &mut || {})
+            .unwrap()
     };
-    let native = render(&Variant { name: "native".into(), technique: TechniqueKind::Native, params: Default::default() });
+    let native = render(&Variant {
+        name: "native".into(),
+        technique: TechniqueKind::Native,
+        params: Default::default(),
+    });
     let cb = render(&variant(&[]));
     for (f, (n, c)) in native.frames.iter().zip(&cb.frames).enumerate() {
-        let max = n.data.iter().zip(&c.data).map(|(a, b)| a.abs_diff(*b)).max().unwrap();
+        let max = n
+            .data
+            .iter()
+            .zip(&c.data)
+            .map(|(a, b)| a.abs_diff(*b))
+            .max()
+            .unwrap();
         let psnr = tessera_metrics::psnr_rgb(n, c).unwrap();
-        assert!(max <= 1 || psnr >= 50.0, "frame {f}: max error {max}/255, PSNR {psnr:.2} dB");
+        assert!(
+            max <= 1 || psnr >= 50.0,
+            "frame {f}: max error {max}/255, PSNR {psnr:.2} dB"
+        );
     }
 }

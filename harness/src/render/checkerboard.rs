@@ -113,7 +113,7 @@ pub struct Checkerboard {
     pipeline: wgpu::ComputePipeline,
     params: wgpu::Buffer,
     /// Bind groups by the parity of the current frame.
-        bind_groups: [wgpu::BindGroup; 2],
+    bind_groups: [wgpu::BindGroup; 2],
     _dummy_velocity: Option<wgpu::Texture>,
     last: Option<LastFrame>,
 }
@@ -323,7 +323,7 @@ impl Checkerboard {
             height,
             pipeline,
             params,
-                        bind_groups,
+            bind_groups,
             _dummy_velocity: dummy,
             last: None,
         })
@@ -461,7 +461,8 @@ impl Technique for Checkerboard {
             mode2: [o.clamp, u32::from(use_velocity), 0, 0],
             depth: [o.depth_tolerance, near_far.0, near_far.1, 0.0],
         };
-                gpu.queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+        gpu.queue
+            .write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         self.last = Some(LastFrame {
             parity: parity as u32,
             reset: !frame.history_valid,

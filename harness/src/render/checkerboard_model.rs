@@ -295,9 +295,9 @@ mod tests {
 
     #[test]
     fn two_pass_jitter_moves_the_pixel_centre_onto_each_standard_position() {
-        for s in 0..2 {
+        for (s, position) in STANDARD_2X.iter().enumerate() {
             let centre_sees = Vec2::splat(0.5) - two_pass_jitter(s);
-            assert_eq!(centre_sees, Vec2::from(STANDARD_2X[s]));
+            assert_eq!(centre_sees, Vec2::from(*position));
         }
     }
 

@@ -109,11 +109,16 @@ impl Readback {
 
 /// Reads a whole single-sample texture back as f32 values, for tests and debugging:
 /// Rgba16Float gives 4 values per texel, Depth32Float 1. Blocks until done.
-pub fn read_texture(device: &wgpu::Device, queue: &wgpu::Queue, texture: &wgpu::Texture) -> Vec<f32> {
+pub fn read_texture(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    texture: &wgpu::Texture,
+) -> Vec<f32> {
     let (w, h) = (texture.width(), texture.height());
     let depth = texture.format() == wgpu::TextureFormat::Depth32Float;
     let texel = if depth { 4 } else { 8 };
-    let padded = (w * texel).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+    let padded = (w * texel).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT)
+        * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
     let buffer = device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("texture readback"),
         size: padded as u64 * h as u64,
@@ -129,14 +134,25 @@ pub fn read_texture(device: &wgpu::Device, queue: &wgpu::Queue, texture: &wgpu::
         source,
         wgpu::TexelCopyBufferInfo {
             buffer: &buffer,
-            layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(padded), rows_per_image: Some(h) },
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(padded),
+                rows_per_image: Some(h),
+            },
         },
-        wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+        wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        },
     );
     queue.submit([encoder.finish()]);
     let slice = buffer.slice(..);
     slice.map_async(wgpu::MapMode::Read, |_| {});
-    let _ = device.poll(wgpu::PollType::Wait { submission_index: None, timeout: None });
+    let _ = device.poll(wgpu::PollType::Wait {
+        submission_index: None,
+        timeout: None,
+    });
     let mut out = Vec::new();
     if let Ok(data) = slice.get_mapped_range() {
         for y in 0..h as usize {
@@ -144,7 +160,11 @@ pub fn read_texture(device: &wgpu::Device, queue: &wgpu::Queue, texture: &wgpu::
             if depth {
                 out.extend(bytemuck::cast_slice::<u8, f32>(row));
             } else {
-                out.extend(bytemuck::cast_slice::<u8, half::f16>(row).iter().map(|v| v.to_f32()));
+                out.extend(
+                    bytemuck::cast_slice::<u8, half::f16>(row)
+                        .iter()
+                        .map(|v| v.to_f32()),
+                );
             }
         }
     }

@@ -1,4 +1,6 @@
 //! Shared helpers for the GPU tests: open the default adapter (lavapipe in CI) once per test.
+// Each test crate uses a subset of these helpers.
+#![allow(dead_code)]
 
 use std::path::Path;
 
