@@ -1,0 +1,233 @@
+//! `tessera upload` and `run --upload` against a fake dashboard: a one-request HTTP server on
+//! loopback that records what it got and answers as the dashboard would. No GPU needed.
+
+use std::io::{BufRead, BufReader, Read, Write};
+use std::net::TcpListener;
+use std::path::Path;
+use std::process::Command;
+use std::thread::JoinHandle;
+
+const RUN: &str = r#"{"schema_version": 1, "run_id": "r1", "status": "complete"}"#;
+const SCENARIO: &str = r#"{"schema_version": 1, "run_id": "r1", "scenario": "tiny", "results": [
+  {"variant": "native", "images": [
+    {"frame": 0, "kind": "output", "path": "images/tiny/native-f000.png"},
+    {"frame": 1, "kind": "output", "path": "images/tiny/native-f001.png"},
+    {"frame": 0, "kind": "output", "path": "../outside.png"}]}]}"#;
+const PNG: &[u8] = b"\x89PNG\r\n\x1a\nfake";
+
+/// A run folder with one saved image (the second listed one is missing, the third unsafe).
+fn run_folder(dir: &Path) -> String {
+    let d = dir.join("r1");
+    std::fs::create_dir_all(d.join("scenarios")).unwrap();
+    std::fs::create_dir_all(d.join("images/tiny")).unwrap();
+    std::fs::write(d.join("run.json"), RUN).unwrap();
+    std::fs::write(d.join("scenarios/tiny.json"), SCENARIO).unwrap();
+    std::fs::write(d.join("images/tiny/native-f000.png"), PNG).unwrap();
+    std::fs::write(dir.join("outside.png"), PNG).unwrap();
+    d.to_string_lossy().into_owned()
+}
+
+fn expected_body() -> serde_json::Value {
+    serde_json::json!({
+        "run": serde_json::from_str::<serde_json::Value>(RUN).unwrap(),
+        "scenarios": [serde_json::from_str::<serde_json::Value>(SCENARIO).unwrap()],
+        "images": {"images/tiny/native-f000.png": "iVBORw0KGgpmYWtl"},
+    })
+}
+
+struct Request {
+    line: String,
+    headers: Vec<(String, String)>,
+    body: Vec<u8>,
+}
+
+impl Request {
+    fn header(&self, name: &str) -> Option<&str> {
+        self.headers
+            .iter()
+            .find(|(k, _)| k.eq_ignore_ascii_case(name))
+            .map(|(_, v)| v.as_str())
+    }
+}
+
+/// Serves one request with `status` and JSON `answer`; returns the URL and the recorded request.
+fn fake_dashboard(status: &'static str, answer: &'static str) -> (String, JoinHandle<Request>) {
+    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+    let url = format!("http://{}", listener.local_addr().unwrap());
+    let handle = std::thread::spawn(move || {
+        let (stream, _) = listener.accept().unwrap();
+        let mut reader = BufReader::new(stream.try_clone().unwrap());
+        let mut line = String::new();
+        reader.read_line(&mut line).unwrap();
+        let mut headers = Vec::new();
+        loop {
+            let mut h = String::new();
+            reader.read_line(&mut h).unwrap();
+            let h = h.trim_end();
+            if h.is_empty() {
+                break;
+            }
+            let (k, v) = h.split_once(':').unwrap();
+            headers.push((k.trim().to_string(), v.trim().to_string()));
+        }
+        let length: usize = headers
+            .iter()
+            .find(|(k, _)| k.eq_ignore_ascii_case("content-length"))
+            .map(|(_, v)| v.parse().unwrap())
+            .unwrap_or(0);
+        let mut body = vec![0; length];
+        reader.read_exact(&mut body).unwrap();
+        let mut stream = stream;
+        write!(
+            stream,
+            "HTTP/1.1 {status}\r\nContent-Type: application/json\r\nContent-Length: {}\r\nConnection: close\r\n\r\n{answer}",
+            answer.len()
+        )
+        .unwrap();
+        Request {
+            line: line.trim_end().to_string(),
+            headers,
+            body,
+        }
+    });
+    (url, handle)
+}
+
+fn tessera(args: &[&str], token: Option<&str>) -> (i32, String, String) {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_tessera"));
+    cmd.args(args);
+    match token {
+        Some(t) => cmd.env("TESSERA_DASHBOARD_TOKEN", t),
+        None => cmd.env_remove("TESSERA_DASHBOARD_TOKEN"),
+    };
+    let out = cmd.output().unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into(),
+        String::from_utf8_lossy(&out.stderr).into(),
+    )
+}
+
+#[test]
+fn bundle_is_the_dashboards_upload_body() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = run_folder(dir.path());
+    assert_eq!(
+        tessera::upload::bundle(Path::new(&run)).unwrap(),
+        expected_body()
+    );
+}
+
+#[test]
+fn endpoint_appends_the_api_path_once() {
+    use tessera::upload::endpoint;
+    assert_eq!(endpoint("http://d:8080").unwrap(), "http://d:8080/api/runs");
+    assert_eq!(endpoint("https://d/").unwrap(), "https://d/api/runs");
+    assert_eq!(endpoint("http://d/api/runs").unwrap(), "http://d/api/runs");
+    assert_eq!(
+        endpoint("d:8080").unwrap_err().to_string(),
+        "\"d:8080\" is not a dashboard URL: give http://host:port or https://host"
+    );
+}
+
+#[test]
+fn upload_posts_the_bundle_with_the_bearer_token() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = run_folder(dir.path());
+    let (url, server) = fake_dashboard(
+        "201 Created",
+        r#"{"run_id":"r1","stored":true,"results":3,"new_regressions":1}"#,
+    );
+    let (code, out, err) = tessera(&["upload", &run, "--url", &url], Some("s3cret"));
+    assert_eq!((code, err.as_str()), (0, ""));
+    assert_eq!(out, "uploaded: r1 stored (3 results, 1 new regressions)\n");
+    let req = server.join().unwrap();
+    assert_eq!(req.line, "POST /api/runs HTTP/1.1");
+    assert_eq!(req.header("authorization"), Some("Bearer s3cret"));
+    assert_eq!(req.header("content-type"), Some("application/json"));
+    let body: serde_json::Value = serde_json::from_slice(&req.body).unwrap();
+    assert_eq!(body, expected_body());
+}
+
+#[test]
+fn already_stored_is_success() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = run_folder(dir.path());
+    let (url, server) = fake_dashboard(
+        "200 OK",
+        r#"{"run_id":"r1","stored":false,"results":0,"new_regressions":0}"#,
+    );
+    let (code, out, _) = tessera(&["upload", &run, "--url", &url], Some("s3cret"));
+    assert_eq!(
+        (code, out.as_str()),
+        (0, "uploaded: r1 was already stored\n")
+    );
+    server.join().unwrap();
+}
+
+#[test]
+fn refused_upload_exits_4_with_the_dashboards_message() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = run_folder(dir.path());
+    let (url, server) = fake_dashboard("401 Unauthorized", r#"{"error":"wrong token"}"#);
+    let (code, out, err) = tessera(&["upload", &run, "--url", &url], Some("wrong"));
+    assert_eq!((code, out.as_str()), (4, ""));
+    assert_eq!(
+        err,
+        format!(
+            "error: the dashboard at {url}/api/runs refused the run with HTTP 401: wrong token\n"
+        )
+    );
+    server.join().unwrap();
+    assert!(
+        Path::new(&run).join("run.json").is_file(),
+        "results stay on disk"
+    );
+}
+
+#[test]
+fn unreachable_dashboard_and_missing_token_exit_4() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = run_folder(dir.path());
+    // A port that nothing listens on any more.
+    let url = {
+        let l = TcpListener::bind("127.0.0.1:0").unwrap();
+        format!("http://{}", l.local_addr().unwrap())
+    };
+    let (code, _, err) = tessera(&["upload", &run, "--url", &url], Some("s3cret"));
+    assert_eq!(code, 4, "{err}");
+    assert!(
+        err.starts_with(&format!(
+            "error: cannot reach the dashboard at {url}/api/runs: "
+        )),
+        "{err}"
+    );
+    let (code, _, err) = tessera(&["upload", &run, "--url", &url], None);
+    assert_eq!(code, 4);
+    assert_eq!(
+        err,
+        "error: TESSERA_DASHBOARD_TOKEN is not set: export the dashboard's token to upload\n"
+    );
+}
+
+#[test]
+fn bad_run_folder_or_url_exits_2() {
+    let (code, _, err) = tessera(&["upload", "/no/such/run", "--url", "http://d"], Some("t"));
+    assert_eq!(code, 2);
+    assert_eq!(err, "error: /no/such/run: no such run folder (expected <run-id>/run.json as written by `tessera run`)\n");
+    let dir = tempfile::tempdir().unwrap();
+    let run = run_folder(dir.path());
+    let (code, _, _) = tessera(&["upload", &run, "--url", "ftp://d"], Some("t"));
+    assert_eq!(code, 2);
+}
+
+#[test]
+fn run_with_upload_refuses_a_missing_token_before_running() {
+    let smoke = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenarios/smoke/basic.toml");
+    let (code, out, err) = tessera(&["run", smoke, "--upload", "http://d:8080"], None);
+    assert_eq!((code, out.as_str()), (2, ""));
+    assert_eq!(
+        err,
+        "error: --upload: TESSERA_DASHBOARD_TOKEN is not set: export the dashboard's token to upload\n"
+    );
+}
