@@ -163,7 +163,7 @@ fn slower_variant_and_worse_psnr_are_regressions_on_one_adapter() {
 |---|---|---|
 | run | `20261122T030000Z-aaaaaaa` | `20261122T040000Z-bbbbbbb` |
 | commit | `aaaaaaa` | `bbbbbbb` |
-| adapter | NVIDIA H100 (vulkan) | NVIDIA H100 (vulkan) |
+| adapter | NVIDIA H100, vulkan | NVIDIA H100, vulkan |
 | driver | NVIDIA, 580.65 | NVIDIA, 580.65 |
 | status | complete | complete |
 
@@ -239,7 +239,7 @@ fn other_adapter_is_compared_by_speedup_and_its_skips_are_not_regressions() {
 |---|---|---|
 | run | `20261122T030000Z-aaaaaaa` | `20261122T040000Z-bbbbbbb` |
 | commit | `aaaaaaa` | `bbbbbbb` |
-| adapter | NVIDIA H100 (vulkan) | AMD Radeon RX 7900 (vulkan) |
+| adapter | NVIDIA H100, vulkan | AMD Radeon RX 7900, vulkan |
 | driver | NVIDIA, 580.65 | NVIDIA, Mesa 24 |
 | status | complete | complete |
 
@@ -304,7 +304,7 @@ fn failures_gates_and_missing_scenarios() {
 |---|---|---|
 | run | `20261122T030000Z-aaaaaaa` | `20261122T040000Z-bbbbbbb` |
 | commit | `aaaaaaa` | `bbbbbbb` |
-| adapter | llvmpipe (LLVM 15.0.6, 256 bits) (vulkan) | llvmpipe (LLVM 15.0.6, 256 bits) (vulkan) |
+| adapter | llvmpipe (LLVM 15.0.6, 256 bits), vulkan | llvmpipe (LLVM 15.0.6, 256 bits), vulkan |
 | driver | NVIDIA, Mesa 22.3.6 | NVIDIA, Mesa 22.3.6 |
 | status | complete | complete |
 

@@ -65,13 +65,15 @@ fn metric_cell(m: &MetricChange) -> String {
     }
 }
 
-fn time_cell(t: &Time) -> (String, String) {
+/// The change and the verdict; "slower" is bold only where it counts as a regression.
+fn time_cell(t: &Time, timings_count: bool) -> (String, String) {
     match t {
         Time::Compared {
             change, p, verdict, ..
         } => {
             let word = match verdict {
-                Verdict::Worse => "**slower**",
+                Verdict::Worse if timings_count => "**slower**",
+                Verdict::Worse => "slower",
                 Verdict::Better => "faster",
                 Verdict::Same => "within noise",
             };
@@ -91,7 +93,7 @@ fn run_rows(out: &mut String, a: &RunInfo, b: &RunInfo) {
         ),
         None => "-".to_string(),
     };
-    let adapter = |r: &RunInfo| cell(&format!("{} ({})", r.adapter.name, r.adapter.backend));
+    let adapter = |r: &RunInfo| cell(&format!("{}, {}", r.adapter.name, r.adapter.backend));
     let driver = |r: &RunInfo| cell(&format!("{}, {}", r.adapter.driver, r.adapter.driver_info));
     let status = |r: &RunInfo| {
         serde_json::to_value(r.status)
@@ -113,13 +115,13 @@ fn run_rows(out: &mut String, a: &RunInfo, b: &RunInfo) {
     }
 }
 
-fn variant_row(out: &mut String, v: &VariantChange) {
+fn variant_row(out: &mut String, v: &VariantChange, timings_count: bool) {
     let name = match v.only_in {
         Some(Side::A) => format!("{} (only in A)", v.variant),
         Some(Side::B) => format!("{} (only in B)", v.variant),
         None => v.variant.clone(),
     };
-    let (change, time) = time_cell(&v.time);
+    let (change, time) = time_cell(&v.time, timings_count);
     let ms = pair(
         v.gpu_ms.0.map(|x| format!("{x:.3}")),
         v.gpu_ms.1.map(|x| format!("{x:.3}")),
@@ -224,7 +226,7 @@ pub fn render(c: &Comparison) -> String {
             "---:|".repeat(metric_headers.len())
         );
         for v in &s.variants {
-            variant_row(&mut out, v);
+            variant_row(&mut out, v, c.timings_count);
         }
         out.push('\n');
     }
