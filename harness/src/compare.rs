@@ -15,6 +15,8 @@
 //!   not compared in milliseconds. Each frame is divided by the median of that run's `native`
 //!   variant in the same scenario and the same test runs on those relative costs, so a verdict
 //!   means the speedup against native changed; `native` itself is the baseline.
+//! - **CPU adapters** (`device_type` `cpu`, i.e. lavapipe, in either run): timings measure CPU
+//!   work and the machine's load, so time verdicts are shown but never count as regressions.
 //! - **Quality.** PSNR, SSIM and FLIP aggregates got **worse** or **better** when they moved by more
 //!   than 0.1 dB, 0.001 and 0.001 in that direction (references are rendered in the same run, so
 //!   these are not noisy; the tolerance absorbs rounding). Infinite PSNR (identical frames) is
