@@ -9,26 +9,13 @@ use tessera::render::checkerboard::Checkerboard;
 use tessera::render::checkerboard_model::{self, Inputs, Samples, Source};
 use tessera::render::readback::read_texture;
 use tessera::render::scene::SceneGpu;
-use tessera::render::technique::{self, FrameInfo, Technique};
+use tessera::render::technique::{self, Technique};
 use tessera::render::timers::Timers;
 use tessera::scenario::Scenario;
 use tessera::technique::{ParamValue, TechniqueKind, Variant};
 
 fn variant(params: &[(&str, ParamValue)]) -> Variant {
-    let t = TechniqueKind::Checkerboard;
-    let mut all: std::collections::BTreeMap<String, ParamValue> = t
-        .params()
-        .iter()
-        .map(|p| (p.name.to_string(), p.default.value()))
-        .collect();
-    for (k, v) in params {
-        all.insert(k.to_string(), v.clone());
-    }
-    Variant {
-        name: "checkerboard".into(),
-        technique: t,
-        params: all,
-    }
+    common::variant(TechniqueKind::Checkerboard, params)
 }
 
 fn vec4s(v: Vec<f32>) -> Vec<Vec4> {
@@ -64,31 +51,7 @@ fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) -> Vec<Source> {
     let mut timers = Timers::new(&gpu.device, &[]).unwrap();
     let mut sources = Vec::new();
     for index in 0..frames {
-        let time = s.frame_time(index);
-        let prev_time = if index == 0 {
-            time
-        } else {
-            s.frame_time(index - 1)
-        };
-        let history_valid =
-            index > 0 && s.camera.pose_at(time).segment == s.camera.pose_at(prev_time).segment;
-        scene.write_objects(&gpu.queue, time, prev_time);
-        let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        cb.record(
-            &gpu,
-            &mut scene,
-            &timers,
-            &mut encoder,
-            FrameInfo {
-                index,
-                time,
-                prev_time,
-                history_valid,
-            },
-        );
-        timers.resolve(&mut encoder);
-        gpu.queue.submit([encoder.finish()]);
-        timers.end_frame();
+        tessera::run::frames::submit_frame(&gpu, &mut scene, s, &mut cb, &mut timers, index);
         let _ = gpu.device.poll(wgpu::PollType::Wait {
             submission_index: None,
             timeout: None,

@@ -186,3 +186,21 @@ fn a_resolution_beyond_the_adapter_limit_is_skipped_with_the_reason() {
         "{stdout}"
     );
 }
+
+/// The smoke suite, as the README's main command runs it, passes on the default adapter.
+#[test]
+fn smoke_suite_passes() {
+    let dir = tempfile::tempdir().unwrap();
+    let smoke = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios/smoke");
+    let (code, stdout, stderr) = tessera(&[
+        "run",
+        smoke.to_str().unwrap(),
+        "--out",
+        dir.path().to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert_eq!(code, 0, "{stdout}\n{stderr}");
+    let verdict = stdout.lines().last().unwrap();
+    assert!(verdict.starts_with("PASSED"), "{verdict}");
+    assert!(!verdict.contains(" 0 ok"), "{verdict}");
+}

@@ -8,21 +8,7 @@ use tessera::render::technique;
 use tessera::run::frames;
 use tessera::technique::{ParamValue, TechniqueKind, Variant};
 
-fn variant(technique: TechniqueKind, params: &[(&str, ParamValue)]) -> Variant {
-    let mut all: std::collections::BTreeMap<String, ParamValue> = technique
-        .params()
-        .iter()
-        .map(|p| (p.name.to_string(), p.default.value()))
-        .collect();
-    for (k, v) in params {
-        all.insert(k.to_string(), v.clone());
-    }
-    Variant {
-        name: technique.name().into(),
-        technique,
-        params: all,
-    }
-}
+use common::variant;
 
 fn render(
     gpu: &tessera::gpu::Gpu,

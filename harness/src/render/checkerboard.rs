@@ -19,7 +19,9 @@ use glam::Vec2;
 
 use super::graph::{Graph, PassKind, Plan, TextureDesc};
 use super::scene::{SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FORMAT};
-use super::technique::{allocate, record_scene_pass, FrameInfo, Technique, Unsupported};
+use super::technique::{
+    allocate, compute_pipeline, record_scene_pass, FrameInfo, Technique, Unsupported,
+};
 use super::timers::Timers;
 use crate::gpu::Gpu;
 use crate::technique::Variant;
@@ -233,18 +235,7 @@ impl Checkerboard {
             TWO_PASS_WGSL
         };
         let source = format!("{prelude}\n{RESOLVE_WGSL}");
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("checkerboard_resolve.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(source.into()),
-        });
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("reconstruct"),
-            layout: None,
-            module: &module,
-            entry_point: Some("main"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
+        let pipeline = compute_pipeline(device, "reconstruct", &source, "main");
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("reconstruct params"),
             size: std::mem::size_of::<ResolveParams>() as u64,
@@ -574,14 +565,7 @@ pub fn probe_sample_positions(gpu: &Gpu) -> Result<[[f32; 2]; 2], String> {
         multiview_mask: None,
         cache: None,
     });
-    let copy = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some("sample probe copy"),
-        layout: None,
-        module: &module,
-        entry_point: Some("copy_samples"),
-        compilation_options: Default::default(),
-        cache: None,
-    });
+    let copy = compute_pipeline(device, "sample probe copy", PROBE_WGSL, "copy_samples");
     let storage = device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("sample positions"),
         size: 32,

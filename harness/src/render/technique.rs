@@ -170,25 +170,22 @@ impl Forward {
                 width: ow,
                 height: oh,
                 ..
-            } => {
-                g.resource("color_low", tex(COLOR_FORMAT, width, height))
-                    .resource("depth_low", tex(DEPTH_FORMAT, width, height))
-                    .resource("color", tex(COLOR_FORMAT, ow, oh))
-                    .pass("scene", PassKind::Render, &[], &["color_low", "depth_low"])
-                    .pass("upscale", PassKind::Compute, &["color_low"], &["color"])
-                    .output("color");
-                "color"
             }
-            Resolve::Downsample {
+            | Resolve::Downsample {
                 width: ow,
                 height: oh,
                 ..
             } => {
-                g.resource("color_ss", tex(COLOR_FORMAT, width, height))
-                    .resource("depth_ss", tex(DEPTH_FORMAT, width, height))
+                // Rendered at another resolution, then resampled to the output by a compute pass.
+                let (color, depth, pass) = match resolve {
+                    Resolve::Upscale { .. } => ("color_low", "depth_low", "upscale"),
+                    _ => ("color_ss", "depth_ss", "downsample"),
+                };
+                g.resource(color, tex(COLOR_FORMAT, width, height))
+                    .resource(depth, tex(DEPTH_FORMAT, width, height))
                     .resource("color", tex(COLOR_FORMAT, ow, oh))
-                    .pass("scene", PassKind::Render, &[], &["color_ss", "depth_ss"])
-                    .pass("downsample", PassKind::Compute, &["color_ss"], &["color"])
+                    .pass("scene", PassKind::Render, &[], &[color, depth])
+                    .pass(pass, PassKind::Compute, &[color], &["color"])
                     .output("color");
                 "color"
             }
@@ -376,6 +373,27 @@ pub fn record_scene_pass(
     timers.end(encoder, q);
 }
 
+/// A compute pipeline with an automatic layout from WGSL `source`.
+pub fn compute_pipeline(
+    device: &wgpu::Device,
+    label: &str,
+    source: &str,
+    entry_point: &str,
+) -> wgpu::ComputePipeline {
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(label),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
+    });
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(label),
+        layout: None,
+        module: &module,
+        entry_point: Some(entry_point),
+        compilation_options: Default::default(),
+        cache: None,
+    })
+}
+
 static UPSCALE_WGSL: &str = include_str!("../../../shaders/upscale.wgsl");
 static DOWNSAMPLE_WGSL: &str = include_str!("../../../shaders/downsample.wgsl");
 
@@ -387,18 +405,7 @@ fn upscale_pipeline(
     size: [u32; 2],
 ) -> (wgpu::ComputePipeline, wgpu::BindGroup, [u32; 2]) {
     let device = &gpu.device;
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("upscale.wgsl"),
-        source: wgpu::ShaderSource::Wgsl(UPSCALE_WGSL.into()),
-    });
-    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some("upscale"),
-        layout: None,
-        module: &module,
-        entry_point: Some("main"),
-        compilation_options: Default::default(),
-        cache: None,
-    });
+    let pipeline = compute_pipeline(device, "upscale", UPSCALE_WGSL, "main");
     let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
         label: Some("upscale"),
         mag_filter: filter,
@@ -437,18 +444,7 @@ fn downsample_pipeline(
 ) -> (wgpu::ComputePipeline, wgpu::BindGroup, [u32; 2]) {
     use wgpu::util::DeviceExt;
     let device = &gpu.device;
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("downsample.wgsl"),
-        source: wgpu::ShaderSource::Wgsl(DOWNSAMPLE_WGSL.into()),
-    });
-    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some("downsample"),
-        layout: None,
-        module: &module,
-        entry_point: Some("main"),
-        compilation_options: Default::default(),
-        cache: None,
-    });
+    let pipeline = compute_pipeline(device, "downsample", DOWNSAMPLE_WGSL, "main");
     let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some("downsample params"),
         contents: bytemuck::cast_slice(&[factor, 0, 0, 0]),

@@ -44,7 +44,7 @@ pub enum RenderError {
 }
 
 /// Encodes and submits frame `index` without waiting for it.
-fn submit_frame(
+pub fn submit_frame(
     gpu: &Gpu,
     scene: &mut SceneGpu,
     scenario: &Scenario,

@@ -6,6 +6,7 @@ use std::path::Path;
 
 use tessera::gpu::{self, Gpu};
 use tessera::scenario::{self, Scenario};
+use tessera::technique::{ParamValue, TechniqueKind, Variant};
 
 /// Opens the adapter the harness would pick. CI installs lavapipe (ci/setup.sh), so a missing
 /// adapter is a failure, not a skip.
@@ -16,6 +17,23 @@ pub fn gpu() -> Gpu {
 
 pub fn scenario(src: &str) -> Scenario {
     scenario::parse(Path::new("test.toml"), src).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// A variant of `technique` with its defaults and `params` set.
+pub fn variant(technique: TechniqueKind, params: &[(&str, ParamValue)]) -> Variant {
+    let mut all: std::collections::BTreeMap<String, ParamValue> = technique
+        .params()
+        .iter()
+        .map(|p| (p.name.to_string(), p.default.value()))
+        .collect();
+    for (k, v) in params {
+        all.insert(k.to_string(), v.clone());
+    }
+    Variant {
+        name: technique.name().into(),
+        technique,
+        params: all,
+    }
 }
 
 /// A small scene with every procedural shape, a light and a moving object.
