@@ -6,6 +6,7 @@ cd "$(dirname "$0")/.."
 ci/setup.sh
 # Prints `export TESSERA_TEST_POSTGRES_URL=...` for the server it starts (idempotent).
 eval "$(bash dashboard/ci/setup-postgres.sh)"
+bash dashboard/ci/setup-chromium.sh  # headless Chromium + chromedriver for dashboard/tests/browser.rs (idempotent)
 cargo fmt --all -- --check
 cargo clippy --workspace --all-targets -- -D warnings
 cargo test --workspace
