@@ -91,7 +91,7 @@ pub fn page(title: &str, active: &str, body: &str) -> String {
     let mut out = String::with_capacity(body.len() + 2048);
     let _ = write!(
         out,
-        "<!doctype html><html lang=en><head><meta charset=utf-8><title>{} · Tessera</title><style>{STYLE}</style></head><body><nav>",
+        "<!doctype html><html lang=en><head><meta charset=utf-8><link rel=icon href=\"data:,\"><title>{} · Tessera</title><style>{STYLE}</style></head><body><nav>",
         esc(title)
     );
     for (href, label) in [
