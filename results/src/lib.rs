@@ -237,6 +237,19 @@ pub struct MetricRecord {
     pub value: f64,
     /// Whether larger values are better (PSNR, SSIM) or worse (errors).
     pub higher_is_better: bool,
+    /// Temporal behaviour of `per_frame`: mean, p95, max and population standard deviation over
+    /// frames (a proxy for quality "pumping"); absent when a frame's value is infinite.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub series: Option<SeriesSummary>,
+}
+
+/// Statistics of a metric's per-frame series.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
+pub struct SeriesSummary {
+    pub mean: f64,
+    pub p95: f64,
+    pub max: f64,
+    pub std_dev: f64,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq, Eq)]
@@ -338,6 +351,7 @@ mod tests {
             frames: vec![0, 1],
             value: f64::INFINITY,
             higher_is_better: true,
+            series: None,
         };
         let json = serde_json::to_string(&m).unwrap();
         assert!(json.contains("\"per_frame\":[null,42.0]"), "{json}");

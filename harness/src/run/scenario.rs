@@ -372,6 +372,10 @@ fn compute_metrics(
     let frames: Vec<u32> = (0..test.len().min(reference.len()) as u32).collect();
     let mut out = Vec::new();
     for &kind in &scenario.metrics {
+        if kind == MetricKind::Flicker {
+            out.push(flicker(test));
+            continue;
+        }
         let mut per_frame = Vec::new();
         for &f in &frames {
             let (r, t) = (&reference[f as usize], &test[f as usize]);
@@ -385,6 +389,7 @@ fn compute_metrics(
                     tessera_metrics::flip_ldr(r, t, tessera_metrics::DEFAULT_PIXELS_PER_DEGREE)?
                         .mean
                 }
+                MetricKind::Flicker => unreachable!("computed above"),
             };
             per_frame.push(v);
         }
@@ -409,6 +414,7 @@ fn compute_metrics(
         };
         out.push(MetricRecord {
             name: kind.name().to_string(),
+            series: series(&per_frame),
             per_frame,
             frames: frames.clone(),
             value,
@@ -416,6 +422,43 @@ fn compute_metrics(
         });
     }
     Ok(out)
+}
+
+fn series(per_frame: &[f64]) -> Option<tessera_results::SeriesSummary> {
+    tessera_metrics::series_stats(per_frame).map(|s| tessera_results::SeriesSummary {
+        mean: s.mean,
+        p95: s.p95,
+        max: s.max,
+        std_dev: s.std_dev,
+    })
+}
+
+/// Static-scene flicker (notes/metrics.md section 3.3, SSF): per measured frame after the first,
+/// the mean absolute difference from the previous frame over pixels and RGB channels, in 8-bit
+/// units; the value is the mean over frames. Zero for a converged deterministic technique on a
+/// static scene; on moving scenes it measures change, not error.
+fn flicker(frames: &[Rgb8Image]) -> MetricRecord {
+    let per_frame: Vec<f64> = frames
+        .windows(2)
+        .map(|w| {
+            let sum: u64 = w[0]
+                .data
+                .iter()
+                .zip(&w[1].data)
+                .map(|(a, b)| a.abs_diff(*b) as u64)
+                .sum();
+            sum as f64 / w[1].data.len().max(1) as f64
+        })
+        .collect();
+    let value = per_frame.iter().sum::<f64>() / per_frame.len().max(1) as f64;
+    MetricRecord {
+        name: MetricKind::Flicker.name().to_string(),
+        series: series(&per_frame),
+        frames: (1..frames.len() as u32).collect(),
+        per_frame,
+        value,
+        higher_is_better: false,
+    }
 }
 
 fn save_images(

@@ -92,16 +92,19 @@ pub enum MetricKind {
     Ssim,
     SsimLuma,
     Flip,
+    /// Static-scene flicker: mean absolute change between consecutive output frames.
+    Flicker,
 }
 
 impl MetricKind {
-    pub const ALL: [MetricKind; 6] = [
+    pub const ALL: [MetricKind; 7] = [
         MetricKind::Psnr,
         MetricKind::PsnrLuma,
         MetricKind::MaxAbsError,
         MetricKind::Ssim,
         MetricKind::SsimLuma,
         MetricKind::Flip,
+        MetricKind::Flicker,
     ];
     pub const DEFAULT: [MetricKind; 3] = [
         MetricKind::Psnr,
@@ -117,6 +120,7 @@ impl MetricKind {
             MetricKind::Ssim => "ssim",
             MetricKind::SsimLuma => "ssim-luma",
             MetricKind::Flip => "flip",
+            MetricKind::Flicker => "flicker",
         }
     }
 
