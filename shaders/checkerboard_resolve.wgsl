@@ -72,30 +72,33 @@ fn untonemap(c: vec3<f32>) -> vec3<f32> {
     return c / max(1.0 - max(c.r, max(c.g, c.b)), 1e-6);
 }
 
+const OFFSETS = array<vec2<i32>, 4>(vec2<i32>(0, -1), vec2<i32>(0, 1), vec2<i32>(-1, 0), vec2<i32>(1, 0));
+
+fn inside(p: vec2<i32>) -> bool {
+    return all(p >= vec2<i32>(0)) && all(p < vec2<i32>(params.size.xy));
+}
+
 struct Neighbourhood {
     // Up, down, left, right (tonemapped when the fill or clamp needs it).
     c: array<vec3<f32>, 4>,
     valid: array<bool, 4>,
-    depth_sum: f32,
     count: f32,
     lo: vec3<f32>,
     hi: vec3<f32>,
 }
 
+// The 4 cardinal neighbours' colours. Loaded only when a fill or a clamp needs them: on the
+// history path without a clamp nothing here is read (CPU adapters pay for every load).
 fn neighbourhood(pixel: vec2<i32>, tonemapped: bool) -> Neighbourhood {
     var n: Neighbourhood;
-    let offsets = array<vec2<i32>, 4>(vec2<i32>(0, -1), vec2<i32>(0, 1), vec2<i32>(-1, 0), vec2<i32>(1, 0));
-    let size = vec2<i32>(params.size.xy);
     n.lo = vec3<f32>(3.0e38);
     n.hi = vec3<f32>(-3.0e38);
-    n.depth_sum = 0.0;
     n.count = 0.0;
     for (var i = 0; i < 4; i = i + 1) {
-        let p = pixel + offsets[i];
-        let inside = all(p >= vec2<i32>(0)) && all(p < size);
-        n.valid[i] = inside;
+        let p = pixel + OFFSETS[i];
+        n.valid[i] = inside(p);
         n.c[i] = vec3<f32>(0.0);
-        if inside {
+        if n.valid[i] {
             var c = color_at(p).rgb;
             if tonemapped {
                 c = tonemap(c);
@@ -103,11 +106,24 @@ fn neighbourhood(pixel: vec2<i32>, tonemapped: bool) -> Neighbourhood {
             n.c[i] = c;
             n.lo = min(n.lo, c);
             n.hi = max(n.hi, c);
-            n.depth_sum = n.depth_sum + linear_depth(depth_at(p));
             n.count = n.count + 1.0;
         }
     }
     return n;
+}
+
+// Mean view depth of the 4 cardinal neighbours (this frame's samples).
+fn neighbour_depth(pixel: vec2<i32>) -> f32 {
+    var sum = 0.0;
+    var count = 0.0;
+    for (var i = 0; i < 4; i = i + 1) {
+        let p = pixel + OFFSETS[i];
+        if inside(p) {
+            sum = sum + linear_depth(depth_at(p));
+            count = count + 1.0;
+        }
+    }
+    return sum / max(count, 1.0);
 }
 
 // The spatial fill of a missing pixel, in the neighbourhood's space (tonemapped or not).
@@ -140,72 +156,72 @@ fn reconstruct(pixel: vec2<i32>) -> vec4<f32> {
     if is_current(q) {
         return color_at(pixel);
     }
-    let tonemapped = params.mode.w != 0u;
-    let n = neighbourhood(pixel, tonemapped);
+    // Decide between history and a spatial fill first, then load the neighbourhood at one place
+    // only: SIMD hardware and CPU rasterisers run every branch some lane takes.
+    var use_history = false;
+    var prev_pixel = pixel;
+    var deviation = 0.0;
+    let confidence_clamp = params.mode2.x == 2u;
     // 2. No usable history (first frame, camera cut, resolution change): spatial fill.
-    if params.mode.y != 0u {
-        return finish(fill(n), tonemapped);
-    }
-    // 3. Where was this pixel last frame? Dynamic pixels: the velocity buffer. Static pixels:
-    //    the previous frame's sample here, unprojected with the previous camera and projected
-    //    with the current one (Intel; mosaiikki unprojects with the current inverse).
-    let size = vec2<f32>(params.size.xy);
-    let centre = vec2<f32>(pixel) + 0.5;
-    var prev_pos: vec2<f32>;
-    var dynamic_pixel = false;
-    var v = vec4<f32>(0.0);
-    if params.mode2.y != 0u {
-        v = textureLoad(velocity, pixel, 0);
-        dynamic_pixel = v.z > 0.5;
-    }
-    if dynamic_pixel {
-        prev_pos = centre - v.xy;
-    } else {
-        let d = depth_at(pixel);
-        let ndc = vec4<f32>(centre.x / size.x * 2.0 - 1.0, 1.0 - centre.y / size.y * 2.0, d, 1.0);
-        let now = params.reproject * ndc;
-        let now_px = vec2<f32>((now.x / now.w * 0.5 + 0.5) * size.x, (0.5 - now.y / now.w * 0.5) * size.y);
-        prev_pos = centre - (now_px - centre);
-    }
-    let prev_pixel = vec2<i32>(floor(prev_pos));
-    // 4. Off screen last frame.
-    if any(prev_pixel < vec2<i32>(0)) || any(prev_pixel >= vec2<i32>(params.size.xy)) {
-        return finish(fill(n), tonemapped);
-    }
-    // 5. The motion cancelled the jitter: last frame did not shade that quadrant.
-    let q_prev = u32(prev_pixel.x & 1) + 2u * u32(prev_pixel.y & 1);
-    if is_current(q_prev) {
-        return finish(fill(n), tonemapped);
-    }
-    // 6. Moved to another 2x2 block: possibly occluded. ASO assumes so; CSO compares the old
-    //    sample's view depth with the mean of the current neighbours'.
-    let old_depth = linear_depth(depth_at(prev_pixel));
-    let avg_depth = n.depth_sum / max(n.count, 1.0);
-    let moved_block = any((prev_pixel >> vec2<u32>(1u)) != (pixel >> vec2<u32>(1u)));
-    if moved_block {
-        if params.mode.z == 1u || abs(avg_depth - old_depth) >= params.depth.x {
-            return finish(fill(n), tonemapped);
+    if params.mode.y == 0u {
+        // 3. Where was this pixel last frame? Dynamic pixels: the velocity buffer. Static
+        //    pixels: the previous frame's sample here, unprojected with the previous camera and
+        //    projected with the current one (Intel; mosaiikki unprojects with the current inverse).
+        let size = vec2<f32>(params.size.xy);
+        let centre = vec2<f32>(pixel) + 0.5;
+        var prev_pos: vec2<f32>;
+        var v = vec4<f32>(0.0);
+        if params.mode2.y != 0u {
+            v = textureLoad(velocity, pixel, 0);
+        }
+        if v.z > 0.5 {
+            prev_pos = centre - v.xy;
+        } else {
+            let d = depth_at(pixel);
+            let ndc = vec4<f32>(centre.x / size.x * 2.0 - 1.0, 1.0 - centre.y / size.y * 2.0, d, 1.0);
+            let now = params.reproject * ndc;
+            let now_px = vec2<f32>((now.x / now.w * 0.5 + 0.5) * size.x, (0.5 - now.y / now.w * 0.5) * size.y);
+            prev_pos = centre - (now_px - centre);
+        }
+        prev_pixel = vec2<i32>(floor(prev_pos));
+        // 4. Off screen last frame; 5. the motion cancelled the jitter (last frame did not shade
+        //    that quadrant): both fill.
+        let q_prev = u32(prev_pixel.x & 1) + 2u * u32(prev_pixel.y & 1);
+        if inside(prev_pixel) && !is_current(q_prev) {
+            // 6. Moved to another 2x2 block: possibly occluded. ASO assumes so; CSO compares
+            //    the old sample's view depth with the mean of the current neighbours'.
+            let moved_block = any((prev_pixel >> vec2<u32>(1u)) != (pixel >> vec2<u32>(1u)));
+            if (moved_block && params.mode.z == 0u) || confidence_clamp {
+                deviation = abs(neighbour_depth(pixel) - linear_depth(depth_at(prev_pixel)));
+            }
+            use_history = !(moved_block && (params.mode.z == 1u || deviation >= params.depth.x));
         }
     }
-    // 7. History, clamped to the neighbourhood (mosaiikki after El Mansouri), optionally blended
-    //    back by depth confidence (large deviation = small-scale detail: trust the history).
-        let history = color_at(prev_pixel);
-    if params.mode2.x == 0u || n.count == 0.0 {
+    // 7. History, unclamped (Intel) ...
+    if use_history && params.mode2.x == 0u {
+        return color_at(prev_pixel);
+    }
+    let tonemapped = params.mode.w != 0u;
+    let n = neighbourhood(pixel, tonemapped);
+    if !use_history {
+        return finish(fill(n), tonemapped);
+    }
+    let history = color_at(prev_pixel);
+    if n.count == 0.0 {
         return history;
     }
+    // ... or clamped to the neighbourhood (mosaiikki after El Mansouri), optionally blended back
+    // by depth confidence (a large deviation means small-scale detail: trust the history).
     var h = history.rgb;
     if tonemapped {
         h = tonemap(h);
     }
-    {
-        let clamped = clamp(h, n.lo, n.hi);
-        if params.mode2.x == 2u {
-            let deviation = abs(avg_depth - old_depth) - params.depth.x;
-            let confidence = clamp(deviation * deviation, 0.0, 1.0);
-            h = mix(clamped, h, confidence);
-        } else {
-            h = clamped;
-        }
+    let clamped = clamp(h, n.lo, n.hi);
+    if confidence_clamp {
+        let d = deviation - params.depth.x;
+        h = mix(clamped, h, clamp(d * d, 0.0, 1.0));
+    } else {
+        h = clamped;
     }
     return finish(h, tonemapped);
 }

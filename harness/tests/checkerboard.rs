@@ -7,7 +7,7 @@ mod common;
 use glam::Vec4;
 use tessera::render::checkerboard::Checkerboard;
 use tessera::render::checkerboard_model::{self, Inputs, Samples, Source};
-use tessera::render::readback::read_texture;
+use tessera::render::readback::{read_texture, read_texture_layer};
 use tessera::render::scene::SceneGpu;
 use tessera::render::technique::{self, Technique};
 use tessera::render::timers::Timers;
@@ -23,21 +23,21 @@ fn vec4s(v: Vec<f32>) -> Vec<Vec4> {
 }
 
 fn samples(gpu: &tessera::gpu::Gpu, cb: &Checkerboard, parity: u32) -> Samples {
-    let p = if parity == 0 { "even" } else { "odd" };
-    let tex = |n: String| cb.texture(&n).unwrap_or_else(|| panic!("no texture {n}"));
-    let c0 = tex(format!("color_{p}_s0"));
+    let colors = cb.texture("color_samples").expect("two-pass colour array");
+    let depths = cb.texture("depth_samples").expect("two-pass depth array");
+    let layer = |s: u32| parity * 2 + s;
     Samples {
-        width: c0.width(),
-        height: c0.height(),
+        width: colors.width(),
+        height: colors.height(),
         color: [0, 1].map(|s| {
-            vec4s(read_texture(
+            vec4s(read_texture_layer(
                 &gpu.device,
                 &gpu.queue,
-                tex(format!("color_{p}_s{s}")),
+                colors,
+                layer(s),
             ))
         }),
-        depth: [0, 1]
-            .map(|s| read_texture(&gpu.device, &gpu.queue, tex(format!("depth_{p}_s{s}")))),
+        depth: [0, 1].map(|s| read_texture_layer(&gpu.device, &gpu.queue, depths, layer(s))),
     }
 }
 

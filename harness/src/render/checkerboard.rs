@@ -118,6 +118,8 @@ pub struct Checkerboard {
     bind_groups: [wgpu::BindGroup; 2],
     _dummy_velocity: Option<wgpu::Texture>,
     last: Option<LastFrame>,
+    /// Two-pass: render-target views of each layer (colour, depth), `parity * 2 + sample`.
+    layer_views: Vec<(wgpu::TextureView, wgpu::TextureView)>,
 }
 
 /// What the last recorded reconstruction was given (for the CPU model in tests).
@@ -132,26 +134,13 @@ pub struct LastFrame {
     pub far: f32,
 }
 
-/// Resource names per sampling: (colour, depth) per parity and sample.
-fn sample_targets(sampling: Sampling) -> [[(&'static str, &'static str); 2]; 2] {
-    match sampling {
-        // [parity][sample]
-        Sampling::TwoPass => [
-            [
-                ("color_even_s0", "depth_even_s0"),
-                ("color_even_s1", "depth_even_s1"),
-            ],
-            [
-                ("color_odd_s0", "depth_odd_s0"),
-                ("color_odd_s1", "depth_odd_s1"),
-            ],
-        ],
-        Sampling::Msaa2x => [
-            [("color_even", "depth_even"); 2],
-            [("color_odd", "depth_odd"); 2],
-        ],
-    }
-}
+/// Two-pass sampling keeps every sample in one 4-layer array per kind, layer
+/// `parity * 2 + sample` (even s0, even s1, odd s0, odd s1): the reconstruction then loads any
+/// sample with one fetch and no branch (divergent branches cost every lane on SIMD and CPU
+/// adapters). 2x MSAA has no portable multisampled arrays: one texture per parity.
+const TWO_PASS_COLOR: &str = "color_samples";
+const TWO_PASS_DEPTH: &str = "depth_samples";
+const MSAA_TARGETS: [(&str, &str); 2] = [("color_even", "depth_even"), ("color_odd", "depth_odd")];
 
 impl Checkerboard {
     pub fn new(
@@ -170,44 +159,59 @@ impl Checkerboard {
         }
         let (qw, qh) = quarter_size(width, height);
         let samples = if sampling == Sampling::Msaa2x { 2 } else { 1 };
-        let q = |format| TextureDesc {
+        let q = |format, layers| TextureDesc {
             format,
             width: qw,
             height: qh,
             samples,
+            layers,
         };
         let full = |format| TextureDesc {
             format,
             width,
             height,
             samples: 1,
+            layers: 1,
         };
         let mut g = Graph::default();
-        let targets = sample_targets(sampling);
         let mut reads: Vec<&'static str> = Vec::new();
-        let passes: &[(&'static str, usize)] = match sampling {
-            Sampling::TwoPass => &[("scene_sample0", 0), ("scene_sample1", 1)],
-            Sampling::Msaa2x => &[("scene", 0)],
-        };
-        for &(name, s) in passes {
-            let writes = [
-                targets[0][s].0,
-                targets[0][s].1,
-                targets[1][s].0,
-                targets[1][s].1,
-            ];
-            for (i, w) in writes.iter().enumerate() {
-                g.resource(
-                    w,
-                    q(if i % 2 == 0 {
-                        COLOR_FORMAT
-                    } else {
-                        DEPTH_FORMAT
-                    }),
-                );
+        match sampling {
+            Sampling::TwoPass => {
+                g.resource(TWO_PASS_COLOR, q(COLOR_FORMAT, 4))
+                    .resource(TWO_PASS_DEPTH, q(DEPTH_FORMAT, 4));
+                for name in ["scene_sample0", "scene_sample1"] {
+                    g.pass(
+                        name,
+                        PassKind::Render,
+                        &[],
+                        &[TWO_PASS_COLOR, TWO_PASS_DEPTH],
+                    );
+                }
+                reads.extend([TWO_PASS_COLOR, TWO_PASS_DEPTH]);
             }
-            g.pass(name, PassKind::Render, &[], &writes);
-            reads.extend(writes);
+            Sampling::Msaa2x => {
+                let writes = [
+                    MSAA_TARGETS[0].0,
+                    MSAA_TARGETS[0].1,
+                    MSAA_TARGETS[1].0,
+                    MSAA_TARGETS[1].1,
+                ];
+                for (i, w) in writes.iter().enumerate() {
+                    g.resource(
+                        w,
+                        q(
+                            if i % 2 == 0 {
+                                COLOR_FORMAT
+                            } else {
+                                DEPTH_FORMAT
+                            },
+                            1,
+                        ),
+                    );
+                }
+                g.pass("scene", PassKind::Render, &[], &writes);
+                reads.extend(writes);
+            }
         }
         g.resource("velocity", full(COLOR_FORMAT))
             .resource("velocity_depth", full(DEPTH_FORMAT));
@@ -266,24 +270,25 @@ impl Checkerboard {
         let layout = pipeline.get_bind_group_layout(0);
         let bind_group = |parity: usize| {
             let view = |name: &str| textures[name].create_view(&Default::default());
-            let (cur, prev) = (targets[parity], targets[1 - parity]);
             let mut views: Vec<(u32, wgpu::TextureView)> = match sampling {
-                Sampling::TwoPass => vec![
-                    (1, view(cur[0].0)),
-                    (2, view(cur[1].0)),
-                    (3, view(prev[0].0)),
-                    (4, view(prev[1].0)),
-                    (5, view(cur[0].1)),
-                    (6, view(cur[1].1)),
-                    (7, view(prev[0].1)),
-                    (8, view(prev[1].1)),
-                ],
-                Sampling::Msaa2x => vec![
-                    (1, view(cur[0].0)),
-                    (3, view(prev[0].0)),
-                    (5, view(cur[0].1)),
-                    (7, view(prev[0].1)),
-                ],
+                Sampling::TwoPass => {
+                    let array = |name: &str| {
+                        textures[name].create_view(&wgpu::TextureViewDescriptor {
+                            dimension: Some(wgpu::TextureViewDimension::D2Array),
+                            ..Default::default()
+                        })
+                    };
+                    vec![(1, array(TWO_PASS_COLOR)), (5, array(TWO_PASS_DEPTH))]
+                }
+                Sampling::Msaa2x => {
+                    let (cur, prev) = (MSAA_TARGETS[parity], MSAA_TARGETS[1 - parity]);
+                    vec![
+                        (1, view(cur.0)),
+                        (3, view(prev.0)),
+                        (5, view(cur.1)),
+                        (7, view(prev.1)),
+                    ]
+                }
             };
             views.push((9, velocity_view.clone()));
             views.push((10, output_view.clone()));
@@ -304,6 +309,22 @@ impl Checkerboard {
             })
         };
         let bind_groups = [bind_group(0), bind_group(1)];
+        let layer_views = match sampling {
+            Sampling::Msaa2x => Vec::new(),
+            Sampling::TwoPass => (0..4)
+                .map(|layer| {
+                    let v = |name: &str| {
+                        textures[name].create_view(&wgpu::TextureViewDescriptor {
+                            dimension: Some(wgpu::TextureViewDimension::D2),
+                            base_array_layer: layer,
+                            array_layer_count: Some(1),
+                            ..Default::default()
+                        })
+                    };
+                    (v(TWO_PASS_COLOR), v(TWO_PASS_DEPTH))
+                })
+                .collect(),
+        };
         Ok(Checkerboard {
             plan,
             textures,
@@ -317,6 +338,7 @@ impl Checkerboard {
             bind_groups,
             _dummy_velocity: dummy,
             last: None,
+            layer_views,
         })
     }
 }
@@ -350,7 +372,6 @@ impl Technique for Checkerboard {
         frame: FrameInfo,
     ) {
         let parity = (frame.index & 1) as usize;
-        let targets = sample_targets(self.sampling);
         let (qw, qh) = quarter_size(self.width, self.height);
         let base = View {
             time: frame.time,
@@ -375,15 +396,16 @@ impl Technique for Checkerboard {
                             ..base
                         },
                     );
-                    let (c, d) = targets[parity][s];
+                    let layer = parity * 2 + s;
+                    let (c, d) = (&self.layer_views[layer].0, &self.layer_views[layer].1);
                     record_scene_pass(
                         gpu,
                         scene,
                         timers,
                         encoder,
                         name,
-                        &self.textures[c],
-                        &self.textures[d],
+                        c,
+                        d,
                         s as u32,
                         ScenePipeline::Forward { samples: 1 },
                     );
@@ -401,15 +423,19 @@ impl Technique for Checkerboard {
                         ..base
                     },
                 );
-                let (c, d) = targets[parity][0];
+                let (c, d) = MSAA_TARGETS[parity];
+                let (c, d) = (
+                    self.textures[c].create_view(&Default::default()),
+                    self.textures[d].create_view(&Default::default()),
+                );
                 record_scene_pass(
                     gpu,
                     scene,
                     timers,
                     encoder,
                     "scene",
-                    &self.textures[c],
-                    &self.textures[d],
+                    &c,
+                    &d,
                     0,
                     ScenePipeline::PerSample { samples: 2 },
                 );
@@ -424,15 +450,18 @@ impl Technique for Checkerboard {
                 ..base
             };
             scene.write_view(&gpu.queue, 2, &full);
-            let (c, d) = (&self.textures["velocity"], &self.textures["velocity_depth"]);
+            let (c, d) = (
+                self.textures["velocity"].create_view(&Default::default()),
+                self.textures["velocity_depth"].create_view(&Default::default()),
+            );
             record_scene_pass(
                 gpu,
                 scene,
                 timers,
                 encoder,
                 "velocity",
-                c,
-                d,
+                &c,
+                &d,
                 2,
                 ScenePipeline::Velocity,
             );

@@ -87,10 +87,15 @@ fn untonemap(c: Vec3) -> Vec3 {
     c / (1.0 - c.max_element()).max(1e-6)
 }
 
+const OFFSETS: [(i32, i32); 4] = [(0, -1), (0, 1), (-1, 0), (1, 0)];
+
+fn inside(inp: &Inputs, x: i32, y: i32) -> bool {
+    x >= 0 && y >= 0 && x < inp.width as i32 && y < inp.height as i32
+}
+
 struct Neighbourhood {
     c: [Vec3; 4],
     valid: [bool; 4],
-    depth_sum: f32,
     count: f32,
     lo: Vec3,
     hi: Vec3,
@@ -100,16 +105,14 @@ fn neighbourhood(inp: &Inputs, x: i32, y: i32, tonemapped: bool) -> Neighbourhoo
     let mut n = Neighbourhood {
         c: [Vec3::ZERO; 4],
         valid: [false; 4],
-        depth_sum: 0.0,
         count: 0.0,
         lo: Vec3::splat(3.0e38),
         hi: Vec3::splat(-3.0e38),
     };
-    for (i, (dx, dy)) in [(0, -1), (0, 1), (-1, 0), (1, 0)].into_iter().enumerate() {
+    for (i, (dx, dy)) in OFFSETS.into_iter().enumerate() {
         let (px, py) = (x + dx, y + dy);
-        let inside = px >= 0 && py >= 0 && px < inp.width as i32 && py < inp.height as i32;
-        n.valid[i] = inside;
-        if inside {
+        n.valid[i] = inside(inp, px, py);
+        if n.valid[i] {
             let mut c = color_at(inp, px, py).truncate();
             if tonemapped {
                 c = tonemap(c);
@@ -117,11 +120,21 @@ fn neighbourhood(inp: &Inputs, x: i32, y: i32, tonemapped: bool) -> Neighbourhoo
             n.c[i] = c;
             n.lo = n.lo.min(c);
             n.hi = n.hi.max(c);
-            n.depth_sum += linear_depth(inp, depth_at(inp, px, py));
             n.count += 1.0;
         }
     }
     n
+}
+
+fn neighbour_depth(inp: &Inputs, x: i32, y: i32) -> f32 {
+    let (mut sum, mut count) = (0.0f32, 0.0f32);
+    for (dx, dy) in OFFSETS {
+        if inside(inp, x + dx, y + dy) {
+            sum += linear_depth(inp, depth_at(inp, x + dx, y + dy));
+            count += 1.0;
+        }
+    }
+    sum / count.max(1.0)
 }
 
 fn fill(inp: &Inputs, n: &Neighbourhood) -> Vec3 {
@@ -156,17 +169,22 @@ pub enum Source {
     History,
 }
 
+fn filled(inp: &Inputs, x: i32, y: i32) -> (Vec4, Source) {
+    let tonemapped = inp.options.fill != 0;
+    (
+        finish(fill(inp, &neighbourhood(inp, x, y, tonemapped)), tonemapped),
+        Source::Fill,
+    )
+}
+
 /// The reconstructed colour of full-resolution pixel (x, y) and how it was made.
 pub fn reconstruct(inp: &Inputs, x: i32, y: i32) -> (Vec4, Source) {
     let q = quadrant(x, y);
     if is_current(inp, q) {
         return (color_at(inp, x, y), Source::Current);
     }
-    let tonemapped = inp.options.fill != 0;
-    let n = neighbourhood(inp, x, y, tonemapped);
-    let filled = || (finish(fill(inp, &n), tonemapped), Source::Fill);
     if inp.reset {
-        return filled();
+        return filled(inp, x, y);
     }
     let size = Vec2::new(inp.width as f32, inp.height as f32);
     let centre = Vec2::new(x as f32, y as f32) + 0.5;
@@ -192,38 +210,39 @@ pub fn reconstruct(inp: &Inputs, x: i32, y: i32) -> (Vec4, Source) {
         centre - (now_px - centre)
     };
     let (px, py) = (prev_pos.x.floor() as i32, prev_pos.y.floor() as i32);
-    if px < 0 || py < 0 || px >= inp.width as i32 || py >= inp.height as i32 {
-        return filled();
+    if !inside(inp, px, py) || is_current(inp, quadrant(px, py)) {
+        return filled(inp, x, y);
     }
-    if is_current(inp, quadrant(px, py)) {
-        return filled();
-    }
-    let old_depth = linear_depth(inp, depth_at(inp, px, py));
-    let avg_depth = n.depth_sum / n.count.max(1.0);
     let moved_block = (px >> 1) != (x >> 1) || (py >> 1) != (y >> 1);
-    if moved_block
-        && (inp.options.aso || (avg_depth - old_depth).abs() >= inp.options.depth_tolerance)
-    {
-        return filled();
+    let confidence_clamp = inp.options.clamp == 2;
+    let deviation = if (moved_block && !inp.options.aso) || confidence_clamp {
+        (neighbour_depth(inp, x, y) - linear_depth(inp, depth_at(inp, px, py))).abs()
+    } else {
+        0.0
+    };
+    if moved_block && (inp.options.aso || deviation >= inp.options.depth_tolerance) {
+        return filled(inp, x, y);
     }
     let history = color_at(inp, px, py);
-    if inp.options.clamp == 0 || n.count == 0.0 {
+    if inp.options.clamp == 0 {
+        return (history, Source::History);
+    }
+    let tonemapped = inp.options.fill != 0;
+    let n = neighbourhood(inp, x, y, tonemapped);
+    if n.count == 0.0 {
         return (history, Source::History);
     }
     let mut h = history.truncate();
     if tonemapped {
         h = tonemap(h);
     }
-    {
-        let clamped = h.clamp(n.lo, n.hi);
-        if inp.options.clamp == 2 {
-            let deviation = (avg_depth - old_depth).abs() - inp.options.depth_tolerance;
-            let confidence = (deviation * deviation).clamp(0.0, 1.0);
-            h = clamped.lerp(h, confidence);
-        } else {
-            h = clamped;
-        }
-    }
+    let clamped = h.clamp(n.lo, n.hi);
+    h = if confidence_clamp {
+        let d = deviation - inp.options.depth_tolerance;
+        clamped.lerp(h, (d * d).clamp(0.0, 1.0))
+    } else {
+        clamped
+    };
     (finish(h, tonemapped), Source::History)
 }
 

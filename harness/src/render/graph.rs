@@ -32,13 +32,19 @@ pub struct TextureDesc {
     pub width: u32,
     pub height: u32,
     pub samples: u32,
+    /// Array layers (1 for a plain 2D texture).
+    pub layers: u32,
 }
 
 impl TextureDesc {
     pub fn bytes(&self) -> u64 {
         // Depth-stencil formats have no single copy size; none of ours is one.
         let block = self.format.block_copy_size(None).unwrap_or(4);
-        block as u64 * self.width as u64 * self.height as u64 * self.samples as u64
+        block as u64
+            * self.width as u64
+            * self.height as u64
+            * self.samples as u64
+            * self.layers as u64
     }
 }
 
@@ -214,6 +220,7 @@ mod tests {
             width: w,
             height: w,
             samples: 1,
+            layers: 1,
         }
     }
 
@@ -227,6 +234,7 @@ mod tests {
                     width: 4,
                     height: 4,
                     samples: 1,
+                    layers: 1,
                 },
             )
             .resource("velocity", tex(4))
@@ -298,6 +306,7 @@ mod tests {
             width: 1280,
             height: 720,
             samples: 2,
+            layers: 1,
         };
         assert_eq!(d.bytes(), 1280 * 720 * 4 * 2);
     }

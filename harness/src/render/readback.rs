@@ -114,6 +114,16 @@ pub fn read_texture(
     queue: &wgpu::Queue,
     texture: &wgpu::Texture,
 ) -> Vec<f32> {
+    read_texture_layer(device, queue, texture, 0)
+}
+
+/// [`read_texture`] of one array layer.
+pub fn read_texture_layer(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    texture: &wgpu::Texture,
+    layer: u32,
+) -> Vec<f32> {
     let (w, h) = (texture.width(), texture.height());
     let depth = texture.format() == wgpu::TextureFormat::Depth32Float;
     let texel = if depth { 4 } else { 8 };
@@ -127,6 +137,7 @@ pub fn read_texture(
     });
     let mut encoder = device.create_command_encoder(&Default::default());
     let mut source = texture.as_image_copy();
+    source.origin.z = layer;
     if depth {
         source.aspect = wgpu::TextureAspect::DepthOnly;
     }

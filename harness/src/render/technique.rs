@@ -156,6 +156,7 @@ impl Forward {
             width,
             height,
             samples: 1,
+            layers: 1,
         };
         let mut g = Graph::default();
         let output = match resolve {
@@ -268,8 +269,8 @@ impl Technique for Forward {
             timers,
             encoder,
             "scene",
-            color,
-            depth,
+            &color.create_view(&Default::default()),
+            &depth.create_view(&Default::default()),
             0,
             ScenePipeline::Forward { samples: 1 },
         );
@@ -310,7 +311,7 @@ pub fn allocate(device: &wgpu::Device, plan: &Plan) -> HashMap<&'static str, wgp
                 size: wgpu::Extent3d {
                     width: d.width,
                     height: d.height,
-                    depth_or_array_layers: 1,
+                    depth_or_array_layers: d.layers,
                 },
                 mip_level_count: 1,
                 sample_count: d.samples,
@@ -332,21 +333,19 @@ pub fn record_scene_pass(
     timers: &Timers,
     encoder: &mut wgpu::CommandEncoder,
     name: &'static str,
-    color: &wgpu::Texture,
-    depth: &wgpu::Texture,
+    color_view: &wgpu::TextureView,
+    depth_view: &wgpu::TextureView,
     slot: u32,
     kind: ScenePipeline,
 ) {
     let clear = scene.clear_color();
     let pipeline = scene.pipeline(&gpu.device, kind).clone();
-    let color_view = color.create_view(&Default::default());
-    let depth_view = depth.create_view(&Default::default());
     let q = timers.begin(name, encoder);
     {
         let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some(name),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &color_view,
+                view: color_view,
                 depth_slice: None,
                 resolve_target: None,
                 ops: wgpu::Operations {
@@ -355,7 +354,7 @@ pub fn record_scene_pass(
                 },
             })],
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &depth_view,
+                view: depth_view,
                 depth_ops: Some(wgpu::Operations {
                     load: wgpu::LoadOp::Clear(0.0),
                     store: wgpu::StoreOp::Store,
