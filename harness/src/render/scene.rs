@@ -306,17 +306,17 @@ impl SceneGpu {
             );
             proj * rotation_view(p)
         };
-        let eye = pose.position.as_dvec3();
+        let eye = pose.position;
         (
             vp(&pose),
-            vp(&prev) * DMat4::from_translation(eye - prev.position.as_dvec3()),
+            vp(&prev) * DMat4::from_translation(eye - prev.position),
         )
     }
 
     /// Writes object matrices for `time` relative to the camera at `time`. Call once per frame.
     pub fn write_objects(&self, queue: &wgpu::Queue, time: f64, prev_time: f64) {
         let pose = self.scenario.camera.pose_at(time);
-        let eye = pose.position.as_dvec3();
+        let eye = pose.position;
         let rel = |m: DMat4| {
             (DMat4::from_translation(-eye) * m)
                 .as_mat4()
@@ -326,7 +326,7 @@ impl SceneGpu {
         if let Some(g) = &self.scenario.scene.ground {
             // The quad follows the camera in x and z; the pattern is anchored in world space.
             let m = DMat4::from_translation(DVec3::new(eye.x, g.height as f64, eye.z));
-            let prev_eye = self.scenario.camera.pose_at(prev_time).position.as_dvec3();
+            let prev_eye = self.scenario.camera.pose_at(prev_time).position;
             let pm = DMat4::from_translation(DVec3::new(prev_eye.x, g.height as f64, prev_eye.z));
             objects.push(GpuObject {
                 model: rel(m),
@@ -362,7 +362,7 @@ impl SceneGpu {
             view.ndc_scale.x,
             view.ndc_scale.y,
         );
-        let eye = pose.position.as_dvec3();
+        let eye = pose.position;
         let (cur_vp, prev_vp) = self.view_projections(view.time, view.prev_time);
         let (ground, filter, checker) = match &s.scene.ground {
             Some(g) => (
@@ -486,7 +486,7 @@ impl SceneGpu {
 
 /// Camera rotation only (the translation is applied per object in f64).
 fn rotation_view(p: &CameraPose) -> DMat4 {
-    let dir = (p.target.as_dvec3() - p.position.as_dvec3()).normalize();
+    let dir = (p.target - p.position).normalize();
     let up = if dir.y.abs() > 0.999 {
         DVec3::Z
     } else {

@@ -12,7 +12,7 @@ mod validate;
 use std::fmt;
 use std::path::{Path, PathBuf};
 
-use glam::{DMat4, Vec3};
+use glam::{DMat4, DVec3, Vec3};
 
 use crate::technique::Variant;
 pub use span::KeyPath;
@@ -186,7 +186,8 @@ pub enum Light {
 #[derive(Clone, Debug)]
 pub struct Object {
     pub shape: Shape,
-    pub position: Vec3,
+    /// f64: a scene far from the origin keeps its precision (stress suite).
+    pub position: DVec3,
     pub yaw_degrees: f32,
     pub color: Vec3,
     pub emissive: Vec3,
@@ -246,7 +247,7 @@ impl Object {
     /// World-space model matrix at scene time `t` (seconds), in f64 so that objects far from the
     /// origin keep their precision once made camera-relative.
     pub fn model_at(&self, t: f64) -> DMat4 {
-        let base = DMat4::from_translation(self.position.as_dvec3())
+        let base = DMat4::from_translation(self.position)
             * DMat4::from_rotation_y((self.yaw_degrees as f64).to_radians());
         match &self.animation {
             None => base,
@@ -287,8 +288,8 @@ pub enum Interpolation {
 #[derive(Clone, Debug)]
 pub struct Keyframe {
     pub time: f64,
-    pub position: Vec3,
-    pub target: Vec3,
+    pub position: DVec3,
+    pub target: DVec3,
     pub fov_degrees: f32,
     pub cut: bool,
 }
@@ -296,8 +297,10 @@ pub struct Keyframe {
 /// The camera at one instant.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CameraPose {
-    pub position: Vec3,
-    pub target: Vec3,
+    /// f64 and interpolated in f64: in f32 a camera 1e6 units from the origin moves in 1/16-unit
+    /// steps (found by scenarios/stress/far-from-origin.toml).
+    pub position: DVec3,
+    pub target: DVec3,
     pub fov_degrees: f32,
     /// Index of the segment (between cuts) the pose belongs to: history is invalid across a change.
     pub segment: usize,
@@ -326,7 +329,7 @@ impl CameraTrack {
             return hold(prev);
         }
         let span = k[next].time - k[prev].time;
-        let s = ((t - k[prev].time) / span) as f32;
+        let s = (t - k[prev].time) / span;
         let (position, target) = match self.interpolation {
             Interpolation::Linear => (
                 k[prev].position.lerp(k[next].position, s),
@@ -365,13 +368,14 @@ impl CameraTrack {
         CameraPose {
             position,
             target,
-            fov_degrees: k[prev].fov_degrees + (k[next].fov_degrees - k[prev].fov_degrees) * s,
+            fov_degrees: k[prev].fov_degrees
+                + (k[next].fov_degrees - k[prev].fov_degrees) * s as f32,
             segment: segment_of(prev),
         }
     }
 }
 
-fn catmull_rom(p0: Vec3, p1: Vec3, p2: Vec3, p3: Vec3, t: f32) -> Vec3 {
+fn catmull_rom(p0: DVec3, p1: DVec3, p2: DVec3, p3: DVec3, t: f64) -> DVec3 {
     let t2 = t * t;
     let t3 = t2 * t;
     0.5 * ((2.0 * p1)

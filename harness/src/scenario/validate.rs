@@ -7,7 +7,7 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 use toml_edit::Document;
 
 use super::raw::*;
@@ -68,6 +68,21 @@ impl Ctx {
             out[i] = self.finite(&path.index(i), *x);
         }
         Vec3::from(out)
+    }
+
+    /// A position, kept in f64.
+    fn dvec3(&mut self, path: &KeyPath, v: &[f64]) -> DVec3 {
+        if v.len() != 3 {
+            self.err(
+                path,
+                format!("expected 3 numbers [x, y, z], found {}", v.len()),
+            );
+            return DVec3::ZERO;
+        }
+        for (i, x) in v.iter().enumerate() {
+            self.finite(&path.index(i), *x);
+        }
+        DVec3::new(v[0], v[1], v[2]).map(|x| if x.is_finite() { x } else { 0.0 })
     }
 
     fn color(&mut self, path: &KeyPath, v: &[f64]) -> Vec3 {
@@ -628,8 +643,8 @@ fn object(ctx: &mut Ctx, path: &KeyPath, file: &Path, o: &RawObject) -> Object {
         position: o
             .position
             .as_deref()
-            .map(|p| ctx.vec3(&path.key("position"), p))
-            .unwrap_or(Vec3::ZERO),
+            .map(|p| ctx.dvec3(&path.key("position"), p))
+            .unwrap_or(DVec3::ZERO),
         yaw_degrees: ctx.finite(&path.key("yaw"), o.yaw.unwrap_or(0.0)),
         color: o
             .color
@@ -750,8 +765,8 @@ fn camera(ctx: &mut Ctx, path: &KeyPath, raw: &RawCamera) -> CameraTrack {
                 ctx.err(&p.key("time"), format!("{} is not after the previous keyframe's time {}: keyframe times must increase", k.time, prev.time));
             }
         }
-        let position = ctx.vec3(&p.key("position"), &k.position);
-        let target = ctx.vec3(&p.key("target"), &k.target);
+        let position = ctx.dvec3(&p.key("position"), &k.position);
+        let target = ctx.dvec3(&p.key("target"), &k.target);
         if (target - position).length_squared() == 0.0 {
             ctx.err(&p.key("target"), "the target must differ from the position");
         }
@@ -773,8 +788,8 @@ fn camera(ctx: &mut Ctx, path: &KeyPath, raw: &RawCamera) -> CameraTrack {
     if keyframes.is_empty() {
         keyframes.push(Keyframe {
             time: 0.0,
-            position: Vec3::new(0.0, 1.0, 5.0),
-            target: Vec3::ZERO,
+            position: DVec3::new(0.0, 1.0, 5.0),
+            target: DVec3::ZERO,
             fov_degrees: 60.0,
             cut: false,
         });
