@@ -11,6 +11,17 @@ use tessera::technique::{ParamValue, TechniqueKind, Variant};
 /// Opens the adapter the harness would pick. CI installs lavapipe (ci/setup.sh), so a missing
 /// adapter is a failure, not a skip.
 pub fn gpu() -> Gpu {
+    // As `tessera` does: keep libwayland's XDG_RUNTIME_DIR complaint out of test output. Set once,
+    // before any test of this binary touches the GPU (every GPU test comes through here first).
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
+            let dir = std::env::temp_dir().join("tessera-runtime");
+            if std::fs::create_dir_all(&dir).is_ok() {
+                std::env::set_var("XDG_RUNTIME_DIR", &dir);
+            }
+        }
+    });
     let adapter = gpu::select(None).expect("no GPU adapter: run ci/setup.sh to install lavapipe");
     gpu::open(adapter).expect("cannot open a device")
 }
