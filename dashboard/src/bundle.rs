@@ -211,21 +211,14 @@ impl RunBundle {
             })
         };
         let run = json(&dir.join("run.json"))?;
-        let scen_dir = dir.join("scenarios");
-        let mut files: Vec<_> = match std::fs::read_dir(&scen_dir) {
-            Ok(entries) => entries
-                .filter_map(|e| e.ok().map(|e| e.path()))
-                .filter(|p| p.extension().is_some_and(|x| x == "json"))
-                .collect(),
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Vec::new(),
-            Err(source) => {
-                return Err(BundleError::Io {
-                    path: scen_dir.display().to_string(),
-                    source,
-                })
-            }
-        };
-        files.sort();
+        let files =
+            tessera_results::layout::scenario_files(dir).map_err(|source| BundleError::Io {
+                path: dir
+                    .join(tessera_results::layout::SCENARIOS_DIR)
+                    .display()
+                    .to_string(),
+                source,
+            })?;
         let scenarios = files
             .iter()
             .map(|p| json(p))

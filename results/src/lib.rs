@@ -8,6 +8,32 @@ use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
+/// The run folder's layout (`results/README.md`): where each file of a run lives. Both the
+/// dashboard's import and `tessera compare` read run folders through this.
+pub mod layout {
+    use std::path::{Path, PathBuf};
+
+    pub const RUN_JSON: &str = "run.json";
+    pub const SCENARIOS_DIR: &str = "scenarios";
+    pub const RESULTS_CSV: &str = "results.csv";
+
+    /// Every `scenarios/*.json` of a run folder, sorted by name; none when the run was interrupted
+    /// before its first scenario (no `scenarios/` folder).
+    pub fn scenario_files(run_dir: &Path) -> std::io::Result<Vec<PathBuf>> {
+        let dir = run_dir.join(SCENARIOS_DIR);
+        let mut files: Vec<PathBuf> = match std::fs::read_dir(&dir) {
+            Ok(entries) => entries
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| p.extension().is_some_and(|x| x == "json"))
+                .collect(),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Vec::new(),
+            Err(e) => return Err(e),
+        };
+        files.sort();
+        Ok(files)
+    }
+}
+
 /// Version of the result format. Readers refuse versions they do not know.
 pub const SCHEMA_VERSION: u32 = 1;
 

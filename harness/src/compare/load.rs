@@ -70,21 +70,10 @@ pub fn read_raw(dir: &Path) -> Result<RawRun, LoadError> {
         return Err(LoadError::NotARun(dir.to_path_buf()));
     }
     let run = read_json(&run_json)?;
-    let scen_dir = dir.join("scenarios");
-    let mut files: Vec<PathBuf> = match std::fs::read_dir(&scen_dir) {
-        Ok(entries) => entries
-            .filter_map(|e| e.ok().map(|e| e.path()))
-            .filter(|p| p.extension().is_some_and(|x| x == "json"))
-            .collect(),
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Vec::new(),
-        Err(source) => {
-            return Err(LoadError::Io {
-                path: scen_dir,
-                source,
-            })
-        }
-    };
-    files.sort();
+    let files = tessera_results::layout::scenario_files(dir).map_err(|source| LoadError::Io {
+        path: dir.join(tessera_results::layout::SCENARIOS_DIR),
+        source,
+    })?;
     let scenarios = files
         .iter()
         .map(|p| read_json(p))
