@@ -376,8 +376,6 @@ impl Technique for Checkerboard {
         let base = View {
             time: frame.time,
             prev_time: frame.prev_time,
-            width: qw,
-            height: qh,
             ndc_offset: Vec2::ZERO,
             ndc_scale: Vec2::ONE,
             gradient_scale: self.gradient_scale,
@@ -444,8 +442,6 @@ impl Technique for Checkerboard {
         let use_velocity = self.plan.runs("velocity");
         if use_velocity {
             let full = View {
-                width: self.width,
-                height: self.height,
                 gradient_scale: 1.0,
                 ..base
             };

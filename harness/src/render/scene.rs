@@ -61,9 +61,6 @@ pub struct View {
     /// Scene time of this frame and of the previous one (for motion).
     pub time: f64,
     pub prev_time: f64,
-    /// Render target size (the aspect ratio comes from the scenario's resolution).
-    pub width: u32,
-    pub height: u32,
     /// Viewport remap after projection, `ndc' = ndc * scale + offset`: the identity for a target
     /// showing the whole frame; techniques use it to jitter and to render parts of the frame.
     pub ndc_offset: Vec2,

@@ -143,9 +143,6 @@ struct Forward {
     plan: Plan,
     textures: HashMap<&'static str, wgpu::Texture>,
     resample: Option<(wgpu::ComputePipeline, wgpu::BindGroup, [u32; 2])>,
-    width: u32,
-    height: u32,
-    out_width: u32,
     output: &'static str,
 }
 
@@ -193,7 +190,6 @@ impl Forward {
         };
         let plan = g.plan().expect("built-in graphs are well formed");
         let textures = allocate(&gpu.device, &plan);
-        let out_width = plan.desc(output).map(|d| d.width).unwrap_or(width);
         let resample = match resolve {
             Resolve::None => None,
             Resolve::Upscale {
@@ -223,9 +219,6 @@ impl Forward {
             plan,
             textures,
             resample,
-            width,
-            height,
-            out_width,
             output,
         }
     }
@@ -251,8 +244,6 @@ impl Technique for Forward {
         let view = View {
             time: frame.time,
             prev_time: frame.prev_time,
-            width: self.width,
-            height: self.height,
             ndc_offset: Vec2::ZERO,
             ndc_scale: Vec2::ONE,
             gradient_scale: 1.0,
@@ -288,7 +279,6 @@ impl Technique for Forward {
             }
             timers.end(encoder, q);
         }
-        let _ = self.out_width;
     }
 }
 

@@ -133,7 +133,6 @@ impl Timers {
     }
 
     /// Resolves this frame's queries; call after the last pass, before `finish`.
-    /// `recorded`: the render passes that actually ran with statistics this frame.
     pub fn resolve(&mut self, encoder: &mut wgpu::CommandEncoder) {
         self.profiler.resolve_queries(encoder);
         if let Some(s) = self.stats.as_ref().filter(|_| self.stats_enabled) {

@@ -9,7 +9,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Instant;
 
-use tessera_metrics::{HdrImage, Rgb8Image};
+use tessera_metrics::Rgb8Image;
 use tessera_results::{
     ImageRecord, MetricRecord, PassRecord, ScenarioResult, Status, Summary, VariantResult,
 };
@@ -25,8 +25,6 @@ use crate::technique::{TechniqueKind, Variant};
 /// Frames a reference render produced, in measured-frame order.
 struct ReferenceFrames {
     frames: Vec<Rgb8Image>,
-    #[allow(dead_code)]
-    hdr: Vec<HdrImage>,
 }
 
 /// Runs `scenario`. Images go under `run_dir/images/<scenario>/`. `on_frame` ticks progress.
@@ -108,17 +106,25 @@ pub fn run(
             run_dir,
             "output",
         );
-        if is_reference {
+        // The native reference's frames become the reference (moved, not copied); its metrics are
+        // then computed against itself, the sanity values every other variant is read against.
+        let frames = if is_reference {
             reference = Some(Ok(ReferenceFrames {
-                frames: rendered.frames.clone(),
-                hdr: rendered.hdr_frames.clone(),
+                frames: rendered.frames,
             }));
-        }
+            None
+        } else {
+            Some(rendered.frames)
+        };
         if needs_reference {
             match reference.as_ref() {
                 Some(Ok(r)) => {
                     result.reference = Some(scenario.reference.name().to_string());
-                    match compute_metrics(scenario, &r.frames, &rendered.frames) {
+                    match compute_metrics(
+                        scenario,
+                        &r.frames,
+                        frames.as_deref().unwrap_or(&r.frames),
+                    ) {
                         Ok(m) => result.metrics = m,
                         Err(e) => {
                             result.status = Status::Failed {
@@ -305,10 +311,7 @@ fn render_reference(
     let result = match built {
         Err(Unsupported(reason)) => Err(format!("no reference: {reason}")),
         Ok(mut t) => frames::render(gpu, scene, scenario, t.as_mut(), true, false, on_frame)
-            .map(|r| ReferenceFrames {
-                frames: r.frames,
-                hdr: r.hdr_frames,
-            })
+            .map(|r| ReferenceFrames { frames: r.frames })
             .map_err(|e| format!("reference render failed: {e}")),
     };
     if let Some(e) = pollster::block_on(validation.pop()) {
