@@ -118,8 +118,11 @@ pub struct Checkerboard {
     bind_groups: [wgpu::BindGroup; 2],
     _dummy_velocity: Option<wgpu::Texture>,
     last: Option<LastFrame>,
-    /// Two-pass: render-target views of each layer (colour, depth), `parity * 2 + sample`.
-    layer_views: Vec<(wgpu::TextureView, wgpu::TextureView)>,
+    /// Render-target views (colour, depth), made once: two-pass per layer `parity * 2 + sample`,
+    /// msaa2x per parity.
+    target_views: Vec<(wgpu::TextureView, wgpu::TextureView)>,
+    /// The velocity pass's targets, when it runs.
+    velocity_views: Option<(wgpu::TextureView, wgpu::TextureView)>,
 }
 
 /// What the last recorded reconstruction was given (for the CPU model in tests).
@@ -309,8 +312,13 @@ impl Checkerboard {
             })
         };
         let bind_groups = [bind_group(0), bind_group(1)];
-        let layer_views = match sampling {
-            Sampling::Msaa2x => Vec::new(),
+        let whole = |name: &str| textures[name].create_view(&Default::default());
+        let velocity_views = use_velocity.then(|| (whole("velocity"), whole("velocity_depth")));
+        let target_views = match sampling {
+            Sampling::Msaa2x => MSAA_TARGETS
+                .iter()
+                .map(|(c, d)| (whole(c), whole(d)))
+                .collect(),
             Sampling::TwoPass => (0..4)
                 .map(|layer| {
                     let v = |name: &str| {
@@ -338,7 +346,8 @@ impl Checkerboard {
             bind_groups,
             _dummy_velocity: dummy,
             last: None,
-            layer_views,
+            target_views,
+            velocity_views,
         })
     }
 }
@@ -395,7 +404,7 @@ impl Technique for Checkerboard {
                         },
                     );
                     let layer = parity * 2 + s;
-                    let (c, d) = (&self.layer_views[layer].0, &self.layer_views[layer].1);
+                    let (c, d) = (&self.target_views[layer].0, &self.target_views[layer].1);
                     record_scene_pass(
                         gpu,
                         scene,
@@ -421,43 +430,35 @@ impl Technique for Checkerboard {
                         ..base
                     },
                 );
-                let (c, d) = MSAA_TARGETS[parity];
-                let (c, d) = (
-                    self.textures[c].create_view(&Default::default()),
-                    self.textures[d].create_view(&Default::default()),
-                );
+                let (c, d) = &self.target_views[parity];
                 record_scene_pass(
                     gpu,
                     scene,
                     timers,
                     encoder,
                     "scene",
-                    &c,
-                    &d,
+                    c,
+                    d,
                     0,
                     ScenePipeline::PerSample { samples: 2 },
                 );
             }
         }
-        let use_velocity = self.plan.runs("velocity");
-        if use_velocity {
+        let use_velocity = self.velocity_views.is_some();
+        if let Some((c, d)) = &self.velocity_views {
             let full = View {
                 gradient_scale: 1.0,
                 ..base
             };
             scene.write_view(&gpu.queue, 2, &full);
-            let (c, d) = (
-                self.textures["velocity"].create_view(&Default::default()),
-                self.textures["velocity_depth"].create_view(&Default::default()),
-            );
             record_scene_pass(
                 gpu,
                 scene,
                 timers,
                 encoder,
                 "velocity",
-                &c,
-                &d,
+                c,
+                d,
                 2,
                 ScenePipeline::Velocity,
             );

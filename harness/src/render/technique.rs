@@ -143,6 +143,8 @@ struct Forward {
     plan: Plan,
     textures: HashMap<&'static str, wgpu::Texture>,
     resample: Option<(wgpu::ComputePipeline, wgpu::BindGroup, [u32; 2])>,
+    /// The scene pass's colour and depth targets, made once.
+    scene_views: (wgpu::TextureView, wgpu::TextureView),
     output: &'static str,
 }
 
@@ -215,10 +217,16 @@ impl Forward {
                 [ow, oh],
             )),
         };
+        let writes = &plan.passes[0].writes;
+        let scene_views = (
+            textures[writes[0]].create_view(&Default::default()),
+            textures[writes[1]].create_view(&Default::default()),
+        );
         Forward {
             plan,
             textures,
             resample,
+            scene_views,
             output,
         }
     }
@@ -249,19 +257,14 @@ impl Technique for Forward {
             gradient_scale: 1.0,
         };
         scene.write_view(&gpu.queue, 0, &view);
-        let pass = &self.plan.passes[0];
-        let (color, depth) = (
-            &self.textures[pass.writes[0]],
-            &self.textures[pass.writes[1]],
-        );
         record_scene_pass(
             gpu,
             scene,
             timers,
             encoder,
             "scene",
-            &color.create_view(&Default::default()),
-            &depth.create_view(&Default::default()),
+            &self.scene_views.0,
+            &self.scene_views.1,
             0,
             ScenePipeline::Forward { samples: 1 },
         );
