@@ -103,8 +103,8 @@ fn tri(x: vec2<f32>) -> vec2<f32> {
 }
 
 // IQ's checkersGrad: box filter over the footprint max(|ddx|, |ddy|) (+ epsilon).
-fn checkers_filtered(p: vec2<f32>, ddx: vec2<f32>, ddy: vec2<f32>, epsilon: f32) -> f32 {
-    let w = max(abs(ddx), abs(ddy)) + epsilon;
+fn checkers_filtered(p: vec2<f32>, footprint: vec2<f32>, epsilon: f32) -> f32 {
+    let w = footprint + epsilon;
     let i = (tri(p + 0.5 * w) - tri(p - 0.5 * w)) / w;
     // A zero footprint (epsilon 0, no derivative) falls back to point sampling.
     let safe = select(i, sign(fract(p * 0.5) - 0.5), w <= vec2<f32>(0.0));
@@ -149,19 +149,47 @@ fn fs_main_sample(in: VsOutSample, @builtin(sample_index) sample: u32) -> @locat
     return vec4<f32>(c.rgb, c.a + f32(sample) * 1e-30);
 }
 
-fn shade(in: VsOut) -> vec4<f32> {
-    let o = objects[in.object];
+// What shading needs of a visible surface point: what the rasteriser interpolates, plus the
+// ground pattern's footprint, which needs screen-space derivatives. The forward path computes it
+// in the fragment shader (`shade`); adaptive shading's G-buffer stores it and its compute shading
+// pass calls `shade_surface` (derivatives are not available in compute).
+struct Surface {
+    rel_pos: vec3<f32>,
+    normal: vec3<f32>,
+    local: vec3<f32>,
+    object: u32,
+    // max(|ddx|, |ddy|) of the ground pattern coordinate, gradient scale applied.
+    footprint: vec2<f32>,
+}
+
+// The ground pattern coordinate (checks of size 1) of a camera-relative position.
+fn ground_coord(rel_pos: vec3<f32>) -> vec2<f32> {
+    return (rel_pos.xz + frame.camera_mod.xz) / frame.ground.x;
+}
+
+// The surface description of a rasterised fragment.
+fn surface(in: VsOut) -> Surface {
     // Derivatives in uniform control flow, for the ground pattern.
-    let p = (in.rel_pos.xz + frame.camera_mod.xz) / frame.ground.x;
+    let p = ground_coord(in.rel_pos);
     let ddx = dpdx(p) * frame.params.z;
     let ddy = dpdy(p) * frame.params.z;
+    return Surface(in.rel_pos, in.normal, in.local, in.object, max(abs(ddx), abs(ddy)));
+}
+
+fn shade(in: VsOut) -> vec4<f32> {
+    return shade_surface(surface(in));
+}
+
+fn shade_surface(in: Surface) -> vec4<f32> {
+    let o = objects[in.object];
+    let p = ground_coord(in.rel_pos);
 
     var albedo = o.color.rgb;
     var seed = in.local;
     if abs(o.emissive.a - 1.0) < 0.5 {
         var f = checkers_point(p);
         if frame.params.w > 0.5 {
-            f = checkers_filtered(p, ddx, ddy, frame.ground.y);
+            f = checkers_filtered(p, in.footprint, frame.ground.y);
         }
         albedo = mix(frame.ground_a.rgb, frame.ground_b.rgb, f);
         seed = vec3<f32>(fract(p * 0.125), 0.0);

@@ -16,13 +16,20 @@ pub enum TechniqueKind {
     Upscale,
     /// Checkerboard rendering: Intel CBR with mosaiikki's refinements.
     Checkerboard,
+    /// NVIDIA content and motion adaptive shading (Yang et al. 2019) on software variable-rate
+    /// shading: a G-buffer, a per-16x16-tile rate pass, a compute shading pass.
+    AdaptiveShading,
+    /// The deferred path of `adaptive-shading` with every tile at rate 1x1: its baseline.
+    NativeDeferred,
 }
 
 impl TechniqueKind {
-    pub const ALL: [TechniqueKind; 3] = [
+    pub const ALL: [TechniqueKind; 5] = [
         TechniqueKind::Native,
         TechniqueKind::Upscale,
         TechniqueKind::Checkerboard,
+        TechniqueKind::AdaptiveShading,
+        TechniqueKind::NativeDeferred,
     ];
 
     pub fn name(self) -> &'static str {
@@ -30,6 +37,8 @@ impl TechniqueKind {
             TechniqueKind::Native => "native",
             TechniqueKind::Upscale => "upscale",
             TechniqueKind::Checkerboard => "checkerboard",
+            TechniqueKind::AdaptiveShading => "adaptive-shading",
+            TechniqueKind::NativeDeferred => "native-deferred",
         }
     }
 
@@ -47,6 +56,8 @@ impl TechniqueKind {
             TechniqueKind::Native => &[],
             TechniqueKind::Upscale => &UPSCALE_PARAMS,
             TechniqueKind::Checkerboard => &CHECKERBOARD_PARAMS,
+            TechniqueKind::AdaptiveShading => &ADAPTIVE_SHADING_PARAMS,
+            TechniqueKind::NativeDeferred => &[],
         }
     }
 }
@@ -121,6 +132,67 @@ static CHECKERBOARD_PARAMS: [ParamSpec; 7] = [
         kind: ParamKind::Bool,
         default: Default::Bool(true),
         doc: "full-resolution velocity pass for dynamic objects (recorded only when the scene has some)",
+    },
+];
+
+/// Defaults are the paper's (seeds/nvidia-adaptive-shading.txt): t = 0.15 and l = 0.05 (section
+/// 6), k = 2.13 (Eq. 14), e = 0.1 (section 4.2's example), 4x4 off (section 3.4), the 2x neighbour
+/// filter on (section 5.4). The paper gives no value for the hysteresis epsilon nor for the
+/// depth-rejection tolerance (section 5.1 cites Nehab et al.): those defaults are ours.
+static ADAPTIVE_SHADING_PARAMS: [ParamSpec; 9] = [
+    ParamSpec {
+        name: "threshold",
+        kind: ParamKind::Float { min: 0.0, min_inclusive: false, max: 100.0 },
+        default: Default::Float(0.15),
+        doc: "sensitivity threshold t of the JND threshold t * (I_avg + l) (Eq. 15); the paper uses 0.15",
+    },
+    ParamSpec {
+        name: "env_luma",
+        kind: ParamKind::Float { min: 0.0, min_inclusive: true, max: 100.0 },
+        default: Default::Float(0.05),
+        doc: "environment luminance l of the JND threshold (Eq. 15); the paper uses 0.05",
+    },
+    ParamSpec {
+        name: "k",
+        kind: ParamKind::Float { min: 0.0, min_inclusive: false, max: 100.0 },
+        default: Default::Float(2.13),
+        doc: "quarter-rate error over half-rate error (Eq. 14), also the scale of b_Q (Eq. 21); 2.13 in the paper",
+    },
+    ParamSpec {
+        name: "mode",
+        kind: ParamKind::Choice(&["content-motion", "content", "motion"]),
+        default: Default::Str("content-motion"),
+        doc: "content-motion: Eq. 22 with the motion factors of Eq. 20 and 21; content: Eq. 16 (b_H = 1, b_Q = k); motion: standalone motion-adaptive shading (Eq. 24), the relative error taken as max_error",
+    },
+    ParamSpec {
+        name: "max_error",
+        kind: ParamKind::Float { min: 0.0, min_inclusive: false, max: 100.0 },
+        default: Default::Float(0.1),
+        doc: "mode motion only: the bound e on the relative error E / (I_avg + l) (Eq. 24); 0.1 as the paper's example in section 4.2",
+    },
+    ParamSpec {
+        name: "hysteresis",
+        kind: ParamKind::Float { min: 0.0, min_inclusive: true, max: 0.99 },
+        default: Default::Float(0.1),
+        doc: "epsilon of the hysteresis thresholds t(1 + epsilon) when a tile's predicted error grew since the previous frame and t(1 - epsilon) when it fell (section 5.4; no value in the paper, 0 turns it off)",
+    },
+    ParamSpec {
+        name: "neighbour_filter",
+        kind: ParamKind::Bool,
+        default: Default::Bool(true),
+        doc: "a filter pass limiting neighbouring tiles to a 2x rate difference per axis, quarter raised to half (section 5.4)",
+    },
+    ParamSpec {
+        name: "allow_4x4",
+        kind: ParamKind::Bool,
+        default: Default::Bool(false),
+        doc: "allow quarter rate on both axes at once; off in the paper (section 3.4), which then keeps quarter rate on the axis with the smaller error",
+    },
+    ParamSpec {
+        name: "disocclusion_tolerance",
+        kind: ParamKind::Float { min: 0.0, min_inclusive: false, max: 1.0e9 },
+        default: Default::Float(0.05),
+        doc: "depth-based rejection (section 5.1): a pixel whose previous-frame view depth differs from its reprojected surface's by more than this fraction is disoccluded, and its tile is shaded at full rate",
     },
 ];
 

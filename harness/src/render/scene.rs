@@ -248,44 +248,38 @@ impl SceneGpu {
                 ),
                 ScenePipeline::Velocity => ("vs_velocity", "fs_velocity", 1, "velocity"),
             };
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(label),
-                layout: Some(layout),
-                vertex: wgpu::VertexState {
-                    module,
-                    entry_point: Some(vs),
-                    compilation_options: Default::default(),
-                    buffers: &[Some(wgpu::VertexBufferLayout {
-                        array_stride: std::mem::size_of::<Vertex>() as u64,
-                        step_mode: wgpu::VertexStepMode::Vertex,
-                        attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3],
-                    })],
-                },
-                fragment: Some(wgpu::FragmentState {
-                    module,
-                    entry_point: Some(fs),
-                    compilation_options: Default::default(),
-                    targets: &[Some(COLOR_FORMAT.into())],
-                }),
-                primitive: wgpu::PrimitiveState {
-                    cull_mode: None,
-                    ..Default::default()
-                },
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: DEPTH_FORMAT,
-                    depth_write_enabled: Some(true),
-                    depth_compare: Some(wgpu::CompareFunction::Greater),
-                    stencil: Default::default(),
-                    bias: Default::default(),
-                }),
-                multisample: wgpu::MultisampleState {
-                    count: samples,
-                    ..Default::default()
-                },
-                multiview_mask: None,
-                cache: None,
-            })
+            let targets = [Some(COLOR_FORMAT.into())];
+            scene_pipeline(device, layout, module, (vs, fs), samples, label, &targets)
         })
+    }
+
+    /// A single-sample pipeline drawing the scene's geometry with the scene's bindings but another
+    /// shader `module` (which includes `scene.wgsl`) and colour `targets`: for techniques with their
+    /// own scene pass, such as adaptive shading's G-buffer. Not cached: the caller keeps it.
+    pub fn custom_pipeline(
+        &self,
+        device: &wgpu::Device,
+        label: &str,
+        module: &wgpu::ShaderModule,
+        entry_points: (&str, &str),
+        targets: &[Option<wgpu::ColorTargetState>],
+    ) -> wgpu::RenderPipeline {
+        scene_pipeline(device, &self.layout, module, entry_points, 1, label, targets)
+    }
+
+    /// View `slot`'s frame uniforms, for binding in compute passes that shade (group 0, binding 0
+    /// of `scene.wgsl`, without the render passes' dynamic offset).
+    pub fn frame_binding(&self, slot: u32) -> wgpu::BindingResource<'_> {
+        wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+            buffer: &self.frame_buffer,
+            offset: slot as u64 * SLOT_STRIDE,
+            size: wgpu::BufferSize::new(std::mem::size_of::<GpuFrame>() as u64),
+        })
+    }
+
+    /// The objects (group 0, binding 1 of `scene.wgsl`), for compute passes that shade.
+    pub fn objects_binding(&self) -> wgpu::BindingResource<'_> {
+        self.object_buffer.as_entire_binding()
     }
 
     /// Current and previous view-projection, both relative to the current camera position (f64).
@@ -479,6 +473,55 @@ impl SceneGpu {
             );
         }
     }
+}
+
+/// A scene render pipeline: the scene's vertex layout, reversed-Z depth test, no culling.
+fn scene_pipeline(
+    device: &wgpu::Device,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    (vs, fs): (&str, &str),
+    samples: u32,
+    label: &str,
+    targets: &[Option<wgpu::ColorTargetState>],
+) -> wgpu::RenderPipeline {
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(label),
+        layout: Some(layout),
+        vertex: wgpu::VertexState {
+            module,
+            entry_point: Some(vs),
+            compilation_options: Default::default(),
+            buffers: &[Some(wgpu::VertexBufferLayout {
+                array_stride: std::mem::size_of::<Vertex>() as u64,
+                step_mode: wgpu::VertexStepMode::Vertex,
+                attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3],
+            })],
+        },
+        fragment: Some(wgpu::FragmentState {
+            module,
+            entry_point: Some(fs),
+            compilation_options: Default::default(),
+            targets,
+        }),
+        primitive: wgpu::PrimitiveState {
+            cull_mode: None,
+            ..Default::default()
+        },
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: DEPTH_FORMAT,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::Greater),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }),
+        multisample: wgpu::MultisampleState {
+            count: samples,
+            ..Default::default()
+        },
+        multiview_mask: None,
+        cache: None,
+    })
 }
 
 /// Camera rotation only (the translation is applied per object in f64).
