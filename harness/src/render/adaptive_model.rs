@@ -208,7 +208,9 @@ pub fn tile_stats(inp: &Inputs, tx: u32, ty: u32) -> TileStats {
         }
         sums[i][2] = lum[i];
     }
-    let s = reduce(&mut sums, |a, b| [a[0] + b[0], a[1] + b[1], a[2] + b[2], a[3] + b[3]]);
+    let s = reduce(&mut sums, |a, b| {
+        [a[0] + b[0], a[1] + b[1], a[2] + b[2], a[3] + b[3]]
+    });
     let mn = reduce(&mut mins, |a, b| [a[0].min(b[0]), a[1].min(b[1])]);
     let tw = (w - tx as i32 * 16).min(16) as f32;
     let th = (h - ty as i32 * 16).min(16) as f32;

@@ -1,5 +1,7 @@
 //! Rendering: scene geometry and passes on the GPU, the pass graph, and the techniques built on them.
 
+pub mod adaptive;
+pub mod adaptive_model;
 pub mod checkerboard;
 pub mod checkerboard_model;
 pub mod graph;

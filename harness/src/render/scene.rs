@@ -264,7 +264,15 @@ impl SceneGpu {
         entry_points: (&str, &str),
         targets: &[Option<wgpu::ColorTargetState>],
     ) -> wgpu::RenderPipeline {
-        scene_pipeline(device, &self.layout, module, entry_points, 1, label, targets)
+        scene_pipeline(
+            device,
+            &self.layout,
+            module,
+            entry_points,
+            1,
+            label,
+            targets,
+        )
     }
 
     /// View `slot`'s frame uniforms, for binding in compute passes that shade (group 0, binding 0

@@ -43,6 +43,27 @@ pub trait Technique {
         encoder: &mut wgpu::CommandEncoder,
         frame: FrameInfo,
     );
+    /// Per-frame values and images beyond the output, asked for after each captured frame has
+    /// been submitted and waited for (never between timed frames): e.g. adaptive shading's
+    /// average shading rate and shading-rate image. `frame` is the frame's output as read back;
+    /// `image`: whether this frame is saved (make images only then). None by default.
+    fn frame_extras(
+        &mut self,
+        _gpu: &Gpu,
+        _frame: &tessera_metrics::HdrImage,
+        _image: bool,
+    ) -> FrameExtras {
+        FrameExtras::default()
+    }
+}
+
+/// What [`Technique::frame_extras`] reports for one frame.
+#[derive(Clone, Debug, Default)]
+pub struct FrameExtras {
+    /// Named values (e.g. `shading-rate`): each becomes a metric of the variant's own frames.
+    pub values: Vec<(&'static str, f64)>,
+    /// Named images (e.g. `shading-rate`), saved next to the frame's as `<variant>-<kind>-fNNN.png`.
+    pub images: Vec<(&'static str, tessera_metrics::Rgb8Image)>,
 }
 
 /// Builds the GPU side of a variant at `width` x `height`.
@@ -83,6 +104,9 @@ pub fn build(
             height,
             dynamic_scene,
         )?),
+        TechniqueKind::AdaptiveShading | TechniqueKind::NativeDeferred => {
+            Box::new(super::adaptive::Adaptive::new(gpu, variant, width, height))
+        }
     })
 }
 
@@ -497,6 +521,16 @@ pub fn shader_sources() -> Vec<(String, String, Vec<&'static str>)> {
             "checkerboard msaa2x".into(),
             format!("{MSAA2X_WGSL}\n{RESOLVE_WGSL}"),
             vec!["checkerboard_msaa2x.wgsl", "checkerboard_resolve.wgsl"],
+        ),
+        (
+            "adaptive_rate.wgsl".into(),
+            super::adaptive::RATE_WGSL.into(),
+            vec!["adaptive_rate.wgsl"],
+        ),
+        (
+            "adaptive shade".into(),
+            super::adaptive::shade_source(),
+            vec!["scene.wgsl", "adaptive_shade.wgsl"],
         ),
     ]
 }

@@ -17,7 +17,7 @@ use crate::gpu::Gpu;
 use crate::render::graph::PassKind;
 use crate::render::readback::Readback;
 use crate::render::scene::SceneGpu;
-use crate::render::technique::{FrameInfo, Technique};
+use crate::render::technique::{FrameExtras, FrameInfo, Technique};
 use crate::render::timers::{FrameMeasurements, Timers, MAX_PENDING_FRAMES};
 use crate::scenario::Scenario;
 
@@ -33,6 +33,8 @@ pub struct Rendered {
     pub non_finite: u64,
     pub timestamps: bool,
     pub readback_bytes: u64,
+    /// The technique's extras of every measured frame ([`Technique::frame_extras`]).
+    pub extras: Vec<FrameExtras>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -154,6 +156,7 @@ pub fn render(
         non_finite: 0,
         timestamps: timers.has_timestamps(),
         readback_bytes: readback.bytes(),
+        extras: Vec::new(),
     };
 
     // Clock warm-up: frame 0 (which never reads history) repeated until the GPU has been busy for
@@ -227,6 +230,12 @@ pub fn render(
                 .read(&gpu.device)
                 .map_err(|_| RenderError::Readback)?;
             rendered.non_finite += frame.non_finite;
+            let saved = scenario
+                .save_frames
+                .contains(&(index - scenario.warmup_frames));
+            rendered
+                .extras
+                .push(technique.frame_extras(gpu, &frame.image, saved));
             if keep_frames {
                 rendered.frames.push(encode_srgb8(&frame.image));
             }

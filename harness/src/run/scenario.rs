@@ -137,6 +137,7 @@ pub fn run(
                 None => {}
             }
         }
+        add_extras(&mut result, &rendered.extras, scenario, &image_dir, run_dir);
         results.push(result);
     }
     // Reference images once per scenario, next to the variants'.
@@ -461,6 +462,66 @@ fn flicker(frames: &[Rgb8Image]) -> MetricRecord {
         per_frame,
         value,
         higher_is_better: false,
+    }
+}
+
+/// A technique's per-frame extras: values become metrics of the variant's own frames (value: the
+/// mean), images of saved frames are saved as `<variant>-<kind>-fNNN.png`.
+fn add_extras(
+    result: &mut VariantResult,
+    extras: &[crate::render::technique::FrameExtras],
+    scenario: &Scenario,
+    dir: &Path,
+    run_dir: &Path,
+) {
+    let mut names: Vec<&'static str> = Vec::new();
+    for e in extras {
+        for (name, _) in &e.values {
+            if !names.contains(name) {
+                names.push(name);
+            }
+        }
+    }
+    for name in names {
+        let (frames, per_frame): (Vec<u32>, Vec<f64>) = extras
+            .iter()
+            .enumerate()
+            .filter_map(|(f, e)| {
+                let v = e.values.iter().find(|(n, _)| *n == name)?.1;
+                Some((f as u32, v))
+            })
+            .unzip();
+        let value = per_frame.iter().sum::<f64>() / per_frame.len().max(1) as f64;
+        result.metrics.push(MetricRecord {
+            name: name.to_string(),
+            series: series(&per_frame),
+            per_frame,
+            frames,
+            value,
+            higher_is_better: false,
+        });
+    }
+    let stem = sanitize(&result.variant);
+    for &f in &scenario.save_frames {
+        let Some(e) = extras.get(f as usize) else {
+            continue;
+        };
+        for (kind, img) in &e.images {
+            let _ = std::fs::create_dir_all(dir);
+            let path = dir.join(format!("{stem}-{kind}-f{f:03}.png"));
+            if tessera_metrics::save_png(&path, img).is_ok() {
+                let rel = path
+                    .strip_prefix(run_dir)
+                    .unwrap_or(&path)
+                    .to_string_lossy()
+                    .replace('\\', "/");
+                result.images.push(ImageRecord {
+                    frame: f,
+                    kind: kind.to_string(),
+                    path: rel,
+                });
+            }
+        }
     }
 }
 

@@ -1,0 +1,683 @@
+//! Techniques `adaptive-shading` and `native-deferred`: NVIDIA's content and motion adaptive
+//! shading (Yang et al. 2019, `seeds/nvidia-adaptive-shading.txt`) on software variable-rate
+//! shading, and its baseline.
+//!
+//! Each frame: a `gbuffer` render pass at full resolution (what `shade_surface` in `scene.wgsl`
+//! needs per pixel, plus per-pixel motion); a `rates` compute pass choosing a rate per 16x16 tile
+//! from the previous frame's output (`shaders/adaptive_rate.wgsl`, CPU model in
+//! `adaptive_model.rs`); optionally the `rate_filter` pass (section 5.4); and a `shade` compute pass
+//! shading once per coarse pixel and object (`shaders/adaptive_shade.wgsl`). `native-deferred` is
+//! the same G-buffer and shading pass at 1x1 everywhere, with no rate pass, no motion and no
+//! history. Outputs and depth buffers are ping-ponged: the rate pass reads the previous frame's.
+//!
+//! Not here: the forward shading function (scene.wgsl), result files (run/).
+
+use std::collections::HashMap;
+
+use glam::Vec2;
+use tessera_metrics::{encode_srgb8, HdrImage, Rgb8Image};
+
+use super::adaptive_model::{self, Mode, RateParams, TILE};
+use super::graph::{Graph, PassKind, Plan, TextureDesc};
+use super::scene::{SceneGpu, View, COLOR_FORMAT, DEPTH_FORMAT};
+use super::technique::{allocate, compute_pipeline, FrameExtras, FrameInfo, Technique};
+use super::timers::Timers;
+use crate::gpu::Gpu;
+use crate::technique::{TechniqueKind, Variant};
+
+pub static RATE_WGSL: &str = include_str!("../../../shaders/adaptive_rate.wgsl");
+pub static SHADE_WGSL: &str = include_str!("../../../shaders/adaptive_shade.wgsl");
+
+/// `scene.wgsl` with the G-buffer and shading entry points appended.
+pub fn shade_source() -> String {
+    format!("{}\n{SHADE_WGSL}", super::scene::SCENE_WGSL)
+}
+
+const GBUF_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+const RATE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
+const STATE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
+const GBUFFER: [&str; 3] = ["gbuf_position", "gbuf_normal", "gbuf_local"];
+const COLORS: [&str; 2] = ["color0", "color1"];
+const DEPTHS: [&str; 2] = ["depth0", "depth1"];
+const STATES: [&str; 2] = ["rate_state0", "rate_state1"];
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct RateUniforms {
+    size: [u32; 4],
+    mode: [u32; 4],
+    t: [f32; 4],
+    more: [f32; 4],
+}
+
+/// Rate-selection parameters of a validated `adaptive-shading` variant.
+pub fn rate_params(v: &Variant) -> RateParams {
+    RateParams {
+        threshold: v.float("threshold") as f32,
+        env_luma: v.float("env_luma") as f32,
+        k: v.float("k") as f32,
+        mode: match v.choice("mode") {
+            "content" => Mode::Content,
+            "motion" => Mode::Motion,
+            _ => Mode::ContentMotion,
+        },
+        max_error: v.float("max_error") as f32,
+        hysteresis: v.float("hysteresis") as f32,
+        neighbour_filter: v.flag("neighbour_filter"),
+        allow_4x4: v.flag("allow_4x4"),
+        disocclusion_tolerance: v.float("disocclusion_tolerance") as f32,
+    }
+}
+
+/// The rate pass and its filter, with bind groups per frame parity.
+struct RatePass {
+    params: RateParams,
+    uniforms: wgpu::Buffer,
+    pipeline: wgpu::ComputePipeline,
+    bind_groups: [wgpu::BindGroup; 2],
+    filter: Option<(wgpu::ComputePipeline, wgpu::BindGroup)>,
+}
+
+/// What the last recorded rate pass was given (for the CPU model in tests).
+#[derive(Clone, Copy, Debug)]
+pub struct LastFrame {
+    pub parity: usize,
+    pub history: bool,
+    pub params: RateParams,
+    pub near: f32,
+    pub far: f32,
+}
+
+pub struct Adaptive {
+    plan: Plan,
+    textures: HashMap<&'static str, wgpu::Texture>,
+    width: u32,
+    height: u32,
+    rate: Option<RatePass>,
+    module: wgpu::ShaderModule,
+    shade_pipeline: wgpu::ComputePipeline,
+    _shade_uniforms: wgpu::Buffer,
+    /// Group 1 of the shading pass per parity (output color0 or color1).
+    shade_groups: Vec<wgpu::BindGroup>,
+    /// Made on the first frame, when the scene is known: G-buffer pipeline, shading group 0.
+    scene_objects: Option<(wgpu::RenderPipeline, wgpu::BindGroup)>,
+    /// G-buffer colour targets, and depth per parity.
+    gbuffer_views: Vec<wgpu::TextureView>,
+    depth_views: Vec<wgpu::TextureView>,
+    counters: wgpu::Buffer,
+    counters_readback: wgpu::Buffer,
+    _dummy_rates: Option<wgpu::Texture>,
+    parity: usize,
+    last: Option<LastFrame>,
+}
+
+impl Adaptive {
+    pub fn new(gpu: &Gpu, variant: &Variant, width: u32, height: u32) -> Adaptive {
+        let params =
+            (variant.technique == TechniqueKind::AdaptiveShading).then(|| rate_params(variant));
+        let (tw, th) = adaptive_model::tiles(width, height);
+        let tex = |format, width, height| TextureDesc {
+            format,
+            width,
+            height,
+            samples: 1,
+            layers: 1,
+        };
+        let mut g = Graph::default();
+        for name in GBUFFER {
+            g.resource(name, tex(GBUF_FORMAT, width, height));
+        }
+        let mut gbuffer_writes: Vec<&'static str> = GBUFFER.to_vec();
+        let history = params.is_some();
+        let parities = if history { 2 } else { 1 };
+        for p in 0..parities {
+            g.resource(COLORS[p], tex(COLOR_FORMAT, width, height))
+                .resource(DEPTHS[p], tex(DEPTH_FORMAT, width, height));
+            gbuffer_writes.push(DEPTHS[p]);
+        }
+        let mut shade_reads: Vec<&'static str> = GBUFFER.to_vec();
+        if let Some(p) = &params {
+            g.resource("motion", tex(GBUF_FORMAT, width, height))
+                .resource("rates", tex(RATE_FORMAT, tw, th));
+            for s in STATES {
+                g.resource(s, tex(STATE_FORMAT, tw, th));
+            }
+            gbuffer_writes.push("motion");
+            g.pass("gbuffer", PassKind::Render, &[], &gbuffer_writes);
+            let reads = [
+                COLORS[0], COLORS[1], "motion", DEPTHS[0], DEPTHS[1], STATES[0], STATES[1],
+            ];
+            if p.neighbour_filter {
+                g.resource("rates_raw", tex(RATE_FORMAT, tw, th));
+                g.pass(
+                    "rates",
+                    PassKind::Compute,
+                    &reads,
+                    &["rates_raw", STATES[0], STATES[1]],
+                );
+                g.pass("rate_filter", PassKind::Compute, &["rates_raw"], &["rates"]);
+            } else {
+                g.pass(
+                    "rates",
+                    PassKind::Compute,
+                    &reads,
+                    &["rates", STATES[0], STATES[1]],
+                );
+            }
+            shade_reads.push("rates");
+            g.pass("shade", PassKind::Compute, &shade_reads, &COLORS);
+            g.output(COLORS[0]).output(COLORS[1]);
+        } else {
+            g.pass("gbuffer", PassKind::Render, &[], &gbuffer_writes);
+            g.pass("shade", PassKind::Compute, &shade_reads, &[COLORS[0]]);
+            g.output(COLORS[0]);
+        }
+        let plan = g.plan().expect("built-in graphs are well formed");
+        let textures = allocate(&gpu.device, &plan);
+        let device = &gpu.device;
+        let view = |name: &str| textures[name].create_view(&Default::default());
+
+        let source = shade_source();
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("adaptive shade"),
+            source: wgpu::ShaderSource::Wgsl(source.as_str().into()),
+        });
+        let shade_pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("shade"),
+            layout: None,
+            module: &module,
+            entry_point: Some("shade_main"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        use wgpu::util::DeviceExt;
+        let shade_uniforms = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("shade params"),
+            contents: bytemuck::cast_slice(&[width, height, u32::from(!history), 0]),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let counters = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("shade counters"),
+            size: 8,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let counters_readback = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("shade counters readback"),
+            size: 8,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let dummy_rates = (!history).then(|| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("no rates"),
+                size: wgpu::Extent3d {
+                    width: 1,
+                    height: 1,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: RATE_FORMAT,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            })
+        });
+        let rates_view = match &dummy_rates {
+            Some(t) => t.create_view(&Default::default()),
+            None => view("rates"),
+        };
+        let shade_layout = shade_pipeline.get_bind_group_layout(1);
+        let shade_groups = (0..parities)
+            .map(|p| {
+                let views = [
+                    view(GBUFFER[0]),
+                    view(GBUFFER[1]),
+                    view(GBUFFER[2]),
+                    rates_view.clone(),
+                    view(COLORS[p]),
+                ];
+                let mut entries = vec![
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: shade_uniforms.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 6,
+                        resource: counters.as_entire_binding(),
+                    },
+                ];
+                for (i, v) in views.iter().enumerate() {
+                    entries.push(wgpu::BindGroupEntry {
+                        binding: i as u32 + 1,
+                        resource: wgpu::BindingResource::TextureView(v),
+                    });
+                }
+                device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("shade"),
+                    layout: &shade_layout,
+                    entries: &entries,
+                })
+            })
+            .collect();
+
+        let rate = params.map(|params| {
+            let pipeline = compute_pipeline(device, "rates", RATE_WGSL, "main");
+            let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("rate params"),
+                size: std::mem::size_of::<RateUniforms>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let raw = if params.neighbour_filter {
+                "rates_raw"
+            } else {
+                "rates"
+            };
+            let layout = pipeline.get_bind_group_layout(0);
+            let bind_group = |cur: usize| {
+                let prev = 1 - cur;
+                let views = [
+                    (1, view(COLORS[prev])),
+                    (2, view("motion")),
+                    (3, view(DEPTHS[prev])),
+                    (4, view(STATES[prev])),
+                    (5, view(STATES[cur])),
+                    (6, view(raw)),
+                ];
+                let mut entries = vec![wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: uniforms.as_entire_binding(),
+                }];
+                for (b, v) in &views {
+                    entries.push(wgpu::BindGroupEntry {
+                        binding: *b,
+                        resource: wgpu::BindingResource::TextureView(v),
+                    });
+                }
+                device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("rates"),
+                    layout: &layout,
+                    entries: &entries,
+                })
+            };
+            let bind_groups = [bind_group(0), bind_group(1)];
+            let filter = params.neighbour_filter.then(|| {
+                let pipeline = compute_pipeline(device, "rate_filter", RATE_WGSL, "filter_rates");
+                let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("rate_filter"),
+                    layout: &pipeline.get_bind_group_layout(0),
+                    entries: &[
+                        wgpu::BindGroupEntry {
+                            binding: 0,
+                            resource: uniforms.as_entire_binding(),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 7,
+                            resource: wgpu::BindingResource::TextureView(&view("rates_raw")),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 8,
+                            resource: wgpu::BindingResource::TextureView(&view("rates")),
+                        },
+                    ],
+                });
+                (pipeline, bind_group)
+            });
+            RatePass {
+                params,
+                uniforms,
+                pipeline,
+                bind_groups,
+                filter,
+            }
+        });
+
+        let mut gbuffer_views: Vec<wgpu::TextureView> = GBUFFER.iter().map(|n| view(n)).collect();
+        if history {
+            gbuffer_views.push(view("motion"));
+        }
+        let depth_views = (0..parities).map(|p| view(DEPTHS[p])).collect();
+        Adaptive {
+            plan,
+            textures,
+            width,
+            height,
+            rate,
+            module,
+            shade_pipeline,
+            _shade_uniforms: shade_uniforms,
+            shade_groups,
+            scene_objects: None,
+            gbuffer_views,
+            depth_views,
+            counters,
+            counters_readback,
+            _dummy_rates: dummy_rates,
+            parity: 0,
+            last: None,
+        }
+    }
+
+    /// A texture of the plan by resource name (`motion`, `rates`, `color0`, ...).
+    pub fn texture(&self, name: &str) -> Option<&wgpu::Texture> {
+        self.textures.get(name)
+    }
+
+    pub fn last_frame(&self) -> Option<LastFrame> {
+        self.last
+    }
+
+    /// Shades and covered pixels of the last submitted frame (blocks until it is done).
+    pub fn counters(&self, gpu: &Gpu) -> [u32; 2] {
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(&self.counters, 0, &self.counters_readback, 0, 8);
+        gpu.queue.submit([encoder.finish()]);
+        let slice = self.counters_readback.slice(..);
+        slice.map_async(wgpu::MapMode::Read, |_| {});
+        let _ = gpu.device.poll(wgpu::PollType::Wait {
+            submission_index: None,
+            timeout: None,
+        });
+        let out = match slice.get_mapped_range() {
+            Ok(data) => {
+                let v: &[u32] = bytemuck::cast_slice(&data);
+                [v[0], v[1]]
+            }
+            Err(_) => [0, 0],
+        };
+        self.counters_readback.unmap();
+        out
+    }
+
+    /// The rate codes of the last frame's tiles (after the filter).
+    pub fn rates(&self, gpu: &Gpu) -> Option<Vec<u32>> {
+        let t = self.textures.get("rates")?;
+        Some(bytemuck::cast_slice(&read_texture_raw(gpu, t)).to_vec())
+    }
+
+    fn gbuffer_pass(&self, encoder: &mut wgpu::CommandEncoder, scene: &SceneGpu, timers: &Timers) {
+        let (pipeline, _) = self.scene_objects.as_ref().expect("made before");
+        let attachments: Vec<Option<wgpu::RenderPassColorAttachment>> = self
+            .gbuffer_views
+            .iter()
+            .map(|v| {
+                Some(wgpu::RenderPassColorAttachment {
+                    view: v,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })
+            })
+            .collect();
+        let q = timers.begin("gbuffer", encoder);
+        {
+            let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("gbuffer"),
+                color_attachments: &attachments,
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &self.depth_views[self.parity],
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(0.0),
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: q.render_pass_timestamp_writes(),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            timers.begin_stats(&mut rp, "gbuffer");
+            scene.draw(&mut rp, pipeline, 0);
+            timers.end_stats(&mut rp, "gbuffer");
+        }
+        timers.end(encoder, q);
+    }
+}
+
+/// One compute pass, timed.
+fn dispatch(
+    encoder: &mut wgpu::CommandEncoder,
+    timers: &Timers,
+    name: &'static str,
+    pipeline: &wgpu::ComputePipeline,
+    groups: &[&wgpu::BindGroup],
+    size: [u32; 2],
+) {
+    let q = timers.begin(name, encoder);
+    {
+        let mut cp = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(name),
+            timestamp_writes: q.compute_pass_timestamp_writes(),
+        });
+        cp.set_pipeline(pipeline);
+        for (i, g) in groups.iter().enumerate() {
+            cp.set_bind_group(i as u32, *g, &[]);
+        }
+        cp.dispatch_workgroups(size[0], size[1], 1);
+    }
+    timers.end(encoder, q);
+}
+
+impl Technique for Adaptive {
+    fn plan(&self) -> &Plan {
+        &self.plan
+    }
+
+    fn output(&self) -> &wgpu::Texture {
+        &self.textures[COLORS[self.parity]]
+    }
+
+    fn record(
+        &mut self,
+        gpu: &Gpu,
+        scene: &mut SceneGpu,
+        timers: &Timers,
+        encoder: &mut wgpu::CommandEncoder,
+        frame: FrameInfo,
+    ) {
+        let device = &gpu.device;
+        if self.scene_objects.is_none() {
+            let targets: Vec<Option<wgpu::ColorTargetState>> = self
+                .gbuffer_views
+                .iter()
+                .map(|_| Some(GBUF_FORMAT.into()))
+                .collect();
+            let fs = if self.rate.is_some() {
+                "fs_gbuffer_motion"
+            } else {
+                "fs_gbuffer"
+            };
+            let pipeline = scene.custom_pipeline(
+                device,
+                "gbuffer",
+                &self.module,
+                ("vs_gbuffer", fs),
+                &targets,
+            );
+            let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("shade scene"),
+                layout: &self.shade_pipeline.get_bind_group_layout(0),
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: scene.frame_binding(0),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: scene.objects_binding(),
+                    },
+                ],
+            });
+            self.scene_objects = Some((pipeline, group));
+        }
+        self.parity = if self.rate.is_some() {
+            (frame.index & 1) as usize
+        } else {
+            0
+        };
+        scene.write_view(
+            &gpu.queue,
+            0,
+            &View {
+                time: frame.time,
+                prev_time: frame.prev_time,
+                ndc_offset: Vec2::ZERO,
+                ndc_scale: Vec2::ONE,
+                gradient_scale: 1.0,
+            },
+        );
+        self.gbuffer_pass(encoder, scene, timers);
+        let (tw, th) = adaptive_model::tiles(self.width, self.height);
+        if let Some(r) = &self.rate {
+            let (near, far) = scene.near_far();
+            let p = r.params;
+            let u = RateUniforms {
+                size: [self.width, self.height, tw, th],
+                mode: [
+                    p.mode.code(),
+                    u32::from(frame.history_valid),
+                    u32::from(p.allow_4x4),
+                    0,
+                ],
+                t: [p.threshold, p.env_luma, p.k, p.max_error],
+                more: [p.hysteresis, p.disocclusion_tolerance, near, far],
+            };
+            gpu.queue
+                .write_buffer(&r.uniforms, 0, bytemuck::bytes_of(&u));
+            dispatch(
+                encoder,
+                timers,
+                "rates",
+                &r.pipeline,
+                &[&r.bind_groups[self.parity]],
+                [tw, th],
+            );
+            if let Some((pipeline, group)) = &r.filter {
+                dispatch(
+                    encoder,
+                    timers,
+                    "rate_filter",
+                    pipeline,
+                    &[group],
+                    [tw.div_ceil(8), th.div_ceil(8)],
+                );
+            }
+            self.last = Some(LastFrame {
+                parity: self.parity,
+                history: frame.history_valid,
+                params: p,
+                near,
+                far,
+            });
+        }
+        encoder.clear_buffer(&self.counters, 0, None);
+        let (_, scene_group) = self.scene_objects.as_ref().expect("made above");
+        dispatch(
+            encoder,
+            timers,
+            "shade",
+            &self.shade_pipeline,
+            &[scene_group, &self.shade_groups[self.parity]],
+            [tw, th],
+        );
+    }
+
+    fn frame_extras(&mut self, gpu: &Gpu, frame: &HdrImage, image: bool) -> FrameExtras {
+        let [shades, covered] = self.counters(gpu);
+        let mut extras = FrameExtras::default();
+        // Shades over native's (one per covered pixel); 1 where nothing is drawn.
+        let rate = if covered > 0 {
+            shades as f64 / covered as f64
+        } else {
+            1.0
+        };
+        extras.values.push(("shading-rate", rate));
+        if image {
+            if let Some(codes) = self.rates(gpu) {
+                extras
+                    .images
+                    .push(("shading-rate", rate_image(frame, &codes)));
+            }
+        }
+        extras
+    }
+}
+
+/// The frame in grey with each tile tinted by its shading-region size, as the paper's Fig. 1 (c).
+pub fn rate_image(frame: &HdrImage, codes: &[u32]) -> Rgb8Image {
+    let mut img = encode_srgb8(frame);
+    let (tw, _) = adaptive_model::tiles(img.width, img.height);
+    for y in 0..img.height {
+        for x in 0..img.width {
+            let i = ((y * img.width + x) * 3) as usize;
+            let px = &mut img.data[i..i + 3];
+            let grey = (0.299 * px[0] as f32 + 0.587 * px[1] as f32 + 0.114 * px[2] as f32) as u8;
+            let code = codes
+                .get(((y / TILE) * tw + x / TILE) as usize)
+                .copied()
+                .unwrap_or(0);
+            let tint = adaptive_model::rate_color(code);
+            for c in 0..3 {
+                px[c] = match tint {
+                    Some(t) => ((grey as u16 + t[c] as u16) / 2) as u8,
+                    None => grey,
+                };
+            }
+        }
+    }
+    img
+}
+
+/// Reads a single-sample colour texture back as raw texel bytes, rows unpadded (tests, extras).
+pub fn read_texture_raw(gpu: &Gpu, texture: &wgpu::Texture) -> Vec<u8> {
+    let (w, h) = (texture.width(), texture.height());
+    let texel = texture.format().block_copy_size(None).unwrap_or(4);
+    let row = w * texel;
+    let padded =
+        row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+    let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("raw texture readback"),
+        size: padded as u64 * h as u64,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    encoder.copy_texture_to_buffer(
+        texture.as_image_copy(),
+        wgpu::TexelCopyBufferInfo {
+            buffer: &buffer,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(padded),
+                rows_per_image: Some(h),
+            },
+        },
+        wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        },
+    );
+    gpu.queue.submit([encoder.finish()]);
+    let slice = buffer.slice(..);
+    slice.map_async(wgpu::MapMode::Read, |_| {});
+    let _ = gpu.device.poll(wgpu::PollType::Wait {
+        submission_index: None,
+        timeout: None,
+    });
+    let mut out = Vec::with_capacity((row * h) as usize);
+    if let Ok(data) = slice.get_mapped_range() {
+        for y in 0..h as usize {
+            let start = y * padded as usize;
+            out.extend_from_slice(&data[start..start + row as usize]);
+        }
+    }
+    out
+}

@@ -1,0 +1,228 @@
+// Adaptive shading's rate pass (Yang et al. 2019, seeds/nvidia-adaptive-shading.txt, sections
+// 3 to 5) and the neighbour filter (section 5.4). One 16x16 workgroup per 16x16 tile, one thread
+// per pixel: reproject the previous frame's output by the per-pixel motion (section 5.1), take its
+// luma (Eq. 25), reduce the error estimate of Eq. 2 (L2 form, x and y apart), the average luma,
+// the minimum motion (section 4.1) and the disoccluded pixels (depth-based rejection, 5.1), then
+// decide the tile's rate (Eq. 15, 20 to 22, 24, hysteresis of 5.4). CPU model: render/adaptive_model.rs.
+
+struct RateParams {
+    // width, height, tiles across, tiles down
+    size: vec4<u32>,
+    // x: mode (0 content-motion, 1 content, 2 motion); y: history valid; z: 4x4 allowed
+    mode: vec4<u32>,
+    // t, l, k, e
+    t: vec4<f32>,
+    // x: hysteresis epsilon, y: disocclusion tolerance, z: near, w: far
+    more: vec4<f32>,
+}
+
+@group(0) @binding(0) var<uniform> rp: RateParams;
+@group(0) @binding(1) var prev_color: texture_2d<f32>;
+// xy: motion in pixels (current - previous, y down); z: the surface's expected previous depth;
+// w: 1 where geometry covers the pixel.
+@group(0) @binding(2) var motion: texture_2d<f32>;
+@group(0) @binding(3) var prev_depth: texture_depth_2d;
+@group(0) @binding(4) var prev_state: texture_2d<f32>;
+@group(0) @binding(5) var state_out: texture_storage_2d<rg32float, write>;
+@group(0) @binding(6) var rates_out: texture_storage_2d<r32uint, write>;
+
+var<workgroup> lum: array<f32, 256>;
+var<workgroup> sums: array<vec4<f32>, 256>;
+var<workgroup> mins: array<vec2<f32>, 256>;
+
+// Eq. 25.
+fn luma(c: vec3<f32>) -> f32 {
+    return 0.299 * c.r + 0.587 * c.g + 0.114 * c.b;
+}
+
+// Eq. 20 and 21 (fits of the motion factors).
+fn b_half(v: f32) -> f32 {
+    return pow(1.0 / (1.0 + pow(1.05 * v, 3.10)), 0.35);
+}
+
+fn b_quarter(v: f32, k: f32) -> f32 {
+    return k * pow(1.0 / (1.0 + pow(0.55 * v, 2.41)), 0.49);
+}
+
+fn view_depth(d: f32) -> f32 {
+    let near = rp.more.z;
+    let far = rp.more.w;
+    return near * far / (near + d * (far - near));
+}
+
+// Eq. 22 on one axis, divided through by I_avg + l: 0 full, 1 half, 2 quarter (log2 of the rate).
+fn axis_rate(rel_half: f32, rel_quarter: f32, t: f32) -> u32 {
+    if rel_half >= t {
+        return 0u;
+    }
+    if rel_quarter < t {
+        return 2u;
+    }
+    return 1u;
+}
+
+@compute @workgroup_size(16, 16)
+fn main(
+    @builtin(workgroup_id) tile: vec3<u32>,
+    @builtin(local_invocation_id) lid: vec3<u32>,
+    @builtin(local_invocation_index) i: u32,
+) {
+    let size = vec2<i32>(rp.size.xy);
+    let p = vec2<i32>(tile.xy * 16u + lid.xy);
+    let inside = p.x < size.x && p.y < size.y;
+    var s = vec4<f32>(0.0);
+    var mn = vec2<f32>(1e30);
+    var l = 0.0;
+    if inside {
+        let m = textureLoad(motion, p, 0);
+        let q = floor(vec2<f32>(p) + 0.5 - m.xy);
+        let on_screen = all(q >= vec2<f32>(0.0)) && all(q < vec2<f32>(size));
+        let c = vec2<i32>(min(max(q, vec2<f32>(0.0)), vec2<f32>(size - 1)));
+        l = luma(max(textureLoad(prev_color, c, 0).rgb, vec3<f32>(0.0)));
+        if m.w > 0.5 {
+            mn = abs(m.xy);
+            var occluded = true;
+            if on_screen {
+                let prev = view_depth(textureLoad(prev_depth, c, 0));
+                let expected = view_depth(m.z);
+                occluded = abs(prev - expected) > rp.more.y * expected;
+            }
+            s.w = select(0.0, 1.0, occluded);
+        }
+    }
+    lum[i] = l;
+    workgroupBarrier();
+    if inside {
+        // Eq. 2: ((I_i - I_{i-1}) / 2)^2 over neighbouring pairs inside the tile.
+        if lid.x >= 1u {
+            let d = (l - lum[i - 1u]) * 0.5;
+            s.x = d * d;
+        }
+        if lid.y >= 1u {
+            let d = (l - lum[i - 16u]) * 0.5;
+            s.y = d * d;
+        }
+        s.z = l;
+    }
+    sums[i] = s;
+    mins[i] = mn;
+    workgroupBarrier();
+    for (var stride = 128u; stride > 0u; stride = stride / 2u) {
+        if i < stride {
+            sums[i] = sums[i] + sums[i + stride];
+            mins[i] = min(mins[i], mins[i + stride]);
+        }
+        workgroupBarrier();
+    }
+    if i != 0u {
+        return;
+    }
+    let t_xy = vec2<i32>(tile.xy);
+    if rp.mode.y == 0u {
+        // No history (first frame, camera cut): full rate everywhere.
+        textureStore(rates_out, t_xy, vec4<u32>(0u));
+        textureStore(state_out, t_xy, vec4<f32>(-1.0, -1.0, 0.0, 0.0));
+        return;
+    }
+    let total = sums[0];
+    let tw = f32(min(size.x - t_xy.x * 16, 16));
+    let th = f32(min(size.y - t_xy.y * 16, 16));
+    let pairs = vec2<f32>((tw - 1.0) * th, tw * (th - 1.0));
+    var err = vec2<f32>(0.0);
+    if pairs.x > 0.0 {
+        err.x = sqrt(total.x / pairs.x);
+    }
+    if pairs.y > 0.0 {
+        err.y = sqrt(total.y / pairs.y);
+    }
+    let avg = total.z / (tw * th);
+    var v = mins[0];
+    if v.x > 1e29 {
+        v.x = 0.0;
+    }
+    if v.y > 1e29 {
+        v.y = 0.0;
+    }
+    let t = rp.t.x;
+    let den = avg + rp.t.y;
+    let k = rp.t.z;
+    let prev = textureLoad(prev_state, t_xy, 0).xy;
+    var rel_half = vec2<f32>(0.0);
+    var rate = vec2<u32>(0u);
+    for (var a = 0; a < 2; a = a + 1) {
+        var bh = 1.0;
+        var bq = k;
+        if rp.mode.x != 1u {
+            bh = b_half(v[a]);
+            bq = b_quarter(v[a], k);
+        }
+        var rel = 0.0;
+        if rp.mode.x == 2u {
+            // Eq. 24: the relative error bounded by e.
+            rel = rp.t.w;
+        } else if den > 0.0 {
+            rel = err[a] / den;
+        }
+        let rh = bh * rel;
+        let rq = bq * rel;
+        // Section 5.4's hysteresis: t(1 + eps) when the predicted error grew, t(1 - eps) when
+        // it fell.
+        var te = t;
+        if prev[a] >= 0.0 && rh > prev[a] {
+            te = t * (1.0 + rp.more.x);
+        } else if prev[a] >= 0.0 && rh < prev[a] {
+            te = t * (1.0 - rp.more.x);
+        }
+        rel_half[a] = rh;
+        rate[a] = axis_rate(rh, rq, te);
+    }
+    // Section 3.4: no 4x4 by default; quarter rate stays on the axis with the smaller error.
+    if rate.x == 2u && rate.y == 2u && rp.mode.z == 0u {
+        if rel_half.x >= rel_half.y {
+            rate.x = 1u;
+        } else {
+            rate.y = 1u;
+        }
+    }
+    // No 4x1 or 1x4 region (D3D12's rates, as the NVIDIA-derived shaders do): 4x1 -> 2x1.
+    if rate.x == 2u && rate.y == 0u {
+        rate.x = 1u;
+    }
+    if rate.y == 2u && rate.x == 0u {
+        rate.y = 1u;
+    }
+    // Section 5.1: tiles with pixels that cannot be reprojected are shaded at full rate.
+    if total.w > 0.0 {
+        rate = vec2<u32>(0u);
+    }
+    textureStore(rates_out, t_xy, vec4<u32>(rate.x | (rate.y << 2u), 0u, 0u, 0u));
+    textureStore(state_out, t_xy, vec4<f32>(rel_half, 0.0, 0.0));
+}
+
+// Section 5.4's filter: per axis, at most twice the lowest rate among the eight neighbours.
+@group(0) @binding(7) var rates_in: texture_2d<u32>;
+@group(0) @binding(8) var rates_filtered: texture_storage_2d<r32uint, write>;
+
+@compute @workgroup_size(8, 8)
+fn filter_rates(@builtin(global_invocation_id) id: vec3<u32>) {
+    let tiles = vec2<i32>(rp.size.zw);
+    let t = vec2<i32>(id.xy);
+    if t.x >= tiles.x || t.y >= tiles.y {
+        return;
+    }
+    let c = textureLoad(rates_in, t, 0).x;
+    var lx = c & 3u;
+    var ly = (c >> 2u) & 3u;
+    for (var dy = -1; dy <= 1; dy = dy + 1) {
+        for (var dx = -1; dx <= 1; dx = dx + 1) {
+            let n = t + vec2<i32>(dx, dy);
+            if any(n < vec2<i32>(0)) || any(n >= tiles) {
+                continue;
+            }
+            let nc = textureLoad(rates_in, n, 0).x;
+            lx = min(lx, (nc & 3u) + 1u);
+            ly = min(ly, ((nc >> 2u) & 3u) + 1u);
+        }
+    }
+    textureStore(rates_filtered, t, vec4<u32>(lx | (ly << 2u), 0u, 0u, 0u));
+}
