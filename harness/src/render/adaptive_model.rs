@@ -283,7 +283,7 @@ pub fn select(stats: &TileStats, prev_state: [f32; 2], history: bool, p: &RatePa
         for x in [rel_half[a], rel_quarter[a]] {
             margin = margin.min((x - t).abs() / t);
         }
-        if prev >= 0.0 {
+        if prev >= 0.0 && p.hysteresis > 0.0 {
             margin = margin.min((rel_half[a] - prev).abs() / prev.max(1e-30));
         }
     }
