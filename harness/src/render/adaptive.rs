@@ -601,9 +601,7 @@ impl Technique for Adaptive {
         extras.values.push(("shading-rate", rate));
         if image {
             if let Some(codes) = self.rates(gpu) {
-                extras
-                    .images
-                    .push(("shading-rate", rate_image(frame, &codes)));
+                extras.images.push(("rate", rate_image(frame, &codes)));
             }
         }
         extras

@@ -62,7 +62,8 @@ pub trait Technique {
 pub struct FrameExtras {
     /// Named values (e.g. `shading-rate`): each becomes a metric of the variant's own frames.
     pub values: Vec<(&'static str, f64)>,
-    /// Named images (e.g. `shading-rate`), saved next to the frame's as `<variant>-<kind>-fNNN.png`.
+    /// Named images (image kinds, e.g. `rate`: a shading-rate image), saved next to the frame's as
+    /// `<variant>-<kind>-fNNN.png`.
     pub images: Vec<(&'static str, tessera_metrics::Rgb8Image)>,
 }
 
