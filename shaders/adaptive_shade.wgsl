@@ -4,11 +4,12 @@
 // coarse pixels for compute the same way, notes/techniques.md "Other sources").
 //
 // Shading pass: one 16x16 workgroup per 16x16 tile, whose rate (rx x ry pixels per shade) is
-// uniform over the workgroup. Each coarse pixel is shaded once per object it covers, at its centre
-// pixel ((rx - 1) / 2, (ry - 1) / 2) when that pixel shows the object, else at the object's first
-// pixel in row order; the result is written to all its pixels of that object. So object edges stay
-// sharp, as with hardware VRS, whose coarse pixels are shaded per primitive. The shades are packed
-// into the first threads of the workgroup, so coarse tiles leave whole SIMD groups idle.
+// uniform over the workgroup. As hardware VRS does, each coarse pixel is shaded once per object it
+// covers, at the coarse pixel's centre for that object (the mean of the G-buffer attributes of the
+// object's pixels in it) with derivatives across the coarse pixel (the ground filter's footprint
+// scaled by rx and ry), and the result is written to all its pixels of that object: object edges
+// stay sharp. At 1x1 this is exactly the forward path's shading. The shades are packed into the
+// first threads of the workgroup, so coarse tiles leave whole SIMD groups idle.
 
 struct GBufferVs {
     @builtin(position) clip: vec4<f32>,
@@ -35,18 +36,24 @@ fn vs_gbuffer(
 struct GBuffer {
     // xyz: camera-relative position; w: object + 1 (0 where nothing is drawn).
     @location(0) position: vec4<f32>,
-    // xyz: interpolated normal; w: ground footprint x.
+    // xyz: interpolated normal.
     @location(1) normal: vec4<f32>,
-    // xyz: object-space position; w: ground footprint y.
+    // xyz: object-space position.
     @location(2) local: vec4<f32>,
+    // Screen-space derivatives of the ground pattern coordinate, gradient scale applied: xy d/dx,
+    // zw d/dy (`surface` in scene.wgsl takes the footprint from them).
+    @location(3) derivatives: vec4<f32>,
 }
 
 fn gbuffer(in: GBufferVs) -> GBuffer {
-    let s = surface(VsOut(in.clip, in.rel_pos, in.normal, in.local, in.object));
+    let p = ground_coord(in.rel_pos);
+    let ddx = dpdx(p) * frame.params.z;
+    let ddy = dpdy(p) * frame.params.z;
     return GBuffer(
-        vec4<f32>(s.rel_pos, f32(s.object + 1u)),
-        vec4<f32>(s.normal, s.footprint.x),
-        vec4<f32>(s.local, s.footprint.y),
+        vec4<f32>(in.rel_pos, f32(in.object + 1u)),
+        vec4<f32>(in.normal, 0.0),
+        vec4<f32>(in.local, 0.0),
+        vec4<f32>(ddx, ddy),
     );
 }
 
@@ -59,9 +66,10 @@ struct GBufferMotion {
     @location(0) position: vec4<f32>,
     @location(1) normal: vec4<f32>,
     @location(2) local: vec4<f32>,
+    @location(3) derivatives: vec4<f32>,
     // xy: screen motion in pixels (current - previous, y down); z: the previous frame's depth
     // of this surface point; w: 1 (covered).
-    @location(3) motion: vec4<f32>,
+    @location(4) motion: vec4<f32>,
 }
 
 @fragment
@@ -75,6 +83,7 @@ fn fs_gbuffer_motion(in: GBufferVs) -> GBufferMotion {
         g.position,
         g.normal,
         g.local,
+        g.derivatives,
         vec4<f32>(motion, in.previous.z / in.previous.w, 1.0),
     );
 }
@@ -90,6 +99,7 @@ struct ShadeParams {
 @group(1) @binding(3) var g_local: texture_2d<f32>;
 @group(1) @binding(4) var rates: texture_2d<u32>;
 @group(1) @binding(5) var shaded: texture_storage_2d<rgba16float, write>;
+@group(1) @binding(7) var g_derivatives: texture_2d<f32>;
 // [0]: shades, [1]: covered pixels, summed over the frame.
 @group(1) @binding(6) var<storage, read_write> counters: array<atomic<u32>, 2>;
 
@@ -100,11 +110,29 @@ var<workgroup> col: array<vec4<f32>, 256>;
 var<workgroup> task_count: atomic<u32>;
 var<workgroup> covered: atomic<u32>;
 
-fn shade_pixel(p: vec2<i32>) -> vec4<f32> {
-    let a = textureLoad(g_position, p, 0);
-    let b = textureLoad(g_normal, p, 0);
-    let c = textureLoad(g_local, p, 0);
-    return shade_surface(Surface(a.xyz, b.xyz, c.xyz, u32(a.w) - 1u, vec2<f32>(b.w, c.w)));
+// Shades object `o` over the coarse pixel of `r` pixels at `block` (tile-local): the mean of the
+// object's attributes there, the derivatives of pixel `at` scaled to the coarse pixel.
+fn shade_coarse(origin: vec2<i32>, block: vec2<u32>, r: vec2<u32>, o: u32, at: u32) -> vec4<f32> {
+    var rel_pos = vec3<f32>(0.0);
+    var normal = vec3<f32>(0.0);
+    var local = vec3<f32>(0.0);
+    var n = 0.0;
+    for (var y = 0u; y < r.y; y = y + 1u) {
+        for (var x = 0u; x < r.x; x = x + 1u) {
+            let q = block + vec2<u32>(x, y);
+            if obj[q.y * 16u + q.x] == o {
+                let p = origin + vec2<i32>(q);
+                rel_pos = rel_pos + textureLoad(g_position, p, 0).xyz;
+                normal = normal + textureLoad(g_normal, p, 0).xyz;
+                local = local + textureLoad(g_local, p, 0).xyz;
+                n = n + 1.0;
+            }
+        }
+    }
+    let d = textureLoad(g_derivatives, origin + vec2<i32>(vec2<u32>(at % 16u, at / 16u)), 0);
+    let scale = vec2<f32>(r);
+    let footprint = max(abs(d.xy * scale.x), abs(d.zw * scale.y));
+    return shade_surface(Surface(rel_pos / n, normal / n, local / n, o - 1u, footprint));
 }
 
 @compute @workgroup_size(16, 16)
@@ -159,7 +187,8 @@ fn shade_main(
     let n = atomicLoad(&task_count);
     if i < n {
         let j = tasks[i];
-        col[j] = shade_pixel(origin + vec2<i32>(vec2<u32>(j % 16u, j / 16u)));
+        let q = vec2<u32>(j % 16u, j / 16u);
+        col[j] = shade_coarse(origin, (q / r) * r, r, obj[j], j);
     }
     workgroupBarrier();
     if inside {

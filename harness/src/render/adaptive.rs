@@ -36,7 +36,12 @@ pub fn shade_source() -> String {
 const GBUF_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 const RATE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 const STATE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
-const GBUFFER: [&str; 3] = ["gbuf_position", "gbuf_normal", "gbuf_local"];
+const GBUFFER: [&str; 4] = [
+    "gbuf_position",
+    "gbuf_normal",
+    "gbuf_local",
+    "gbuf_derivatives",
+];
 const COLORS: [&str; 2] = ["color0", "color1"];
 const DEPTHS: [&str; 2] = ["depth0", "depth1"];
 const STATES: [&str; 2] = ["rate_state0", "rate_state1"];
@@ -234,11 +239,12 @@ impl Adaptive {
         let shade_groups = (0..parities)
             .map(|p| {
                 let views = [
-                    view(GBUFFER[0]),
-                    view(GBUFFER[1]),
-                    view(GBUFFER[2]),
-                    rates_view.clone(),
-                    view(COLORS[p]),
+                    (1, view(GBUFFER[0])),
+                    (2, view(GBUFFER[1])),
+                    (3, view(GBUFFER[2])),
+                    (4, rates_view.clone()),
+                    (5, view(COLORS[p])),
+                    (7, view(GBUFFER[3])),
                 ];
                 let mut entries = vec![
                     wgpu::BindGroupEntry {
@@ -250,9 +256,9 @@ impl Adaptive {
                         resource: counters.as_entire_binding(),
                     },
                 ];
-                for (i, v) in views.iter().enumerate() {
+                for (binding, v) in &views {
                     entries.push(wgpu::BindGroupEntry {
-                        binding: i as u32 + 1,
+                        binding: *binding,
                         resource: wgpu::BindingResource::TextureView(v),
                     });
                 }
