@@ -8,7 +8,8 @@
 // covers, at the coarse pixel's centre for that object (the mean of the G-buffer attributes of the
 // object's pixels in it) with derivatives across the coarse pixel (the ground filter's footprint
 // scaled by rx and ry), and the result is written to all its pixels of that object: object edges
-// stay sharp. At 1x1 this is exactly the forward path's shading. The shades are packed into the
+// stay sharp. With `coarse_sample = "pixel"` it is shaded at its shading pixel's own sample
+// instead (the centre pixel, or the object's first pixel in it). At 1x1 this is exactly the forward path's shading. The shades are packed into the
 // first threads of the workgroup, so coarse tiles leave whole SIMD groups idle.
 
 struct GBufferVs {
@@ -89,7 +90,9 @@ fn fs_gbuffer_motion(in: GBufferVs) -> GBufferMotion {
 }
 
 struct ShadeParams {
-    // x, y: output size; z: 1 to shade every tile at 1x1 (native-deferred), ignoring `rates`.
+    // x, y: output size; z: 1 to shade every tile at 1x1 (native-deferred), ignoring `rates`;
+    // w: where a coarse pixel is shaded: 0 at its centre with derivatives across it (hardware
+    // VRS), 1 at its shading pixel with that pixel's own attributes (a native sample, replicated).
     size: vec4<u32>,
 }
 
@@ -113,6 +116,20 @@ var<workgroup> covered: atomic<u32>;
 // Shades object `o` over the coarse pixel of `r` pixels at `block` (tile-local): the mean of the
 // object's attributes there, the derivatives of pixel `at` scaled to the coarse pixel.
 fn shade_coarse(origin: vec2<i32>, block: vec2<u32>, r: vec2<u32>, o: u32, at: u32) -> vec4<f32> {
+    let pixel = origin + vec2<i32>(vec2<u32>(at % 16u, at / 16u));
+    if sp.size.w == 1u {
+        let a = textureLoad(g_position, pixel, 0);
+        let d = textureLoad(g_derivatives, pixel, 0);
+        let footprint = max(abs(d.xy), abs(d.zw));
+        let s = Surface(
+            a.xyz,
+            textureLoad(g_normal, pixel, 0).xyz,
+            textureLoad(g_local, pixel, 0).xyz,
+            o - 1u,
+            footprint,
+        );
+        return shade_surface(s);
+    }
     var rel_pos = vec3<f32>(0.0);
     var normal = vec3<f32>(0.0);
     var local = vec3<f32>(0.0);
@@ -129,7 +146,7 @@ fn shade_coarse(origin: vec2<i32>, block: vec2<u32>, r: vec2<u32>, o: u32, at: u
             }
         }
     }
-    let d = textureLoad(g_derivatives, origin + vec2<i32>(vec2<u32>(at % 16u, at / 16u)), 0);
+    let d = textureLoad(g_derivatives, pixel, 0);
     let scale = vec2<f32>(r);
     let footprint = max(abs(d.xy * scale.x), abs(d.zw * scale.y));
     return shade_surface(Surface(rel_pos / n, normal / n, local / n, o - 1u, footprint));

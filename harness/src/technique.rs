@@ -139,7 +139,7 @@ static CHECKERBOARD_PARAMS: [ParamSpec; 7] = [
 /// 6), k = 2.13 (Eq. 14), e = 0.1 (section 4.2's example), 4x4 off (section 3.4), the 2x neighbour
 /// filter on (section 5.4). The paper gives no value for the hysteresis epsilon nor for the
 /// depth-rejection tolerance (section 5.1 cites Nehab et al.): those defaults are ours.
-static ADAPTIVE_SHADING_PARAMS: [ParamSpec; 9] = [
+static ADAPTIVE_SHADING_PARAMS: [ParamSpec; 10] = [
     ParamSpec {
         name: "threshold",
         kind: ParamKind::Float { min: 0.0, min_inclusive: false, max: 100.0 },
@@ -193,6 +193,12 @@ static ADAPTIVE_SHADING_PARAMS: [ParamSpec; 9] = [
         kind: ParamKind::Float { min: 0.0, min_inclusive: false, max: 1.0e9 },
         default: Default::Float(0.05),
         doc: "depth-based rejection (section 5.1): a pixel whose previous-frame view depth differs from its reprojected surface's by more than this fraction is disoccluded, and its tile is shaded at full rate",
+    },
+    ParamSpec {
+        name: "coarse_sample",
+        kind: ParamKind::Choice(&["centre", "pixel"]),
+        default: Default::Str("centre"),
+        doc: "where software VRS shades a coarse pixel: centre, as hardware VRS (the paper's setting), at the mean of the object's G-buffer attributes in it with derivatives across it; pixel, at one of its pixels' own sample, replicated",
     },
 ];
 

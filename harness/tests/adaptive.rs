@@ -334,10 +334,10 @@ fn gpu_rates_equal_the_model_on_a_moving_scene_with_a_cut() {
 #[test]
 fn gpu_rates_equal_the_model_in_every_mode() {
     let s = common::scenario(SCENE);
-    for (mode, filter, allow) in [
-        ("content", false, true),
-        ("motion", true, false),
-        ("content-motion", false, false),
+    for (mode, filter, allow, sample) in [
+        ("content", false, true, "centre"),
+        ("motion", true, false, "centre"),
+        ("content-motion", false, false, "pixel"),
     ] {
         compare_with_model(
             &s,
@@ -345,6 +345,7 @@ fn gpu_rates_equal_the_model_in_every_mode() {
                 ("mode", ParamValue::Str(mode.into())),
                 ("neighbour_filter", ParamValue::Bool(filter)),
                 ("allow_4x4", ParamValue::Bool(allow)),
+                ("coarse_sample", ParamValue::Str(sample.into())),
                 ("threshold", ParamValue::Float(0.3)),
                 // In motion mode every still tile predicts the same error each frame: hysteresis
                 // would compare equal values, where f32 rounding decides.

@@ -17,7 +17,7 @@ use std::collections::HashMap;
 use glam::Vec2;
 use tessera_metrics::{encode_srgb8, HdrImage, Rgb8Image};
 
-use super::adaptive_model::{self, Mode, RateParams, TILE};
+use super::adaptive_model::{self, CoarseSample, Mode, RateParams, TILE};
 use super::graph::{Graph, PassKind, Plan, TextureDesc};
 use super::scene::{SceneGpu, View, COLOR_FORMAT, DEPTH_FORMAT};
 use super::technique::{allocate, compute_pipeline, FrameExtras, FrameInfo, Technique};
@@ -71,6 +71,10 @@ pub fn rate_params(v: &Variant) -> RateParams {
         neighbour_filter: v.flag("neighbour_filter"),
         allow_4x4: v.flag("allow_4x4"),
         disocclusion_tolerance: v.float("disocclusion_tolerance") as f32,
+        coarse_sample: match v.choice("coarse_sample") {
+            "pixel" => CoarseSample::Pixel,
+            _ => CoarseSample::Centre,
+        },
     }
 }
 
@@ -198,7 +202,12 @@ impl Adaptive {
         use wgpu::util::DeviceExt;
         let shade_uniforms = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("shade params"),
-            contents: bytemuck::cast_slice(&[width, height, u32::from(!history), 0]),
+            contents: bytemuck::cast_slice(&[
+                width,
+                height,
+                u32::from(!history),
+                u32::from(params.is_some_and(|p| p.coarse_sample == CoarseSample::Pixel)),
+            ]),
             usage: wgpu::BufferUsages::UNIFORM,
         });
         let counters = device.create_buffer(&wgpu::BufferDescriptor {

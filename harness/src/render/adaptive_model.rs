@@ -47,6 +47,17 @@ pub struct RateParams {
     pub allow_4x4: bool,
     /// Relative view-depth difference beyond which a reprojected pixel is disoccluded.
     pub disocclusion_tolerance: f32,
+    /// Where the shading pass shades a coarse pixel (not part of rate selection).
+    pub coarse_sample: CoarseSample,
+}
+
+/// Where a coarse pixel is shaded (parameter `coarse_sample`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CoarseSample {
+    /// At its centre, with derivatives across it, as hardware VRS shades.
+    Centre,
+    /// At its shading pixel's own G-buffer sample (a native sample, replicated).
+    Pixel,
 }
 
 impl Default for RateParams {
@@ -61,6 +72,7 @@ impl Default for RateParams {
             neighbour_filter: true,
             allow_4x4: false,
             disocclusion_tolerance: 0.05,
+            coarse_sample: CoarseSample::Centre,
         }
     }
 }
