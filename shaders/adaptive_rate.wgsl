@@ -50,17 +50,6 @@ fn view_depth(d: f32) -> f32 {
     return near * far / (near + d * (far - near));
 }
 
-// Eq. 22 on one axis, divided through by I_avg + l: 0 full, 1 half, 2 quarter (log2 of the rate).
-fn axis_rate(rel_half: f32, rel_quarter: f32, t: f32) -> u32 {
-    if rel_half >= t {
-        return 0u;
-    }
-    if rel_quarter < t {
-        return 2u;
-    }
-    return 1u;
-}
-
 @compute @workgroup_size(16, 16)
 fn main(
     @builtin(workgroup_id) tile: vec3<u32>,
@@ -165,16 +154,23 @@ fn main(
         }
         let rh = bh * rel;
         let rq = bq * rel;
-        // Section 5.4's hysteresis: t(1 + eps) when the predicted error grew, t(1 - eps) when
-        // it fell.
-        var te = t;
-        if prev[a] >= 0.0 && rh > prev[a] {
-            te = t * (1.0 + rp.more.x);
-        } else if prev[a] >= 0.0 && rh < prev[a] {
-            te = t * (1.0 - rp.more.x);
+        // Section 5.4's hysteresis against the tile's previous rate on this axis: a rise of the
+        // predicted error to a finer rate must pass t(1 + eps), a fall to a coarser rate
+        // t(1 - eps).
+        var th = t;
+        var tq = t;
+        if prev[a] >= 0.0 {
+            let eps = rp.more.x;
+            th = select(t * (1.0 + eps), t * (1.0 - eps), prev[a] < 0.5);
+            tq = select(t * (1.0 - eps), t * (1.0 + eps), prev[a] > 1.5);
         }
         rel_half[a] = rh;
-        rate[a] = axis_rate(rh, rq, te);
+        rate[a] = 1u;
+        if rh >= th {
+            rate[a] = 0u;
+        } else if rq < tq {
+            rate[a] = 2u;
+        }
     }
     // Section 3.4: no 4x4 by default; quarter rate stays on the axis with the smaller error.
     if rate.x == 2u && rate.y == 2u && rp.mode.z == 0u {
@@ -196,7 +192,7 @@ fn main(
         rate = vec2<u32>(0u);
     }
     textureStore(rates_out, t_xy, vec4<u32>(rate.x | (rate.y << 2u), 0u, 0u, 0u));
-    textureStore(state_out, t_xy, vec4<f32>(rel_half, 0.0, 0.0));
+    textureStore(state_out, t_xy, vec4<f32>(vec2<f32>(rate), 0.0, 0.0));
 }
 
 // Section 5.4's filter: per axis, at most twice the lowest rate among the eight neighbours.

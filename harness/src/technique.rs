@@ -174,7 +174,7 @@ static ADAPTIVE_SHADING_PARAMS: [ParamSpec; 10] = [
         name: "hysteresis",
         kind: ParamKind::Float { min: 0.0, min_inclusive: true, max: 0.99 },
         default: Default::Float(0.1),
-        doc: "epsilon of the hysteresis thresholds t(1 + epsilon) when a tile's predicted error grew since the previous frame and t(1 - epsilon) when it fell (section 5.4; no value in the paper, 0 turns it off)",
+        doc: "epsilon of the hysteresis thresholds (section 5.4; no value in the paper, 0 turns it off): against the tile's previous rate per axis, a rise of the predicted error to a finer rate must pass t(1 + epsilon), a fall to a coarser rate t(1 - epsilon)",
     },
     ParamSpec {
         name: "neighbour_filter",

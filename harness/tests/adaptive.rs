@@ -88,7 +88,7 @@ fn worked_example_of_section_4_2() {
 }
 
 /// Eq. 15 and 16 at rest: full rate when E >= t(I_avg + l), quarter when kE < t(I_avg + l);
-/// hysteresis moves the threshold by t * epsilon in the direction of the change.
+/// hysteresis (section 5.4) moves each threshold by t * epsilon towards keeping the previous rate.
 #[test]
 fn content_thresholds_and_hysteresis() {
     let p = RateParams {
@@ -114,10 +114,16 @@ fn content_thresholds_and_hysteresis() {
         hysteresis: 0.1,
         ..p
     };
-    // Error just above tau but grown since last frame: t(1 + eps) keeps half rate.
-    assert_eq!(at(tau * 1.05, 0.0, &h), 2);
-    // Error just below tau but fallen: t(1 - eps) keeps full rate.
-    assert_eq!(at(tau * 0.95, 1.0, &h), 1);
+    // The previous rate (log2) is sticky: just above tau, a half-rate tile stays half
+    // (t(1 + eps)); just below, a full-rate tile stays full (t(1 - eps)); likewise at the
+    // half/quarter boundary.
+    assert_eq!(at(tau * 1.05, 1.0, &h), 2);
+    assert_eq!(at(tau * 1.15, 1.0, &h), 1);
+    assert_eq!(at(tau * 0.95, 0.0, &h), 1);
+    assert_eq!(at(tau * 0.85, 0.0, &h), 2);
+    assert_eq!(at(tau / 2.13 * 1.05, 2.0, &h), 4);
+    assert_eq!(at(tau / 2.13 * 0.95, 1.0, &h), 2);
+    assert_eq!(at(tau / 2.13 * 0.85, 1.0, &h), 4);
     // Disoccluded tiles are shaded at full rate whatever their error.
     let stats = TileStats {
         error: [0.0, 0.0],
@@ -347,9 +353,6 @@ fn gpu_rates_equal_the_model_in_every_mode() {
                 ("allow_4x4", ParamValue::Bool(allow)),
                 ("coarse_sample", ParamValue::Str(sample.into())),
                 ("threshold", ParamValue::Float(0.3)),
-                // In motion mode every still tile predicts the same error each frame: hysteresis
-                // would compare equal values, where f32 rounding decides.
-                ("hysteresis", ParamValue::Float(0.0)),
             ]),
             4,
         );

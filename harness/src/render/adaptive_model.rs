@@ -96,16 +96,37 @@ pub fn b_quarter(v: f32, k: f32) -> f32 {
 pub type AxisRate = u32;
 
 /// Eq. 22 on one axis in relative form: `rel_half` = b_H(v) E / (I_avg + l) and `rel_quarter` =
-/// b_Q(v) E / (I_avg + l) against the sensitivity threshold `t` (Eq. 15 divided through by
+/// b_Q(v) E / (I_avg + l) against the thresholds of the full/half boundary `t_half` and of the
+/// half/quarter boundary `t_quarter` (both t without hysteresis: Eq. 15 divided through by
 /// I_avg + l). Full when b_H E >= tau (the `>=` of Eq. 16 and both public codes).
-pub fn axis_rate(rel_half: f32, rel_quarter: f32, t: f32) -> AxisRate {
-    if rel_half >= t {
+pub fn axis_rate(rel_half: f32, rel_quarter: f32, t_half: f32, t_quarter: f32) -> AxisRate {
+    if rel_half >= t_half {
         1
-    } else if rel_quarter < t {
+    } else if rel_quarter < t_quarter {
         4
     } else {
         2
     }
+}
+
+/// Section 5.4's hysteresis as thresholds (full/half, half/quarter) given the axis's previous
+/// rate (log2; negative: none): a rise of the predicted error to a finer rate must pass
+/// t(1 + eps), a fall to a coarser rate t(1 - eps).
+pub fn hysteresis_thresholds(t: f32, eps: f32, prev: f32) -> (f32, f32) {
+    if prev < 0.0 {
+        return (t, t);
+    }
+    let half = if prev < 0.5 {
+        t * (1.0 - eps)
+    } else {
+        t * (1.0 + eps)
+    };
+    let quarter = if prev > 1.5 {
+        t * (1.0 + eps)
+    } else {
+        t * (1.0 - eps)
+    };
+    (half, quarter)
 }
 
 /// A tile's rate as stored in the rate texture: log2 of the x rate in bits 0-1, of y in bits 2-3.
@@ -142,7 +163,7 @@ pub struct Inputs<'a> {
     pub motion: &'a [[f32; 4]],
     /// Previous frame's reversed-Z depth.
     pub prev_depth: &'a [f32],
-    /// Previous frame's per-tile state (relative half-rate error per axis; negative: none).
+    /// Previous frame's per-tile state (decided log2 rate per axis; negative: none).
     pub prev_state: &'a [[f32; 2]],
     pub near: f32,
     pub far: f32,
@@ -247,9 +268,9 @@ pub fn tile_stats(inp: &Inputs, tx: u32, ty: u32) -> TileStats {
 }
 
 /// One tile's decision before the neighbour filter: (rate code, state to keep, margin). The state
-/// is the relative half-rate error per axis (negative without history). The margin is the
-/// smallest relative distance of a compared value from its threshold: where it is tiny, f32
-/// rounding on the GPU may decide the other way.
+/// is the decided log2 rate per axis (negative without history), the previous rate of the next
+/// frame's hysteresis. The margin is the smallest relative distance of a compared value from its
+/// threshold: where it is tiny, f32 rounding on the GPU may decide the other way.
 pub fn select(stats: &TileStats, prev_state: [f32; 2], history: bool, p: &RateParams) -> Decision {
     if !history {
         return Decision {
@@ -281,23 +302,11 @@ pub fn select(stats: &TileStats, prev_state: [f32; 2], history: bool, p: &RatePa
         };
         rel_half[a] = bh * rel;
         rel_quarter[a] = bq * rel;
-        // Section 5.4: t(1 + eps) when the predicted error grew since the last frame, t(1 - eps)
-        // when it fell.
-        let prev = prev_state[a];
-        let t = if prev >= 0.0 && rel_half[a] > prev {
-            p.threshold * (1.0 + p.hysteresis)
-        } else if prev >= 0.0 && rel_half[a] < prev {
-            p.threshold * (1.0 - p.hysteresis)
-        } else {
-            p.threshold
-        };
-        rates[a] = axis_rate(rel_half[a], rel_quarter[a], t);
-        for x in [rel_half[a], rel_quarter[a]] {
-            margin = margin.min((x - t).abs() / t);
-        }
-        if prev >= 0.0 && p.hysteresis > 0.0 {
-            margin = margin.min((rel_half[a] - prev).abs() / prev.max(1e-30));
-        }
+        let (th, tq) = hysteresis_thresholds(p.threshold, p.hysteresis, prev_state[a]);
+        rates[a] = axis_rate(rel_half[a], rel_quarter[a], th, tq);
+        margin = margin
+            .min((rel_half[a] - th).abs() / th)
+            .min((rel_quarter[a] - tq).abs() / tq);
     }
     let (mut rx, mut ry) = (rates[0], rates[1]);
     // Section 3.4: no 4x4 by default; keep quarter rate on the axis with the smaller error.
@@ -320,7 +329,7 @@ pub fn select(stats: &TileStats, prev_state: [f32; 2], history: bool, p: &RatePa
     }
     Decision {
         code: encode(rx, ry),
-        state: rel_half,
+        state: [rx.trailing_zeros() as f32, ry.trailing_zeros() as f32],
         margin,
     }
 }
