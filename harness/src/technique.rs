@@ -173,8 +173,8 @@ static ADAPTIVE_SHADING_PARAMS: [ParamSpec; 10] = [
     ParamSpec {
         name: "hysteresis",
         kind: ParamKind::Float { min: 0.0, min_inclusive: true, max: 0.99 },
-        default: Default::Float(0.1),
-        doc: "epsilon of the hysteresis thresholds (section 5.4; no value in the paper, 0 turns it off): against the tile's previous rate per axis, a rise of the predicted error to a finer rate must pass t(1 + epsilon), a fall to a coarser rate t(1 - epsilon)",
+        default: Default::Float(0.2),
+        doc: "epsilon of the hysteresis thresholds (section 5.4; no value in the paper; 0.2 is the least that stopped rate oscillation on scenarios/adaptive/detailed.toml, where coarse output raises the next estimate by about sqrt 2; 0 turns it off): against the tile's previous rate per axis, a rise of the predicted error to a finer rate must pass t(1 + epsilon), a fall to a coarser rate t(1 - epsilon)",
     },
     ParamSpec {
         name: "neighbour_filter",

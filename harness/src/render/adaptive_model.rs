@@ -68,7 +68,7 @@ impl Default for RateParams {
             k: 2.13,
             mode: Mode::ContentMotion,
             max_error: 0.1,
-            hysteresis: 0.1,
+            hysteresis: 0.2,
             neighbour_filter: true,
             allow_4x4: false,
             disocclusion_tolerance: 0.05,
