@@ -217,13 +217,6 @@ fn f32s(bytes: Vec<u8>) -> Vec<f32> {
     bytemuck::cast_slice(&bytes).to_vec()
 }
 
-fn vec4s(bytes: Vec<u8>) -> Vec<[f32; 4]> {
-    f32s(bytes)
-        .chunks_exact(4)
-        .map(|c| [c[0], c[1], c[2], c[3]])
-        .collect()
-}
-
 /// Renders `frames` frames; after each compares the GPU's rates with the CPU model's on the same
 /// inputs. Returns the number of tiles at each region size over all frames with history.
 fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) -> [usize; 5] {
@@ -252,7 +245,11 @@ fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) -> [usize; 5] {
         .chunks_exact(4)
         .map(|c| [c[0], c[1], c[2], c[3]])
         .collect();
-        let motion = vec4s(read_texture_raw(&gpu, tex("motion".into())));
+        let motion: Vec<[f32; 4]> =
+            tessera::render::readback::read_texture(&gpu.device, &gpu.queue, tex("motion".into()))
+                .chunks_exact(4)
+                .map(|c| [c[0], c[1], c[2], c[3]])
+                .collect();
         let prev_depth = tessera::render::readback::read_texture(
             &gpu.device,
             &gpu.queue,

@@ -34,6 +34,10 @@ pub fn shade_source() -> String {
 }
 
 const GBUF_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+/// Motion in pixels and the previous reversed-Z depth: f16 keeps sub-pixel motion to 1024 px and
+/// depth near the far plane (near 0) finely enough for the 5% rejection, at half the bandwidth of
+/// the rate pass's largest input.
+const MOTION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 const RATE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 const STATE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
 const GBUFFER: [&str; 4] = [
@@ -146,7 +150,7 @@ impl Adaptive {
         }
         let mut shade_reads: Vec<&'static str> = GBUFFER.to_vec();
         if let Some(p) = &params {
-            g.resource("motion", tex(GBUF_FORMAT, width, height))
+            g.resource("motion", tex(MOTION_FORMAT, width, height))
                 .resource("rates", tex(RATE_FORMAT, tw, th));
             for s in STATES {
                 g.resource(s, tex(STATE_FORMAT, tw, th));
@@ -499,11 +503,11 @@ impl Technique for Adaptive {
     ) {
         let device = &gpu.device;
         if self.scene_objects.is_none() {
-            let targets: Vec<Option<wgpu::ColorTargetState>> = self
-                .gbuffer_views
-                .iter()
-                .map(|_| Some(GBUF_FORMAT.into()))
-                .collect();
+            let mut targets: Vec<Option<wgpu::ColorTargetState>> =
+                GBUFFER.iter().map(|_| Some(GBUF_FORMAT.into())).collect();
+            if self.rate.is_some() {
+                targets.push(Some(MOTION_FORMAT.into()));
+            }
             let fs = if self.rate.is_some() {
                 "fs_gbuffer_motion"
             } else {
