@@ -30,7 +30,13 @@ fn vs_gbuffer(
 ) -> GBufferVs {
     let v = transform(position, normal, object);
     let o = objects[object];
-    let previous = frame.prev_view_proj * o.prev_model * vec4<f32>(position, 1.0);
+    // The ground quad follows the camera while its pattern stays in world space: what is seen
+    // there moves as the world does, so its motion comes from this frame's model matrix.
+    var prev_model = o.prev_model;
+    if abs(o.emissive.a - 1.0) < 0.5 {
+        prev_model = o.model;
+    }
+    let previous = frame.prev_view_proj * prev_model * vec4<f32>(position, 1.0);
     return GBufferVs(v.clip, v.rel_pos, v.normal, v.local, v.object, v.clip, previous);
 }
 
