@@ -1,9 +1,10 @@
 // Adaptive shading's rate pass (Yang et al. 2019, seeds/nvidia-adaptive-shading.txt, sections
-// 3 to 5) and the neighbour filter (section 5.4). One 16x16 workgroup per 16x16 tile, one thread
-// per pixel: reproject the previous frame's output by the per-pixel motion (section 5.1), take its
-// luma (Eq. 25), reduce the error estimate of Eq. 2 (L2 form, x and y apart), the average luma,
-// the minimum motion (section 4.1) and the disoccluded pixels (depth-based rejection, 5.1), then
-// decide the tile's rate (Eq. 15, 20 to 22, 24, hysteresis of 5.4). CPU model: render/adaptive_model.rs.
+// 3 to 5) and the neighbour filter (section 5.4). One workgroup of 32 threads per 16x16 tile, 8
+// pixels per thread (section 5.1): reproject the previous frame's output by the per-pixel motion
+// (section 5.1), take its luma (Eq. 25), reduce the error estimate of Eq. 2 (L2 form, x and y
+// apart), the average luma, the minimum motion (section 4.1) and the disoccluded pixels
+// (depth-based rejection, 5.1), then decide the tile's rate (Eq. 15, 20 to 22, 24, hysteresis of
+// 5.4). CPU model: harness/src/render/adaptive_model.rs.
 
 struct RateParams {
     // width, height, tiles across, tiles down
@@ -27,8 +28,8 @@ struct RateParams {
 @group(0) @binding(6) var rates_out: texture_storage_2d<r32uint, write>;
 
 var<workgroup> lum: array<f32, 256>;
-var<workgroup> sums: array<vec4<f32>, 256>;
-var<workgroup> mins: array<vec2<f32>, 256>;
+var<workgroup> sums: array<vec4<f32>, 32>;
+var<workgroup> mins: array<vec2<f32>, 32>;
 
 // Eq. 25.
 fn luma(c: vec3<f32>) -> f32 {
@@ -50,53 +51,64 @@ fn view_depth(d: f32) -> f32 {
     return near * far / (near + d * (far - near));
 }
 
-@compute @workgroup_size(16, 16)
+// Section 5.1's layout: 32 threads per tile, each owning 8 pixels, here a column of 8: thread
+// (x, h) owns pixels (x, 8h) to (x, 8h + 7) of the tile. Each sums its pixels in order, then the
+// 32 partial sums are reduced as a tree (the CPU model reduces in the same order).
+@compute @workgroup_size(16, 2)
 fn main(
     @builtin(workgroup_id) tile: vec3<u32>,
     @builtin(local_invocation_id) lid: vec3<u32>,
     @builtin(local_invocation_index) i: u32,
 ) {
     let size = vec2<i32>(rp.size.xy);
-    let p = vec2<i32>(tile.xy * 16u + lid.xy);
-    let inside = p.x < size.x && p.y < size.y;
     var s = vec4<f32>(0.0);
     var mn = vec2<f32>(1e30);
-    var l = 0.0;
-    if inside {
-        let m = textureLoad(motion, p, 0);
-        let q = floor(vec2<f32>(p) + 0.5 - m.xy);
-        let on_screen = all(q >= vec2<f32>(0.0)) && all(q < vec2<f32>(size));
-        let c = vec2<i32>(min(max(q, vec2<f32>(0.0)), vec2<f32>(size - 1)));
-        l = luma(max(textureLoad(prev_color, c, 0).rgb, vec3<f32>(0.0)));
-        if m.w > 0.5 {
-            mn = abs(m.xy);
-            var occluded = true;
-            if on_screen {
-                let prev = view_depth(textureLoad(prev_depth, c, 0));
-                let expected = view_depth(m.z);
-                occluded = abs(prev - expected) > rp.more.y * expected;
+    var l: array<f32, 8>;
+    for (var k = 0u; k < 8u; k = k + 1u) {
+        let ly = lid.y * 8u + k;
+        let p = vec2<i32>(tile.xy * 16u + vec2<u32>(lid.x, ly));
+        l[k] = 0.0;
+        if all(p < size) {
+            let m = textureLoad(motion, p, 0);
+            let q = floor(vec2<f32>(p) + 0.5 - m.xy);
+            let on_screen = all(q >= vec2<f32>(0.0)) && all(q < vec2<f32>(size));
+            let c = vec2<i32>(min(max(q, vec2<f32>(0.0)), vec2<f32>(size - 1)));
+            l[k] = luma(max(textureLoad(prev_color, c, 0).rgb, vec3<f32>(0.0)));
+            if m.w > 0.5 {
+                mn = min(mn, abs(m.xy));
+                var occluded = true;
+                if on_screen {
+                    let prev = view_depth(textureLoad(prev_depth, c, 0));
+                    let expected = view_depth(m.z);
+                    occluded = abs(prev - expected) > rp.more.y * expected;
+                }
+                s.w = s.w + select(0.0, 1.0, occluded);
             }
-            s.w = select(0.0, 1.0, occluded);
         }
+        lum[ly * 16u + lid.x] = l[k];
     }
-    lum[i] = l;
     workgroupBarrier();
-    if inside {
-        // Eq. 2: ((I_i - I_{i-1}) / 2)^2 over neighbouring pairs inside the tile.
-        if lid.x >= 1u {
-            let d = (l - lum[i - 1u]) * 0.5;
-            s.x = d * d;
+    for (var k = 0u; k < 8u; k = k + 1u) {
+        let ly = lid.y * 8u + k;
+        let p = vec2<i32>(tile.xy * 16u + vec2<u32>(lid.x, ly));
+        if all(p < size) {
+            let idx = ly * 16u + lid.x;
+            // Eq. 2: ((I_i - I_{i-1}) / 2)^2 over neighbouring pairs inside the tile.
+            if lid.x >= 1u {
+                let d = (l[k] - lum[idx - 1u]) * 0.5;
+                s.x = s.x + d * d;
+            }
+            if ly >= 1u {
+                let d = (l[k] - lum[idx - 16u]) * 0.5;
+                s.y = s.y + d * d;
+            }
+            s.z = s.z + l[k];
         }
-        if lid.y >= 1u {
-            let d = (l - lum[i - 16u]) * 0.5;
-            s.y = d * d;
-        }
-        s.z = l;
     }
     sums[i] = s;
     mins[i] = mn;
     workgroupBarrier();
-    for (var stride = 128u; stride > 0u; stride = stride / 2u) {
+    for (var stride = 16u; stride > 0u; stride = stride / 2u) {
         if i < stride {
             sums[i] = sums[i] + sums[i + stride];
             mins[i] = min(mins[i], mins[i + stride]);

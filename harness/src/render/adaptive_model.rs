@@ -177,9 +177,9 @@ pub fn view_depth(d: f32, near: f32, far: f32) -> f32 {
     near * far / (near + d * (far - near))
 }
 
-/// In-place tree reduction over 256 values, as the shader's workgroup does.
-fn reduce<T: Copy>(v: &mut [T; 256], op: impl Fn(T, T) -> T) -> T {
-    let mut stride = 128;
+/// In-place tree reduction over 32 values, as the shader's workgroup does.
+fn reduce<T: Copy>(v: &mut [T; 32], op: impl Fn(T, T) -> T) -> T {
+    let mut stride = 16;
     while stride > 0 {
         for i in 0..stride {
             v[i] = op(v[i], v[i + stride]);
@@ -189,57 +189,74 @@ fn reduce<T: Copy>(v: &mut [T; 256], op: impl Fn(T, T) -> T) -> T {
     v[0]
 }
 
-/// The reductions of one tile (the rate pass's workgroup).
+/// The reductions of one tile (the rate pass's workgroup: 32 threads, thread (x, h) summing the
+/// pixels (x, 8h) to (x, 8h + 7) in order, then a tree over the threads).
 pub fn tile_stats(inp: &Inputs, tx: u32, ty: u32) -> TileStats {
     let (w, h) = (inp.width as i32, inp.height as i32);
+    let pixel = |i: usize| {
+        (
+            tx as i32 * 16 + (i % 16) as i32,
+            ty as i32 * 16 + (i / 16) as i32,
+        )
+    };
+    let inside = |i: usize| {
+        let (px, py) = pixel(i);
+        px < w && py < h
+    };
     let mut lum = [0f32; 256];
-    let mut inside = [false; 256];
-    let mut sums = [[0f32; 4]; 256];
-    let mut mins = [[1e30f32; 2]; 256];
-    for i in 0..256usize {
-        let (lx, ly) = ((i % 16) as i32, (i / 16) as i32);
-        let (px, py) = (tx as i32 * 16 + lx, ty as i32 * 16 + ly);
-        if px >= w || py >= h {
-            continue;
-        }
-        inside[i] = true;
-        let m = inp.motion[(py * w + px) as usize];
-        let qx = (px as f32 + 0.5 - m[0]).floor();
-        let qy = (py as f32 + 0.5 - m[1]).floor();
-        let on_screen = qx >= 0.0 && qy >= 0.0 && qx < w as f32 && qy < h as f32;
-        let (cx, cy) = (
-            (qx.max(0.0) as i32).min(w - 1),
-            (qy.max(0.0) as i32).min(h - 1),
-        );
-        let c = inp.prev_color[(cy * w + cx) as usize];
-        lum[i] = luma([c[0].max(0.0), c[1].max(0.0), c[2].max(0.0)]);
-        if m[3] > 0.5 {
-            mins[i] = [m[0].abs(), m[1].abs()];
-            let occluded = if on_screen {
-                let prev = view_depth(inp.prev_depth[(cy * w + cx) as usize], inp.near, inp.far);
-                let expected = view_depth(m[2], inp.near, inp.far);
-                (prev - expected).abs() > inp.params.disocclusion_tolerance * expected
-            } else {
-                true
-            };
-            sums[i][3] = if occluded { 1.0 } else { 0.0 };
+    let mut sums = [[0f32; 4]; 32];
+    let mut mins = [[1e30f32; 2]; 32];
+    for t in 0..32usize {
+        let (x, half) = (t % 16, t / 16);
+        for k in 0..8 {
+            let i = (half * 8 + k) * 16 + x;
+            if !inside(i) {
+                continue;
+            }
+            let (px, py) = pixel(i);
+            let m = inp.motion[(py * w + px) as usize];
+            let qx = (px as f32 + 0.5 - m[0]).floor();
+            let qy = (py as f32 + 0.5 - m[1]).floor();
+            let on_screen = qx >= 0.0 && qy >= 0.0 && qx < w as f32 && qy < h as f32;
+            let (cx, cy) = (
+                (qx.max(0.0) as i32).min(w - 1),
+                (qy.max(0.0) as i32).min(h - 1),
+            );
+            let c = inp.prev_color[(cy * w + cx) as usize];
+            lum[i] = luma([c[0].max(0.0), c[1].max(0.0), c[2].max(0.0)]);
+            if m[3] > 0.5 {
+                mins[t] = [mins[t][0].min(m[0].abs()), mins[t][1].min(m[1].abs())];
+                let occluded = if on_screen {
+                    let prev =
+                        view_depth(inp.prev_depth[(cy * w + cx) as usize], inp.near, inp.far);
+                    let expected = view_depth(m[2], inp.near, inp.far);
+                    (prev - expected).abs() > inp.params.disocclusion_tolerance * expected
+                } else {
+                    true
+                };
+                sums[t][3] += if occluded { 1.0 } else { 0.0 };
+            }
         }
     }
-    for i in 0..256usize {
-        if !inside[i] {
-            continue;
+    for (t, s) in sums.iter_mut().enumerate() {
+        let (x, half) = (t % 16, t / 16);
+        for k in 0..8 {
+            let ly = half * 8 + k;
+            let i = ly * 16 + x;
+            if !inside(i) {
+                continue;
+            }
+            // Eq. 2: ((I_i - I_{i-1}) / 2)^2 over neighbouring pairs inside the tile.
+            if x >= 1 {
+                let d = (lum[i] - lum[i - 1]) * 0.5;
+                s[0] += d * d;
+            }
+            if ly >= 1 {
+                let d = (lum[i] - lum[i - 16]) * 0.5;
+                s[1] += d * d;
+            }
+            s[2] += lum[i];
         }
-        let (lx, ly) = (i % 16, i / 16);
-        // Eq. 2: ((I_i - I_{i-1}) / 2)^2 over neighbouring pairs inside the tile.
-        if lx >= 1 && inside[i - 1] {
-            let d = (lum[i] - lum[i - 1]) * 0.5;
-            sums[i][0] = d * d;
-        }
-        if ly >= 1 && inside[i - 16] {
-            let d = (lum[i] - lum[i - 16]) * 0.5;
-            sums[i][1] = d * d;
-        }
-        sums[i][2] = lum[i];
     }
     let s = reduce(&mut sums, |a, b| {
         [a[0] + b[0], a[1] + b[1], a[2] + b[2], a[3] + b[3]]
