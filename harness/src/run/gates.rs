@@ -12,9 +12,15 @@ pub fn frame_ms(r: &VariantResult) -> Option<f64> {
 
 /// Speed-up of `r` against the `native` variant of the same scenario on the same adapter.
 pub fn speedup(results: &[VariantResult], r: &VariantResult) -> Option<f64> {
+    speedup_over(results, r, "native")
+}
+
+/// Speed-up of `r` against the variant named `baseline` (e.g. `native-deferred`, the baseline of
+/// `adaptive-shading`) of the same scenario on the same adapter.
+pub fn speedup_over(results: &[VariantResult], r: &VariantResult, baseline: &str) -> Option<f64> {
     let native = results
         .iter()
-        .find(|v| v.variant == "native" && v.status == Status::Ok)?;
+        .find(|v| v.variant == baseline && v.status == Status::Ok)?;
     if r.status != Status::Ok {
         return None;
     }

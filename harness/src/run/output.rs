@@ -98,6 +98,11 @@ pub fn results_csv(run: &RunInfo, scenarios: &[ScenarioResult]) -> Vec<u8> {
             if let Some(sp) = gates::speedup(&s.results, r) {
                 row("speedup", num(sp), "x");
             }
+            if r.technique == "adaptive-shading" {
+                if let Some(sp) = gates::speedup_over(&s.results, r, "native-deferred") {
+                    row("speedup.native-deferred", num(sp), "x");
+                }
+            }
             for p in &r.passes {
                 if let Some(t) = p.gpu_ms {
                     row(
