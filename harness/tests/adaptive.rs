@@ -1,7 +1,8 @@
 //! Adaptive shading: the paper's numbers on the CPU model (motion factors, section 4.2's worked
 //! example), and on the default adapter: `native-deferred` renders what `native` renders, the GPU
 //! rates equal the CPU model's on the inputs the rate pass was given (static, moving and cut
-//! cameras, a dynamic object), and the reported shading rate matches the rates.
+//! cameras, a dynamic object), the shading pass shades once per coarse pixel and object and
+//! writes that shade to all its pixels, and the reported shading rate counts exactly those shades.
 
 mod common;
 
@@ -10,7 +11,7 @@ use tessera::render::adaptive_model::{
     self, b_half, b_quarter, decode, Inputs, Mode, RateParams, TileStats,
 };
 use tessera::render::scene::SceneGpu;
-use tessera::render::technique;
+use tessera::render::technique::{self, Technique};
 use tessera::render::timers::Timers;
 use tessera::run::frames;
 use tessera::scenario::Scenario;
@@ -353,6 +354,83 @@ fn gpu_rates_equal_the_model_in_every_mode() {
             ]),
             4,
         );
+    }
+}
+
+/// After each frame: every coarse pixel (a tile's rate) shows one colour per object in it, and the
+/// shades counted on the GPU are exactly one per coarse pixel and object; the covered pixels are
+/// those with an object. Both ways of placing the shade.
+#[test]
+fn one_shade_per_coarse_pixel_and_object() {
+    let gpu = common::gpu();
+    let s = common::scenario(SCENE);
+    for sample in ["centre", "pixel"] {
+        let v = adaptive(&[
+            ("threshold", ParamValue::Float(0.4)),
+            ("allow_4x4", ParamValue::Bool(true)),
+            ("coarse_sample", ParamValue::Str(sample.into())),
+        ]);
+        let mut scene = SceneGpu::new(&gpu.device, &s).unwrap();
+        let mut t = Adaptive::new(&gpu, &v, s.width, s.height);
+        let mut timers = Timers::new(&gpu.device, &[]).unwrap();
+        let (w, h) = (s.width as usize, s.height as usize);
+        let (tw, _) = adaptive_model::tiles(s.width, s.height);
+        let mut coarse_blocks = 0;
+        for index in 0..6 {
+            frames::submit_frame(&gpu, &mut scene, &s, &mut t, &mut timers, index);
+            let _ = gpu.device.poll(wgpu::PollType::Wait {
+                submission_index: None,
+                timeout: None,
+            });
+            let _ = timers.try_collect(&gpu.queue);
+            let objects: Vec<u32> =
+                f32s(read_texture_raw(&gpu, t.texture("gbuf_position").unwrap()))
+                    .chunks_exact(4)
+                    .map(|c| c[3] as u32)
+                    .collect();
+            let color =
+                tessera::render::readback::read_texture(&gpu.device, &gpu.queue, t.output());
+            let rates = t.rates(&gpu).unwrap();
+            let mut shades = 0u32;
+            for by in 0..h {
+                for bx in 0..w {
+                    let (rx, ry) = decode(rates[(by / 16) * tw as usize + bx / 16]);
+                    let (rx, ry) = (rx as usize, ry as usize);
+                    // Visit each coarse pixel once, at its top-left pixel.
+                    if bx % rx != 0 || by % ry != 0 {
+                        continue;
+                    }
+                    if rx * ry > 1 {
+                        coarse_blocks += 1;
+                    }
+                    let mut seen: Vec<(u32, &[f32])> = Vec::new();
+                    for y in by..(by + ry).min(h) {
+                        for x in bx..(bx + rx).min(w) {
+                            let o = objects[y * w + x];
+                            if o == 0 {
+                                continue;
+                            }
+                            let c = &color[(y * w + x) * 4..(y * w + x) * 4 + 4];
+                            match seen.iter().find(|(so, _)| *so == o) {
+                                Some((_, sc)) => assert_eq!(
+                                    *sc, c,
+                                    "{sample} frame {index}: pixel ({x}, {y}) of object {o}"
+                                ),
+                                None => seen.push((o, c)),
+                            }
+                        }
+                    }
+                    shades += seen.len() as u32;
+                }
+            }
+            let covered = objects.iter().filter(|o| **o != 0).count() as u32;
+            assert_eq!(
+                t.counters(&gpu),
+                [shades, covered],
+                "{sample} frame {index}"
+            );
+        }
+        assert!(coarse_blocks > 0, "{sample}: no coarse pixel was tested");
     }
 }
 

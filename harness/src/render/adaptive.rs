@@ -698,3 +698,27 @@ pub fn read_texture_raw(gpu: &Gpu, texture: &wgpu::Texture) -> Vec<u8> {
     }
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use adaptive_model::encode;
+
+    #[test]
+    fn rate_image_tints_coarse_tiles_only() {
+        // Two tiles side by side, mid grey: 1x1 stays grey, 2x2 is tinted green (Fig. 1's code).
+        let frame = HdrImage {
+            width: 32,
+            height: 16,
+            data: vec![0.2; 32 * 16 * 3],
+        };
+        let img = rate_image(&frame, &[encode(1, 1), encode(2, 2)]);
+        let px = |x: usize| &img.data[x * 3..x * 3 + 3];
+        assert!(px(3)[0] == px(3)[1] && px(3)[1] == px(3)[2], "{:?}", px(3));
+        assert!(
+            px(20)[1] > px(20)[0] && px(20)[1] > px(20)[2],
+            "{:?}",
+            px(20)
+        );
+    }
+}
