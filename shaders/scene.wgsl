@@ -41,6 +41,8 @@ struct Object {
     color: vec4<f32>,
     // rgb: emitted radiance; a: 0 static object, 1 the ground, 2 dynamic (animated) object.
     emissive: vec4<f32>,
+    // x: injected non-finite output (stress suite): 0 none, 1 NaN, 2 +Inf.
+    flags: vec4<f32>,
 }
 
 @group(0) @binding(0) var<uniform> frame: Frame;
@@ -193,7 +195,18 @@ fn shade(in: VsOut) -> vec4<f32> {
         color = color + (albedo * ndl + vec3<f32>(spec)) * radiance;
     }
     color = color + o.emissive.rgb;
-    return vec4<f32>(color, 1.0);
+    return injected(vec4<f32>(color, 1.0), o.flags.x);
+}
+
+// Stress suite: an object marked `inject` writes NaN (1) or +Inf (2) in its colour channels, so a
+// run can check that no technique spreads non-finite values beyond the pixels that had them. The
+// bit patterns are chosen at run time (WGSL refuses NaN and Inf in constant expressions).
+fn injected(color: vec4<f32>, mode: f32) -> vec4<f32> {
+    if mode < 0.5 {
+        return color;
+    }
+    let bits = select(0x7f800000u, 0x7fc00000u, mode < 1.5);
+    return vec4<f32>(vec3<f32>(bitcast<f32>(bits)), 1.0);
 }
 
 // Velocity pass (checkerboard): full-resolution screen motion in pixels (y down) of every

@@ -227,6 +227,7 @@ fn run_command(
     };
     let tally = console::tally(&outcome.scenarios);
     eprintln!("results: {}", outcome.run_dir.display());
+    println!("{}", console::stability_summary(&outcome.scenarios));
     println!("{}", console::verdict(&tally));
     let code = if outcome.device_lost {
         EXIT_DEVICE

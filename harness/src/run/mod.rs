@@ -9,6 +9,7 @@ pub mod frames;
 pub mod gates;
 pub mod output;
 pub mod scenario;
+pub mod stability;
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};

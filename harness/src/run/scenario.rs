@@ -16,6 +16,7 @@ use tessera_results::{
 
 use super::frames::{self, Rendered};
 use super::gates;
+use super::stability;
 use crate::gpu::Gpu;
 use crate::render::scene::SceneGpu;
 use crate::render::technique::{self, Technique, Unsupported};
@@ -25,6 +26,8 @@ use crate::technique::{TechniqueKind, Variant};
 /// Frames a reference render produced, in measured-frame order.
 struct ReferenceFrames {
     frames: Vec<Rgb8Image>,
+    /// Non-finite pixels per frame (what the scene injected, as the reference renders it).
+    masks: Vec<Option<Vec<u64>>>,
 }
 
 /// Runs `scenario`. Images go under `run_dir/images/<scenario>/`. `on_frame` ticks progress.
@@ -108,13 +111,19 @@ pub fn run(
         );
         // The native reference's frames become the reference (moved, not copied); its metrics are
         // then computed against itself, the sanity values every other variant is read against.
-        let frames = if is_reference {
+        let (frames, masks) = if is_reference {
             reference = Some(Ok(ReferenceFrames {
                 frames: rendered.frames,
+                masks: rendered.non_finite_masks.clone(),
             }));
-            None
+            (None, rendered.non_finite_masks)
         } else {
-            Some(rendered.frames)
+            (Some(rendered.frames), rendered.non_finite_masks)
+        };
+        let rendered = Rendered {
+            frames: Vec::new(),
+            non_finite_masks: masks,
+            ..rendered
         };
         if needs_reference {
             match reference.as_ref() {
@@ -137,6 +146,18 @@ pub fn run(
                 None => {}
             }
         }
+        let reference_view = match reference.as_ref() {
+            Some(Ok(r)) if needs_reference => Some(stability::ReferenceView {
+                frames: &r.frames,
+                masks: &r.masks,
+            }),
+            _ => None,
+        };
+        let own = frames
+            .as_deref()
+            .or(reference_view.as_ref().map(|r| r.frames))
+            .unwrap_or(&[]);
+        result.stability = Some(stability::check(scenario, &rendered, own, reference_view));
         results.push(result);
     }
     // Reference images once per scenario, next to the variants'.
@@ -209,6 +230,7 @@ fn empty_result(v: &Variant, status: Status) -> VariantResult {
         allocated_bytes: 0,
         metrics: Vec::new(),
         non_finite_values: 0,
+        stability: None,
         images: Vec::new(),
         gates: Vec::new(),
     }
@@ -311,7 +333,10 @@ fn render_reference(
     let result = match built {
         Err(Unsupported(reason)) => Err(format!("no reference: {reason}")),
         Ok(mut t) => frames::render(gpu, scene, scenario, t.as_mut(), true, false, on_frame)
-            .map(|r| ReferenceFrames { frames: r.frames })
+            .map(|r| ReferenceFrames {
+                frames: r.frames,
+                masks: r.non_finite_masks,
+            })
             .map_err(|e| format!("reference render failed: {e}")),
     };
     if let Some(e) = pollster::block_on(validation.pop()) {

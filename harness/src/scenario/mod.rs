@@ -193,6 +193,26 @@ pub struct Object {
     pub emissive: Vec3,
     pub specular: f32,
     pub animation: Option<Animation>,
+    /// Stress suite: the object's pixels are written non-finite, to check that a technique does
+    /// not spread them (issue 8).
+    pub inject: Option<Inject>,
+}
+
+/// A non-finite value an object's shader writes instead of its colour.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Inject {
+    Nan,
+    Inf,
+}
+
+impl Inject {
+    /// The value the scene shader reads (`Object.flags.x`).
+    pub fn code(self) -> f32 {
+        match self {
+            Inject::Nan => 1.0,
+            Inject::Inf => 2.0,
+        }
+    }
 }
 
 #[derive(Clone, Debug)]
@@ -399,6 +419,16 @@ pub struct Gate {
 
 /// Measures a gate can name besides metrics.
 pub const TIMING_MEASURES: [&str; 3] = ["gpu_ms", "cpu_ms", "speedup"];
+
+/// Gate measures of the stability checks (`run/stability.rs`): non-finite output values, pixels
+/// made non-finite beyond the reference's, 1 when the sequence did not render the same twice,
+/// camera cuts not recovered within 2 frames.
+pub const STABILITY_MEASURES: [&str; 4] = [
+    "non-finite",
+    "spread-non-finite",
+    "nondeterministic",
+    "unrecovered-cuts",
+];
 
 /// A problem in a scenario file, at a place in it.
 #[derive(Clone, Debug, PartialEq, Eq)]
