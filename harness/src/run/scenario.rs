@@ -56,13 +56,13 @@ pub fn run(
         }
     };
 
-    let needs_reference = scenario.reference != Reference::None && !scenario.metrics.is_empty();
+    let needs_reference = scenario.needs_reference();
     let native_is_reference = |v: &Variant| {
         v.technique == TechniqueKind::Native && scenario.reference == Reference::Native
     };
     // The reference renders first; when it is the native variant itself, that render is reused.
     let mut reference: Option<Result<ReferenceFrames, String>> = None;
-    if needs_reference && !scenario.variants.iter().any(native_is_reference) {
+    if scenario.needs_separate_reference() {
         reference = Some(render_reference(gpu, &mut scene, scenario, on_frame));
     }
     let mut order: Vec<&Variant> = scenario

@@ -46,6 +46,22 @@ pub struct Scenario {
 }
 
 impl Scenario {
+    /// Whether a reference is rendered at all: only when there are metrics to compute against it.
+    pub fn needs_reference(&self) -> bool {
+        self.reference != Reference::None && !self.metrics.is_empty()
+    }
+
+    /// Whether the reference needs a render of its own: not when it is the scenario's own
+    /// `native` variant (that render serves as both).
+    pub fn needs_separate_reference(&self) -> bool {
+        self.needs_reference()
+            && !(self.reference == Reference::Native
+                && self
+                    .variants
+                    .iter()
+                    .any(|v| v.technique == crate::technique::TechniqueKind::Native))
+    }
+
     /// Clock warm-up for an adapter of `device_type`: as set, or 1000 ms on GPUs (an H200 took
     /// several hundred milliseconds of load to reach its top clock) and 20 ms on CPU adapters.
     pub fn clock_warmup_ms(&self, device_type: &str) -> f64 {
