@@ -209,9 +209,11 @@ fn injected(color: vec4<f32>, mode: f32) -> vec4<f32> {
     return vec4<f32>(vec3<f32>(bitcast<f32>(bits)), 1.0);
 }
 
-// Velocity pass (checkerboard): full-resolution screen motion in pixels (y down) of every
-// object, with z = 1 where the object is dynamic (moves by itself) and 0 where the camera alone
-// moves it (those pixels are reprojected through the cameras instead). Not jittered.
+// Velocity pass (checkerboard, and the `tde` metric's exact motion): full-resolution screen
+// motion in pixels (y down) of every object, with z = 1 where the object is dynamic (moves by
+// itself) and 0 where the camera alone moves it (checkerboard reprojects those through the
+// cameras instead), and w = the point's reversed-Z depth in the previous frame (disocclusion
+// test). Cleared to 0 where nothing is drawn. Not jittered.
 struct VelocityOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) current: vec4<f32>,
@@ -240,5 +242,5 @@ fn fs_velocity(in: VelocityOut) -> @location(0) vec4<f32> {
     let ndc = in.current.xy / in.current.w;
     let prev = in.previous.xy / in.previous.w;
     let motion = (ndc - prev) * 0.5 * vec2<f32>(f32(size.x), -f32(size.y));
-    return vec4<f32>(motion, f32(in.dynamic_object), 1.0);
+    return vec4<f32>(motion, f32(in.dynamic_object), in.previous.z / in.previous.w);
 }

@@ -18,6 +18,7 @@ mod report;
 mod series;
 mod srgb;
 mod ssim;
+mod temporal;
 
 pub use error::MetricsError;
 pub use flip::{
@@ -34,3 +35,4 @@ pub use report::{diff, diff_at, DiffReport};
 pub use series::{series_stats, SeriesStats};
 pub use srgb::{encode_srgb8, linear_to_srgb, srgb_to_linear};
 pub use ssim::{ssim_luma, ssim_rgb, SSIM_MIN_SIZE};
+pub use temporal::temporal_difference_error;

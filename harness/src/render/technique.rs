@@ -356,7 +356,11 @@ pub fn record_scene_pass(
     slot: u32,
     kind: ScenePipeline,
 ) {
-    let clear = scene.clear_color();
+    // Velocity targets hold motion, not colour: nothing drawn means no motion.
+    let clear = match kind {
+        ScenePipeline::Velocity => wgpu::Color::TRANSPARENT,
+        _ => scene.clear_color(),
+    };
     let pipeline = scene.pipeline(&gpu.device, kind).clone();
     let q = timers.begin(name, encoder);
     {

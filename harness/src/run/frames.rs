@@ -48,6 +48,15 @@ pub enum RenderError {
     Readback,
 }
 
+/// Whether frame `index` continues the previous frame's shot: false on the first frame and at a
+/// camera cut, where techniques must not read history.
+pub fn history_valid(scenario: &Scenario, index: u32) -> bool {
+    let cam = &scenario.camera;
+    index > 0
+        && cam.pose_at(scenario.frame_time(index)).segment
+            == cam.pose_at(scenario.frame_time(index - 1)).segment
+}
+
 /// Encodes and submits frame `index` without waiting for it.
 pub fn submit_frame(
     gpu: &Gpu,
@@ -69,8 +78,7 @@ pub fn submit_frame(
         .create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("frame"),
         });
-    let cam = &scenario.camera;
-    let history_valid = index > 0 && cam.pose_at(time).segment == cam.pose_at(prev_time).segment;
+    let history_valid = history_valid(scenario, index);
     technique.record(
         gpu,
         scene,

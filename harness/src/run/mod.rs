@@ -7,6 +7,7 @@
 pub mod console;
 pub mod frames;
 pub mod gates;
+pub mod motion;
 pub mod output;
 pub mod scenario;
 pub mod stability;

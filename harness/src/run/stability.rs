@@ -6,7 +6,7 @@
 use tessera_metrics::Rgb8Image;
 use tessera_results::{CutRecovery, Stability};
 
-use super::frames::{spread_pixels, Rendered};
+use super::frames::{history_valid, spread_pixels, Rendered};
 use crate::scenario::Scenario;
 
 /// How far (in PSNR dB) the second frame after a cut may stay below the steady level.
@@ -17,13 +17,10 @@ const SETTLE_FRAMES: u32 = 3;
 
 /// Measured-frame indices where a new camera shot starts (history is dropped there).
 pub fn cut_frames(scenario: &Scenario) -> Vec<u32> {
-    let cam = &scenario.camera;
     (0..scenario.measured_frames)
         .filter(|&m| {
             let index = scenario.warmup_frames + m;
-            index > 0
-                && cam.pose_at(scenario.frame_time(index)).segment
-                    != cam.pose_at(scenario.frame_time(index - 1)).segment
+            index > 0 && !history_valid(scenario, index)
         })
         .collect()
 }

@@ -110,10 +110,14 @@ pub enum MetricKind {
     Flip,
     /// Static-scene flicker: mean absolute change between consecutive output frames.
     Flicker,
+    /// HDR-FLIP on the linear output, exposures from the reference frame.
+    FlipHdr,
+    /// Temporal difference error with the renderer's exact motion (notes/metrics.md 3.3).
+    Tde,
 }
 
 impl MetricKind {
-    pub const ALL: [MetricKind; 7] = [
+    pub const ALL: [MetricKind; 9] = [
         MetricKind::Psnr,
         MetricKind::PsnrLuma,
         MetricKind::MaxAbsError,
@@ -121,6 +125,8 @@ impl MetricKind {
         MetricKind::SsimLuma,
         MetricKind::Flip,
         MetricKind::Flicker,
+        MetricKind::FlipHdr,
+        MetricKind::Tde,
     ];
     pub const DEFAULT: [MetricKind; 3] = [
         MetricKind::Psnr,
@@ -137,6 +143,8 @@ impl MetricKind {
             MetricKind::SsimLuma => "ssim-luma",
             MetricKind::Flip => "flip",
             MetricKind::Flicker => "flicker",
+            MetricKind::FlipHdr => "flip-hdr",
+            MetricKind::Tde => "tde",
         }
     }
 
