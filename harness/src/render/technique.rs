@@ -83,6 +83,9 @@ pub fn build(
             height,
             dynamic_scene,
         )?),
+        TechniqueKind::Checkerboard2x2 => Box::new(super::checkerboard_2x2::Checkerboard2x2::new(
+            gpu, variant, width, height,
+        )),
     })
 }
 
@@ -497,6 +500,16 @@ pub fn shader_sources() -> Vec<(String, String, Vec<&'static str>)> {
             "checkerboard msaa2x".into(),
             format!("{MSAA2X_WGSL}\n{RESOLVE_WGSL}"),
             vec!["checkerboard_msaa2x.wgsl", "checkerboard_resolve.wgsl"],
+        ),
+        (
+            "checkerboard-2x2 mask".into(),
+            super::checkerboard_2x2::MASK_WGSL.into(),
+            vec!["checkerboard_2x2_mask.wgsl"],
+        ),
+        (
+            "checkerboard-2x2 reconstitute".into(),
+            super::checkerboard_2x2::RECONSTITUTE_WGSL.into(),
+            vec!["checkerboard_2x2_reconstitute.wgsl"],
         ),
     ]
 }
