@@ -355,12 +355,10 @@ impl Checkerboard2x2 {
             // Which view of pair i is current (c) and which is history (h) at this parity.
             let pick = |i: usize, hist: &str| -> (wgpu::TextureView, wgpu::TextureView) {
                 let [a, b] = &pair_views[i];
-                if !kept(hist) {
-                    (a.clone(), b.clone())
-                } else if parity == 0 {
-                    (a.clone(), b.clone())
-                } else {
+                if kept(hist) && parity == 1 {
                     (b.clone(), a.clone())
+                } else {
+                    (a.clone(), b.clone())
                 }
             };
             (
