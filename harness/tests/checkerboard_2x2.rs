@@ -858,3 +858,66 @@ fn parameters_are_validated() {
         errors("clamp = [\"none\", \"blended\"]\nblend_min = 0.01\nblend_max = 0.2").is_empty()
     );
 }
+
+/// The motion pass gives every masked pixel of static geometry (the ground included, whose quad
+/// follows the camera while its pattern stays in the world) the camera's motion: the pixel,
+/// unprojected at its motion-pass depth with this frame's camera and projected with last frame's.
+#[test]
+fn motion_of_static_geometry_is_the_cameras() {
+    let gpu = common::gpu();
+    // A fast pan (about 3 px per frame at the objects) with nothing animated.
+    let s = common::scenario(&format!(
+        "{}[[camera.keyframes]]\ntime = 1\nposition = [30, 1.5, 4]\ntarget = [30, 0.4, 0]\n[[techniques]]\ntechnique = \"native\"\n",
+        SCENE.replace(
+            "animation = { kind = \"rotate\", degrees_per_second = 120 }\n",
+            ""
+        )
+    ));
+    let mut scene = SceneGpu::new(&gpu.device, &s).unwrap();
+    let mut t = Checkerboard2x2::new(&gpu, &variant(&[]), s.width, s.height);
+    let mut timers = Timers::new(&gpu.device, &[]).unwrap();
+    for index in 0..2 {
+        tessera::run::frames::submit_frame(&gpu, &mut scene, &s, &mut t, &mut timers, index);
+        wait(&gpu);
+        let _ = timers.try_collect(&gpu.queue);
+    }
+    let (cur, prev) = scene.view_projections(s.frame_time(1), s.frame_time(0));
+    let motion = vec4s(read_texture(
+        &gpu.device,
+        &gpu.queue,
+        t.texture("motion").unwrap(),
+    ));
+    let depth = read_texture(&gpu.device, &gpu.queue, t.texture("motion_depth").unwrap());
+    let (w, h) = (s.width as f64, s.height as f64);
+    let (mut checked, mut moving) = (0, 0);
+    for y in 0..s.height as i32 {
+        for x in 0..s.width as i32 {
+            let i = (y as u32 * s.width + x as u32) as usize;
+            if shaded(1, x, y) || depth[i] <= 0.0 {
+                continue;
+            }
+            let centre = glam::DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
+            let ndc = glam::DVec4::new(
+                centre.x / w * 2.0 - 1.0,
+                1.0 - centre.y / h * 2.0,
+                depth[i] as f64,
+                1.0,
+            );
+            let p = cur.inverse() * ndc;
+            let q = prev * (p / p.w);
+            let before = glam::DVec2::new((q.x / q.w * 0.5 + 0.5) * w, (0.5 - q.y / q.w * 0.5) * h);
+            let expected = centre - before;
+            let m = motion[i];
+            moving += usize::from(expected.length() > 2.0);
+            assert!(
+                (m.x as f64 - expected.x).abs() < 0.05 && (m.y as f64 - expected.y).abs() < 0.05,
+                "({x}, {y}): motion {m} expected {expected}"
+            );
+            checked += 1;
+        }
+    }
+    assert!(
+        checked > 200 && moving > checked / 2,
+        "{checked} pixels checked, {moving} moving"
+    );
+}
