@@ -921,3 +921,19 @@ fn motion_of_static_geometry_is_the_cameras() {
         "{checked} pixels checked, {moving} moving"
     );
 }
+
+/// Tiny and odd sizes: partial blocks, images one block wide (no shaded neighbour at all), and the
+/// reconstitution still equals the model with finite values everywhere.
+#[test]
+fn tiny_and_odd_resolutions_match_the_model() {
+    for (w, h) in [(1, 1), (2, 2), (3, 3), (2, 5), (7, 3)] {
+        let s = common::scenario(&format!(
+            "{}[[camera.keyframes]]\ntime = 1\nposition = [2, 1.5, 4]\ntarget = [2, 0.4, 0]\n[[techniques]]\ntechnique = \"native\"\n",
+            SCENE.replace("resolution = [40, 30]", &format!("resolution = [{w}, {h}]"))
+        ));
+        let sources = compare_rendered(&s, &variant(&[]), 3);
+        if w <= 2 && h <= 2 {
+            assert!(sources[1].contains(&Source::Isolated), "{w}x{h}");
+        }
+    }
+}
