@@ -107,7 +107,10 @@ fn reconstitute(p: vec2<i32>) -> vec3<f32> {
     if params.frame.w != 0u {
         return 0.5 * (ch + cv);
     }
-    // 5.3.3: the colour this pixel's geometry had last frame, at the end of its motion vector.
+    // 5.3.3: the colour this pixel's geometry had last frame, at the end of its motion vector: the
+    // pixel containing that point, unfiltered (the report names no filter). With slow motion it
+    // was shaded last frame (blocks alternate); after an odd number of blocks it was itself
+    // reconstituted.
     let m = textureLoad(motion, p, 0).xy;
     let prev = vec2<i32>(floor(vec2<f32>(p) + 0.5 - m));
     if !inside(prev) {
