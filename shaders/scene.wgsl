@@ -230,7 +230,14 @@ fn vs_velocity(
     let o = objects[object];
     var out: VelocityOut;
     out.current = frame.view_proj * o.model * vec4<f32>(position, 1.0);
-    out.previous = frame.prev_view_proj * o.prev_model * vec4<f32>(position, 1.0);
+    // The ground's quad follows the camera but its pattern is anchored in the world: the point seen
+    // now was at the same world position last frame (model, not prev_model), so its motion is the
+    // camera's. Without this the ground's motion would be the quad's (zero on a pan).
+    var prev_model = o.prev_model;
+    if abs(o.emissive.a - 1.0) < 0.5 {
+        prev_model = o.model;
+    }
+    out.previous = frame.prev_view_proj * prev_model * vec4<f32>(position, 1.0);
     out.clip = out.current;
     out.dynamic_object = select(0u, 1u, o.emissive.a > 1.5);
     return out;

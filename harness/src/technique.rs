@@ -16,13 +16,16 @@ pub enum TechniqueKind {
     Upscale,
     /// Checkerboard rendering: Intel CBR with mosaiikki's refinements.
     Checkerboard,
+    /// Depth-based 2x2 checkerboarding (the depth-based report, seeds/depth-based-checkerboarding.txt).
+    Checkerboard2x2,
 }
 
 impl TechniqueKind {
-    pub const ALL: [TechniqueKind; 3] = [
+    pub const ALL: [TechniqueKind; 4] = [
         TechniqueKind::Native,
         TechniqueKind::Upscale,
         TechniqueKind::Checkerboard,
+        TechniqueKind::Checkerboard2x2,
     ];
 
     pub fn name(self) -> &'static str {
@@ -30,6 +33,7 @@ impl TechniqueKind {
             TechniqueKind::Native => "native",
             TechniqueKind::Upscale => "upscale",
             TechniqueKind::Checkerboard => "checkerboard",
+            TechniqueKind::Checkerboard2x2 => "checkerboard-2x2",
         }
     }
 
@@ -47,6 +51,7 @@ impl TechniqueKind {
             TechniqueKind::Native => &[],
             TechniqueKind::Upscale => &UPSCALE_PARAMS,
             TechniqueKind::Checkerboard => &CHECKERBOARD_PARAMS,
+            TechniqueKind::Checkerboard2x2 => &CHECKERBOARD_2X2_PARAMS,
         }
     }
 }
@@ -121,6 +126,43 @@ static CHECKERBOARD_PARAMS: [ParamSpec; 7] = [
         kind: ParamKind::Bool,
         default: Default::Bool(true),
         doc: "full-resolution velocity pass for dynamic objects (recorded only when the scene has some)",
+    },
+];
+
+/// Defaults are the depth-based report's final implementation (seeds/depth-based-checkerboarding.txt,
+/// sections 5.3.4 to 5.3.8): blended clamping with motion coherency, its small-motion constant and
+/// its blend limits. Motion is in pixels per frame; depth differences are in linear depth
+/// normalised to [0, 1] between the camera's near and far planes (section 5.3.7).
+static CHECKERBOARD_2X2_PARAMS: [ParamSpec; 5] = [
+    ParamSpec {
+        name: "clamp",
+        kind: ParamKind::Choice(&["none", "uniform", "conditional", "blended"]),
+        default: Default::Str("blended"),
+        doc: "reprojected colour against the two shaded direct neighbours' min/max: none (5.3.3), always (uniform, 5.3.4), only where motion exceeds motion_threshold (conditional, 5.3.5), or conditional with the clamp blended back by depth difference (blended, 5.3.7; the report's final version)",
+    },
+    ParamSpec {
+        name: "motion_threshold",
+        kind: ParamKind::Float { min: 0.0, min_inclusive: true, max: 1.0e9 },
+        default: Default::Float(1.0e-7),
+        doc: "conditional and blended: pixels moving less than this (pixels per frame) are not clamped; 0.0000001 as the report (5.3.5)",
+    },
+    ParamSpec {
+        name: "blend_min",
+        kind: ParamKind::Float { min: 0.0, min_inclusive: true, max: 1.0 },
+        default: Default::Float(0.005),
+        doc: "blended: linear depth difference below which the reprojected colour is kept unclamped (the report's minimum blend difference, 5.3.7)",
+    },
+    ParamSpec {
+        name: "blend_max",
+        kind: ParamKind::Float { min: 0.0, min_inclusive: false, max: 1.0 },
+        default: Default::Float(0.1),
+        doc: "blended: linear depth difference at which the clamped colour is used in full; the clamp weight is difference / blend_max (the report's maximum blend difference, 5.3.7)",
+    },
+    ParamSpec {
+        name: "motion_coherency",
+        kind: ParamKind::Bool,
+        default: Default::Bool(true),
+        doc: "conditional and blended: also clamp when a shaded neighbour's previous motion differs from this pixel's motion by more than motion_threshold (5.3.8; keeps the motion history)",
     },
 ];
 

@@ -9,7 +9,7 @@ use tessera::render::technique::plan;
 use tessera::scenario::{self, Reference, Scenario};
 use tessera::technique::TechniqueKind;
 
-const SUITES: [&str; 4] = ["smoke", "quality", "perf", "stress"];
+const SUITES: [&str; 5] = ["smoke", "quality", "perf", "stress", "checkerboard-2x2"];
 
 fn suite(name: &str) -> Vec<Scenario> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR"))

@@ -1,6 +1,8 @@
 //! Rendering: scene geometry and passes on the GPU, the pass graph, and the techniques built on them.
 
 pub mod checkerboard;
+pub mod checkerboard_2x2;
+pub mod checkerboard_2x2_model;
 pub mod checkerboard_model;
 pub mod graph;
 pub mod mesh;

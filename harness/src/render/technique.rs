@@ -67,6 +67,9 @@ pub fn build(
             height,
             dynamic_scene,
         )?),
+        TechniqueKind::Checkerboard2x2 => Box::new(super::checkerboard_2x2::Checkerboard2x2::new(
+            gpu, variant, width, height,
+        )),
     })
 }
 
@@ -103,6 +106,12 @@ pub fn plan(variant: &Variant, width: u32, height: u32, dynamic_scene: bool) -> 
         }
         TechniqueKind::Checkerboard => {
             super::checkerboard::graph(variant, width, height, dynamic_scene).0
+        }
+        TechniqueKind::Checkerboard2x2 => {
+            let options = super::checkerboard_2x2::Options::from_variant(variant);
+            super::checkerboard_2x2::graph(width, height, &options)
+                .plan()
+                .expect("built-in graphs are well formed")
         }
     }
 }
@@ -526,6 +535,16 @@ pub fn shader_sources() -> Vec<(String, String, Vec<&'static str>)> {
             "checkerboard msaa2x".into(),
             format!("{MSAA2X_WGSL}\n{RESOLVE_WGSL}"),
             vec!["checkerboard_msaa2x.wgsl", "checkerboard_resolve.wgsl"],
+        ),
+        (
+            "checkerboard-2x2 mask".into(),
+            super::checkerboard_2x2::MASK_WGSL.into(),
+            vec!["checkerboard_2x2_mask.wgsl"],
+        ),
+        (
+            "checkerboard-2x2 reconstitute".into(),
+            super::checkerboard_2x2::RECONSTITUTE_WGSL.into(),
+            vec!["checkerboard_2x2_reconstitute.wgsl"],
         ),
     ]
 }
