@@ -38,6 +38,12 @@ struct Params {
 @group(0) @binding(6) var history_motion: texture_2d<f32>;
 @group(0) @binding(7) var output: texture_storage_2d<rgba16float, write>;
 
+// NaN and ±Inf, by their bits (a fast-math compiler may fold `x != x` away).
+fn finite(c: vec3<f32>) -> bool {
+    let e = bitcast<vec3<u32>>(c) & vec3<u32>(0x7f800000u);
+    return all(e != vec3<u32>(0x7f800000u));
+}
+
 fn inside(p: vec2<i32>) -> bool {
     return all(p >= vec2<i32>(0)) && all(p < vec2<i32>(params.frame.xy));
 }
@@ -89,7 +95,10 @@ fn reconstitute(p: vec2<i32>) -> vec3<f32> {
         if params.frame.w == 0u {
             let prev = vec2<i32>(floor(vec2<f32>(p) + 0.5 - textureLoad(motion, p, 0).xy));
             if inside(prev) {
-                return textureLoad(history_color, prev, 0).rgb;
+                let c = textureLoad(history_color, prev, 0).rgb;
+                if finite(c) {
+                    return c;
+                }
             }
         }
         return textureLoad(scene_color, p, 0).rgb;
@@ -100,8 +109,17 @@ fn reconstitute(p: vec2<i32>) -> vec3<f32> {
     if !has_v {
         v = h;
     }
-    let ch = textureLoad(scene_color, h, 0).rgb;
-    let cv = textureLoad(scene_color, v, 0).rgb;
+    var ch = textureLoad(scene_color, h, 0).rgb;
+    var cv = textureLoad(scene_color, v, 0).rgb;
+    // Stability (issue 8, not in the report): a non-finite neighbour stands aside for the other,
+    // so NaN or Inf never spreads into a finite pixel; both non-finite means the pixel is inside
+    // such a region and stays non-finite.
+    if !finite(ch) && finite(cv) {
+        ch = cv;
+    }
+    if !finite(cv) && finite(ch) {
+        cv = ch;
+    }
     // No history (first frame, camera cut): the neighbours' mean (5.2's "neighbour colour
     // averages", the first step before reprojection).
     if params.frame.w != 0u {
@@ -118,8 +136,13 @@ fn reconstitute(p: vec2<i32>) -> vec3<f32> {
         return 0.5 * (ch + cv);
     }
     let reprojected = textureLoad(history_color, prev, 0).rgb;
+    if !finite(reprojected) {
+        // A non-finite history is not used (stability, as above): the neighbours' mean.
+        return 0.5 * (ch + cv);
+    }
     let clamp_mode = params.mode.x;
-    if clamp_mode == 0u {
+    // Both neighbours non-finite: no range to clamp to; the finite history as it is.
+    if clamp_mode == 0u || !finite(ch) {
         return reprojected;
     }
     // 5.3.4: clamp to the range of the two shaded neighbours.

@@ -100,7 +100,7 @@ fn reconstitute(inp: &Inputs, p: IVec2) -> (Vec3, Source) {
     if !has_h && !has_v {
         if !f.reset {
             let prev = inp.prev(p);
-            if inp.inside(prev) {
+            if inp.inside(prev) && rgb(inp.history_color, prev).is_finite() {
                 return (rgb(inp.history_color, prev), Source::Isolated);
             }
         }
@@ -112,7 +112,14 @@ fn reconstitute(inp: &Inputs, p: IVec2) -> (Vec3, Source) {
     if !has_v {
         v = h;
     }
-    let (ch, cv) = (rgb(inp.scene_color, h), rgb(inp.scene_color, v));
+    let (mut ch, mut cv) = (rgb(inp.scene_color, h), rgb(inp.scene_color, v));
+    // The shader's stability rule: a non-finite neighbour stands aside for a finite one.
+    if !ch.is_finite() && cv.is_finite() {
+        ch = cv;
+    }
+    if !cv.is_finite() && ch.is_finite() {
+        cv = ch;
+    }
     let fill = 0.5 * (ch + cv);
     if f.reset {
         return (fill, Source::Fill);
@@ -123,7 +130,10 @@ fn reconstitute(inp: &Inputs, p: IVec2) -> (Vec3, Source) {
         return (fill, Source::Fill);
     }
     let reprojected = rgb(inp.history_color, prev);
-    if o.clamp == Clamp::None {
+    if !reprojected.is_finite() {
+        return (fill, Source::Fill);
+    }
+    if o.clamp == Clamp::None || !ch.is_finite() {
         return (reprojected, Source::Reprojected);
     }
     let clamped = reprojected.clamp(ch.min(cv), ch.max(cv));
