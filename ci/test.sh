@@ -10,3 +10,9 @@ bash dashboard/ci/setup-chromium.sh  # headless Chromium + chromedriver for dash
 cargo fmt --all -- --check
 cargo clippy --workspace --all-targets -- -D warnings
 cargo test --workspace
+# The quality and stress suites on lavapipe (issue 8), with their gates: a failed gate or a
+# stability finding the suites gate on fails the run. JUnit and results stay under target/.
+out=target/ci-suites
+rm -rf "$out"
+cargo build -p tessera
+target/debug/tessera run scenarios/quality scenarios/stress --out "$out" --junit "$out/junit.xml" --quiet

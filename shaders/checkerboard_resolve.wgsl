@@ -78,19 +78,31 @@ fn inside(p: vec2<i32>) -> bool {
     return all(p >= vec2<i32>(0)) && all(p < vec2<i32>(params.size.xy));
 }
 
+// NaN and ±Inf, by their bits: a fast-math compiler may fold `x != x` away.
+fn finite(c: vec3<f32>) -> bool {
+    let e = bitcast<vec3<u32>>(c) & vec3<u32>(0x7f800000u);
+    return all(e != vec3<u32>(0x7f800000u));
+}
+
 struct Neighbourhood {
     // Up, down, left, right (tonemapped when the fill or clamp needs it).
     c: array<vec3<f32>, 4>,
+    // On screen and finite.
     valid: array<bool, 4>,
     count: f32,
     lo: vec3<f32>,
     hi: vec3<f32>,
+    // A non-finite neighbour's colour (untonemapped), when one was left out.
+    non_finite: vec3<f32>,
+    has_non_finite: bool,
 }
 
 // The 4 cardinal neighbours' colours. Loaded only when a fill or a clamp needs them: on the
 // history path without a clamp nothing here is read (CPU adapters pay for every load).
 fn neighbourhood(pixel: vec2<i32>, tonemapped: bool) -> Neighbourhood {
     var n: Neighbourhood;
+    n.has_non_finite = false;
+    n.non_finite = vec3<f32>(0.0);
     n.lo = vec3<f32>(3.0e38);
     n.hi = vec3<f32>(-3.0e38);
     n.count = 0.0;
@@ -100,6 +112,15 @@ fn neighbourhood(pixel: vec2<i32>, tonemapped: bool) -> Neighbourhood {
         n.c[i] = vec3<f32>(0.0);
         if n.valid[i] {
             var c = color_at(p).rgb;
+            // Stability (issue 8, not in the sources): a non-finite neighbour is left out of the
+            // fill and the clamp, so NaN or Inf never spreads into a finite pixel; a pixel whose
+            // neighbours are all non-finite is inside such a region and stays non-finite.
+            if !finite(c) {
+                n.valid[i] = false;
+                n.non_finite = c;
+                n.has_non_finite = true;
+                continue;
+            }
             if tonemapped {
                 c = tonemap(c);
             }
@@ -197,16 +218,24 @@ fn reconstruct(pixel: vec2<i32>) -> vec4<f32> {
             use_history = !(moved_block && (params.mode.z == 1u || deviation >= params.depth.x));
         }
     }
+    // A non-finite history sample is not used (stability, as the neighbours above).
+    var history = vec4<f32>(0.0);
+    if use_history {
+        history = color_at(prev_pixel);
+        use_history = finite(history.rgb);
+    }
     // 7. History, unclamped (Intel) ...
     if use_history && params.mode2.x == 0u {
-        return color_at(prev_pixel);
+        return history;
     }
     let tonemapped = params.mode.w != 0u;
     let n = neighbourhood(pixel, tonemapped);
     if !use_history {
+        if n.count == 0.0 && n.has_non_finite {
+            return vec4<f32>(n.non_finite, 1.0);
+        }
         return finish(fill(n), tonemapped);
     }
-    let history = color_at(prev_pixel);
     if n.count == 0.0 {
         return history;
     }

@@ -41,6 +41,8 @@ struct Object {
     color: vec4<f32>,
     // rgb: emitted radiance; a: 0 static object, 1 the ground, 2 dynamic (animated) object.
     emissive: vec4<f32>,
+    // x: injected non-finite output (stress suite): 0 none, 1 NaN, 2 +Inf.
+    flags: vec4<f32>,
 }
 
 @group(0) @binding(0) var<uniform> frame: Frame;
@@ -221,12 +223,25 @@ fn shade_surface(in: Surface) -> vec4<f32> {
         color = color + (albedo * ndl + vec3<f32>(spec)) * radiance;
     }
     color = color + o.emissive.rgb;
-    return vec4<f32>(color, 1.0);
+    return injected(vec4<f32>(color, 1.0), o.flags.x);
 }
 
-// Velocity pass (checkerboard): full-resolution screen motion in pixels (y down) of every
-// object, with z = 1 where the object is dynamic (moves by itself) and 0 where the camera alone
-// moves it (those pixels are reprojected through the cameras instead). Not jittered.
+// Stress suite: an object marked `inject` writes NaN (1) or +Inf (2) in its colour channels, so a
+// run can check that no technique spreads non-finite values beyond the pixels that had them. The
+// bit patterns are chosen at run time (WGSL refuses NaN and Inf in constant expressions).
+fn injected(color: vec4<f32>, mode: f32) -> vec4<f32> {
+    if mode < 0.5 {
+        return color;
+    }
+    let bits = select(0x7f800000u, 0x7fc00000u, mode < 1.5);
+    return vec4<f32>(vec3<f32>(bitcast<f32>(bits)), 1.0);
+}
+
+// Velocity pass (checkerboard, and the `tde` metric's exact motion): full-resolution screen
+// motion in pixels (y down) of every object, with z = 1 where the object is dynamic (moves by
+// itself) and 0 where the camera alone moves it (checkerboard reprojects those through the
+// cameras instead), and w = the point's reversed-Z depth in the previous frame (disocclusion
+// test). Cleared to 0 where nothing is drawn. Not jittered.
 struct VelocityOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) current: vec4<f32>,
@@ -243,7 +258,14 @@ fn vs_velocity(
     let o = objects[object];
     var out: VelocityOut;
     out.current = frame.view_proj * o.model * vec4<f32>(position, 1.0);
-    out.previous = frame.prev_view_proj * o.prev_model * vec4<f32>(position, 1.0);
+    // The ground's quad follows the camera but its pattern is anchored in the world: the point seen
+    // now was at the same world position last frame (model, not prev_model), so its motion is the
+    // camera's. Without this the ground's motion would be the quad's (zero on a pan).
+    var prev_model = o.prev_model;
+    if abs(o.emissive.a - 1.0) < 0.5 {
+        prev_model = o.model;
+    }
+    out.previous = frame.prev_view_proj * prev_model * vec4<f32>(position, 1.0);
     out.clip = out.current;
     out.dynamic_object = select(0u, 1u, o.emissive.a > 1.5);
     return out;
@@ -255,5 +277,5 @@ fn fs_velocity(in: VelocityOut) -> @location(0) vec4<f32> {
     let ndc = in.current.xy / in.current.w;
     let prev = in.previous.xy / in.previous.w;
     let motion = (ndc - prev) * 0.5 * vec2<f32>(f32(size.x), -f32(size.y));
-    return vec4<f32>(motion, f32(in.dynamic_object), 1.0);
+    return vec4<f32>(motion, f32(in.dynamic_object), in.previous.z / in.previous.w);
 }

@@ -227,6 +227,7 @@ fn run_command(
     };
     let tally = console::tally(&outcome.scenarios);
     eprintln!("results: {}", outcome.run_dir.display());
+    println!("{}", console::stability_summary(&outcome.scenarios));
     println!("{}", console::verdict(&tally));
     let code = if outcome.device_lost {
         EXIT_DEVICE
@@ -350,12 +351,7 @@ fn diff_command(
     json: bool,
     heatmap: Option<PathBuf>,
 ) -> u8 {
-    use tessera_metrics::LoadedImage;
-    let load = |p: &std::path::Path| match tessera_metrics::load_image(p) {
-        Ok(LoadedImage::Ldr(i)) => Ok(i),
-        Ok(LoadedImage::Hdr(h)) => Ok(tessera_metrics::encode_srgb8(&h)),
-        Err(e) => Err(e),
-    };
+    let load = tessera_metrics::load_image;
     let (r, t) = match (load(reference), load(test)) {
         (Ok(r), Ok(t)) => (r, t),
         (Err(e), _) | (_, Err(e)) => {
@@ -363,7 +359,7 @@ fn diff_command(
             return EXIT_INPUT;
         }
     };
-    let report = match tessera_metrics::diff(&r, &t) {
+    let report = match tessera_metrics::diff_images(&r, &t) {
         Ok(rep) => rep,
         Err(e) => {
             eprintln!("error: {e}");

@@ -16,6 +16,8 @@ pub enum TechniqueKind {
     Upscale,
     /// Checkerboard rendering: Intel CBR with mosaiikki's refinements.
     Checkerboard,
+    /// Depth-based 2x2 checkerboarding (the depth-based report, seeds/depth-based-checkerboarding.txt).
+    Checkerboard2x2,
     /// NVIDIA content and motion adaptive shading (Yang et al. 2019) on software variable-rate
     /// shading: a G-buffer, a per-16x16-tile rate pass, a compute shading pass.
     AdaptiveShading,
@@ -24,10 +26,11 @@ pub enum TechniqueKind {
 }
 
 impl TechniqueKind {
-    pub const ALL: [TechniqueKind; 5] = [
+    pub const ALL: [TechniqueKind; 6] = [
         TechniqueKind::Native,
         TechniqueKind::Upscale,
         TechniqueKind::Checkerboard,
+        TechniqueKind::Checkerboard2x2,
         TechniqueKind::AdaptiveShading,
         TechniqueKind::NativeDeferred,
     ];
@@ -39,6 +42,7 @@ impl TechniqueKind {
             TechniqueKind::Checkerboard => "checkerboard",
             TechniqueKind::AdaptiveShading => "adaptive-shading",
             TechniqueKind::NativeDeferred => "native-deferred",
+            TechniqueKind::Checkerboard2x2 => "checkerboard-2x2",
         }
     }
 
@@ -58,6 +62,7 @@ impl TechniqueKind {
             TechniqueKind::Checkerboard => &CHECKERBOARD_PARAMS,
             TechniqueKind::AdaptiveShading => &ADAPTIVE_SHADING_PARAMS,
             TechniqueKind::NativeDeferred => &[],
+            TechniqueKind::Checkerboard2x2 => &CHECKERBOARD_2X2_PARAMS,
         }
     }
 }
@@ -199,6 +204,43 @@ static ADAPTIVE_SHADING_PARAMS: [ParamSpec; 10] = [
         kind: ParamKind::Choice(&["centre", "pixel"]),
         default: Default::Str("centre"),
         doc: "where software VRS shades a coarse pixel: centre, as hardware VRS (the paper's setting), at the mean of the object's G-buffer attributes in it with derivatives across it; pixel, at one of its pixels' own sample, replicated",
+    },
+];
+
+/// Defaults are the depth-based report's final implementation (seeds/depth-based-checkerboarding.txt,
+/// sections 5.3.4 to 5.3.8): blended clamping with motion coherency, its small-motion constant and
+/// its blend limits. Motion is in pixels per frame; depth differences are in linear depth
+/// normalised to [0, 1] between the camera's near and far planes (section 5.3.7).
+static CHECKERBOARD_2X2_PARAMS: [ParamSpec; 5] = [
+    ParamSpec {
+        name: "clamp",
+        kind: ParamKind::Choice(&["none", "uniform", "conditional", "blended"]),
+        default: Default::Str("blended"),
+        doc: "reprojected colour against the two shaded direct neighbours' min/max: none (5.3.3), always (uniform, 5.3.4), only where motion exceeds motion_threshold (conditional, 5.3.5), or conditional with the clamp blended back by depth difference (blended, 5.3.7; the report's final version)",
+    },
+    ParamSpec {
+        name: "motion_threshold",
+        kind: ParamKind::Float { min: 0.0, min_inclusive: true, max: 1.0e9 },
+        default: Default::Float(1.0e-7),
+        doc: "conditional and blended: pixels moving less than this (pixels per frame) are not clamped; 0.0000001 as the report (5.3.5)",
+    },
+    ParamSpec {
+        name: "blend_min",
+        kind: ParamKind::Float { min: 0.0, min_inclusive: true, max: 1.0 },
+        default: Default::Float(0.005),
+        doc: "blended: linear depth difference below which the reprojected colour is kept unclamped (the report's minimum blend difference, 5.3.7)",
+    },
+    ParamSpec {
+        name: "blend_max",
+        kind: ParamKind::Float { min: 0.0, min_inclusive: false, max: 1.0 },
+        default: Default::Float(0.1),
+        doc: "blended: linear depth difference at which the clamped colour is used in full; the clamp weight is difference / blend_max (the report's maximum blend difference, 5.3.7)",
+    },
+    ParamSpec {
+        name: "motion_coherency",
+        kind: ParamKind::Bool,
+        default: Default::Bool(true),
+        doc: "conditional and blended: also clamp when a shaded neighbour's previous motion differs from this pixel's motion by more than motion_threshold (5.3.8; keeps the motion history)",
     },
 ];
 

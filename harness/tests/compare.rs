@@ -100,6 +100,7 @@ fn variant(name: &str, samples: &[f64], quality: Option<(f64, f64, f64)>) -> Var
             })
             .unwrap_or_default(),
         non_finite_values: 0,
+        stability: None,
         images: vec![],
         gates: vec![],
     }

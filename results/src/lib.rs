@@ -157,9 +157,46 @@ pub struct VariantResult {
     pub metrics: Vec<MetricRecord>,
     /// Non-finite channel values in the variant's output, summed over measured frames.
     pub non_finite_values: u64,
+    /// Numerical-stability checks of this result: non-finite pixels and their spread, determinism,
+    /// recovery after camera cuts. Absent in files written before they existed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stability: Option<Stability>,
     /// Saved frames (paths relative to the run folder).
     pub images: Vec<ImageRecord>,
     pub gates: Vec<GateOutcome>,
+}
+
+/// Stability checks of one variant (`results/README.md`, "Stability").
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Stability {
+    /// Output pixels with a non-finite channel, summed over measured frames.
+    pub non_finite_pixels: u64,
+    /// Of those, pixels whose reference pixel is finite: non-finite values the technique made or
+    /// spread beyond what the scene injected. `None` without a reference render.
+    pub spread_pixels: Option<u64>,
+    /// Whether the capture render's last frame equals the timed render's last frame bit for bit:
+    /// the same sequence rendered twice on one adapter, histories included. `None` when the
+    /// scenario measures no frames.
+    pub deterministic: Option<bool>,
+    /// Camera cuts inside the measured frames, and how fast the error came back.
+    pub cuts: Vec<CutRecovery>,
+}
+
+/// The error around one camera cut, as mean squared error against the reference (8-bit sRGB
+/// units, the MSE behind PSNR).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct CutRecovery {
+    /// Measured-frame index of the first frame of the new shot.
+    pub frame: u32,
+    /// MSE of the cut frame and the frames after it, up to 2 (fewer at the end of the sequence).
+    pub mse: Vec<f64>,
+    /// Median MSE of the new shot from 3 frames after the cut to the next cut; `None` when the
+    /// shot is shorter.
+    pub steady_mse: Option<f64>,
+    /// The frame 2 after the cut is within `tolerance_db` of the steady PSNR; `None` when there
+    /// is no steady level or no such frame.
+    pub recovered: Option<bool>,
+    pub tolerance_db: f64,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq, Eq)]

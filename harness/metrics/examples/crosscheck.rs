@@ -27,6 +27,7 @@ fn read_raw(path: &Path, width: u32, height: u32) -> HdrImage {
 fn read_png(path: &Path) -> Rgb8Image {
     match load_image(path).unwrap_or_else(|e| panic!("{e}")) {
         LoadedImage::Ldr(i) => i,
+        LoadedImage::Ldr16(i) => i.to_rgb8(),
         LoadedImage::Hdr(_) => panic!("{} is not LDR", path.display()),
     }
 }

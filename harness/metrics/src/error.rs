@@ -32,6 +32,13 @@ pub enum MetricsError {
         expected: usize,
         actual: usize,
     },
+    /// A per-pixel input (motion field, mask) does not match the images' pixel count.
+    #[error("{what} has {actual} entries for {expected} pixels")]
+    PerPixelLength {
+        what: &'static str,
+        expected: usize,
+        actual: usize,
+    },
     /// The image is smaller than a metric's window (SSIM needs at least 11x11 pixels).
     #[error("{metric} needs images of at least {min}x{min} pixels, got {width}x{height}")]
     TooSmall {

@@ -59,7 +59,7 @@ impl HdrImage {
     }
 }
 
-fn check_layout(width: u32, height: u32, len: usize) -> Result<(), MetricsError> {
+pub(crate) fn check_layout(width: u32, height: u32, len: usize) -> Result<(), MetricsError> {
     if width == 0 || height == 0 {
         return Err(MetricsError::EmptyImage { width, height });
     }
@@ -75,7 +75,7 @@ fn check_layout(width: u32, height: u32, len: usize) -> Result<(), MetricsError>
     Ok(())
 }
 
-fn check_same_size(rw: u32, rh: u32, tw: u32, th: u32) -> Result<(), MetricsError> {
+pub(crate) fn check_same_size(rw: u32, rh: u32, tw: u32, th: u32) -> Result<(), MetricsError> {
     if (rw, rh) != (tw, th) {
         return Err(MetricsError::SizeMismatch {
             ref_width: rw,

@@ -17,6 +17,8 @@ pub const SUPPORTED_INPUTS: &str = "PNG (8- or 16-bit; grey, grey+alpha, RGB, RG
 #[derive(Debug, Clone, PartialEq)]
 pub enum LoadedImage {
     Ldr(Rgb8Image),
+    /// A 16-bit PNG, kept at 16 bits.
+    Ldr16(crate::Rgb16Image),
     Hdr(HdrImage),
 }
 
@@ -24,7 +26,7 @@ impl LoadedImage {
     /// "LDR" or "HDR", for messages.
     pub fn kind(&self) -> &'static str {
         match self {
-            LoadedImage::Ldr(_) => "LDR",
+            LoadedImage::Ldr(_) | LoadedImage::Ldr16(_) => "LDR",
             LoadedImage::Hdr(_) => "HDR",
         }
     }
@@ -69,6 +71,20 @@ pub fn load_image(path: &Path) -> Result<LoadedImage, MetricsError> {
         return Err(MetricsError::EmptyImage { width, height });
     }
     if format == ImageFormat::Png {
+        let sixteen = matches!(
+            decoded,
+            DynamicImage::ImageLuma16(_)
+                | DynamicImage::ImageLumaA16(_)
+                | DynamicImage::ImageRgb16(_)
+                | DynamicImage::ImageRgba16(_)
+        );
+        if sixteen {
+            return Ok(LoadedImage::Ldr16(crate::Rgb16Image {
+                width,
+                height,
+                data: decoded.into_rgb16().into_raw(),
+            }));
+        }
         Ok(LoadedImage::Ldr(to_rgb8(decoded)))
     } else {
         Ok(LoadedImage::Hdr(HdrImage {
@@ -79,30 +95,18 @@ pub fn load_image(path: &Path) -> Result<LoadedImage, MetricsError> {
     }
 }
 
-/// 8-bit RGB from any decoded PNG: 16-bit values are rounded to nearest, alpha is dropped.
+/// 8-bit RGB from a decoded 8-bit PNG: grey is expanded, alpha is dropped.
 fn to_rgb8(decoded: DynamicImage) -> Rgb8Image {
     let (width, height) = (decoded.width(), decoded.height());
-    let data = match decoded {
-        DynamicImage::ImageLuma16(_)
-        | DynamicImage::ImageLumaA16(_)
-        | DynamicImage::ImageRgb16(_)
-        | DynamicImage::ImageRgba16(_) => decoded
-            .into_rgb16()
-            .into_raw()
-            .into_iter()
-            .map(round_16_to_8)
-            .collect(),
-        other => other.into_rgb8().into_raw(),
-    };
     Rgb8Image {
         width,
         height,
-        data,
+        data: decoded.into_rgb8().into_raw(),
     }
 }
 
 /// `round(v * 255 / 65535)` in integers.
-fn round_16_to_8(v: u16) -> u8 {
+pub(crate) fn round_16_to_8(v: u16) -> u8 {
     ((v as u32 * 255 + 32767) / 65535) as u8
 }
 

@@ -8,6 +8,7 @@
 //! (gates belong to the harness). See the crate README for exact settings and measured
 //! agreement with the reference implementations.
 
+mod deep;
 mod error;
 mod flip;
 mod image;
@@ -18,7 +19,9 @@ mod report;
 mod series;
 mod srgb;
 mod ssim;
+mod temporal;
 
+pub use deep::{mse_luma16, mse_rgb16, ssim_luma16, ssim_rgb16, Rgb16Image, DATA_RANGE_16BIT};
 pub use error::MetricsError;
 pub use flip::{
     flip_hdr, flip_heatmap, flip_ldr, hdr_exposure_range, pixels_per_degree, ExposureRange,
@@ -30,7 +33,8 @@ pub use luma::LUMA_WEIGHTS;
 pub use pixel::{
     max_abs_error, mse_luma, mse_rgb, psnr_from_mse, psnr_luma, psnr_rgb, DATA_RANGE_8BIT,
 };
-pub use report::{diff, diff_at, DiffReport};
+pub use report::{diff, diff_at, diff_images, DiffReport};
 pub use series::{series_stats, SeriesStats};
 pub use srgb::{encode_srgb8, linear_to_srgb, srgb_to_linear};
 pub use ssim::{ssim_luma, ssim_rgb, SSIM_MIN_SIZE};
+pub use temporal::temporal_difference_error;

@@ -8,8 +8,10 @@
 //! 11x11 (one Gaussian window); the FLIP error map is left out.
 
 use crate::{
-    flip_ldr, max_abs_error, mse_luma, mse_rgb, psnr_from_mse, ssim_luma, ssim_rgb, FlipResult,
-    MetricsError, Rgb8Image, DATA_RANGE_8BIT, DEFAULT_PIXELS_PER_DEGREE, SSIM_MIN_SIZE,
+    encode_srgb8, flip_hdr, flip_ldr, hdr_exposure_range, max_abs_error, mse_luma, mse_luma16,
+    mse_rgb, mse_rgb16, psnr_from_mse, ssim_luma, ssim_luma16, ssim_rgb, ssim_rgb16, ExposureRange,
+    FlipResult, LoadedImage, MetricsError, Rgb16Image, Rgb8Image, DATA_RANGE_16BIT,
+    DATA_RANGE_8BIT, DEFAULT_PIXELS_PER_DEGREE, SSIM_MIN_SIZE,
 };
 use serde::{Serialize, Serializer};
 use std::fmt::Write;
@@ -38,6 +40,57 @@ pub struct DiffReport {
     pub pixels_per_degree: f64,
     /// LDR-FLIP pooled statistics (the error map is not serialised).
     pub flip: FlipResult,
+    /// Bits per channel of PSNR, MSE and SSIM: 8, or 16 when both inputs are 16-bit PNGs (data
+    /// range 65535; an 8-bit input beside a 16-bit one is expanded exactly, `v * 257`). FLIP and
+    /// max |error| always use the 8-bit values.
+    pub bit_depth: u8,
+    /// HDR-FLIP of linear inputs (`.hdr`, `.exr`), with the exposure range from the reference;
+    /// absent for PNG. The other metrics then use the sRGB encoding of the inputs (clamped).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub flip_hdr: Option<FlipResult>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub exposure_range: Option<ExposureRange>,
+}
+
+/// Every metric of two decoded files: 8-bit or 16-bit PNG, or linear HDR (both of one kind).
+pub fn diff_images(
+    reference: &LoadedImage,
+    test: &LoadedImage,
+) -> Result<DiffReport, MetricsError> {
+    use LoadedImage::{Hdr, Ldr, Ldr16};
+    match (reference, test) {
+        (Ldr(r), Ldr(t)) => diff(r, t),
+        (Hdr(r), Hdr(t)) => {
+            let mut report = diff(&encode_srgb8(r), &encode_srgb8(t))?;
+            let range = hdr_exposure_range(r);
+            report.flip_hdr = Some(flip_hdr(r, t, &range, DEFAULT_PIXELS_PER_DEGREE)?);
+            report.exposure_range = Some(range);
+            Ok(report)
+        }
+        (Ldr16(_) | Ldr(_), Ldr16(_) | Ldr(_)) => {
+            let deep = |i: &LoadedImage| match i {
+                Ldr16(i) => i.clone(),
+                Ldr(i) => Rgb16Image::from_rgb8(i),
+                Hdr(_) => unreachable!("matched above"),
+            };
+            let (r, t) = (deep(reference), deep(test));
+            let mut report = diff(&r.to_rgb8(), &t.to_rgb8())?;
+            report.bit_depth = 16;
+            report.mse_rgb = mse_rgb16(&r, &t)?;
+            report.mse_luma = mse_luma16(&r, &t)?;
+            report.psnr_rgb = psnr_from_mse(report.mse_rgb, DATA_RANGE_16BIT);
+            report.psnr_luma = psnr_from_mse(report.mse_luma, DATA_RANGE_16BIT);
+            if report.ssim_rgb.is_some() {
+                report.ssim_rgb = Some(ssim_rgb16(&r, &t)?);
+                report.ssim_luma = Some(ssim_luma16(&r, &t)?);
+            }
+            Ok(report)
+        }
+        (r, t) => Err(MetricsError::KindMismatch {
+            reference: r.kind(),
+            test: t.kind(),
+        }),
+    }
 }
 
 fn finite_or_null<S: Serializer>(v: &f64, s: S) -> Result<S::Ok, S::Error> {
@@ -91,6 +144,9 @@ pub fn diff_at(
         max_abs_error,
         pixels_per_degree,
         flip: flip?,
+        bit_depth: 8,
+        flip_hdr: None,
+        exposure_range: None,
     })
 }
 
@@ -132,6 +188,25 @@ impl DiffReport {
         let mut s = String::new();
         for (label, value) in rows {
             let _ = writeln!(s, "{label:<14} {value}");
+        }
+        if self.bit_depth != 8 {
+            let _ = writeln!(
+                s,
+                "{:<14} PSNR, MSE and SSIM at {} bits (data range 65535)",
+                "bit depth", self.bit_depth
+            );
+        }
+        if let (Some(f), Some(r)) = (&self.flip_hdr, &self.exposure_range) {
+            let _ = writeln!(
+                s,
+                "{:<14} {:.6} (exposures {:.3} to {:.3} stops, {} steps)",
+                "HDR-FLIP mean", f.mean, r.start, r.stop, r.count
+            );
+            let _ = writeln!(
+                s,
+                "{:<14} p50 {:.6}  p95 {:.6}  p99 {:.6}  max {:.6}",
+                "HDR-FLIP wtd", f.p50, f.p95, f.p99, f.max
+            );
         }
         s
     }

@@ -36,7 +36,13 @@ pub fn ssim_rgb(reference: &Rgb8Image, test: &Rgb8Image) -> Result<f64, MetricsE
     for channel in 0..3 {
         let r = channel_plane(reference, channel);
         let t = channel_plane(test, channel);
-        sum += ssim_plane(&r, &t, reference.width as usize, reference.height as usize);
+        sum += ssim_plane(
+            &r,
+            &t,
+            reference.width as usize,
+            reference.height as usize,
+            DATA_RANGE,
+        );
     }
     Ok(sum / 3.0)
 }
@@ -52,10 +58,11 @@ pub fn ssim_luma(reference: &Rgb8Image, test: &Rgb8Image) -> Result<f64, Metrics
         &t,
         reference.width as usize,
         reference.height as usize,
+        DATA_RANGE,
     ))
 }
 
-fn check_size(width: u32, height: u32) -> Result<(), MetricsError> {
+pub(crate) fn check_size(width: u32, height: u32) -> Result<(), MetricsError> {
     if width < SSIM_MIN_SIZE || height < SSIM_MIN_SIZE {
         return Err(MetricsError::TooSmall {
             metric: "SSIM",
@@ -102,7 +109,7 @@ struct Rows {
 /// Each output row is filtered vertically first (11 input rows to one row of five moments),
 /// then horizontally, so the working set stays in cache; rows run in parallel and their sums
 /// are added in row order, so the result does not depend on the thread count.
-pub(crate) fn ssim_plane<T>(x: &[T], y: &[T], w: usize, h: usize) -> f64
+pub(crate) fn ssim_plane<T>(x: &[T], y: &[T], w: usize, h: usize, data_range: f64) -> f64
 where
     T: Copy + Into<f64> + Send + Sync,
 {
@@ -114,7 +121,7 @@ where
             || Rows {
                 v: std::array::from_fn(|_| vec![0.0; w]),
             },
-            |rows, row| row_sum(rows, x, y, w, row - RADIUS, &g),
+            |rows, row| row_sum(rows, x, y, w, row - RADIUS, &g, data_range),
         )
         .collect();
     row_sums.iter().sum::<f64>() / (out_w * (h - 2 * RADIUS)) as f64
@@ -128,13 +135,14 @@ fn row_sum<T: Copy + Into<f64>>(
     w: usize,
     top: usize,
     g: &[f64; TAPS],
+    data_range: f64,
 ) -> f64 {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU supports AVX2, checked just above.
-        return unsafe { row_sum_avx2(rows, x, y, w, top, g) };
+        return unsafe { row_sum_avx2(rows, x, y, w, top, g, data_range) };
     }
-    row_sum_generic(rows, x, y, w, top, g)
+    row_sum_generic(rows, x, y, w, top, g, data_range)
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -146,8 +154,9 @@ fn row_sum_avx2<T: Copy + Into<f64>>(
     w: usize,
     top: usize,
     g: &[f64; TAPS],
+    data_range: f64,
 ) -> f64 {
-    row_sum_generic(rows, x, y, w, top, g)
+    row_sum_generic(rows, x, y, w, top, g, data_range)
 }
 
 #[inline(always)]
@@ -158,9 +167,10 @@ fn row_sum_generic<T: Copy + Into<f64>>(
     w: usize,
     top: usize,
     g: &[f64; TAPS],
+    data_range: f64,
 ) -> f64 {
-    let c1 = (K1 * DATA_RANGE) * (K1 * DATA_RANGE);
-    let c2 = (K2 * DATA_RANGE) * (K2 * DATA_RANGE);
+    let c1 = (K1 * data_range) * (K1 * data_range);
+    let c2 = (K2 * data_range) * (K2 * data_range);
     let out_w = w - 2 * RADIUS;
     // Vertical 11-tap pass of x, y, x*x, y*y and x*y, all columns.
     let [mx, my, mxx, myy, mxy] = &mut rows.v;

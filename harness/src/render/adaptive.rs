@@ -82,6 +82,70 @@ pub fn rate_params(v: &Variant) -> RateParams {
     }
 }
 
+/// The pass graph of a variant of `adaptive-shading` or `native-deferred` at `width` x `height`
+/// (no GPU needed): what runs and what is allocated.
+pub fn graph(variant: &Variant, width: u32, height: u32) -> Plan {
+    let params =
+        (variant.technique == TechniqueKind::AdaptiveShading).then(|| rate_params(variant));
+    let (tw, th) = adaptive_model::tiles(width, height);
+    let tex = |format, width, height| TextureDesc {
+        format,
+        width,
+        height,
+        samples: 1,
+        layers: 1,
+    };
+    let mut g = Graph::default();
+    for name in GBUFFER {
+        g.resource(name, tex(GBUF_FORMAT, width, height));
+    }
+    let mut gbuffer_writes: Vec<&'static str> = GBUFFER.to_vec();
+    let parities = if params.is_some() { 2 } else { 1 };
+    for p in 0..parities {
+        g.resource(COLORS[p], tex(COLOR_FORMAT, width, height))
+            .resource(DEPTHS[p], tex(DEPTH_FORMAT, width, height));
+        gbuffer_writes.push(DEPTHS[p]);
+    }
+    let mut shade_reads: Vec<&'static str> = GBUFFER.to_vec();
+    if let Some(p) = &params {
+        g.resource("motion", tex(MOTION_FORMAT, width, height))
+            .resource("rates", tex(RATE_FORMAT, tw, th));
+        for s in STATES {
+            g.resource(s, tex(STATE_FORMAT, tw, th));
+        }
+        gbuffer_writes.push("motion");
+        g.pass("gbuffer", PassKind::Render, &[], &gbuffer_writes);
+        let reads = [
+            COLORS[0], COLORS[1], "motion", DEPTHS[0], DEPTHS[1], STATES[0], STATES[1],
+        ];
+        if p.neighbour_filter {
+            g.resource("rates_raw", tex(RATE_FORMAT, tw, th));
+            g.pass(
+                "rates",
+                PassKind::Compute,
+                &reads,
+                &["rates_raw", STATES[0], STATES[1]],
+            );
+            g.pass("rate_filter", PassKind::Compute, &["rates_raw"], &["rates"]);
+        } else {
+            g.pass(
+                "rates",
+                PassKind::Compute,
+                &reads,
+                &["rates", STATES[0], STATES[1]],
+            );
+        }
+        shade_reads.push("rates");
+        g.pass("shade", PassKind::Compute, &shade_reads, &COLORS);
+        g.output(COLORS[0]).output(COLORS[1]);
+    } else {
+        g.pass("gbuffer", PassKind::Render, &[], &gbuffer_writes);
+        g.pass("shade", PassKind::Compute, &shade_reads, &[COLORS[0]]);
+        g.output(COLORS[0]);
+    }
+    g.plan().expect("built-in graphs are well formed")
+}
+
 /// The rate pass and its filter, with bind groups per frame parity.
 struct RatePass {
     params: RateParams,
@@ -128,64 +192,9 @@ impl Adaptive {
     pub fn new(gpu: &Gpu, variant: &Variant, width: u32, height: u32) -> Adaptive {
         let params =
             (variant.technique == TechniqueKind::AdaptiveShading).then(|| rate_params(variant));
-        let (tw, th) = adaptive_model::tiles(width, height);
-        let tex = |format, width, height| TextureDesc {
-            format,
-            width,
-            height,
-            samples: 1,
-            layers: 1,
-        };
-        let mut g = Graph::default();
-        for name in GBUFFER {
-            g.resource(name, tex(GBUF_FORMAT, width, height));
-        }
-        let mut gbuffer_writes: Vec<&'static str> = GBUFFER.to_vec();
         let history = params.is_some();
         let parities = if history { 2 } else { 1 };
-        for p in 0..parities {
-            g.resource(COLORS[p], tex(COLOR_FORMAT, width, height))
-                .resource(DEPTHS[p], tex(DEPTH_FORMAT, width, height));
-            gbuffer_writes.push(DEPTHS[p]);
-        }
-        let mut shade_reads: Vec<&'static str> = GBUFFER.to_vec();
-        if let Some(p) = &params {
-            g.resource("motion", tex(MOTION_FORMAT, width, height))
-                .resource("rates", tex(RATE_FORMAT, tw, th));
-            for s in STATES {
-                g.resource(s, tex(STATE_FORMAT, tw, th));
-            }
-            gbuffer_writes.push("motion");
-            g.pass("gbuffer", PassKind::Render, &[], &gbuffer_writes);
-            let reads = [
-                COLORS[0], COLORS[1], "motion", DEPTHS[0], DEPTHS[1], STATES[0], STATES[1],
-            ];
-            if p.neighbour_filter {
-                g.resource("rates_raw", tex(RATE_FORMAT, tw, th));
-                g.pass(
-                    "rates",
-                    PassKind::Compute,
-                    &reads,
-                    &["rates_raw", STATES[0], STATES[1]],
-                );
-                g.pass("rate_filter", PassKind::Compute, &["rates_raw"], &["rates"]);
-            } else {
-                g.pass(
-                    "rates",
-                    PassKind::Compute,
-                    &reads,
-                    &["rates", STATES[0], STATES[1]],
-                );
-            }
-            shade_reads.push("rates");
-            g.pass("shade", PassKind::Compute, &shade_reads, &COLORS);
-            g.output(COLORS[0]).output(COLORS[1]);
-        } else {
-            g.pass("gbuffer", PassKind::Render, &[], &gbuffer_writes);
-            g.pass("shade", PassKind::Compute, &shade_reads, &[COLORS[0]]);
-            g.output(COLORS[0]);
-        }
-        let plan = g.plan().expect("built-in graphs are well formed");
+        let plan = graph(variant, width, height);
         let textures = allocate(&gpu.device, &plan);
         let device = &gpu.device;
         let view = |name: &str| textures[name].create_view(&Default::default());

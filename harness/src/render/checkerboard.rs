@@ -145,6 +145,96 @@ const TWO_PASS_COLOR: &str = "color_samples";
 const TWO_PASS_DEPTH: &str = "depth_samples";
 const MSAA_TARGETS: [(&str, &str); 2] = [("color_even", "depth_even"), ("color_odd", "depth_odd")];
 
+/// `sampling` as the variant names it.
+fn sampling(variant: &Variant) -> Sampling {
+    match variant.choice("sampling") {
+        "msaa2x" => Sampling::Msaa2x,
+        _ => Sampling::TwoPass,
+    }
+}
+
+/// The pass graph of a checkerboard variant, without a GPU (what `tessera` would allocate), and
+/// whether the reconstruction reads the velocity buffer.
+pub fn graph(variant: &Variant, width: u32, height: u32, dynamic_scene: bool) -> (Plan, bool) {
+    let sampling = sampling(variant);
+    let (qw, qh) = quarter_size(width, height);
+    let samples = if sampling == Sampling::Msaa2x { 2 } else { 1 };
+    let q = |format, layers| TextureDesc {
+        format,
+        width: qw,
+        height: qh,
+        samples,
+        layers,
+    };
+    let full = |format| TextureDesc {
+        format,
+        width,
+        height,
+        samples: 1,
+        layers: 1,
+    };
+    let mut g = Graph::default();
+    let mut reads: Vec<&'static str> = Vec::new();
+    match sampling {
+        Sampling::TwoPass => {
+            g.resource(TWO_PASS_COLOR, q(COLOR_FORMAT, 4))
+                .resource(TWO_PASS_DEPTH, q(DEPTH_FORMAT, 4));
+            for name in ["scene_sample0", "scene_sample1"] {
+                g.pass(
+                    name,
+                    PassKind::Render,
+                    &[],
+                    &[TWO_PASS_COLOR, TWO_PASS_DEPTH],
+                );
+            }
+            reads.extend([TWO_PASS_COLOR, TWO_PASS_DEPTH]);
+        }
+        Sampling::Msaa2x => {
+            let writes = [
+                MSAA_TARGETS[0].0,
+                MSAA_TARGETS[0].1,
+                MSAA_TARGETS[1].0,
+                MSAA_TARGETS[1].1,
+            ];
+            for (i, w) in writes.iter().enumerate() {
+                g.resource(
+                    w,
+                    q(
+                        if i % 2 == 0 {
+                            COLOR_FORMAT
+                        } else {
+                            DEPTH_FORMAT
+                        },
+                        1,
+                    ),
+                );
+            }
+            g.pass("scene", PassKind::Render, &[], &writes);
+            reads.extend(writes);
+        }
+    }
+    g.resource("velocity", full(COLOR_FORMAT))
+        .resource("velocity_depth", full(DEPTH_FORMAT));
+    g.pass(
+        "velocity",
+        PassKind::Render,
+        &[],
+        &["velocity", "velocity_depth"],
+    );
+    // Dynamic objects need the velocity buffer; without them, nothing reads it and it is culled.
+    let use_velocity = variant.flag("velocity") && dynamic_scene;
+    if use_velocity {
+        reads.push("velocity");
+    }
+    g.resource("color", full(COLOR_FORMAT));
+    g.pass("reconstruct", PassKind::Compute, &reads, &["color"])
+        .output("color");
+    (
+        g.plan().expect("built-in graphs are well formed"),
+        use_velocity,
+    )
+}
+
 impl Checkerboard {
     pub fn new(
         gpu: &Gpu,
@@ -153,86 +243,11 @@ impl Checkerboard {
         height: u32,
         dynamic_scene: bool,
     ) -> Result<Checkerboard, Unsupported> {
-        let sampling = match variant.choice("sampling") {
-            "msaa2x" => Sampling::Msaa2x,
-            _ => Sampling::TwoPass,
-        };
+        let sampling = sampling(variant);
         if sampling == Sampling::Msaa2x {
             check_msaa2x(gpu)?;
         }
-        let (qw, qh) = quarter_size(width, height);
-        let samples = if sampling == Sampling::Msaa2x { 2 } else { 1 };
-        let q = |format, layers| TextureDesc {
-            format,
-            width: qw,
-            height: qh,
-            samples,
-            layers,
-        };
-        let full = |format| TextureDesc {
-            format,
-            width,
-            height,
-            samples: 1,
-            layers: 1,
-        };
-        let mut g = Graph::default();
-        let mut reads: Vec<&'static str> = Vec::new();
-        match sampling {
-            Sampling::TwoPass => {
-                g.resource(TWO_PASS_COLOR, q(COLOR_FORMAT, 4))
-                    .resource(TWO_PASS_DEPTH, q(DEPTH_FORMAT, 4));
-                for name in ["scene_sample0", "scene_sample1"] {
-                    g.pass(
-                        name,
-                        PassKind::Render,
-                        &[],
-                        &[TWO_PASS_COLOR, TWO_PASS_DEPTH],
-                    );
-                }
-                reads.extend([TWO_PASS_COLOR, TWO_PASS_DEPTH]);
-            }
-            Sampling::Msaa2x => {
-                let writes = [
-                    MSAA_TARGETS[0].0,
-                    MSAA_TARGETS[0].1,
-                    MSAA_TARGETS[1].0,
-                    MSAA_TARGETS[1].1,
-                ];
-                for (i, w) in writes.iter().enumerate() {
-                    g.resource(
-                        w,
-                        q(
-                            if i % 2 == 0 {
-                                COLOR_FORMAT
-                            } else {
-                                DEPTH_FORMAT
-                            },
-                            1,
-                        ),
-                    );
-                }
-                g.pass("scene", PassKind::Render, &[], &writes);
-                reads.extend(writes);
-            }
-        }
-        g.resource("velocity", full(COLOR_FORMAT))
-            .resource("velocity_depth", full(DEPTH_FORMAT));
-        g.pass(
-            "velocity",
-            PassKind::Render,
-            &[],
-            &["velocity", "velocity_depth"],
-        );
-        // Dynamic objects need the velocity buffer; without them, nothing reads it and it is culled.
-        let use_velocity = variant.flag("velocity") && dynamic_scene;
-        if use_velocity {
-            reads.push("velocity");
-        }
-        g.resource("color", full(COLOR_FORMAT));
-        g.pass("reconstruct", PassKind::Compute, &reads, &["color"])
-            .output("color");
-        let plan = g.plan().expect("built-in graphs are well formed");
+        let (plan, use_velocity) = graph(variant, width, height, dynamic_scene);
         let textures = allocate(&gpu.device, &plan);
 
         let device = &gpu.device;

@@ -95,10 +95,13 @@ fn inside(inp: &Inputs, x: i32, y: i32) -> bool {
 
 struct Neighbourhood {
     c: [Vec3; 4],
+    /// On screen and finite.
     valid: [bool; 4],
     count: f32,
     lo: Vec3,
     hi: Vec3,
+    /// A non-finite neighbour's colour, when one was left out.
+    non_finite: Option<Vec3>,
 }
 
 fn neighbourhood(inp: &Inputs, x: i32, y: i32, tonemapped: bool) -> Neighbourhood {
@@ -108,12 +111,19 @@ fn neighbourhood(inp: &Inputs, x: i32, y: i32, tonemapped: bool) -> Neighbourhoo
         count: 0.0,
         lo: Vec3::splat(3.0e38),
         hi: Vec3::splat(-3.0e38),
+        non_finite: None,
     };
     for (i, (dx, dy)) in OFFSETS.into_iter().enumerate() {
         let (px, py) = (x + dx, y + dy);
         n.valid[i] = inside(inp, px, py);
         if n.valid[i] {
             let mut c = color_at(inp, px, py).truncate();
+            // Non-finite neighbours are left out (the shader's stability rule).
+            if !c.is_finite() {
+                n.valid[i] = false;
+                n.non_finite = Some(c);
+                continue;
+            }
             if tonemapped {
                 c = tonemap(c);
             }
@@ -171,10 +181,12 @@ pub enum Source {
 
 fn filled(inp: &Inputs, x: i32, y: i32) -> (Vec4, Source) {
     let tonemapped = inp.options.fill != 0;
-    (
-        finish(fill(inp, &neighbourhood(inp, x, y, tonemapped)), tonemapped),
-        Source::Fill,
-    )
+    let n = neighbourhood(inp, x, y, tonemapped);
+    if let (0.0, Some(c)) = (n.count, n.non_finite) {
+        // Inside a non-finite region: it stays non-finite.
+        return (c.extend(1.0), Source::Fill);
+    }
+    (finish(fill(inp, &n), tonemapped), Source::Fill)
 }
 
 /// The reconstructed colour of full-resolution pixel (x, y) and how it was made.
@@ -224,6 +236,9 @@ pub fn reconstruct(inp: &Inputs, x: i32, y: i32) -> (Vec4, Source) {
         return filled(inp, x, y);
     }
     let history = color_at(inp, px, py);
+    if !history.truncate().is_finite() {
+        return filled(inp, x, y);
+    }
     if inp.options.clamp == 0 {
         return (history, Source::History);
     }

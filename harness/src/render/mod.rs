@@ -3,6 +3,8 @@
 pub mod adaptive;
 pub mod adaptive_model;
 pub mod checkerboard;
+pub mod checkerboard_2x2;
+pub mod checkerboard_2x2_model;
 pub mod checkerboard_model;
 pub mod graph;
 pub mod mesh;

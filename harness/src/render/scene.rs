@@ -53,6 +53,8 @@ struct GpuObject {
     prev_model: [[f32; 4]; 4],
     color: [f32; 4],
     emissive: [f32; 4],
+    /// x: injected non-finite value (0 none, 1 NaN, 2 +Inf); yzw unused.
+    flags: [f32; 4],
 }
 
 /// What a technique asks of one view of the scene.
@@ -332,6 +334,7 @@ impl SceneGpu {
                 prev_model: rel(pm),
                 color: [1.0, 1.0, 1.0, 0.05],
                 emissive: [0.0, 0.0, 0.0, 1.0],
+                flags: [0.0; 4],
             });
         }
         for o in &self.scenario.scene.objects {
@@ -343,6 +346,7 @@ impl SceneGpu {
                     .emissive
                     .extend(if o.animation.is_some() { 2.0 } else { 0.0 })
                     .into(),
+                flags: [o.inject.map_or(0.0, |i| i.code()), 0.0, 0.0, 0.0],
             });
         }
         if !objects.is_empty() {

@@ -78,25 +78,9 @@ pub fn build(
 ) -> Result<Box<dyn Technique>, Unsupported> {
     check_size(gpu, width, height)?;
     Ok(match variant.technique {
-        TechniqueKind::Native => Box::new(Forward::new(gpu, width, height, Resolve::None)),
-        TechniqueKind::Upscale => {
-            let s = variant.float("scale");
-            let lw = ((width as f64 * s).round() as u32).max(1);
-            let lh = ((height as f64 * s).round() as u32).max(1);
-            let filter = match variant.choice("filter") {
-                "nearest" => wgpu::FilterMode::Nearest,
-                _ => wgpu::FilterMode::Linear,
-            };
-            Box::new(Forward::new(
-                gpu,
-                lw,
-                lh,
-                Resolve::Upscale {
-                    width,
-                    height,
-                    filter,
-                },
-            ))
+        TechniqueKind::Native | TechniqueKind::Upscale => {
+            let (w, h, resolve) = forward_setup(variant, width, height);
+            Box::new(Forward::new(gpu, w, h, resolve))
         }
         TechniqueKind::Checkerboard => Box::new(super::checkerboard::Checkerboard::new(
             gpu,
@@ -108,7 +92,56 @@ pub fn build(
         TechniqueKind::AdaptiveShading | TechniqueKind::NativeDeferred => {
             Box::new(super::adaptive::Adaptive::new(gpu, variant, width, height))
         }
+        TechniqueKind::Checkerboard2x2 => Box::new(super::checkerboard_2x2::Checkerboard2x2::new(
+            gpu, variant, width, height,
+        )),
     })
+}
+
+/// Render size and resolve of a forward variant (`native`, `upscale`).
+fn forward_setup(variant: &Variant, width: u32, height: u32) -> (u32, u32, Resolve) {
+    if variant.technique != TechniqueKind::Upscale {
+        return (width, height, Resolve::None);
+    }
+    let s = variant.float("scale");
+    let lw = ((width as f64 * s).round() as u32).max(1);
+    let lh = ((height as f64 * s).round() as u32).max(1);
+    let filter = match variant.choice("filter") {
+        "nearest" => wgpu::FilterMode::Nearest,
+        _ => wgpu::FilterMode::Linear,
+    };
+    (
+        lw,
+        lh,
+        Resolve::Upscale {
+            width,
+            height,
+            filter,
+        },
+    )
+}
+
+/// The pass graph a variant would run at `width` x `height`, without a GPU: which passes run,
+/// which are culled, what is allocated. `tessera` builds the same graph when it renders.
+pub fn plan(variant: &Variant, width: u32, height: u32, dynamic_scene: bool) -> Plan {
+    match variant.technique {
+        TechniqueKind::Native | TechniqueKind::Upscale => {
+            let (w, h, resolve) = forward_setup(variant, width, height);
+            forward_graph(w, h, resolve)
+        }
+        TechniqueKind::Checkerboard => {
+            super::checkerboard::graph(variant, width, height, dynamic_scene).0
+        }
+        TechniqueKind::Checkerboard2x2 => {
+            let options = super::checkerboard_2x2::Options::from_variant(variant);
+            super::checkerboard_2x2::graph(width, height, &options)
+                .plan()
+                .expect("built-in graphs are well formed")
+        }
+        TechniqueKind::AdaptiveShading | TechniqueKind::NativeDeferred => {
+            super::adaptive::graph(variant, width, height)
+        }
+    }
 }
 
 /// The ground-truth reference: native at `supersample`x the resolution per axis, box-downsampled.
@@ -173,49 +206,53 @@ struct Forward {
     output: &'static str,
 }
 
+/// The pass graph of forward rendering at `width` x `height` with `resolve`.
+fn forward_graph(width: u32, height: u32, resolve: Resolve) -> Plan {
+    let tex = |format, width, height| TextureDesc {
+        format,
+        width,
+        height,
+        samples: 1,
+        layers: 1,
+    };
+    let mut g = Graph::default();
+    match resolve {
+        Resolve::None => {
+            g.resource("color", tex(COLOR_FORMAT, width, height))
+                .resource("depth", tex(DEPTH_FORMAT, width, height))
+                .pass("scene", PassKind::Render, &[], &["color", "depth"])
+                .output("color");
+        }
+        Resolve::Upscale {
+            width: ow,
+            height: oh,
+            ..
+        }
+        | Resolve::Downsample {
+            width: ow,
+            height: oh,
+            ..
+        } => {
+            // Rendered at another resolution, then resampled to the output by a compute pass.
+            let (color, depth, pass) = match resolve {
+                Resolve::Upscale { .. } => ("color_low", "depth_low", "upscale"),
+                _ => ("color_ss", "depth_ss", "downsample"),
+            };
+            g.resource(color, tex(COLOR_FORMAT, width, height))
+                .resource(depth, tex(DEPTH_FORMAT, width, height))
+                .resource("color", tex(COLOR_FORMAT, ow, oh))
+                .pass("scene", PassKind::Render, &[], &[color, depth])
+                .pass(pass, PassKind::Compute, &[color], &["color"])
+                .output("color");
+        }
+    }
+    g.plan().expect("built-in graphs are well formed")
+}
+
 impl Forward {
     fn new(gpu: &Gpu, width: u32, height: u32, resolve: Resolve) -> Forward {
-        let tex = |format, width, height| TextureDesc {
-            format,
-            width,
-            height,
-            samples: 1,
-            layers: 1,
-        };
-        let mut g = Graph::default();
-        let output = match resolve {
-            Resolve::None => {
-                g.resource("color", tex(COLOR_FORMAT, width, height))
-                    .resource("depth", tex(DEPTH_FORMAT, width, height))
-                    .pass("scene", PassKind::Render, &[], &["color", "depth"])
-                    .output("color");
-                "color"
-            }
-            Resolve::Upscale {
-                width: ow,
-                height: oh,
-                ..
-            }
-            | Resolve::Downsample {
-                width: ow,
-                height: oh,
-                ..
-            } => {
-                // Rendered at another resolution, then resampled to the output by a compute pass.
-                let (color, depth, pass) = match resolve {
-                    Resolve::Upscale { .. } => ("color_low", "depth_low", "upscale"),
-                    _ => ("color_ss", "depth_ss", "downsample"),
-                };
-                g.resource(color, tex(COLOR_FORMAT, width, height))
-                    .resource(depth, tex(DEPTH_FORMAT, width, height))
-                    .resource("color", tex(COLOR_FORMAT, ow, oh))
-                    .pass("scene", PassKind::Render, &[], &[color, depth])
-                    .pass(pass, PassKind::Compute, &[color], &["color"])
-                    .output("color");
-                "color"
-            }
-        };
-        let plan = g.plan().expect("built-in graphs are well formed");
+        let plan = forward_graph(width, height, resolve);
+        let output = "color";
         let textures = allocate(&gpu.device, &plan);
         let resample = match resolve {
             Resolve::None => None,
@@ -356,7 +393,11 @@ pub fn record_scene_pass(
     slot: u32,
     kind: ScenePipeline,
 ) {
-    let clear = scene.clear_color();
+    // Velocity targets hold motion, not colour: nothing drawn means no motion.
+    let clear = match kind {
+        ScenePipeline::Velocity => wgpu::Color::TRANSPARENT,
+        _ => scene.clear_color(),
+    };
     let pipeline = scene.pipeline(&gpu.device, kind).clone();
     let q = timers.begin(name, encoder);
     {
@@ -532,6 +573,16 @@ pub fn shader_sources() -> Vec<(String, String, Vec<&'static str>)> {
             "adaptive shade".into(),
             super::adaptive::shade_source(),
             vec!["scene.wgsl", "adaptive_shade.wgsl"],
+        ),
+        (
+            "checkerboard-2x2 mask".into(),
+            super::checkerboard_2x2::MASK_WGSL.into(),
+            vec!["checkerboard_2x2_mask.wgsl"],
+        ),
+        (
+            "checkerboard-2x2 reconstitute".into(),
+            super::checkerboard_2x2::RECONSTITUTE_WGSL.into(),
+            vec!["checkerboard_2x2_reconstitute.wgsl"],
         ),
     ]
 }

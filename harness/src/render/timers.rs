@@ -111,6 +111,17 @@ impl Timers {
         self.profiler.begin_pass_query(name, encoder)
     }
 
+    /// Opens a timer around commands recorded on the encoder outside any pass (copies): timestamps
+    /// written into the encoder (needs `TIMESTAMP_QUERY_INSIDE_ENCODERS`, else untimed). Close
+    /// with [`Timers::end`] on the same encoder.
+    pub fn begin_encoder(
+        &self,
+        name: &'static str,
+        encoder: &mut wgpu::CommandEncoder,
+    ) -> GpuProfilerQuery {
+        self.profiler.begin_query(name, encoder)
+    }
+
     pub fn end(&self, encoder: &mut wgpu::CommandEncoder, query: GpuProfilerQuery) {
         self.profiler.end_query(encoder, query);
     }

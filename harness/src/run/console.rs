@@ -102,7 +102,70 @@ pub fn scenario_table(s: &ScenarioResult) -> String {
     for row in &rows {
         let _ = writeln!(out, "{}", line(row));
     }
+    for r in &s.results {
+        for f in stability_findings(r) {
+            let _ = writeln!(out, "  stability: {}: {f}", r.variant);
+        }
+    }
     out
+}
+
+/// What the stability checks found wrong with one result, one line each (nothing when clean).
+pub fn stability_findings(r: &VariantResult) -> Vec<String> {
+    let Some(s) = &r.stability else {
+        return Vec::new();
+    };
+    let mut out = Vec::new();
+    match s.spread_pixels {
+        Some(n) if n > 0 => out.push(format!(
+            "{n} non-finite pixels where the reference is finite ({} non-finite in all)",
+            s.non_finite_pixels
+        )),
+        None if s.non_finite_pixels > 0 => {
+            out.push(format!("{} non-finite pixels", s.non_finite_pixels))
+        }
+        _ => {}
+    }
+    if s.deterministic == Some(false) {
+        out.push("not deterministic: the second render of the sequence ended on other bits".into());
+    }
+    for c in s.cuts.iter().filter(|c| c.recovered == Some(false)) {
+        let db = |mse: f64| tessera_metrics::psnr_from_mse(mse, 255.0);
+        let after = c.mse.get(2).copied().unwrap_or(f64::NAN);
+        out.push(format!(
+            "error not back to steady 2 frames after the cut at frame {}: PSNR {:.2} dB against a steady {:.2} dB",
+            c.frame,
+            db(after),
+            c.steady_mse.map(db).unwrap_or(f64::NAN)
+        ));
+    }
+    out
+}
+
+/// One line over a whole run: how many results the stability checks looked at, and findings.
+pub fn stability_summary(scenarios: &[ScenarioResult]) -> String {
+    let checked: Vec<&VariantResult> = scenarios
+        .iter()
+        .flat_map(|s| &s.results)
+        .filter(|r| r.stability.is_some())
+        .collect();
+    let findings = checked
+        .iter()
+        .filter(|r| !stability_findings(r).is_empty())
+        .count();
+    let cuts: usize = checked
+        .iter()
+        .filter_map(|r| r.stability.as_ref())
+        .map(|s| s.cuts.iter().filter(|c| c.recovered.is_some()).count())
+        .sum();
+    let deterministic = checked
+        .iter()
+        .filter(|r| r.stability.as_ref().and_then(|s| s.deterministic) == Some(true))
+        .count();
+    format!(
+        "stability: {} results checked, {findings} with findings; {deterministic} rendered the same twice; {cuts} camera cuts judged",
+        checked.len()
+    )
 }
 
 /// Counts over a whole run.

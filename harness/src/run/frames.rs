@@ -31,6 +31,11 @@ pub struct Rendered {
     /// Linear frames, when asked to keep them (HDR metrics).
     pub hdr_frames: Vec<HdrImage>,
     pub non_finite: u64,
+    /// Per measured frame, the pixels with a non-finite channel (bit per pixel, row-major);
+    /// `None` for a frame without any.
+    pub non_finite_masks: Vec<Option<Vec<u64>>>,
+    /// The capture phase's last frame equals the timed phase's bit for bit (`None`: no frames).
+    pub deterministic: Option<bool>,
     pub timestamps: bool,
     pub readback_bytes: u64,
     /// The technique's extras of every measured frame ([`Technique::frame_extras`]).
@@ -43,6 +48,15 @@ pub enum RenderError {
     Timers(#[from] crate::render::timers::TimerError),
     #[error("reading the frame back failed (device lost?)")]
     Readback,
+}
+
+/// Whether frame `index` continues the previous frame's shot: false on the first frame and at a
+/// camera cut, where techniques must not read history.
+pub fn history_valid(scenario: &Scenario, index: u32) -> bool {
+    let cam = &scenario.camera;
+    index > 0
+        && cam.pose_at(scenario.frame_time(index)).segment
+            == cam.pose_at(scenario.frame_time(index - 1)).segment
 }
 
 /// Encodes and submits frame `index` without waiting for it.
@@ -66,8 +80,7 @@ pub fn submit_frame(
         .create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("frame"),
         });
-    let cam = &scenario.camera;
-    let history_valid = index > 0 && cam.pose_at(time).segment == cam.pose_at(prev_time).segment;
+    let history_valid = history_valid(scenario, index);
     technique.record(
         gpu,
         scene,
@@ -154,6 +167,8 @@ pub fn render(
         frames: Vec::new(),
         hdr_frames: Vec::new(),
         non_finite: 0,
+        non_finite_masks: Vec::new(),
+        deterministic: None,
         timestamps: timers.has_timestamps(),
         readback_bytes: readback.bytes(),
         extras: Vec::new(),
@@ -200,6 +215,14 @@ pub fn render(
         },
     );
 
+    // The timed phase's last frame, kept as a hash: the capture phase renders the sequence again
+    // from frame 0 and must end on the same bits (determinism, histories included).
+    let timed_hash = if scenario.measured_frames > 0 {
+        Some(image_hash(&read_output(gpu, &readback, technique)?.image))
+    } else {
+        None
+    };
+
     // Capture phase: the same frames again, one at a time (rendering is deterministic, histories
     // included); each measured frame is counted (fragment invocations) and read back for
     // non-finite checks, images and metrics. Not timed.
@@ -219,16 +242,7 @@ pub fn render(
             {
                 m.fragment_invocations = stats;
             }
-            let mut encoder = gpu
-                .device
-                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                    label: Some("readback"),
-                });
-            readback.copy(&mut encoder, technique.output());
-            gpu.queue.submit([encoder.finish()]);
-            let frame = readback
-                .read(&gpu.device)
-                .map_err(|_| RenderError::Readback)?;
+            let frame = read_output(gpu, &readback, technique)?;
             rendered.non_finite += frame.non_finite;
             let saved = scenario
                 .save_frames
@@ -236,6 +250,12 @@ pub fn render(
             rendered
                 .extras
                 .push(technique.frame_extras(gpu, &frame.image, saved));
+            rendered
+                .non_finite_masks
+                .push(non_finite_mask(&frame.image));
+            if index + 1 == scenario.total_frames() {
+                rendered.deterministic = timed_hash.map(|h| h == image_hash(&frame.image));
+            }
             if keep_frames {
                 rendered.frames.push(encode_srgb8(&frame.image));
             }
@@ -246,4 +266,58 @@ pub fn render(
         on_frame();
     }
     Ok(rendered)
+}
+
+fn read_output(
+    gpu: &Gpu,
+    readback: &Readback,
+    technique: &dyn Technique,
+) -> Result<crate::render::readback::CpuFrame, RenderError> {
+    let mut encoder = gpu
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("readback"),
+        });
+    readback.copy(&mut encoder, technique.output());
+    gpu.queue.submit([encoder.finish()]);
+    readback
+        .read(&gpu.device)
+        .map_err(|_| RenderError::Readback)
+}
+
+/// A hash of the exact bits of a frame (NaN payloads included).
+fn image_hash(image: &HdrImage) -> u64 {
+    use std::hash::{Hash, Hasher};
+    let mut h = std::hash::DefaultHasher::new();
+    for v in &image.data {
+        v.to_bits().hash(&mut h);
+    }
+    h.finish()
+}
+
+/// Pixels of an RGB image with a non-finite channel, one bit each; `None` when there are none.
+pub fn non_finite_mask(image: &HdrImage) -> Option<Vec<u64>> {
+    let pixels = image.data.len() / 3;
+    let mut mask = vec![0u64; pixels.div_ceil(64)];
+    let mut any = false;
+    for (i, px) in image.data.chunks_exact(3).enumerate() {
+        if px.iter().any(|v| !v.is_finite()) {
+            mask[i / 64] |= 1 << (i % 64);
+            any = true;
+        }
+    }
+    any.then_some(mask)
+}
+
+/// Pixels set in `mask` but not in `reference` (the non-finite pixels a technique added).
+pub fn spread_pixels(mask: Option<&[u64]>, reference: Option<&[u64]>) -> u64 {
+    match (mask, reference) {
+        (None, _) => 0,
+        (Some(m), None) => m.iter().map(|w| w.count_ones() as u64).sum(),
+        (Some(m), Some(r)) => m
+            .iter()
+            .zip(r.iter().chain(std::iter::repeat(&0)))
+            .map(|(a, b)| (a & !b).count_ones() as u64)
+            .sum(),
+    }
 }

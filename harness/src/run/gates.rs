@@ -66,6 +66,16 @@ fn measure(results: &[VariantResult], r: &VariantResult, name: &str) -> Option<f
         "cpu_ms" => (r.cpu_frame_ms.count > 0).then_some(r.cpu_frame_ms.median),
         "speedup" => speedup(results, r),
         "non-finite" => Some(r.non_finite_values as f64),
+        "spread-non-finite" => r.stability.as_ref()?.spread_pixels.map(|v| v as f64),
+        "nondeterministic" => r
+            .stability
+            .as_ref()?
+            .deterministic
+            .map(|d| if d { 0.0 } else { 1.0 }),
+        "unrecovered-cuts" => r
+            .stability
+            .as_ref()
+            .map(|s| super::stability::unrecovered_cuts(s) as f64),
         metric => r.metrics.iter().find(|m| m.name == metric).map(|m| m.value),
     }
 }

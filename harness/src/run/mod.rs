@@ -7,8 +7,10 @@
 pub mod console;
 pub mod frames;
 pub mod gates;
+pub mod motion;
 pub mod output;
 pub mod scenario;
+pub mod stability;
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};

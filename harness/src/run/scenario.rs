@@ -9,13 +9,15 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Instant;
 
-use tessera_metrics::Rgb8Image;
+use tessera_metrics::{ExposureRange, HdrImage, Rgb8Image};
 use tessera_results::{
     ImageRecord, MetricRecord, PassRecord, ScenarioResult, Status, Summary, VariantResult,
 };
 
 use super::frames::{self, Rendered};
 use super::gates;
+use super::motion;
+use super::stability;
 use crate::gpu::Gpu;
 use crate::render::scene::SceneGpu;
 use crate::render::technique::{self, Technique, Unsupported};
@@ -25,6 +27,12 @@ use crate::technique::{TechniqueKind, Variant};
 /// Frames a reference render produced, in measured-frame order.
 struct ReferenceFrames {
     frames: Vec<Rgb8Image>,
+    /// Linear frames and their HDR-FLIP exposure ranges, when `flip-hdr` is asked for: the range
+    /// of each reference frame is held fixed for every variant diffed against it.
+    hdr: Vec<HdrImage>,
+    exposures: Vec<ExposureRange>,
+    /// Non-finite pixels per frame (what the scene injected, as the reference renders it).
+    masks: Vec<Option<Vec<u64>>>,
 }
 
 /// Runs `scenario`. Images go under `run_dir/images/<scenario>/`. `on_frame` ticks progress.
@@ -53,15 +61,22 @@ pub fn run(
         }
     };
 
-    let needs_reference = scenario.reference != Reference::None && !scenario.metrics.is_empty();
+    let needs_reference = scenario.needs_reference();
     let native_is_reference = |v: &Variant| {
         v.technique == TechniqueKind::Native && scenario.reference == Reference::Native
     };
     // The reference renders first; when it is the native variant itself, that render is reused.
     let mut reference: Option<Result<ReferenceFrames, String>> = None;
-    if needs_reference && !scenario.variants.iter().any(native_is_reference) {
+    if scenario.needs_separate_reference() {
         reference = Some(render_reference(gpu, &mut scene, scenario, on_frame));
     }
+    // The renderer's exact motion for `tde`, rendered once, outside any timed work.
+    let motion: Result<Vec<Option<motion::MotionField>>, String> =
+        if needs_reference && scenario.metrics.contains(&MetricKind::Tde) {
+            motion::capture(gpu, &mut scene, scenario)
+        } else {
+            Ok(Vec::new())
+        };
     let mut order: Vec<&Variant> = scenario
         .variants
         .iter()
@@ -108,23 +123,37 @@ pub fn run(
         );
         // The native reference's frames become the reference (moved, not copied); its metrics are
         // then computed against itself, the sanity values every other variant is read against.
-        let frames = if is_reference {
-            reference = Some(Ok(ReferenceFrames {
-                frames: rendered.frames,
-            }));
-            None
+        let (frames, hdr, masks) = if is_reference {
+            reference = Some(Ok(ReferenceFrames::new(
+                rendered.frames,
+                rendered.hdr_frames,
+                rendered.non_finite_masks.clone(),
+            )));
+            (None, None, rendered.non_finite_masks)
         } else {
-            Some(rendered.frames)
+            (
+                Some(rendered.frames),
+                Some(rendered.hdr_frames),
+                rendered.non_finite_masks,
+            )
+        };
+        let rendered = Rendered {
+            frames: Vec::new(),
+            hdr_frames: Vec::new(),
+            non_finite_masks: masks,
+            ..rendered
         };
         if needs_reference {
             match reference.as_ref() {
                 Some(Ok(r)) => {
                     result.reference = Some(scenario.reference.name().to_string());
-                    match compute_metrics(
-                        scenario,
-                        &r.frames,
-                        frames.as_deref().unwrap_or(&r.frames),
-                    ) {
+                    let inputs = MetricInputs {
+                        reference: r,
+                        test: frames.as_deref().unwrap_or(&r.frames),
+                        test_hdr: hdr.as_deref().unwrap_or(&r.hdr),
+                        motion: &motion,
+                    };
+                    match compute_metrics(scenario, &inputs) {
                         Ok(m) => result.metrics = m,
                         Err(e) => {
                             result.status = Status::Failed {
@@ -138,6 +167,18 @@ pub fn run(
             }
         }
         add_extras(&mut result, &rendered.extras, scenario, &image_dir, run_dir);
+        let reference_view = match reference.as_ref() {
+            Some(Ok(r)) if needs_reference => Some(stability::ReferenceView {
+                frames: &r.frames,
+                masks: &r.masks,
+            }),
+            _ => None,
+        };
+        let own = frames
+            .as_deref()
+            .or(reference_view.as_ref().map(|r| r.frames))
+            .unwrap_or(&[]);
+        result.stability = Some(stability::check(scenario, &rendered, own, reference_view));
         results.push(result);
     }
     // Reference images once per scenario, next to the variants'.
@@ -210,6 +251,7 @@ fn empty_result(v: &Variant, status: Status) -> VariantResult {
         allocated_bytes: 0,
         metrics: Vec::new(),
         non_finite_values: 0,
+        stability: None,
         images: Vec::new(),
         gates: Vec::new(),
     }
@@ -246,7 +288,8 @@ fn render_variant(
         Err(u) => Ok(Err(u)),
         Ok(mut t) => {
             let plan = plan_record(t.as_ref());
-            match frames::render(gpu, scene, scenario, t.as_mut(), keep, false, on_frame) {
+            let hdr = keep && keep_hdr(scenario);
+            match frames::render(gpu, scene, scenario, t.as_mut(), keep, hdr, on_frame) {
                 Ok(r) => Ok(Ok((r, plan))),
                 Err(e) => Err(e.to_string()),
             }
@@ -311,9 +354,17 @@ fn render_reference(
     };
     let result = match built {
         Err(Unsupported(reason)) => Err(format!("no reference: {reason}")),
-        Ok(mut t) => frames::render(gpu, scene, scenario, t.as_mut(), true, false, on_frame)
-            .map(|r| ReferenceFrames { frames: r.frames })
-            .map_err(|e| format!("reference render failed: {e}")),
+        Ok(mut t) => frames::render(
+            gpu,
+            scene,
+            scenario,
+            t.as_mut(),
+            true,
+            keep_hdr(scenario),
+            on_frame,
+        )
+        .map(|r| ReferenceFrames::new(r.frames, r.hdr_frames, r.non_finite_masks))
+        .map_err(|e| format!("reference render failed: {e}")),
     };
     if let Some(e) = pollster::block_on(validation.pop()) {
         return Err(format!(
@@ -367,17 +418,61 @@ fn fill_timings(result: &mut VariantResult, r: &Rendered, plan: PlanRecord) {
     result.resources = plan.resources;
 }
 
+impl ReferenceFrames {
+    fn new(frames: Vec<Rgb8Image>, hdr: Vec<HdrImage>, masks: Vec<Option<Vec<u64>>>) -> Self {
+        let exposures = hdr
+            .iter()
+            .map(tessera_metrics::hdr_exposure_range)
+            .collect();
+        ReferenceFrames {
+            frames,
+            hdr,
+            exposures,
+            masks,
+        }
+    }
+}
+
+/// Linear frames are kept only for HDR-FLIP.
+fn keep_hdr(scenario: &Scenario) -> bool {
+    scenario.metrics.contains(&MetricKind::FlipHdr)
+}
+
+/// What a variant's metrics are computed from.
+struct MetricInputs<'a> {
+    reference: &'a ReferenceFrames,
+    test: &'a [Rgb8Image],
+    test_hdr: &'a [HdrImage],
+    motion: &'a Result<Vec<Option<motion::MotionField>>, String>,
+}
+
+#[derive(Debug, thiserror::Error)]
+enum MetricError {
+    #[error("{0}")]
+    Metric(#[from] tessera_metrics::MetricsError),
+    #[error("no motion for tde: {0}")]
+    Motion(String),
+}
+
 /// Metrics of every measured frame against the reference's frame of the same index.
 fn compute_metrics(
     scenario: &Scenario,
-    reference: &[Rgb8Image],
-    test: &[Rgb8Image],
-) -> Result<Vec<MetricRecord>, tessera_metrics::MetricsError> {
+    inputs: &MetricInputs<'_>,
+) -> Result<Vec<MetricRecord>, MetricError> {
+    let (reference, test) = (&inputs.reference.frames[..], inputs.test);
     let frames: Vec<u32> = (0..test.len().min(reference.len()) as u32).collect();
     let mut out = Vec::new();
     for &kind in &scenario.metrics {
         if kind == MetricKind::Flicker {
             out.push(flicker(test));
+            continue;
+        }
+        if kind == MetricKind::Tde {
+            let motion = inputs
+                .motion
+                .as_ref()
+                .map_err(|e| MetricError::Motion(e.clone()))?;
+            out.push(tde(reference, test, motion)?);
             continue;
         }
         let mut per_frame = Vec::new();
@@ -393,7 +488,18 @@ fn compute_metrics(
                     tessera_metrics::flip_ldr(r, t, tessera_metrics::DEFAULT_PIXELS_PER_DEGREE)?
                         .mean
                 }
-                MetricKind::Flicker => unreachable!("computed above"),
+                MetricKind::FlipHdr => {
+                    let i = f as usize;
+                    let rh = &inputs.reference.hdr[i];
+                    tessera_metrics::flip_hdr(
+                        rh,
+                        &inputs.test_hdr[i],
+                        &inputs.reference.exposures[i],
+                        tessera_metrics::DEFAULT_PIXELS_PER_DEGREE,
+                    )?
+                    .mean
+                }
+                MetricKind::Flicker | MetricKind::Tde => unreachable!("computed above"),
             };
             per_frame.push(v);
         }
@@ -434,6 +540,42 @@ fn series(per_frame: &[f64]) -> Option<tessera_results::SeriesSummary> {
         p95: s.p95,
         max: s.max,
         std_dev: s.std_dev,
+    })
+}
+
+/// Temporal difference error (notes/metrics.md 3.3, item 1) per measured frame that has motion
+/// from a previous measured frame in the same shot; the value is the mean over those frames.
+fn tde(
+    reference: &[Rgb8Image],
+    test: &[Rgb8Image],
+    motion: &[Option<motion::MotionField>],
+) -> Result<MetricRecord, MetricError> {
+    let (mut frames, mut per_frame) = (Vec::new(), Vec::new());
+    for t in 1..test.len().min(reference.len()) {
+        let Some(Some(m)) = motion.get(t) else {
+            continue;
+        };
+        let v = tessera_metrics::temporal_difference_error(
+            &test[t - 1],
+            &test[t],
+            &reference[t - 1],
+            &reference[t],
+            &m.motion,
+            &m.valid,
+        )?;
+        if let Some(v) = v {
+            frames.push(t as u32);
+            per_frame.push(v);
+        }
+    }
+    let value = per_frame.iter().sum::<f64>() / per_frame.len().max(1) as f64;
+    Ok(MetricRecord {
+        name: MetricKind::Tde.name().to_string(),
+        series: series(&per_frame),
+        frames,
+        per_frame,
+        value,
+        higher_is_better: false,
     })
 }
 

@@ -46,6 +46,22 @@ pub struct Scenario {
 }
 
 impl Scenario {
+    /// Whether a reference is rendered at all: only when there are metrics to compute against it.
+    pub fn needs_reference(&self) -> bool {
+        self.reference != Reference::None && !self.metrics.is_empty()
+    }
+
+    /// Whether the reference needs a render of its own: not when it is the scenario's own
+    /// `native` variant (that render serves as both).
+    pub fn needs_separate_reference(&self) -> bool {
+        self.needs_reference()
+            && !(self.reference == Reference::Native
+                && self
+                    .variants
+                    .iter()
+                    .any(|v| v.technique == crate::technique::TechniqueKind::Native))
+    }
+
     /// Clock warm-up for an adapter of `device_type`: as set, or 1000 ms on GPUs (an H200 took
     /// several hundred milliseconds of load to reach its top clock) and 20 ms on CPU adapters.
     pub fn clock_warmup_ms(&self, device_type: &str) -> f64 {
@@ -94,10 +110,14 @@ pub enum MetricKind {
     Flip,
     /// Static-scene flicker: mean absolute change between consecutive output frames.
     Flicker,
+    /// HDR-FLIP on the linear output, exposures from the reference frame.
+    FlipHdr,
+    /// Temporal difference error with the renderer's exact motion (notes/metrics.md 3.3).
+    Tde,
 }
 
 impl MetricKind {
-    pub const ALL: [MetricKind; 7] = [
+    pub const ALL: [MetricKind; 9] = [
         MetricKind::Psnr,
         MetricKind::PsnrLuma,
         MetricKind::MaxAbsError,
@@ -105,6 +125,8 @@ impl MetricKind {
         MetricKind::SsimLuma,
         MetricKind::Flip,
         MetricKind::Flicker,
+        MetricKind::FlipHdr,
+        MetricKind::Tde,
     ];
     pub const DEFAULT: [MetricKind; 3] = [
         MetricKind::Psnr,
@@ -121,6 +143,8 @@ impl MetricKind {
             MetricKind::SsimLuma => "ssim-luma",
             MetricKind::Flip => "flip",
             MetricKind::Flicker => "flicker",
+            MetricKind::FlipHdr => "flip-hdr",
+            MetricKind::Tde => "tde",
         }
     }
 
@@ -193,6 +217,26 @@ pub struct Object {
     pub emissive: Vec3,
     pub specular: f32,
     pub animation: Option<Animation>,
+    /// Stress suite: the object's pixels are written non-finite, to check that a technique does
+    /// not spread them (issue 8).
+    pub inject: Option<Inject>,
+}
+
+/// A non-finite value an object's shader writes instead of its colour.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Inject {
+    Nan,
+    Inf,
+}
+
+impl Inject {
+    /// The value the scene shader reads (`Object.flags.x`).
+    pub fn code(self) -> f32 {
+        match self {
+            Inject::Nan => 1.0,
+            Inject::Inf => 2.0,
+        }
+    }
 }
 
 #[derive(Clone, Debug)]
@@ -399,6 +443,16 @@ pub struct Gate {
 
 /// Measures a gate can name besides metrics.
 pub const TIMING_MEASURES: [&str; 3] = ["gpu_ms", "cpu_ms", "speedup"];
+
+/// Gate measures of the stability checks (`run/stability.rs`): non-finite output values, pixels
+/// made non-finite beyond the reference's, 1 when the sequence did not render the same twice,
+/// camera cuts not recovered within 2 frames.
+pub const STABILITY_MEASURES: [&str; 4] = [
+    "non-finite",
+    "spread-non-finite",
+    "nondeterministic",
+    "unrecovered-cuts",
+];
 
 /// A problem in a scenario file, at a place in it.
 #[derive(Clone, Debug, PartialEq, Eq)]

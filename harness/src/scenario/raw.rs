@@ -123,6 +123,8 @@ pub struct RawObject {
     pub emissive: Option<Vec<f64>>,
     pub specular: Option<f64>,
     pub animation: Option<RawAnimation>,
+    /// Stress: `nan` or `inf`, the object's shader output in every channel.
+    pub inject: Option<String>,
 }
 
 #[derive(Debug, Deserialize)]

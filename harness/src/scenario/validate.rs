@@ -658,6 +658,13 @@ fn object(ctx: &mut Ctx, path: &KeyPath, file: &Path, o: &RawObject) -> Object {
             .unwrap_or(Vec3::ZERO),
         specular: ctx.non_negative(&path.key("specular"), o.specular.unwrap_or(0.25)),
         animation,
+        inject: o.inject.as_deref().and_then(|v| {
+            match ctx.choice(&path.key("inject"), "injected value", v, &["nan", "inf"]) {
+                Some("nan") => Some(Inject::Nan),
+                Some(_) => Some(Inject::Inf),
+                None => None,
+            }
+        }),
     }
 }
 
@@ -944,7 +951,7 @@ fn gates(ctx: &mut Ctx, path: &KeyPath, raw: &[RawGate], metrics: &[MetricKind])
         let p = path.index(i);
         let mut allowed: Vec<&str> = metrics.iter().map(|m| m.name()).collect();
         allowed.extend(TIMING_MEASURES);
-        allowed.push("non-finite");
+        allowed.extend(STABILITY_MEASURES);
         if !allowed.contains(&g.measure.as_str()) {
             let known_metric = MetricKind::ALL.iter().any(|m| m.name() == g.measure);
             if known_metric {
