@@ -9,7 +9,14 @@ use tessera::render::technique::plan;
 use tessera::scenario::{self, Reference, Scenario};
 use tessera::technique::TechniqueKind;
 
-const SUITES: [&str; 5] = ["smoke", "quality", "perf", "stress", "checkerboard-2x2"];
+const SUITES: [&str; 6] = [
+    "smoke",
+    "quality",
+    "perf",
+    "stress",
+    "checkerboard-2x2",
+    "adaptive",
+];
 
 fn suite(name: &str) -> Vec<Scenario> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR"))
