@@ -40,27 +40,35 @@ fn vs_gbuffer(
     return GBufferVs(v.clip, v.rel_pos, v.normal, v.local, v.object, v.clip, previous);
 }
 
+// The ground is shaded from its pattern coordinate and footprint, every other object from its
+// object-space position: one target holds whichever the object needs.
+fn is_ground(object: u32) -> bool {
+    return abs(objects[object].emissive.a - 1.0) < 0.5;
+}
+
 struct GBuffer {
     // xyz: camera-relative position; w: object + 1 (0 where nothing is drawn).
     @location(0) position: vec4<f32>,
     // xyz: interpolated normal.
     @location(1) normal: vec4<f32>,
-    // xyz: object-space position.
-    @location(2) local: vec4<f32>,
-    // Screen-space derivatives of the ground pattern coordinate, gradient scale applied: xy d/dx,
-    // zw d/dy (`surface` in scene.wgsl takes the footprint from them).
-    @location(3) derivatives: vec4<f32>,
+    // The ground: screen-space derivatives of its pattern coordinate, gradient scale applied (xy
+    // d/dx, zw d/dy; `surface` in scene.wgsl takes the footprint from them). Other objects: xyz
+    // object-space position (the detail seed).
+    @location(2) detail: vec4<f32>,
 }
 
 fn gbuffer(in: GBufferVs) -> GBuffer {
     let p = ground_coord(in.rel_pos);
     let ddx = dpdx(p) * frame.params.z;
     let ddy = dpdy(p) * frame.params.z;
+    var detail = vec4<f32>(in.local, 0.0);
+    if is_ground(in.object) {
+        detail = vec4<f32>(ddx, ddy);
+    }
     return GBuffer(
         vec4<f32>(in.rel_pos, f32(in.object + 1u)),
         vec4<f32>(in.normal, 0.0),
-        vec4<f32>(in.local, 0.0),
-        vec4<f32>(ddx, ddy),
+        detail,
     );
 }
 
@@ -72,11 +80,10 @@ fn fs_gbuffer(in: GBufferVs) -> GBuffer {
 struct GBufferMotion {
     @location(0) position: vec4<f32>,
     @location(1) normal: vec4<f32>,
-    @location(2) local: vec4<f32>,
-    @location(3) derivatives: vec4<f32>,
+    @location(2) detail: vec4<f32>,
     // xy: screen motion in pixels (current - previous, y down); z: the previous frame's depth
     // of this surface point; w: 1 (covered).
-    @location(4) motion: vec4<f32>,
+    @location(3) motion: vec4<f32>,
 }
 
 @fragment
@@ -89,8 +96,7 @@ fn fs_gbuffer_motion(in: GBufferVs) -> GBufferMotion {
     return GBufferMotion(
         g.position,
         g.normal,
-        g.local,
-        g.derivatives,
+        g.detail,
         vec4<f32>(motion, in.previous.z / in.previous.w, 1.0),
     );
 }
@@ -105,10 +111,9 @@ struct ShadeParams {
 @group(1) @binding(0) var<uniform> sp: ShadeParams;
 @group(1) @binding(1) var g_position: texture_2d<f32>;
 @group(1) @binding(2) var g_normal: texture_2d<f32>;
-@group(1) @binding(3) var g_local: texture_2d<f32>;
+@group(1) @binding(3) var g_detail: texture_2d<f32>;
 @group(1) @binding(4) var rates: texture_2d<u32>;
 @group(1) @binding(5) var shaded: texture_storage_2d<rgba16float, write>;
-@group(1) @binding(7) var g_derivatives: texture_2d<f32>;
 // [0]: shades, [1]: covered pixels, summed over the frame.
 @group(1) @binding(6) var<storage, read_write> counters: array<atomic<u32>, 2>;
 
@@ -120,42 +125,47 @@ var<workgroup> task_count: atomic<u32>;
 var<workgroup> covered: atomic<u32>;
 
 // Shades object `o` over the coarse pixel of `r` pixels at `block` (tile-local): the mean of the
-// object's attributes there, the derivatives of pixel `at` scaled to the coarse pixel.
+// object's attributes there, the ground's derivatives of pixel `at` scaled to the coarse pixel.
 fn shade_coarse(origin: vec2<i32>, block: vec2<u32>, r: vec2<u32>, o: u32, at: u32) -> vec4<f32> {
+    let object = o - 1u;
     let pixel = origin + vec2<i32>(vec2<u32>(at % 16u, at / 16u));
+    var scale = vec2<f32>(r);
+    var rel_pos = textureLoad(g_position, pixel, 0).xyz;
+    var normal = textureLoad(g_normal, pixel, 0).xyz;
+    var detail = textureLoad(g_detail, pixel, 0);
     if sp.size.w == 1u {
-        let a = textureLoad(g_position, pixel, 0);
-        let d = textureLoad(g_derivatives, pixel, 0);
-        let footprint = max(abs(d.xy), abs(d.zw));
-        let s = Surface(
-            a.xyz,
-            textureLoad(g_normal, pixel, 0).xyz,
-            textureLoad(g_local, pixel, 0).xyz,
-            o - 1u,
-            footprint,
-        );
-        return shade_surface(s);
-    }
-    var rel_pos = vec3<f32>(0.0);
-    var normal = vec3<f32>(0.0);
-    var local = vec3<f32>(0.0);
-    var n = 0.0;
-    for (var y = 0u; y < r.y; y = y + 1u) {
-        for (var x = 0u; x < r.x; x = x + 1u) {
-            let q = block + vec2<u32>(x, y);
-            if obj[q.y * 16u + q.x] == o {
-                let p = origin + vec2<i32>(q);
-                rel_pos = rel_pos + textureLoad(g_position, p, 0).xyz;
-                normal = normal + textureLoad(g_normal, p, 0).xyz;
-                local = local + textureLoad(g_local, p, 0).xyz;
-                n = n + 1.0;
+        scale = vec2<f32>(1.0);
+    } else {
+        rel_pos = vec3<f32>(0.0);
+        normal = vec3<f32>(0.0);
+        var local = vec3<f32>(0.0);
+        var n = 0.0;
+        for (var y = 0u; y < r.y; y = y + 1u) {
+            for (var x = 0u; x < r.x; x = x + 1u) {
+                let q = block + vec2<u32>(x, y);
+                if obj[q.y * 16u + q.x] == o {
+                    let p = origin + vec2<i32>(q);
+                    rel_pos = rel_pos + textureLoad(g_position, p, 0).xyz;
+                    normal = normal + textureLoad(g_normal, p, 0).xyz;
+                    local = local + textureLoad(g_detail, p, 0).xyz;
+                    n = n + 1.0;
+                }
             }
         }
+        rel_pos = rel_pos / n;
+        normal = normal / n;
+        if !is_ground(object) {
+            detail = vec4<f32>(local / n, 0.0);
+        }
     }
-    let d = textureLoad(g_derivatives, pixel, 0);
-    let scale = vec2<f32>(r);
-    let footprint = max(abs(d.xy * scale.x), abs(d.zw * scale.y));
-    return shade_surface(Surface(rel_pos / n, normal / n, local / n, o - 1u, footprint));
+    // Only the ground reads the footprint, only other objects the object-space position.
+    var local = detail.xyz;
+    var footprint = vec2<f32>(0.0);
+    if is_ground(object) {
+        local = vec3<f32>(0.0);
+        footprint = max(abs(detail.xy * scale.x), abs(detail.zw * scale.y));
+    }
+    return shade_surface(Surface(rel_pos, normal, local, object, footprint));
 }
 
 @compute @workgroup_size(16, 16)

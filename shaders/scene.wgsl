@@ -153,8 +153,8 @@ fn fs_main_sample(in: VsOutSample, @builtin(sample_index) sample: u32) -> @locat
 
 // What shading needs of a visible surface point: what the rasteriser interpolates, plus the
 // ground pattern's footprint, which needs screen-space derivatives. The forward path computes it
-// in the fragment shader (`shade`); adaptive shading's G-buffer stores it and its compute shading
-// pass calls `shade_surface` (derivatives are not available in compute).
+// in the fragment shader (`shade`); adaptive shading's G-buffer stores the derivatives it is made
+// from and its compute shading pass calls `shade_surface` (no derivatives in compute).
 struct Surface {
     rel_pos: vec3<f32>,
     normal: vec3<f32>,

@@ -40,12 +40,7 @@ const GBUF_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 const MOTION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 const RATE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 const STATE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
-const GBUFFER: [&str; 4] = [
-    "gbuf_position",
-    "gbuf_normal",
-    "gbuf_local",
-    "gbuf_derivatives",
-];
+const GBUFFER: [&str; 3] = ["gbuf_position", "gbuf_normal", "gbuf_detail"];
 const COLORS: [&str; 2] = ["color0", "color1"];
 const DEPTHS: [&str; 2] = ["depth0", "depth1"];
 const STATES: [&str; 2] = ["rate_state0", "rate_state1"];
@@ -266,7 +261,6 @@ impl Adaptive {
                     (3, view(GBUFFER[2])),
                     (4, rates_view.clone()),
                     (5, view(COLORS[p])),
-                    (7, view(GBUFFER[3])),
                 ];
                 let mut entries = vec![
                     wgpu::BindGroupEntry {
