@@ -455,3 +455,41 @@ fn reported_shading_rate_is_within_the_rates_bounds() {
     );
     assert_eq!(r.non_finite, 0);
 }
+
+/// The pass graphs, without a GPU: native-deferred has no rate pass, motion or history; the
+/// neighbour filter adds one pass and one tile-resolution texture; bytes per pixel as declared.
+#[test]
+fn pass_graphs_run_and_allocate_only_what_each_variant_needs() {
+    use tessera::render::adaptive::graph;
+    let names = |p: &tessera::render::graph::Plan| -> Vec<&str> {
+        p.passes.iter().map(|x| x.name).collect()
+    };
+    let (w, h) = (64u32, 48u32);
+    let px = (w * h) as u64;
+    let deferred = graph(&common::variant(TechniqueKind::NativeDeferred, &[]), w, h);
+    assert_eq!(names(&deferred), ["gbuffer", "shade"]);
+    // Three Rgba32Float G-buffer targets, one Rgba16Float output, one Depth32Float.
+    let total = |p: &tessera::render::graph::Plan| p.records().iter().map(|r| r.bytes).sum::<u64>();
+    assert_eq!(total(&deferred), px * (3 * 16 + 8 + 4));
+
+    let adaptive_default = graph(&adaptive(&[]), w, h);
+    assert_eq!(
+        names(&adaptive_default),
+        ["gbuffer", "rates", "rate_filter", "shade"]
+    );
+    let no_filter = graph(
+        &adaptive(&[("neighbour_filter", ParamValue::Bool(false))]),
+        w,
+        h,
+    );
+    assert_eq!(names(&no_filter), ["gbuffer", "rates", "shade"]);
+    let tiles = (w.div_ceil(16) * h.div_ceil(16)) as u64;
+    // The filter's input: one R32Uint per tile.
+    assert_eq!(total(&adaptive_default) - total(&no_filter), tiles * 4);
+    // History (a second output and depth), motion (Rgba16Float), rates (R32Uint) and two
+    // Rg32Float rate states on top of the baseline.
+    assert_eq!(
+        total(&no_filter) - total(&deferred),
+        px * (8 + 4 + 8) + tiles * (4 + 2 * 8)
+    );
+}
