@@ -29,7 +29,8 @@ struct Frame {
     ground: vec4<f32>,
     ground_a: vec4<f32>,
     ground_b: vec4<f32>,
-    // x: number of lights; y, z: output width and height in pixels.
+    // x: number of lights; y, z: output width and height in pixels; w: 1 when the camera did not
+    // move since the previous frame.
     counts: vec4<u32>,
     lights: array<Light, 8>,
 }
@@ -266,6 +267,12 @@ fn vs_velocity(
         prev_model = o.model;
     }
     out.previous = frame.prev_view_proj * prev_model * vec4<f32>(position, 1.0);
+    // Nothing moved (still camera, object not animated): the motion is exactly zero. Computing it
+    // gives rounding noise on some GPUs (on an H100, checkerboard-2x2's conditional clamp, whose
+    // threshold is 1e-7 px, switched on in a static scene), which would pass for real motion.
+    if frame.counts.w == 1u && o.emissive.a < 1.5 {
+        out.previous = out.current;
+    }
     out.clip = out.current;
     out.dynamic_object = select(0u, 1u, o.emissive.a > 1.5);
     return out;

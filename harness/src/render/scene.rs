@@ -410,9 +410,15 @@ impl SceneGpu {
                 },
             };
         }
+        let (view_proj, prev_view_proj) = (
+            cur_vp.as_mat4().to_cols_array_2d(),
+            prev_vp.as_mat4().to_cols_array_2d(),
+        );
+        // The camera did not move: static geometry has exactly zero motion (see `vs_velocity`).
+        let camera_still = u32::from(view_proj == prev_view_proj);
         let frame = GpuFrame {
-            view_proj: cur_vp.as_mat4().to_cols_array_2d(),
-            prev_view_proj: prev_vp.as_mat4().to_cols_array_2d(),
+            view_proj,
+            prev_view_proj,
             jitter: jitter.into(),
             camera_mod,
             background: s.scene.background.extend(1.0).into(),
@@ -438,7 +444,7 @@ impl SceneGpu {
                 s.scene.lights.len().min(MAX_LIGHTS) as u32,
                 s.width,
                 s.height,
-                0,
+                camera_still,
             ],
             lights,
         };
