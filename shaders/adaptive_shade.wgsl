@@ -36,7 +36,12 @@ fn vs_gbuffer(
     if abs(o.emissive.a - 1.0) < 0.5 {
         prev_model = o.model;
     }
-    let previous = frame.prev_view_proj * prev_model * vec4<f32>(position, 1.0);
+    var previous = frame.prev_view_proj * prev_model * vec4<f32>(position, 1.0);
+    // Nothing moved (still camera, object not animated): exactly zero motion, as `vs_velocity`
+    // (the two products differ by rounding on some GPUs).
+    if frame.counts.w == 1u && o.emissive.a < 1.5 {
+        previous = v.clip;
+    }
     return GBufferVs(v.clip, v.rel_pos, v.normal, v.local, v.object, v.clip, previous);
 }
 
