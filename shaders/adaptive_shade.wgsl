@@ -97,7 +97,11 @@ fn fs_gbuffer_motion(in: GBufferVs) -> GBufferMotion {
     let size = frame.counts.yz;
     let ndc = in.current.xy / in.current.w;
     let prev = in.previous.xy / in.previous.w;
-    let motion = (ndc - prev) * 0.5 * vec2<f32>(f32(size.x), -f32(size.y));
+    var motion = (ndc - prev) * 0.5 * vec2<f32>(f32(size.x), -f32(size.y));
+    // Exactly zero where nothing moved (see `vs_velocity`: rounding survives equal inputs).
+    if frame.counts.w == 1u && objects[in.object].emissive.a < 1.5 {
+        motion = vec2<f32>(0.0);
+    }
     return GBufferMotion(
         g.position,
         g.normal,

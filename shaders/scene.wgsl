@@ -248,6 +248,8 @@ struct VelocityOut {
     @location(0) current: vec4<f32>,
     @location(1) previous: vec4<f32>,
     @location(2) @interpolate(flat) dynamic_object: u32,
+    // 1 when nothing moved (still camera, object not animated): the motion is exactly zero.
+    @location(3) @interpolate(flat) still: u32,
 }
 
 @vertex
@@ -268,11 +270,15 @@ fn vs_velocity(
     }
     out.previous = frame.prev_view_proj * prev_model * vec4<f32>(position, 1.0);
     // Nothing moved (still camera, object not animated): the motion is exactly zero. Computing it
-    // gives rounding noise on some GPUs (on an H100, checkerboard-2x2's conditional clamp, whose
-    // threshold is 1e-7 px, switched on in a static scene), which would pass for real motion.
-    if frame.counts.w == 1u && o.emissive.a < 1.5 {
+    // gives rounding noise on some GPUs, even from two equal products (on an H100: between 1e-7
+    // and 1e-5 px, enough to switch on checkerboard-2x2's conditional clamp, threshold 1e-7 px, in
+    // a static scene; the compiler may contract `(a - b) * k` into `a * k - b * k`), so the
+    // fragment shader writes zero for it explicitly.
+    let still = frame.counts.w == 1u && o.emissive.a < 1.5;
+    if still {
         out.previous = out.current;
     }
+    out.still = select(0u, 1u, still);
     out.clip = out.current;
     out.dynamic_object = select(0u, 1u, o.emissive.a > 1.5);
     return out;
@@ -283,6 +289,9 @@ fn fs_velocity(in: VelocityOut) -> @location(0) vec4<f32> {
     let size = frame.counts.yz;
     let ndc = in.current.xy / in.current.w;
     let prev = in.previous.xy / in.previous.w;
-    let motion = (ndc - prev) * 0.5 * vec2<f32>(f32(size.x), -f32(size.y));
+    var motion = (ndc - prev) * 0.5 * vec2<f32>(f32(size.x), -f32(size.y));
+    if in.still == 1u {
+        motion = vec2<f32>(0.0);
+    }
     return vec4<f32>(motion, f32(in.dynamic_object), in.previous.z / in.previous.w);
 }
