@@ -14,7 +14,6 @@
 
 use std::collections::HashMap;
 
-use glam::Vec2;
 use tessera_metrics::{encode_srgb8, HdrImage, Rgb8Image};
 
 use super::adaptive_model::{self, CoarseSample, Mode, RateParams, TILE};
@@ -544,17 +543,7 @@ impl Technique for Adaptive {
         } else {
             0
         };
-        scene.write_view(
-            &gpu.queue,
-            0,
-            &View {
-                time: frame.time,
-                prev_time: frame.prev_time,
-                ndc_offset: Vec2::ZERO,
-                ndc_scale: Vec2::ONE,
-                gradient_scale: 1.0,
-            },
-        );
+        scene.write_view(&gpu.queue, 0, &View::whole(frame.time, frame.prev_time));
         self.gbuffer_pass(encoder, scene, timers);
         let (tw, th) = adaptive_model::tiles(self.width, self.height);
         if let Some(r) = &self.rate {

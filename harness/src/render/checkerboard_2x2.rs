@@ -28,11 +28,9 @@
 
 use std::collections::HashMap;
 
-use glam::Vec2;
-
 use super::graph::{Graph, PassKind, Plan, TextureDesc};
 use super::scene::{SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FORMAT};
-use super::technique::{compute_pipeline, FrameInfo, Technique};
+use super::technique::{allocate_with, compute_pipeline, FrameInfo, Technique};
 use super::timers::Timers;
 use crate::gpu::Gpu;
 use crate::technique::Variant;
@@ -311,7 +309,8 @@ impl Checkerboard2x2 {
         let plan = graph(width, height, &options)
             .plan()
             .expect("built-in graphs are well formed");
-        let textures = allocate(device, &plan);
+        // Depth textures are filled by copies (pre-conditioning): every texture is a copy target.
+        let textures = allocate_with(device, &plan, wgpu::TextureUsages::COPY_DST);
         draw_checks(gpu, &textures["depth_white"], &textures["depth_black"]);
 
         let dummy = |format: wgpu::TextureFormat| {
@@ -457,17 +456,7 @@ impl Technique for Checkerboard2x2 {
     ) {
         let parity = (frame.index & 1) as usize;
         // One view serves both render passes: no jitter, full resolution.
-        scene.write_view(
-            &gpu.queue,
-            0,
-            &View {
-                time: frame.time,
-                prev_time: frame.prev_time,
-                ndc_offset: Vec2::ZERO,
-                ndc_scale: Vec2::ONE,
-                gradient_scale: 1.0,
-            },
-        );
+        scene.write_view(&gpu.queue, 0, &View::whole(frame.time, frame.prev_time));
         let clear = scene.clear_color();
         let checks = [&self.textures["depth_white"], &self.textures["depth_black"]];
         let [scene_color, depth, motion, motion_depth] = &self.views[parity];
@@ -529,39 +518,6 @@ impl Technique for Checkerboard2x2 {
         );
         self.last = Some(LastFrame { params });
     }
-}
-
-/// Allocates the plan's textures: every one a render target (the checks are drawn, the others
-/// rendered or stored into), sampled, and a copy source and destination (pre-conditioning).
-fn allocate(device: &wgpu::Device, plan: &Plan) -> HashMap<&'static str, wgpu::Texture> {
-    plan.resources
-        .iter()
-        .map(|r| {
-            let d = &r.desc;
-            let mut usage = wgpu::TextureUsages::RENDER_ATTACHMENT
-                | wgpu::TextureUsages::TEXTURE_BINDING
-                | wgpu::TextureUsages::COPY_SRC
-                | wgpu::TextureUsages::COPY_DST;
-            if !d.format.is_depth_stencil_format() {
-                usage |= wgpu::TextureUsages::STORAGE_BINDING;
-            }
-            let t = device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(r.name),
-                size: wgpu::Extent3d {
-                    width: d.width,
-                    height: d.height,
-                    depth_or_array_layers: d.layers,
-                },
-                mip_level_count: 1,
-                sample_count: d.samples,
-                dimension: wgpu::TextureDimension::D2,
-                format: d.format,
-                usage,
-                view_formats: &[],
-            });
-            (r.name, t)
-        })
-        .collect()
 }
 
 /// Draws the white and black checks once (5.3.2, moved to start-up in 5.3.6).

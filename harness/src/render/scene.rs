@@ -71,6 +71,20 @@ pub struct View {
     pub gradient_scale: f32,
 }
 
+impl View {
+    /// The whole frame at output resolution, unjittered: what `native`, the velocity pass and
+    /// the G-buffer passes render.
+    pub fn whole(time: f64, prev_time: f64) -> View {
+        View {
+            time,
+            prev_time,
+            ndc_offset: Vec2::ZERO,
+            ndc_scale: Vec2::ONE,
+            gradient_scale: 1.0,
+        }
+    }
+}
+
 /// The scene shader's pipelines.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum ScenePipeline {

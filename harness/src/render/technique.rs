@@ -8,8 +8,6 @@
 
 use std::collections::HashMap;
 
-use glam::Vec2;
-
 use super::graph::{Graph, PassKind, Plan, TextureDesc};
 use super::scene::{SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FORMAT};
 use super::timers::Timers;
@@ -311,13 +309,7 @@ impl Technique for Forward {
         encoder: &mut wgpu::CommandEncoder,
         frame: FrameInfo,
     ) {
-        let view = View {
-            time: frame.time,
-            prev_time: frame.prev_time,
-            ndc_offset: Vec2::ZERO,
-            ndc_scale: Vec2::ONE,
-            gradient_scale: 1.0,
-        };
+        let view = View::whole(frame.time, frame.prev_time);
         scene.write_view(&gpu.queue, 0, &view);
         record_scene_pass(
             gpu,
@@ -349,12 +341,23 @@ impl Technique for Forward {
 
 /// Allocates every texture the plan keeps.
 pub fn allocate(device: &wgpu::Device, plan: &Plan) -> HashMap<&'static str, wgpu::Texture> {
+    allocate_with(device, plan, wgpu::TextureUsages::empty())
+}
+
+/// [`allocate`], every texture also with `extra` usages (e.g. `COPY_DST` for textures a
+/// technique fills by copying).
+pub fn allocate_with(
+    device: &wgpu::Device,
+    plan: &Plan,
+    extra: wgpu::TextureUsages,
+) -> HashMap<&'static str, wgpu::Texture> {
     plan.resources
         .iter()
         .map(|r| {
             let d = &r.desc;
-            let mut usage =
-                wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
+            let mut usage = wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::TEXTURE_BINDING
+                | extra;
             if d.samples == 1 {
                 usage |= wgpu::TextureUsages::COPY_SRC;
                 if !d.format.is_depth_stencil_format() {

@@ -6,8 +6,6 @@
 //! Rendered once per scenario, only when `tde` is asked for, after the timed work of the
 //! reference; never between timed frames.
 
-use glam::Vec2;
-
 use super::frames::{history_valid, submit_frame};
 use crate::gpu::Gpu;
 use crate::render::graph::{Graph, PassKind, Plan, TextureDesc};
@@ -86,13 +84,7 @@ impl Technique for VelocityPass {
         encoder: &mut wgpu::CommandEncoder,
         frame: FrameInfo,
     ) {
-        let view = View {
-            time: frame.time,
-            prev_time: frame.prev_time,
-            ndc_offset: Vec2::ZERO,
-            ndc_scale: Vec2::ONE,
-            gradient_scale: 1.0,
-        };
+        let view = View::whole(frame.time, frame.prev_time);
         scene.write_view(&gpu.queue, 0, &view);
         record_scene_pass(
             gpu,

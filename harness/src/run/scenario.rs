@@ -651,18 +651,7 @@ fn add_extras(
         for (kind, img) in &e.images {
             let _ = std::fs::create_dir_all(dir);
             let path = dir.join(format!("{stem}-{kind}-f{f:03}.png"));
-            if tessera_metrics::save_png(&path, img).is_ok() {
-                let rel = path
-                    .strip_prefix(run_dir)
-                    .unwrap_or(&path)
-                    .to_string_lossy()
-                    .replace('\\', "/");
-                result.images.push(ImageRecord {
-                    frame: f,
-                    kind: kind.to_string(),
-                    path: rel,
-                });
-            }
+            save_image(result, img, &path, run_dir, f, kind);
         }
     }
 }
@@ -689,18 +678,30 @@ fn save_images(
             continue;
         };
         let path = dir.join(format!("{stem}-f{f:03}.png"));
-        if tessera_metrics::save_png(&path, img).is_ok() {
-            let rel = path
-                .strip_prefix(run_dir)
-                .unwrap_or(&path)
-                .to_string_lossy()
-                .replace('\\', "/");
-            result.images.push(ImageRecord {
-                frame: f,
-                kind: kind.to_string(),
-                path: rel,
-            });
-        }
+        save_image(result, img, &path, run_dir, f, kind);
+    }
+}
+
+/// Writes one PNG and records it (path relative to the run folder); a failed write is left out.
+fn save_image(
+    result: &mut VariantResult,
+    img: &Rgb8Image,
+    path: &Path,
+    run_dir: &Path,
+    frame: u32,
+    kind: &str,
+) {
+    if tessera_metrics::save_png(path, img).is_ok() {
+        let rel = path
+            .strip_prefix(run_dir)
+            .unwrap_or(path)
+            .to_string_lossy()
+            .replace('\\', "/");
+        result.images.push(ImageRecord {
+            frame,
+            kind: kind.to_string(),
+            path: rel,
+        });
     }
 }
 
