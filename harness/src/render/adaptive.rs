@@ -231,22 +231,8 @@ impl Adaptive {
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let dummy_rates = (!history).then(|| {
-            device.create_texture(&wgpu::TextureDescriptor {
-                label: Some("no rates"),
-                size: wgpu::Extent3d {
-                    width: 1,
-                    height: 1,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: RATE_FORMAT,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
-            })
-        });
+        let dummy_rates = (!history)
+            .then(|| super::technique::placeholder_texture(device, "no rates", RATE_FORMAT));
         let rates_view = match &dummy_rates {
             Some(t) => t.create_view(&Default::default()),
             None => view("rates"),

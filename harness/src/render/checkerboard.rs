@@ -20,7 +20,8 @@ use glam::Vec2;
 use super::graph::{Graph, PassKind, Plan, TextureDesc};
 use super::scene::{SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FORMAT};
 use super::technique::{
-    allocate, compute_pipeline, record_scene_pass, FrameInfo, Technique, Unsupported,
+    allocate, compute_pipeline, placeholder_texture, record_scene_pass, FrameInfo, Technique,
+    Unsupported,
 };
 use super::timers::Timers;
 use crate::gpu::Gpu;
@@ -264,22 +265,8 @@ impl Checkerboard {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let dummy = (!use_velocity).then(|| {
-            device.create_texture(&wgpu::TextureDescriptor {
-                label: Some("no velocity"),
-                size: wgpu::Extent3d {
-                    width: 1,
-                    height: 1,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: COLOR_FORMAT,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
-            })
-        });
+        let dummy =
+            (!use_velocity).then(|| placeholder_texture(device, "no velocity", COLOR_FORMAT));
         let velocity_view = match &dummy {
             Some(t) => t.create_view(&Default::default()),
             None => textures["velocity"].create_view(&Default::default()),

@@ -30,7 +30,10 @@ use std::collections::HashMap;
 
 use super::graph::{Graph, PassKind, Plan, TextureDesc};
 use super::scene::{SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FORMAT};
-use super::technique::{allocate_with, compute_pipeline, FrameInfo, Technique};
+use super::technique::{
+    allocate_with, compute_pipeline, placeholder_texture, record_scene_pass_on, FrameInfo,
+    Technique,
+};
 use super::timers::Timers;
 use crate::gpu::Gpu;
 use crate::technique::Variant;
@@ -313,22 +316,7 @@ impl Checkerboard2x2 {
         let textures = allocate_with(device, &plan, wgpu::TextureUsages::COPY_DST);
         draw_checks(gpu, &textures["depth_white"], &textures["depth_black"]);
 
-        let dummy = |format: wgpu::TextureFormat| {
-            device.create_texture(&wgpu::TextureDescriptor {
-                label: Some("no history"),
-                size: wgpu::Extent3d {
-                    width: 1,
-                    height: 1,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
-            })
-        };
+        let dummy = |format| placeholder_texture(device, "no history", format);
         let mut dummies = Vec::new();
         // Per pair: [current view, history view] for parity 0; swapped for parity 1.
         let mut pair_views: Vec<[wgpu::TextureView; 2]> = Vec::new();
@@ -457,7 +445,6 @@ impl Technique for Checkerboard2x2 {
         let parity = (frame.index & 1) as usize;
         // One view serves both render passes: no jitter, full resolution.
         scene.write_view(&gpu.queue, 0, &View::whole(frame.time, frame.prev_time));
-        let clear = scene.clear_color();
         let checks = [&self.textures["depth_white"], &self.textures["depth_black"]];
         let [scene_color, depth, motion, motion_depth] = &self.views[parity];
         // 5.3.6: the scene depth starts as this frame's check pattern ...
@@ -468,16 +455,15 @@ impl Technique for Checkerboard2x2 {
             checks[parity],
             self.pair_texture(1, parity),
         );
-        record_masked_pass(
+        record_scene_pass_on(
             gpu,
             scene,
             timers,
             encoder,
-            "scene",
+            ("scene", 0, ScenePipeline::Forward { samples: 1 }),
             scene_color,
             depth,
-            clear,
-            ScenePipeline::Forward { samples: 1 },
+            wgpu::LoadOp::Load,
         );
         // ... and the motion depth as the other one (the inverse mask).
         copy_depth(
@@ -487,16 +473,15 @@ impl Technique for Checkerboard2x2 {
             checks[1 - parity],
             &self.textures["motion_depth"],
         );
-        record_masked_pass(
+        record_scene_pass_on(
             gpu,
             scene,
             timers,
             encoder,
-            "motion",
+            ("motion", 0, ScenePipeline::Velocity),
             motion,
             motion_depth,
-            wgpu::Color::TRANSPARENT,
-            ScenePipeline::Velocity,
+            wgpu::LoadOp::Load,
         );
         let (near, far) = scene.near_far();
         let params = FrameParams {
@@ -590,52 +575,5 @@ fn copy_depth(
 ) {
     let q = timers.begin_encoder(name, encoder);
     encoder.copy_texture_to_texture(src.as_image_copy(), dst.as_image_copy(), src.size());
-    timers.end(encoder, q);
-}
-
-/// A scene-shader pass on a pre-conditioned depth buffer: depth loaded (not cleared), colour
-/// cleared; timed and its fragment invocations counted.
-#[allow(clippy::too_many_arguments)]
-fn record_masked_pass(
-    gpu: &Gpu,
-    scene: &mut SceneGpu,
-    timers: &Timers,
-    encoder: &mut wgpu::CommandEncoder,
-    name: &'static str,
-    color_view: &wgpu::TextureView,
-    depth_view: &wgpu::TextureView,
-    clear: wgpu::Color,
-    kind: ScenePipeline,
-) {
-    let pipeline = scene.pipeline(&gpu.device, kind).clone();
-    let q = timers.begin(name, encoder);
-    {
-        let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some(name),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: color_view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(clear),
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: depth_view,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Load,
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: None,
-            }),
-            timestamp_writes: q.render_pass_timestamp_writes(),
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
-        timers.begin_stats(&mut rp, name);
-        scene.draw(&mut rp, &pipeline, 0);
-        timers.end_stats(&mut rp, name);
-    }
     timers.end(encoder, q);
 }

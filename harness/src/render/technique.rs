@@ -396,6 +396,31 @@ pub fn record_scene_pass(
     slot: u32,
     kind: ScenePipeline,
 ) {
+    record_scene_pass_on(
+        gpu,
+        scene,
+        timers,
+        encoder,
+        (name, slot, kind),
+        color_view,
+        depth_view,
+        wgpu::LoadOp::Clear(0.0),
+    );
+}
+
+/// [`record_scene_pass`] with the depth buffer's load op: `Load` draws over a pre-conditioned
+/// depth buffer (checkerboard-2x2's masks), `Clear(0.0)` starts from the far plane (reversed-Z).
+#[allow(clippy::too_many_arguments)]
+pub fn record_scene_pass_on(
+    gpu: &Gpu,
+    scene: &mut SceneGpu,
+    timers: &Timers,
+    encoder: &mut wgpu::CommandEncoder,
+    (name, slot, kind): (&'static str, u32, ScenePipeline),
+    color_view: &wgpu::TextureView,
+    depth_view: &wgpu::TextureView,
+    depth_load: wgpu::LoadOp<f32>,
+) {
     // Velocity targets hold motion, not colour: nothing drawn means no motion.
     let clear = match kind {
         ScenePipeline::Velocity => wgpu::Color::TRANSPARENT,
@@ -418,7 +443,7 @@ pub fn record_scene_pass(
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                 view: depth_view,
                 depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(0.0),
+                    load: depth_load,
                     store: wgpu::StoreOp::Store,
                 }),
                 stencil_ops: None,
@@ -432,6 +457,29 @@ pub fn record_scene_pass(
         timers.end_stats(&mut rp, name);
     }
     timers.end(encoder, q);
+}
+
+/// A 1x1 texture bound where a technique's optional input (a history, a velocity buffer) is not
+/// kept, so one bind group layout serves with and without it.
+pub fn placeholder_texture(
+    device: &wgpu::Device,
+    label: &str,
+    format: wgpu::TextureFormat,
+) -> wgpu::Texture {
+    device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: 1,
+            height: 1,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING,
+        view_formats: &[],
+    })
 }
 
 /// A compute pipeline with an automatic layout from WGSL `source`.
