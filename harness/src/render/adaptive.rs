@@ -247,27 +247,15 @@ impl Adaptive {
                     (4, rates_view.clone()),
                     (5, view(COLORS[p])),
                 ];
-                let mut entries = vec![
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: shade_uniforms.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 6,
-                        resource: counters.as_entire_binding(),
-                    },
-                ];
-                for (binding, v) in &views {
-                    entries.push(wgpu::BindGroupEntry {
-                        binding: *binding,
-                        resource: wgpu::BindingResource::TextureView(v),
-                    });
-                }
-                device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("shade"),
-                    layout: &shade_layout,
-                    entries: &entries,
-                })
+                let views: Vec<(u32, &wgpu::TextureView)> =
+                    views.iter().map(|(b, v)| (*b, v)).collect();
+                super::technique::bind_group(
+                    device,
+                    "shade",
+                    &shade_layout,
+                    &[(0, &shade_uniforms), (6, &counters)],
+                    &views,
+                )
             })
             .collect();
 
@@ -295,21 +283,9 @@ impl Adaptive {
                     (5, view(STATES[cur])),
                     (6, view(raw)),
                 ];
-                let mut entries = vec![wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: uniforms.as_entire_binding(),
-                }];
-                for (b, v) in &views {
-                    entries.push(wgpu::BindGroupEntry {
-                        binding: *b,
-                        resource: wgpu::BindingResource::TextureView(v),
-                    });
-                }
-                device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("rates"),
-                    layout: &layout,
-                    entries: &entries,
-                })
+                let views: Vec<(u32, &wgpu::TextureView)> =
+                    views.iter().map(|(b, v)| (*b, v)).collect();
+                super::technique::bind_group(device, "rates", &layout, &[(0, &uniforms)], &views)
             };
             let bind_groups = [bind_group(0), bind_group(1)];
             let filter = params.neighbour_filter.then(|| {

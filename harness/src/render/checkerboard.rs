@@ -297,21 +297,9 @@ impl Checkerboard {
             };
             views.push((9, velocity_view.clone()));
             views.push((10, output_view.clone()));
-            let mut entries: Vec<wgpu::BindGroupEntry> = vec![wgpu::BindGroupEntry {
-                binding: 0,
-                resource: params.as_entire_binding(),
-            }];
-            for (binding, v) in &views {
-                entries.push(wgpu::BindGroupEntry {
-                    binding: *binding,
-                    resource: wgpu::BindingResource::TextureView(v),
-                });
-            }
-            device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("reconstruct"),
-                layout: &layout,
-                entries: &entries,
-            })
+            let views: Vec<(u32, &wgpu::TextureView)> =
+                views.iter().map(|(b, v)| (*b, v)).collect();
+            super::technique::bind_group(device, "reconstruct", &layout, &[(0, &params)], &views)
         };
         let bind_groups = [bind_group(0), bind_group(1)];
         let whole = |name: &str| textures[name].create_view(&Default::default());

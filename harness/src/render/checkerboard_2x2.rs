@@ -219,21 +219,18 @@ impl Reconstitution {
             b.history_motion,
             b.output,
         ];
-        let mut entries = vec![wgpu::BindGroupEntry {
-            binding: 0,
-            resource: self.params.as_entire_binding(),
-        }];
-        for (i, v) in views.iter().enumerate() {
-            entries.push(wgpu::BindGroupEntry {
-                binding: i as u32 + 1,
-                resource: wgpu::BindingResource::TextureView(v),
-            });
-        }
-        device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("reconstitute"),
-            layout: &self.pipeline.get_bind_group_layout(0),
-            entries: &entries,
-        })
+        let views: Vec<(u32, &wgpu::TextureView)> = views
+            .iter()
+            .enumerate()
+            .map(|(i, v)| (i as u32 + 1, *v))
+            .collect();
+        super::technique::bind_group(
+            device,
+            "reconstitute",
+            &self.pipeline.get_bind_group_layout(0),
+            &[(0, &self.params)],
+            &views,
+        )
     }
 
     /// Writes this frame's parameters (ordered before the next submission).

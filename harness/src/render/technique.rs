@@ -482,6 +482,32 @@ pub fn placeholder_texture(
     })
 }
 
+/// A bind group of whole buffers and texture views, each at its binding number.
+pub fn bind_group(
+    device: &wgpu::Device,
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    buffers: &[(u32, &wgpu::Buffer)],
+    views: &[(u32, &wgpu::TextureView)],
+) -> wgpu::BindGroup {
+    let mut entries: Vec<wgpu::BindGroupEntry> = buffers
+        .iter()
+        .map(|(binding, b)| wgpu::BindGroupEntry {
+            binding: *binding,
+            resource: b.as_entire_binding(),
+        })
+        .collect();
+    entries.extend(views.iter().map(|(binding, v)| wgpu::BindGroupEntry {
+        binding: *binding,
+        resource: wgpu::BindingResource::TextureView(v),
+    }));
+    device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(label),
+        layout,
+        entries: &entries,
+    })
+}
+
 /// A compute pipeline with an automatic layout from WGSL `source`.
 pub fn compute_pipeline(
     device: &wgpu::Device,
