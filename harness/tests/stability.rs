@@ -2,8 +2,9 @@
 //! spread by checkerboard and is caught where it is (upscale's filter), sequences render the same
 //! twice, and the error is back at the shot's steady level 2 frames after a camera cut.
 
+mod common;
+
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use tessera_results::ScenarioResult;
 
@@ -11,28 +12,8 @@ fn scenarios() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios")
 }
 
-/// Runs `tessera run file` and returns the exit code and the scenario's result.
 fn run(file: &Path) -> (i32, ScenarioResult, String) {
-    let out = tempfile::tempdir().unwrap();
-    let o = Command::new(env!("CARGO_BIN_EXE_tessera"))
-        .args(["run", file.to_str().unwrap(), "--quiet", "--out"])
-        .arg(out.path())
-        .output()
-        .unwrap();
-    let stdout = String::from_utf8_lossy(&o.stdout).into_owned();
-    let run_dir = std::fs::read_dir(out.path())
-        .unwrap()
-        .next()
-        .expect("a run folder")
-        .unwrap()
-        .path();
-    let files = tessera_results::layout::scenario_files(&run_dir).unwrap();
-    let text = std::fs::read_to_string(&files[0]).unwrap();
-    (
-        o.status.code().unwrap_or(-1),
-        serde_json::from_str(&text).unwrap(),
-        stdout,
-    )
+    common::run_file(file)
 }
 
 #[test]

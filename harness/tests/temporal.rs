@@ -2,7 +2,7 @@
 //! error with the renderer's exact motion is zero for the reference itself and not for a
 //! technique that changes differently; HDR-FLIP uses one exposure range per reference frame.
 
-use std::process::Command;
+mod common;
 
 use tessera_results::ScenarioResult;
 
@@ -50,21 +50,9 @@ fn run(src: &str) -> ScenarioResult {
     let dir = tempfile::tempdir().unwrap();
     let f = dir.path().join("pan.toml");
     std::fs::write(&f, src).unwrap();
-    let out = dir.path().join("out");
-    let o = Command::new(env!("CARGO_BIN_EXE_tessera"))
-        .args(["run", f.to_str().unwrap(), "--quiet", "--out"])
-        .arg(&out)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stdout));
-    let run_dir = std::fs::read_dir(&out)
-        .unwrap()
-        .next()
-        .unwrap()
-        .unwrap()
-        .path();
-    let file = &tessera_results::layout::scenario_files(&run_dir).unwrap()[0];
-    serde_json::from_str(&std::fs::read_to_string(file).unwrap()).unwrap()
+    let (code, result, stdout) = common::run_file(&f);
+    assert_eq!(code, 0, "{stdout}");
+    result
 }
 
 fn metric<'a>(

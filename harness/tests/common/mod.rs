@@ -89,3 +89,28 @@ target = [0, 0.4, 0]
 [[techniques]]
 technique = "native"
 "#;
+
+/// Runs `tessera run FILE --quiet` into a temporary folder: the exit code, the scenario's result
+/// file and stdout.
+pub fn run_file(file: &Path) -> (i32, tessera_results::ScenarioResult, String) {
+    let out = tempfile::tempdir().unwrap();
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_tessera"))
+        .args(["run", file.to_str().unwrap(), "--quiet", "--out"])
+        .arg(out.path())
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&o.stdout).into_owned();
+    let run_dir = std::fs::read_dir(out.path())
+        .unwrap()
+        .next()
+        .unwrap_or_else(|| panic!("no run folder: {stdout}"))
+        .unwrap()
+        .path();
+    let files = tessera_results::layout::scenario_files(&run_dir).unwrap();
+    let text = std::fs::read_to_string(&files[0]).unwrap();
+    (
+        o.status.code().unwrap_or(-1),
+        serde_json::from_str(&text).unwrap(),
+        stdout,
+    )
+}
