@@ -29,19 +29,7 @@ fn vs_gbuffer(
     @builtin(instance_index) object: u32,
 ) -> GBufferVs {
     let v = transform(position, normal, object);
-    let o = objects[object];
-    // The ground quad follows the camera while its pattern stays in world space: what is seen
-    // there moves as the world does, so its motion comes from this frame's model matrix.
-    var prev_model = o.prev_model;
-    if abs(o.emissive.a - 1.0) < 0.5 {
-        prev_model = o.model;
-    }
-    var previous = frame.prev_view_proj * prev_model * vec4<f32>(position, 1.0);
-    // Nothing moved (still camera, object not animated): exactly zero motion, as `vs_velocity`
-    // (the two products differ by rounding on some GPUs).
-    if frame.counts.w == 1u && o.emissive.a < 1.5 {
-        previous = v.clip;
-    }
+    let previous = previous_clip(position, object, v.clip, is_still(object));
     return GBufferVs(v.clip, v.rel_pos, v.normal, v.local, v.object, v.clip, previous);
 }
 
@@ -94,14 +82,7 @@ struct GBufferMotion {
 @fragment
 fn fs_gbuffer_motion(in: GBufferVs) -> GBufferMotion {
     let g = gbuffer(in);
-    let size = frame.counts.yz;
-    let ndc = in.current.xy / in.current.w;
-    let prev = in.previous.xy / in.previous.w;
-    var motion = (ndc - prev) * 0.5 * vec2<f32>(f32(size.x), -f32(size.y));
-    // Exactly zero where nothing moved (see `vs_velocity`: rounding survives equal inputs).
-    if frame.counts.w == 1u && objects[in.object].emissive.a < 1.5 {
-        motion = vec2<f32>(0.0);
-    }
+    let motion = screen_motion(in.current, in.previous, is_still(in.object));
     return GBufferMotion(
         g.position,
         g.normal,

@@ -261,23 +261,8 @@ fn vs_velocity(
     let o = objects[object];
     var out: VelocityOut;
     out.current = frame.view_proj * o.model * vec4<f32>(position, 1.0);
-    // The ground's quad follows the camera but its pattern is anchored in the world: the point seen
-    // now was at the same world position last frame (model, not prev_model), so its motion is the
-    // camera's. Without this the ground's motion would be the quad's (zero on a pan).
-    var prev_model = o.prev_model;
-    if abs(o.emissive.a - 1.0) < 0.5 {
-        prev_model = o.model;
-    }
-    out.previous = frame.prev_view_proj * prev_model * vec4<f32>(position, 1.0);
-    // Nothing moved (still camera, object not animated): the motion is exactly zero. Computing it
-    // gives rounding noise on some GPUs, even from two equal products (on an H100: between 1e-7
-    // and 1e-5 px, enough to switch on checkerboard-2x2's conditional clamp, threshold 1e-7 px, in
-    // a static scene; the compiler may contract `(a - b) * k` into `a * k - b * k`), so the
-    // fragment shader writes zero for it explicitly.
-    let still = frame.counts.w == 1u && o.emissive.a < 1.5;
-    if still {
-        out.previous = out.current;
-    }
+    let still = is_still(object);
+    out.previous = previous_clip(position, object, out.current, still);
     out.still = select(0u, 1u, still);
     out.clip = out.current;
     out.dynamic_object = select(0u, 1u, o.emissive.a > 1.5);
@@ -286,12 +271,35 @@ fn vs_velocity(
 
 @fragment
 fn fs_velocity(in: VelocityOut) -> @location(0) vec4<f32> {
-    let size = frame.counts.yz;
-    let ndc = in.current.xy / in.current.w;
-    let prev = in.previous.xy / in.previous.w;
-    var motion = (ndc - prev) * 0.5 * vec2<f32>(f32(size.x), -f32(size.y));
-    if in.still == 1u {
-        motion = vec2<f32>(0.0);
-    }
+    let motion = screen_motion(in.current, in.previous, in.still == 1u);
     return vec4<f32>(motion, f32(in.dynamic_object), in.previous.z / in.previous.w);
+}
+
+// Motion, shared by the velocity pass and adaptive shading's G-buffer.
+//
+// Nothing moved (still camera, object not animated): the motion is exactly zero. Computing it
+// gives rounding noise on some GPUs, even from two equal products (on an H100: between 1e-7 and
+// 1e-5 px, enough to switch on checkerboard-2x2's conditional clamp, threshold 1e-7 px, in a static
+// scene; the compiler may contract `(a - b) * k` into `a * k - b * k`), so it is zeroed explicitly.
+fn is_still(object: u32) -> bool {
+    return frame.counts.w == 1u && objects[object].emissive.a < 1.5;
+}
+
+// A vertex's clip position in the previous frame (`current` itself where nothing moved).
+fn previous_clip(position: vec3<f32>, object: u32, current: vec4<f32>, still: bool) -> vec4<f32> {
+    if still {
+        return current;
+    }
+    return frame.prev_view_proj * objects[object].prev_model * vec4<f32>(position, 1.0);
+}
+
+// Screen motion in pixels (x right, y down) from the previous clip position to the current one.
+fn screen_motion(current: vec4<f32>, previous: vec4<f32>, still: bool) -> vec2<f32> {
+    if still {
+        return vec2<f32>(0.0);
+    }
+    let size = frame.counts.yz;
+    let ndc = current.xy / current.w;
+    let prev = previous.xy / previous.w;
+    return (ndc - prev) * 0.5 * vec2<f32>(f32(size.x), -f32(size.y));
 }

@@ -339,13 +339,18 @@ impl SceneGpu {
         };
         let mut objects = Vec::new();
         if let Some(g) = &self.scenario.scene.ground {
-            // The quad follows the camera in x and z; the pattern is anchored in world space.
-            let m = DMat4::from_translation(DVec3::new(eye.x, g.height as f64, eye.z));
-            let prev_eye = self.scenario.camera.pose_at(prev_time).position;
-            let pm = DMat4::from_translation(DVec3::new(prev_eye.x, g.height as f64, prev_eye.z));
+            // The quad follows the camera in x and z; the pattern is anchored in world space, so
+            // the point seen on it now was at the same world position last frame: its previous
+            // model is this frame's (motion passes then give the ground the camera's motion, not
+            // the quad's, which is zero on a pan).
+            let m = rel(DMat4::from_translation(DVec3::new(
+                eye.x,
+                g.height as f64,
+                eye.z,
+            )));
             objects.push(GpuObject {
-                model: rel(m),
-                prev_model: rel(pm),
+                model: m,
+                prev_model: m,
                 color: [1.0, 1.0, 1.0, 0.05],
                 emissive: [0.0, 0.0, 0.0, 1.0],
                 flags: [0.0; 4],
