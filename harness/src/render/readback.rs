@@ -17,6 +17,8 @@ pub struct CpuFrame {
     pub image: HdrImage,
     /// NaN or infinite values among the R, G and B channels.
     pub non_finite: u64,
+    /// The pixels with such a value, one bit each (row-major); `None` when there are none.
+    pub non_finite_mask: Option<Vec<u64>>,
 }
 
 impl Readback {
@@ -76,6 +78,7 @@ impl Readback {
         rx.recv().unwrap_or(Err(wgpu::BufferAsyncError))?;
         let mut data = Vec::with_capacity(self.width as usize * self.height as usize * 3);
         let mut non_finite = 0u64;
+        let mut mask: Vec<u64> = Vec::new();
         {
             let mapped = slice
                 .get_mapped_range()
@@ -84,13 +87,22 @@ impl Readback {
                 let start = y * self.padded_row as usize;
                 let row: &[half::f16] =
                     bytemuck::cast_slice(&mapped[start..start + self.width as usize * 8]);
-                for px in row.chunks_exact(4) {
+                for (x, px) in row.chunks_exact(4).enumerate() {
+                    let before = non_finite;
                     for c in &px[..3] {
                         let v = c.to_f32();
                         if !v.is_finite() {
                             non_finite += 1;
                         }
                         data.push(v);
+                    }
+                    if non_finite != before {
+                        let i = y * self.width as usize + x;
+                        if mask.is_empty() {
+                            mask =
+                                vec![0; (self.width as usize * self.height as usize).div_ceil(64)];
+                        }
+                        mask[i / 64] |= 1 << (i % 64);
                     }
                 }
             }
@@ -103,6 +115,7 @@ impl Readback {
                 data,
             },
             non_finite,
+            non_finite_mask: (!mask.is_empty()).then_some(mask),
         })
     }
 }

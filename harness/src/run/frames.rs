@@ -250,9 +250,7 @@ pub fn render(
             rendered
                 .extras
                 .push(technique.frame_extras(gpu, &frame.image, saved));
-            rendered
-                .non_finite_masks
-                .push(non_finite_mask(&frame.image));
+            rendered.non_finite_masks.push(frame.non_finite_mask);
             if index + 1 == scenario.total_frames() {
                 rendered.deterministic = timed_hash.map(|h| h == image_hash(&frame.image));
             }
@@ -293,31 +291,4 @@ fn image_hash(image: &HdrImage) -> u64 {
         v.to_bits().hash(&mut h);
     }
     h.finish()
-}
-
-/// Pixels of an RGB image with a non-finite channel, one bit each; `None` when there are none.
-pub fn non_finite_mask(image: &HdrImage) -> Option<Vec<u64>> {
-    let pixels = image.data.len() / 3;
-    let mut mask = vec![0u64; pixels.div_ceil(64)];
-    let mut any = false;
-    for (i, px) in image.data.chunks_exact(3).enumerate() {
-        if px.iter().any(|v| !v.is_finite()) {
-            mask[i / 64] |= 1 << (i % 64);
-            any = true;
-        }
-    }
-    any.then_some(mask)
-}
-
-/// Pixels set in `mask` but not in `reference` (the non-finite pixels a technique added).
-pub fn spread_pixels(mask: Option<&[u64]>, reference: Option<&[u64]>) -> u64 {
-    match (mask, reference) {
-        (None, _) => 0,
-        (Some(m), None) => m.iter().map(|w| w.count_ones() as u64).sum(),
-        (Some(m), Some(r)) => m
-            .iter()
-            .zip(r.iter().chain(std::iter::repeat(&0)))
-            .map(|(a, b)| (a & !b).count_ones() as u64)
-            .sum(),
-    }
 }

@@ -127,21 +127,15 @@ pub fn run(
             reference = Some(Ok(ReferenceFrames::new(
                 rendered.frames,
                 rendered.hdr_frames,
-                rendered.non_finite_masks.clone(),
+                rendered.non_finite_masks,
             )));
-            (None, None, rendered.non_finite_masks)
+            (None, None, None)
         } else {
             (
                 Some(rendered.frames),
                 Some(rendered.hdr_frames),
-                rendered.non_finite_masks,
+                Some(rendered.non_finite_masks),
             )
-        };
-        let rendered = Rendered {
-            frames: Vec::new(),
-            hdr_frames: Vec::new(),
-            non_finite_masks: masks,
-            ..rendered
         };
         if needs_reference {
             match reference.as_ref() {
@@ -167,18 +161,31 @@ pub fn run(
             }
         }
         add_extras(&mut result, &rendered.extras, scenario, &image_dir, run_dir);
-        let reference_view = match reference.as_ref() {
-            Some(Ok(r)) if needs_reference => Some(stability::ReferenceView {
-                frames: &r.frames,
-                masks: &r.masks,
-            }),
+        // The native reference's own frames and masks are the reference's.
+        let reference_ok = match reference.as_ref() {
+            Some(Ok(r)) if needs_reference => Some(r),
             _ => None,
         };
-        let own = frames
-            .as_deref()
-            .or(reference_view.as_ref().map(|r| r.frames))
-            .unwrap_or(&[]);
-        result.stability = Some(stability::check(scenario, &rendered, own, reference_view));
+        let own = stability::Frames {
+            frames: frames
+                .as_deref()
+                .or(reference_ok.map(|r| r.frames.as_slice()))
+                .unwrap_or(&[]),
+            masks: masks
+                .as_deref()
+                .or(reference_ok.map(|r| r.masks.as_slice()))
+                .unwrap_or(&[]),
+        };
+        let reference_view = reference_ok.map(|r| stability::Frames {
+            frames: &r.frames,
+            masks: &r.masks,
+        });
+        result.stability = Some(stability::check(
+            scenario,
+            own,
+            rendered.deterministic,
+            reference_view,
+        ));
         results.push(result);
     }
     // Reference images once per scenario, next to the variants'.

@@ -6,7 +6,7 @@
 use tessera_metrics::Rgb8Image;
 use tessera_results::{CutRecovery, Stability};
 
-use super::frames::{history_valid, spread_pixels, Rendered};
+use super::frames::history_valid;
 use crate::scenario::Scenario;
 
 /// How far (in PSNR dB) the second frame after a cut may stay below the steady level.
@@ -66,30 +66,32 @@ pub fn cut_recovery(mse: &[f64], cuts: &[u32]) -> Vec<CutRecovery> {
         .collect()
 }
 
-/// What a reference render leaves for the stability checks of the variants diffed against it.
-pub struct ReferenceView<'a> {
+/// A render's measured frames and, per frame, its non-finite pixels (bit per pixel; `None` for a
+/// frame without any).
+pub struct Frames<'a> {
     pub frames: &'a [Rgb8Image],
     pub masks: &'a [Option<Vec<u64>>],
 }
 
 /// The stability record of one rendered variant. `reference` is `None` without a reference render
 /// (then spread and cut recovery are not measured).
+/// `deterministic`: whether the second render of the sequence ended on the same bits.
 pub fn check(
     scenario: &Scenario,
-    rendered: &Rendered,
-    frames: &[Rgb8Image],
-    reference: Option<ReferenceView<'_>>,
+    own: Frames<'_>,
+    deterministic: Option<bool>,
+    reference: Option<Frames<'_>>,
 ) -> Stability {
-    let non_finite_pixels = rendered
-        .non_finite_masks
+    let non_finite_pixels = own
+        .masks
         .iter()
         .flatten()
         .map(|m| m.iter().map(|w| w.count_ones() as u64).sum::<u64>())
         .sum();
     let (spread, cuts) = match reference {
         Some(r) => {
-            let spread = rendered
-                .non_finite_masks
+            let spread = own
+                .masks
                 .iter()
                 .enumerate()
                 .map(|(i, m)| {
@@ -100,7 +102,8 @@ pub fn check(
             let cuts = if cut_list.is_empty() {
                 Vec::new()
             } else {
-                let mse: Vec<f64> = frames
+                let mse: Vec<f64> = own
+                    .frames
                     .iter()
                     .zip(r.frames)
                     .map(|(t, r)| tessera_metrics::mse_rgb(r, t).unwrap_or(f64::INFINITY))
@@ -114,8 +117,21 @@ pub fn check(
     Stability {
         non_finite_pixels,
         spread_pixels: spread,
-        deterministic: rendered.deterministic,
+        deterministic,
         cuts,
+    }
+}
+
+/// Pixels set in `mask` but not in `reference` (the non-finite pixels a technique added).
+pub fn spread_pixels(mask: Option<&[u64]>, reference: Option<&[u64]>) -> u64 {
+    match (mask, reference) {
+        (None, _) => 0,
+        (Some(m), None) => m.iter().map(|w| w.count_ones() as u64).sum(),
+        (Some(m), Some(r)) => m
+            .iter()
+            .zip(r.iter().chain(std::iter::repeat(&0)))
+            .map(|(a, b)| (a & !b).count_ones() as u64)
+            .sum(),
     }
 }
 
