@@ -195,13 +195,14 @@ enum Resolve {
 }
 
 /// Forward rendering at some resolution, optionally followed by a resampling compute pass.
-struct Forward {
+pub struct Forward {
     plan: Plan,
     textures: HashMap<&'static str, wgpu::Texture>,
     resample: Option<(wgpu::ComputePipeline, wgpu::BindGroup, [u32; 2])>,
     /// The scene pass's colour and depth targets, made once.
     scene_views: (wgpu::TextureView, wgpu::TextureView),
-    output: &'static str,
+    /// What the scene pass draws: shaded colour, or (`velocity_only`) screen motion.
+    kind: ScenePipeline,
 }
 
 /// The pass graph of forward rendering at `width` x `height` with `resolve`.
@@ -250,7 +251,6 @@ fn forward_graph(width: u32, height: u32, resolve: Resolve) -> Plan {
 impl Forward {
     fn new(gpu: &Gpu, width: u32, height: u32, resolve: Resolve) -> Forward {
         let plan = forward_graph(width, height, resolve);
-        let output = "color";
         let textures = allocate(&gpu.device, &plan);
         let resample = match resolve {
             Resolve::None => None,
@@ -287,8 +287,22 @@ impl Forward {
             textures,
             resample,
             scene_views,
-            output,
+            kind: ScenePipeline::Forward { samples: 1 },
         }
+    }
+
+    /// The velocity pass alone at output resolution (the `tde` metric's exact motion): `output()`
+    /// is the motion target, [`Forward::depth`] its depth.
+    pub fn velocity_only(gpu: &Gpu, width: u32, height: u32) -> Forward {
+        Forward {
+            kind: ScenePipeline::Velocity,
+            ..Forward::new(gpu, width, height, Resolve::None)
+        }
+    }
+
+    /// The scene pass's depth target.
+    pub fn depth(&self) -> &wgpu::Texture {
+        &self.textures[self.plan.passes[0].writes[1]]
     }
 }
 
@@ -298,7 +312,7 @@ impl Technique for Forward {
     }
 
     fn output(&self) -> &wgpu::Texture {
-        &self.textures[self.output]
+        &self.textures["color"]
     }
 
     fn record(
@@ -320,7 +334,7 @@ impl Technique for Forward {
             &self.scene_views.0,
             &self.scene_views.1,
             0,
-            ScenePipeline::Forward { samples: 1 },
+            self.kind,
         );
         if let Some((pipeline, bind_group, [w, h])) = &self.resample {
             let name = self.plan.passes[1].name;

@@ -8,10 +8,9 @@
 
 use super::frames::{history_valid, submit_frame};
 use crate::gpu::Gpu;
-use crate::render::graph::{Graph, PassKind, Plan, TextureDesc};
 use crate::render::readback::read_texture;
-use crate::render::scene::{SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FORMAT};
-use crate::render::technique::{allocate, record_scene_pass, FrameInfo, Technique};
+use crate::render::scene::SceneGpu;
+use crate::render::technique::{Forward, Technique};
 use crate::render::timers::Timers;
 use crate::scenario::Scenario;
 
@@ -27,79 +26,6 @@ pub struct MotionField {
     pub valid: Vec<bool>,
 }
 
-/// The velocity pass alone, at output resolution.
-struct VelocityPass {
-    plan: Plan,
-    textures: std::collections::HashMap<&'static str, wgpu::Texture>,
-    views: (wgpu::TextureView, wgpu::TextureView),
-}
-
-impl VelocityPass {
-    fn new(gpu: &Gpu, width: u32, height: u32) -> VelocityPass {
-        let tex = |format| TextureDesc {
-            format,
-            width,
-            height,
-            samples: 1,
-            layers: 1,
-        };
-        let mut g = Graph::default();
-        g.resource("velocity", tex(COLOR_FORMAT))
-            .resource("velocity_depth", tex(DEPTH_FORMAT))
-            .pass(
-                "velocity",
-                PassKind::Render,
-                &[],
-                &["velocity", "velocity_depth"],
-            )
-            .output("velocity");
-        let plan = g.plan().expect("built-in graphs are well formed");
-        let textures = allocate(&gpu.device, &plan);
-        let views = (
-            textures["velocity"].create_view(&Default::default()),
-            textures["velocity_depth"].create_view(&Default::default()),
-        );
-        VelocityPass {
-            plan,
-            textures,
-            views,
-        }
-    }
-}
-
-impl Technique for VelocityPass {
-    fn plan(&self) -> &Plan {
-        &self.plan
-    }
-
-    fn output(&self) -> &wgpu::Texture {
-        &self.textures["velocity"]
-    }
-
-    fn record(
-        &mut self,
-        gpu: &Gpu,
-        scene: &mut SceneGpu,
-        timers: &Timers,
-        encoder: &mut wgpu::CommandEncoder,
-        frame: FrameInfo,
-    ) {
-        let view = View::whole(frame.time, frame.prev_time);
-        scene.write_view(&gpu.queue, 0, &view);
-        record_scene_pass(
-            gpu,
-            scene,
-            timers,
-            encoder,
-            "velocity",
-            &self.views.0,
-            &self.views.1,
-            0,
-            ScenePipeline::Velocity,
-        );
-    }
-}
-
 /// Motion of every measured frame; `None` where the frame has no previous frame in its shot
 /// (the first frame, a camera cut).
 pub fn capture(
@@ -108,7 +34,7 @@ pub fn capture(
     scenario: &Scenario,
 ) -> Result<Vec<Option<MotionField>>, String> {
     let (w, h) = (scenario.width, scenario.height);
-    let mut pass = VelocityPass::new(gpu, w, h);
+    let mut pass = Forward::velocity_only(gpu, w, h);
     let mut timers = Timers::new(&gpu.device, &[]).map_err(|e| e.to_string())?;
     let mut out = Vec::new();
     let mut prev_depth: Option<Vec<f32>> = None;
@@ -119,7 +45,11 @@ pub fn capture(
             timeout: None,
         });
         let _ = timers.try_collect(&gpu.queue);
-        let depth = read_texture(&gpu.device, &gpu.queue, &pass.textures["velocity_depth"]);
+        if index + 1 < scenario.warmup_frames {
+            // Neither this frame's motion nor its depth (the next frame's history) is read.
+            continue;
+        }
+        let depth = read_texture(&gpu.device, &gpu.queue, pass.depth());
         if index >= scenario.warmup_frames {
             let field = match (&prev_depth, history_valid(scenario, index)) {
                 (Some(prev), true) => {
