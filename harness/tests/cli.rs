@@ -141,7 +141,7 @@ fn run_writes_results_and_gates_decide_the_exit_code() {
         .iter()
         .find(|i| i.kind == "heatmap")
         .unwrap();
-    assert_eq!(heatmap.path, "images/good/upscale_scale=0.5_-flip-f001.png");
+    assert_eq!(heatmap.path, "images/good/upscale-flip-f001.png");
     let Ok(tessera_metrics::LoadedImage::Ldr(png)) =
         tessera_metrics::load_image(&run_dir.join(&heatmap.path))
     else {
