@@ -8,7 +8,7 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 use tessera_dashboard::store::ingest::{ingest, Ingested};
 use tessera_dashboard::{
-    bundle::RunBundle, db, detect::Params, import, regressions, server, synth,
+    bundle::RunBundle, db, detect::Params, import, regressions, replay, server, synth,
 };
 
 const DEFAULT_DB: &str = "tessera-dashboard.sqlite";
@@ -47,6 +47,24 @@ enum Command {
     Detect {
         #[arg(long, env = "TESSERA_DASHBOARD_DB", default_value = DEFAULT_DB)]
         db: String,
+    },
+    /// Replay benchmark of online detection: synthetic nightly histories made from a real run,
+    /// uploaded run by run as `POST /api/runs` stores them, scored against the injected changes
+    /// and against one batch pass (see docs/regressions.md). Exit code 1 when a target is missed.
+    Replay {
+        /// The run folder to copy (default: the committed lavapipe fixture).
+        #[arg(default_value = "dashboard/tests/fixtures/runs/20261122T030520Z-34ab2b4")]
+        template: PathBuf,
+        #[arg(long, default_value_t = 120)]
+        nights: usize,
+        /// Copies of the template's scenarios in each run.
+        #[arg(long, default_value_t = 16)]
+        scenarios: usize,
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// An empty store to replay into (default: a temporary SQLite file).
+        #[arg(long)]
+        db: Option<String>,
     },
     /// Print a run folder as the JSON body that `POST /api/runs` takes.
     Bundle { folder: PathBuf },
@@ -112,8 +130,17 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let pool = db::open(&db)?;
             let mut conn = pool.get()?;
             let series = regressions::all_series(&mut *conn)?;
-            let added = regressions::update(&mut *conn, &series, &Params::default())?;
-            println!("checked {} series; {added} new change points", series.len());
+            let c = regressions::update_all(&mut *conn, &series, &Params::default())?;
+            println!(
+                "checked {} series: {} new alerts, {} moved, {} merged, {} withdrawn, {} confirmed, {} reinstated",
+                series.len(),
+                c.detected,
+                c.moved,
+                c.merged,
+                c.withdrawn,
+                c.confirmed,
+                c.reinstated
+            );
         }
         Command::Generate {
             template,
@@ -148,12 +175,64 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 start.elapsed().as_secs_f64() - stored
             );
         }
+        Command::Replay {
+            template,
+            nights,
+            scenarios,
+            seed,
+            db,
+        } => {
+            let dir = tempfile_dir()?;
+            let url = db.unwrap_or_else(|| dir.join("replay.sqlite").display().to_string());
+            let pool = db::open(&url)?;
+            {
+                let mut conn = pool.get()?;
+                let runs = conn.query("SELECT COUNT(*) FROM runs", &[])?[0].i64(0)?;
+                if runs > 0 {
+                    anyhow::bail!("{url} already holds {runs} runs; replay needs an empty store");
+                }
+            }
+            let template = RunBundle::read_folder(&template)?;
+            let config = replay::Config {
+                nights,
+                scenarios,
+                seed,
+            };
+            eprintln!(
+                "replaying {nights} nights x {} profiles into {}",
+                replay::PROFILES.len(),
+                pool.describe()
+            );
+            let report = replay::run(&pool, &template, &config, &Params::default())?;
+            for line in report.lines() {
+                println!("{line}");
+            }
+            for d in report.disagreements.iter().take(20) {
+                eprintln!("  {d}");
+            }
+            let _ = std::fs::remove_dir_all(&dir);
+            if !report.meets_targets() {
+                anyhow::bail!("the replay missed a target");
+            }
+        }
         Command::Bundle { folder } => {
             let bundle = RunBundle::read_folder(&folder)?;
             serde_json::to_writer(std::io::stdout().lock(), &bundle.to_upload())?;
         }
     }
     Ok(())
+}
+
+/// A fresh folder under the system's temporary directory.
+fn tempfile_dir() -> anyhow::Result<PathBuf> {
+    let dir = std::env::temp_dir().join(format!(
+        "tessera-replay-{}-{}",
+        std::process::id(),
+        chrono::Utc::now().timestamp_micros()
+    ));
+    std::fs::create_dir_all(&dir)
+        .map_err(|e| anyhow::anyhow!("cannot create {}: {e}", dir.display()))?;
+    Ok(dir)
 }
 
 fn main() -> ExitCode {
