@@ -65,6 +65,9 @@ enum Command {
         /// An empty store to replay into (default: a temporary SQLite file).
         #[arg(long)]
         db: Option<String>,
+        /// List the changes not blamed on their exact commit and the false alerts.
+        #[arg(long)]
+        verbose: bool,
     },
     /// Print a run folder as the JSON body that `POST /api/runs` takes.
     Bundle { folder: PathBuf },
@@ -181,6 +184,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             scenarios,
             seed,
             db,
+            verbose,
         } => {
             let dir = tempfile_dir()?;
             let url = db.unwrap_or_else(|| dir.join("replay.sqlite").display().to_string());
@@ -209,6 +213,14 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             }
             for d in report.disagreements.iter().take(20) {
                 eprintln!("  {d}");
+            }
+            if verbose {
+                for m in &report.misses {
+                    eprintln!("  not exact: {m}");
+                }
+                for f in &report.false_list {
+                    eprintln!("  false: {f}");
+                }
             }
             let _ = std::fs::remove_dir_all(&dir);
             if !report.meets_targets() {

@@ -302,6 +302,9 @@ pub struct Report {
     pub online_alerts: usize,
     pub batch_alerts: usize,
     pub disagreements: Vec<String>,
+    /// Eligible changes not blamed on their exact commit, and false confirmed alerts, described.
+    pub misses: Vec<String>,
+    pub false_list: Vec<String>,
     pub upload_ms: Vec<f64>,
 }
 
@@ -592,10 +595,19 @@ pub fn run(
             if near.is_some() {
                 report.found += 1;
             }
-            if let Some(a) = alerts
+            let exact = alerts
                 .iter()
-                .find(|a| a.night == t.night && a.up == (t.relative > 0.0))
-            {
+                .find(|a| a.night == t.night && a.up == (t.relative > 0.0));
+            if exact.is_none() {
+                report.misses.push(format!(
+                    "{name:?}: {:+.1}% ({:.1} sigma) at night {}, alert at {:?}",
+                    t.relative * 100.0,
+                    t.sigmas,
+                    t.night,
+                    near.map(|a| a.night)
+                ));
+            }
+            if let Some(a) = exact {
                 report.exact += 1;
                 let sid = ids[name];
                 let pk = run_of.get(&(name.0.clone(), a.night)).copied();
@@ -621,6 +633,10 @@ pub fn run(
         if !real {
             if ever_confirmed.contains(&(sid, pk)) {
                 report.false_confirmed += 1;
+                report.false_list.push(format!(
+                    "{name:?}: night {night}, {}",
+                    if up { "up" } else { "down" }
+                ));
             } else {
                 report.false_pending_only += 1;
             }
