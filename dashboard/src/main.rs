@@ -82,6 +82,13 @@ enum Command {
         scenarios: usize,
         #[arg(long, env = "TESSERA_DASHBOARD_DB", default_value = DEFAULT_DB)]
         db: String,
+        /// Then time this many further runs stored as an upload stores them (run and detection
+        /// in one transaction) and print the median and 95th percentile.
+        #[arg(long, default_value_t = 0)]
+        then_upload: u64,
+        /// Scenario copies in each timed upload (default: as many as the generated runs).
+        #[arg(long)]
+        upload_scenarios: Option<usize>,
     },
 }
 
@@ -150,9 +157,12 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             runs,
             scenarios,
             db,
+            then_upload,
+            upload_scenarios,
         } => {
             let pool = db::open(&db)?;
-            let template = synth::widen(&RunBundle::read_folder(&template)?, scenarios);
+            let base = RunBundle::read_folder(&template)?;
+            let template = synth::widen(&base, scenarios);
             let mut rng = tessera_dashboard::detect::Rng::new(1);
             let mut conn = pool.get()?;
             let start = std::time::Instant::now();
@@ -177,6 +187,29 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 touched.len(),
                 start.elapsed().as_secs_f64() - stored
             );
+            if then_upload > 0 {
+                let small = synth::widen(&base, upload_scenarios.unwrap_or(scenarios));
+                let first: u64 = conn.query("SELECT COUNT(*) FROM runs", &[])?[0].i64(0)? as u64;
+                let mut ms = Vec::new();
+                let mut series = 0;
+                for i in first..first + then_upload {
+                    let b = synth::run_from(&small, "gen", i, 1.0, 0.01, &mut rng);
+                    let t = std::time::Instant::now();
+                    let (ingested, _) =
+                        regressions::ingest_and_detect(&mut *conn, &b, &Params::default())?;
+                    ms.push(t.elapsed().as_secs_f64() * 1e3);
+                    if let Ingested::Stored { series: s, .. } = ingested {
+                        series = s.len();
+                    }
+                }
+                ms.sort_by(|a, b| a.total_cmp(b));
+                println!(
+                    "{then_upload} uploads of {} results ({series} series each): p50 {:.1} ms, p95 {:.1} ms",
+                    small.scenarios.iter().map(|s| s.results.len()).sum::<usize>(),
+                    ms[ms.len() / 2],
+                    ms[(ms.len() - 1) * 95 / 100]
+                );
+            }
         }
         Command::Replay {
             template,

@@ -18,7 +18,7 @@
 //!
 //! Not for: the statistics (see [`crate::detect`]) or triage (see [`crate::store::triage`]).
 
-use std::collections::{BTreeMap, BTreeSet};
+use std::collections::{BTreeMap, BTreeSet, HashMap};
 
 use crate::bundle::RunBundle;
 use crate::db::{transaction, Backend, Connection, Value};
@@ -71,37 +71,64 @@ pub fn points(conn: &mut dyn Connection, series_id: i64) -> Result<Vec<SeriesPoi
         .collect()
 }
 
-/// A point as detection reads it.
+/// A point as detection reads it: its run, its environment (an id from [`Environments`]) and value.
 #[derive(Clone, Debug, PartialEq)]
 pub struct WindowPoint {
     pub run_pk: i64,
-    pub environment: String,
+    pub environment: u32,
     pub value: f64,
 }
 
-/// The newest `len` points of a series, oldest first: an index range scan of `points_order`.
+/// Environment (driver, driver version, harness version) of each run, read once per run and
+/// shared by every series a detection pass reads: a point is then just a run and a value.
+#[derive(Debug, Default)]
+pub struct Environments {
+    by_run: HashMap<i64, u32>,
+    ids: HashMap<String, u32>,
+}
+
+impl Environments {
+    pub fn of(&mut self, conn: &mut dyn Connection, run_pk: i64) -> Result<u32, StoreError> {
+        if let Some(&e) = self.by_run.get(&run_pk) {
+            return Ok(e);
+        }
+        let row = conn.query(
+            "SELECT driver || ' ' || driver_info || ' / harness ' || harness_version FROM runs WHERE id = $1",
+            &[Value::Int(run_pk)],
+        )?;
+        let name = row
+            .first()
+            .map(|r| r.string(0))
+            .transpose()?
+            .unwrap_or_default();
+        let next = self.ids.len() as u32;
+        let id = *self.ids.entry(name).or_insert(next);
+        self.by_run.insert(run_pk, id);
+        Ok(id)
+    }
+}
+
+/// The newest `len` points of a series, oldest first: one range of the covering index
+/// `points_order`, whatever the length of the series.
 pub fn window(
     conn: &mut dyn Connection,
     series_id: i64,
     len: usize,
+    envs: &mut Environments,
 ) -> Result<Vec<WindowPoint>, StoreError> {
     let rows = conn.query(
-        "SELECT p.run_pk, p.value, r.driver || ' ' || r.driver_info || ' / harness ' || r.harness_version
-         FROM points p JOIN runs r ON r.id = p.run_pk
-         WHERE p.series_id = $1 ORDER BY p.ord DESC, p.run_pk DESC LIMIT $2",
+        "SELECT run_pk, value FROM points WHERE series_id = $1 ORDER BY ord DESC, run_pk DESC LIMIT $2",
         &[Value::Int(series_id), Value::Int(len as i64)],
     )?;
-    let mut pts = rows
-        .iter()
-        .map(|r| {
-            Ok(WindowPoint {
-                run_pk: r.i64(0)?,
-                value: r.f64(1)?,
-                environment: r.string(2)?,
-            })
-        })
-        .collect::<Result<Vec<_>, StoreError>>()?;
-    pts.reverse();
+    let mut pts = Vec::with_capacity(rows.len());
+    for r in rows.iter().rev() {
+        let run_pk = r.i64(0)?;
+        pts.push(WindowPoint {
+            run_pk,
+            environment: envs.of(conn, run_pk)?,
+            value: r.f64(1)?,
+        });
+    }
     Ok(pts)
 }
 
@@ -158,7 +185,7 @@ impl std::ops::AddAssign for Changes {
 /// The change points of a window with their status (pure).
 pub fn find(pts: &[WindowPoint], params: &Params) -> Vec<Found> {
     let values: Vec<f64> = pts.iter().map(|p| p.value).collect();
-    let env: Vec<&str> = pts.iter().map(|p| p.environment.as_str()).collect();
+    let env: Vec<u32> = pts.iter().map(|p| p.environment).collect();
     let analysis = analyse(&values, &env, params);
     analysis
         .change_points
@@ -317,8 +344,9 @@ pub fn update_series(
     conn: &mut dyn Connection,
     series_id: i64,
     params: &Params,
+    envs: &mut Environments,
 ) -> Result<Changes, StoreError> {
-    let pts = window(conn, series_id, params.window)?;
+    let pts = window(conn, series_id, params.window, envs)?;
     let found = find(&pts, params);
     let alerts = stored_alerts(conn, series_id)?;
     if found.is_empty() && alerts.iter().all(|a| a.status == WITHDRAWN) {
@@ -449,8 +477,9 @@ pub fn ingest_and_detect(
             let mut changes = Changes::default();
             if let Ingested::Stored { run_pk, series, .. } = &ingested {
                 lock_series_of_run(c, *run_pk)?;
+                let mut envs = Environments::default();
                 for &id in series {
-                    changes += update_series(c, id, params)?;
+                    changes += update_series(c, id, params, &mut envs)?;
                 }
             }
             Ok::<_, StoreError>((ingested, changes))
@@ -469,6 +498,7 @@ pub fn update_all(
     params: &Params,
 ) -> Result<Changes, StoreError> {
     let mut changes = Changes::default();
+    let mut envs = Environments::default();
     for chunk in series.chunks(64) {
         changes += transaction(conn, |c| {
             if c.backend() == Backend::Postgres {
@@ -481,7 +511,7 @@ pub fn update_all(
             }
             let mut ch = Changes::default();
             for &id in chunk {
-                ch += update_series(c, id, params)?;
+                ch += update_series(c, id, params, &mut envs)?;
             }
             Ok::<_, StoreError>(ch)
         })?;

@@ -531,8 +531,9 @@ pub fn run(
         })
         .collect();
     let mut batch = BTreeSet::new();
+    let mut envs = regressions::Environments::default();
     for (&id, name) in &names {
-        let pts = regressions::window(&mut *conn, id, params.window)?;
+        let pts = regressions::window(&mut *conn, id, params.window, &mut envs)?;
         for f in regressions::find(&pts, params) {
             batch.insert(AlertKey {
                 series: name.clone(),
