@@ -11,6 +11,7 @@ pub mod detect;
 pub mod html;
 pub mod import;
 pub mod regressions;
+pub mod replay;
 pub mod server;
 pub mod store;
 pub mod svg;

@@ -430,6 +430,7 @@ fn regression_summary_text() {
         note: String::new(),
         detected_at: String::new(),
         updated_at: String::new(),
+        status: "confirmed".into(),
     };
     assert_eq!(
         tessera_dashboard::server::regressions::summary(&r),

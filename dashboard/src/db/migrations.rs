@@ -110,6 +110,23 @@ CREATE TABLE regressions (
 );
 CREATE INDEX regressions_state ON regressions (state, detected_at);
 "#,
+    // Online detection (issue 12): runs ordered by commit, points carrying that order so that the
+    // newest points of a series are one covering index range, alerts with a status and a history.
+    r#"
+ALTER TABLE runs ADD COLUMN commit_time TEXT;
+ALTER TABLE points ADD COLUMN ord TEXT NOT NULL DEFAULT '';
+UPDATE points SET ord = (SELECT r.started_at || ' ' || r.started_at FROM runs r WHERE r.id = points.run_pk);
+CREATE INDEX points_order ON points (series_id, ord, run_pk, value);
+ALTER TABLE regressions ADD COLUMN status TEXT NOT NULL DEFAULT 'confirmed';
+CREATE TABLE regression_events (
+    id {id},
+    regression_id BIGINT NOT NULL REFERENCES regressions (id),
+    at TEXT NOT NULL,
+    kind TEXT NOT NULL,
+    detail TEXT NOT NULL
+);
+CREATE INDEX regression_events_alert ON regression_events (regression_id, id);
+"#,
 ];
 
 fn render(step: &str, backend: Backend) -> String {
