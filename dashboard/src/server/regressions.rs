@@ -240,7 +240,7 @@ const STYLE: &str = "<style>
 #regressions{width:100%}#regressions tbody.group>tr.head>td{background:#f3f5f8;border-top:2px solid #1d2733;padding:8px 8px 6px}
 .group h2{font-size:15px;margin:0 0 4px;font-weight:600}.group h2 a{color:#1d2733;text-decoration:none}.group h2 a:hover{text-decoration:underline}
 .meta{margin:2px 0 6px;color:#444}.meta code{background:#e8ebf0;padding:0 3px}
-.chg{display:inline-block;min-width:84px;padding:0 6px;border-radius:3px;font-weight:600;font-variant-numeric:tabular-nums;text-align:right}
+.chg{display:inline-block;white-space:nowrap;min-width:84px;padding:0 6px;border-radius:3px;font-weight:600;font-variant-numeric:tabular-nums;text-align:right}
 .chg.worse{background:#fde8e6;color:#a1140f}.chg.better{background:#e2f3e7;color:#0d6b2c}
 .count.worse{color:#a1140f;font-weight:600}.count.better{color:#0d6b2c;font-weight:600}
 .badge{display:inline-block;padding:0 7px;border-radius:9px;font-size:12px;border:1px solid #aaa;background:#fff}
@@ -654,7 +654,11 @@ pub async fn group_page(
             Ok((g, charts))
         })
         .await?;
-    let title = format!("Alert group {}", g.key);
+    let title = format!(
+        "Alert group {}..{}",
+        commit(g.commit_before.as_deref()),
+        commit(g.commit_after.as_deref())
+    );
     Ok(Html(layout(&title, "regressions", &render_group(&g, &charts))).into_response())
 }
 
@@ -681,7 +685,11 @@ pub async fn feed(
     let mut groups = state
         .db(move |c| Ok(groups::list(c, &filter, Sort::Date, usize::MAX)?))
         .await?;
-    groups.sort_by(|x, y| y.detected_at.cmp(&x.detected_at).then(x.key.cmp(&y.key)));
+    groups.sort_by(|x, y| {
+        (y.detected_at.cmp(&x.detected_at))
+            .then(y.started_at.cmp(&x.started_at))
+            .then(x.key.cmp(&y.key))
+    });
     groups.truncate(50);
     let xml = notify::atom::feed(&groups, &base_url(&state, &headers), &crate::now_rfc3339());
     Ok((

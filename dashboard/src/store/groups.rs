@@ -376,11 +376,11 @@ pub fn title(commit_after: &str, alerts: &[&Alert], code: bool) -> String {
             let largest = ms.first().map_or(0.0, |m| m.0.abs());
             let shown: Vec<String> = ms
                 .iter()
-                .take(3)
+                .take(2)
                 .map(|(v, m)| format!("{} {}", q(m), crate::html::pct(*v)))
                 .collect();
-            let more = if ms.len() > 3 {
-                format!(" and {} more", ms.len() - 3)
+            let more = if ms.len() > 2 {
+                format!(" and {} more", ms.len() - 2)
             } else {
                 String::new()
             };
