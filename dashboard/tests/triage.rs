@@ -257,7 +257,7 @@ fn bulk_triage_sets_every_alert_of_a_group_at_once() {
 
 /// Adds detection's `status` column as its migration will, unless it is already there.
 fn with_status_column(c: &mut dyn Connection) {
-    if !groups::has_status_column(c) {
+    if !groups::has_status_column(c).unwrap() {
         c.batch("ALTER TABLE regressions ADD COLUMN status TEXT NOT NULL DEFAULT 'confirmed'")
             .unwrap();
     }

@@ -217,10 +217,47 @@ impl Sort {
     }
 }
 
-/// Whether the store has detection's `status` column (added by its own migration).
-pub fn has_status_column(conn: &mut dyn Connection) -> bool {
-    conn.query("SELECT status FROM regressions WHERE 1 = 0", &[])
-        .is_ok()
+/// Whether the store has detection's `status` column (added by its own migration). Asks the
+/// catalogue, so it never fails a statement (which would abort a PostgreSQL transaction).
+pub fn has_status_column(conn: &mut dyn Connection) -> Result<bool, StoreError> {
+    let sql = match conn.backend() {
+        Backend::Sqlite => "SELECT COUNT(*) FROM pragma_table_info('regressions') WHERE name = 'status'",
+        Backend::Postgres => {
+            "SELECT COUNT(*) FROM information_schema.columns
+             WHERE table_schema = current_schema() AND table_name = 'regressions' AND column_name = 'status'"
+        }
+    };
+    Ok(conn.query(sql, &[])?[0].i64(0)? > 0)
+}
+
+/// The suite of each scenario that has alerts: the folder of its newest scenario file (one JSON
+/// read per scenario, not per alert).
+fn suites(conn: &mut dyn Connection) -> Result<BTreeMap<String, String>, StoreError> {
+    let file = match conn.backend() {
+        Backend::Sqlite => "json_extract(sr.record_json, '$.file')",
+        Backend::Postgres => "CAST(sr.record_json AS JSON) ->> 'file'",
+    };
+    let rows = conn.query(
+        &format!(
+            "SELECT sr.scenario, {file} FROM scenario_results sr
+             WHERE sr.id IN (SELECT MAX(id) FROM scenario_results
+                             WHERE scenario IN (SELECT DISTINCT s.scenario FROM regressions g JOIN series s ON s.id = g.series_id)
+                             GROUP BY scenario)"
+        ),
+        &[],
+    )?;
+    let mut out = BTreeMap::new();
+    for r in &rows {
+        let scenario = r.string(0)?;
+        let folder = r.opt_string(1)?.and_then(|f| {
+            std::path::Path::new(&f)
+                .parent()
+                .and_then(|p| p.file_name())
+                .map(|n| n.to_string_lossy().into_owned())
+        });
+        out.insert(scenario.clone(), folder.unwrap_or(scenario));
+    }
+    Ok(out)
 }
 
 /// Alerts, newest first, of one group (`only`) or of all groups.
@@ -229,15 +266,12 @@ fn alerts(
     only: Option<&(Side, Side)>,
     limit: i64,
 ) -> Result<Vec<Alert>, StoreError> {
-    let status = if has_status_column(conn) {
+    let status = if has_status_column(conn)? {
         "g.status"
     } else {
         "'confirmed'"
     };
-    let file = match conn.backend() {
-        Backend::Sqlite => "json_extract(sr.record_json, '$.file')",
-        Backend::Postgres => "CAST(sr.record_json AS JSON) ->> 'file'",
-    };
+    let suites = suites(conn)?;
     let (cb, pb) = match only.map(|k| &k.0) {
         Some(Side::Commit(c)) => (Value::from(c.as_str()), Value::Null),
         Some(Side::Run(pk)) => (Value::Null, Value::Int(*pk)),
@@ -253,10 +287,9 @@ fn alerts(
             "SELECT s.id, s.scenario, s.variant, s.adapter_id, a.name, s.measure, s.higher_is_better,
                 g.id, g.run_pk_before, rb.run_id, rb.commit_sha, g.run_pk_after, ra.run_id, ra.commit_sha,
                 ra.started_at, g.value_before, g.value_after, g.relative_change, g.confidence,
-                {status}, g.state, g.note, g.bug_url, g.updated_by, g.detected_at, g.updated_at, {file}
+                {status}, g.state, g.note, g.bug_url, g.updated_by, g.detected_at, g.updated_at
              FROM regressions g JOIN series s ON s.id = g.series_id JOIN adapters a ON a.id = s.adapter_id
              JOIN runs rb ON rb.id = g.run_pk_before JOIN runs ra ON ra.id = g.run_pk_after
-             LEFT JOIN scenario_results sr ON sr.run_pk = g.run_pk_after AND sr.scenario = s.scenario
              WHERE (CAST($1 AS TEXT) IS NULL OR rb.commit_sha = $1)
                AND (CAST($2 AS BIGINT) IS NULL OR g.run_pk_before = $2)
                AND (CAST($3 AS TEXT) IS NULL OR ra.commit_sha = $3)
@@ -265,10 +298,10 @@ fn alerts(
         ),
         &[cb, pb, ca, pa, Value::Int(limit)],
     )?;
-    rows.iter().map(alert).collect()
+    rows.iter().map(|r| alert(r, &suites)).collect()
 }
 
-fn alert(r: &Row) -> Result<Alert, StoreError> {
+fn alert(r: &Row, suites: &BTreeMap<String, String>) -> Result<Alert, StoreError> {
     let series = SeriesKey {
         id: r.i64(0)?,
         scenario: r.string(1)?,
@@ -279,14 +312,9 @@ fn alert(r: &Row) -> Result<Alert, StoreError> {
         higher_is_better: r.bool(6)?,
     };
     let relative_change = r.opt_f64(17)?.unwrap_or(f64::INFINITY);
-    let suite = r
-        .opt_string(26)?
-        .and_then(|f| {
-            std::path::Path::new(&f)
-                .parent()
-                .and_then(|p| p.file_name())
-                .map(|n| n.to_string_lossy().into_owned())
-        })
+    let suite = suites
+        .get(&series.scenario)
+        .cloned()
         .unwrap_or_else(|| series.scenario.clone());
     Ok(Alert {
         id: r.i64(7)?,

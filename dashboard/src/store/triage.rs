@@ -97,13 +97,11 @@ pub fn set_group(
 ) -> Result<usize, StoreError> {
     t.validate()?;
     let now = crate::now_rfc3339();
-    // Detection's `status` probe must not run inside the transaction (a failed statement would
-    // abort a PostgreSQL transaction), so the ids are read first and re-checked inside.
-    let ids = groups::alert_ids(conn, key)?;
-    if ids.is_empty() {
-        return Err(StoreError::NotFound(format!("alert group {key:?}")));
-    }
     transaction(conn, |c| {
+        let ids = groups::alert_ids(c, key)?;
+        if ids.is_empty() {
+            return Err(StoreError::NotFound(format!("alert group {key:?}")));
+        }
         let mut n = 0;
         for id in &ids {
             n += c.execute(
