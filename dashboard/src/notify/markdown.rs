@@ -74,7 +74,11 @@ pub fn render(g: &Group, base: &str) -> String {
         let _ = writeln!(
             out,
             "| {} {} {} | {} | {} | {} | {} | {} | {} | {} | [chart]({base}/series/{}) |",
-            if a.is_regression { "▲" } else { "▼" },
+            if a.relative_change >= 0.0 {
+                "▲"
+            } else {
+                "▼"
+            },
             pct(a.relative_change),
             if a.is_regression { "worse" } else { "better" },
             cell(&a.series.adapter),

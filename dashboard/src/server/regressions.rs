@@ -399,7 +399,11 @@ fn change_cell(a: &Alert) -> String {
     let dir = if a.is_regression { "worse" } else { "better" };
     format!(
         "<span class=\"chg {dir}\">{} {} {dir}</span>",
-        if a.is_regression { "▲" } else { "▼" },
+        if a.relative_change >= 0.0 {
+            "▲"
+        } else {
+            "▼"
+        },
         pct(a.relative_change)
     )
 }
@@ -490,6 +494,10 @@ fn alert_row(a: &Alert, b: &mut String) {
 
 const ALERT_HEADER: &str = "<tr><th>adapter</th><th>suite</th><th>scenario</th><th>variant</th><th>measure (series)</th><th class=n>before</th><th class=n>after</th><th class=n>change</th><th class=n>confidence</th><th>status</th></tr>";
 
+/// Most series listed under a group on the list page (largest changes first); its own page
+/// lists them all, so a change that moved thousands of series keeps the list fast.
+const LIST_ROWS: usize = 20;
+
 /// The list page's body.
 pub fn render(groups: &[Group], facets: &Facets, q: &GroupsQuery) -> String {
     let mut b = String::from(STYLE);
@@ -499,7 +507,7 @@ pub fn render(groups: &[Group], facets: &Facets, q: &GroupsQuery) -> String {
     let alerts: usize = groups.iter().map(|g| g.alerts.len()).sum();
     let _ = write!(
         b,
-        "<p id=count>{} group{}, {} series shown</p>",
+        "<p id=count>{} group{} with {} matching series</p>",
         groups.len(),
         if groups.len() == 1 { "" } else { "s" },
         alerts
@@ -514,15 +522,16 @@ pub fn render(groups: &[Group], facets: &Facets, q: &GroupsQuery) -> String {
         group_head(g, &mut b, true);
         b.push_str("</td></tr>");
         b.push_str(ALERT_HEADER);
-        for a in &g.alerts {
+        for a in g.alerts.iter().take(LIST_ROWS) {
             alert_row(a, &mut b);
         }
-        if g.alerts.len() < g.series_count {
+        let shown = g.alerts.len().min(LIST_ROWS);
+        if shown < g.series_count {
             let _ = write!(
                 b,
-                "<tr><td colspan=10 class=muted>{} of {} series match the filter; <a href=\"/regressions/groups/{}\">all of them</a></td></tr>",
-                g.alerts.len(),
+                "<tr><td colspan=10 class=muted>{shown} of {} series shown{}; <a href=\"/regressions/groups/{}\">all of them, with charts</a></td></tr>",
                 g.series_count,
+                if g.alerts.len() < g.series_count { " (filtered)" } else { "" },
                 enc(&g.key)
             );
         }
