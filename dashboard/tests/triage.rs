@@ -493,3 +493,27 @@ fn pending_groups_are_shown_but_not_notified_and_withdrawn_ones_hidden() {
         assert_eq!(h.got.lock().unwrap().len(), 1);
     }
 }
+
+#[test]
+fn a_queued_group_that_detection_moved_away_is_dropped_not_retried() {
+    let store = common::sqlite();
+    let h = hook(vec![500]);
+    let n = Notifier::new(store.pool.clone(), config(&h));
+    assert_eq!(n.tick(at(0)).unwrap().baseline, 0);
+    fill(&store.pool, 0, 25);
+    assert_eq!(n.tick(at(1)).unwrap().failed, 1);
+    // Detection moved or merged the alerts: the group's commit range has none left.
+    store
+        .pool
+        .get()
+        .unwrap()
+        .execute("DELETE FROM regressions", &[])
+        .unwrap();
+    let t = n.tick(at(100)).unwrap();
+    assert_eq!((t.sent, t.failed), (0, 0));
+    let d = n.deliveries().unwrap();
+    assert_eq!(d[0].state, outbox::FAILED);
+    assert!(d[0].last_error.contains("no longer exists"), "{:?}", d[0]);
+    assert_eq!(h.got.lock().unwrap().len(), 1);
+    assert_eq!(n.tick(at(1000)).unwrap(), Default::default());
+}

@@ -217,8 +217,15 @@ impl Notifier {
             };
             let outcome = match group {
                 Ok(g) => self.post(&body(&g, &self.config.public_url), &g.key),
-                // A group that detection has since moved away: nothing left to announce.
-                Err(StoreError::NotFound(_)) => Err("the group no longer exists".to_string()),
+                // A group that detection has since moved away: nothing left to announce, and
+                // nothing a retry would change.
+                Err(StoreError::NotFound(_)) => {
+                    d.state = outbox::FAILED.into();
+                    d.last_error = "the group no longer exists (its alerts moved)".into();
+                    let mut conn = self.pool.get()?;
+                    outbox::update(&mut *conn, &self.target, &d)?;
+                    continue;
+                }
                 Err(e) => return Err(e),
             };
             d.attempts += 1;
