@@ -914,6 +914,12 @@ fn regressions_page_triages_groups_with_the_token_entered_once() {
     browser.screenshot(&shots.join("alert-group.png"));
     browser.eval("document.querySelector('.charts').scrollIntoView(); return true;");
     browser.screenshot(&shots.join("alert-group-charts.png"));
+    // Better (none in this history) has a colour of its own, also inside a link.
+    let better = browser.eval(
+        "const a = document.createElement('a'); a.href = '#'; a.innerHTML = '<span class=\"chg better\">x</span>'; document.querySelector('#regressions td').append(a); return getComputedStyle(a.firstChild).color;",
+    );
+    assert_eq!(better, "rgb(13, 107, 44)");
+    assert_ne!(better, groups[0]["worse_colour"]);
     let console: Vec<String> = browser
         .console()
         .into_iter()
