@@ -10,6 +10,7 @@ pub mod db;
 pub mod detect;
 pub mod html;
 pub mod import;
+pub mod notify;
 pub mod regressions;
 pub mod replay;
 pub mod server;

@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
+use tessera_dashboard::notify::webhook;
 use tessera_dashboard::store::ingest::{ingest, Ingested};
 use tessera_dashboard::{
     bundle::RunBundle, db, detect::Params, import, regressions, replay, server, synth,
@@ -42,6 +43,20 @@ enum Command {
         /// Largest accepted upload in MiB.
         #[arg(long, default_value_t = 64)]
         max_upload_mib: usize,
+        /// The dashboard's URL as others reach it, for links in the feed, Markdown and webhook
+        /// (default: http:// and the request's Host; the webhook uses http://<listen>).
+        #[arg(long, env = "TESSERA_DASHBOARD_PUBLIC_URL")]
+        public_url: Option<String>,
+        /// POST a JSON body to this URL for each newly confirmed alert group (retried with
+        /// backoff; what was sent is kept in the store).
+        #[arg(long, env = "TESSERA_DASHBOARD_WEBHOOK_URL", hide_env_values = true)]
+        webhook_url: Option<String>,
+        /// Seconds one webhook request may take.
+        #[arg(long, default_value_t = 10)]
+        webhook_timeout_s: u64,
+        /// Seconds between two looks for newly confirmed groups.
+        #[arg(long, default_value_t = 30)]
+        webhook_poll_s: u64,
     },
     /// Re-run regression detection on every stored series.
     Detect {
@@ -113,10 +128,36 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             listen,
             token,
             max_upload_mib,
+            public_url,
+            webhook_url,
+            webhook_timeout_s,
+            webhook_poll_s,
         } => {
             let pool = db::open(&db)?;
             let mut state = server::AppState::new(pool, token.filter(|t| !t.is_empty()));
             state.max_upload_bytes = max_upload_mib << 20;
+            let public_url = public_url.filter(|u| !u.is_empty());
+            if let Some(u) = &public_url {
+                if !(u.starts_with("http://") || u.starts_with("https://")) {
+                    anyhow::bail!("--public-url must start with http:// or https://, not {u:?}");
+                }
+            }
+            state.public_url = public_url.clone();
+            if let Some(url) = webhook_url.filter(|u| !u.is_empty()) {
+                if !(url.starts_with("http://") || url.starts_with("https://")) {
+                    anyhow::bail!("--webhook-url must start with http:// or https://");
+                }
+                let base = public_url.unwrap_or_else(|| format!("http://{listen}"));
+                let mut config = webhook::Config::new(&url, &base);
+                config.timeout = std::time::Duration::from_secs(webhook_timeout_s.max(1));
+                config.poll = std::time::Duration::from_secs(webhook_poll_s.max(1));
+                let notifier = webhook::Notifier::new(state.pool.clone(), config);
+                eprintln!(
+                    "webhook: posting newly confirmed alert groups (outbox target {})",
+                    notifier.target()
+                );
+                notifier.spawn();
+            }
             if state.token.is_none() {
                 eprintln!(
                     "note: no --token or TESSERA_DASHBOARD_TOKEN: uploads and triage are refused"

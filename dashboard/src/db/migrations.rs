@@ -127,6 +127,30 @@ CREATE TABLE regression_events (
 );
 CREATE INDEX regression_events_alert ON regression_events (regression_id, id);
 "#,
+    // i12-triage: triage by alert group (a bug link and who changed an alert last, set on every
+    // alert of a group at once) and the webhook's outbox (what was sent where, so that a restart
+    // neither loses nor repeats a notification). `target` is a hash of the webhook URL, which
+    // may hold a secret.
+    r#"
+ALTER TABLE regressions ADD COLUMN bug_url TEXT NOT NULL DEFAULT '';
+ALTER TABLE regressions ADD COLUMN updated_by TEXT NOT NULL DEFAULT '';
+CREATE INDEX regressions_runs ON regressions (run_pk_after, run_pk_before);
+CREATE TABLE webhook_targets (
+    target TEXT PRIMARY KEY,
+    created_at TEXT NOT NULL
+);
+CREATE TABLE webhook_deliveries (
+    target TEXT NOT NULL REFERENCES webhook_targets (target),
+    group_key TEXT NOT NULL,
+    state TEXT NOT NULL,
+    attempts BIGINT NOT NULL,
+    next_attempt_at TEXT NOT NULL,
+    last_error TEXT NOT NULL,
+    created_at TEXT NOT NULL,
+    sent_at TEXT,
+    PRIMARY KEY (target, group_key)
+);
+"#,
 ];
 
 fn render(step: &str, backend: Backend) -> String {
