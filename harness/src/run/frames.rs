@@ -40,6 +40,16 @@ pub struct Rendered {
     pub readback_bytes: u64,
     /// The technique's extras of every measured frame ([`Technique::frame_extras`]).
     pub extras: Vec<FrameExtras>,
+    /// Per measured frame, a hash of its exact bits, when `TESSERA_FRAME_HASHES` is set (see
+    /// [`frame_hash_file`]); empty otherwise.
+    pub hashes: Vec<u64>,
+}
+
+/// Where to append every measured frame's bit hash (`<scenario> <variant> <frame> <hash>`), from the
+/// `TESSERA_FRAME_HASHES` environment variable: a check that a refactoring left every frame
+/// bit-identical, not a measure.
+pub fn frame_hash_file() -> Option<std::path::PathBuf> {
+    std::env::var_os("TESSERA_FRAME_HASHES").map(Into::into)
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -172,7 +182,9 @@ pub fn render(
         timestamps: timers.has_timestamps(),
         readback_bytes: readback.bytes(),
         extras: Vec::new(),
+        hashes: Vec::new(),
     };
+    let hash_frames = frame_hash_file().is_some();
 
     // Clock warm-up: frame 0 (which never reads history) repeated until the GPU has been busy for
     // `warmup_ms`, so that it reaches its working clocks before the first timed frame.
@@ -251,6 +263,9 @@ pub fn render(
                 .extras
                 .push(technique.frame_extras(gpu, &frame.image, saved));
             rendered.non_finite_masks.push(frame.non_finite_mask);
+            if hash_frames {
+                rendered.hashes.push(image_hash(&frame.image));
+            }
             if index + 1 == scenario.total_frames() {
                 rendered.deterministic = timed_hash.map(|h| h == image_hash(&frame.image));
             }

@@ -113,6 +113,7 @@ pub fn run(
             }
         };
         result.non_finite_values = rendered.non_finite;
+        append_hashes(&scenario.name, &variant.name, &rendered.hashes);
         save_images(
             &mut result,
             &rendered.frames,
@@ -370,7 +371,10 @@ fn render_reference(
             keep_hdr(scenario),
             on_frame,
         )
-        .map(|r| ReferenceFrames::new(r.frames, r.hdr_frames, r.non_finite_masks))
+        .map(|r| {
+            append_hashes(&scenario.name, "(reference)", &r.hashes);
+            ReferenceFrames::new(r.frames, r.hdr_frames, r.non_finite_masks)
+        })
         .map_err(|e| format!("reference render failed: {e}")),
     };
     if let Some(e) = pollster::block_on(validation.pop()) {
@@ -740,4 +744,25 @@ pub fn run_failed(scenario: &Scenario, run_id: &str, error: &str) -> ScenarioRes
         })
         .collect();
     finish(scenario, run_id, results, Instant::now())
+}
+
+/// Appends a variant's frame hashes to the `TESSERA_FRAME_HASHES` file, when set.
+fn append_hashes(scenario: &str, variant: &str, hashes: &[u64]) {
+    use std::io::Write;
+    let Some(path) = frames::frame_hash_file() else {
+        return;
+    };
+    let lines: String = hashes
+        .iter()
+        .enumerate()
+        .map(|(i, h)| format!("{scenario} {variant} {i} {h:016x}\n"))
+        .collect();
+    let written = std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(&path)
+        .and_then(|mut f| f.write_all(lines.as_bytes()));
+    if let Err(e) = written {
+        eprintln!("warning: cannot append frame hashes to {}: {e}", path.display());
+    }
 }
