@@ -16,8 +16,8 @@ use tessera_metrics::{encode_srgb8, HdrImage, Rgb8Image};
 use crate::gpu::Gpu;
 use crate::render::graph::PassKind;
 use crate::render::readback::Readback;
+use crate::render::renderer::{FrameExtras, FrameInfo, Renderer};
 use crate::render::scene::SceneGpu;
-use crate::render::technique::{FrameExtras, FrameInfo, Technique};
 use crate::render::timers::{FrameMeasurements, Timers, MAX_PENDING_FRAMES};
 use crate::scenario::Scenario;
 
@@ -38,7 +38,7 @@ pub struct Rendered {
     pub deterministic: Option<bool>,
     pub timestamps: bool,
     pub readback_bytes: u64,
-    /// The technique's extras of every measured frame ([`Technique::frame_extras`]).
+    /// The technique's extras of every measured frame ([`Renderer::frame_extras`]).
     pub extras: Vec<FrameExtras>,
     /// Per measured frame, a hash of its exact bits, when `TESSERA_FRAME_HASHES` is set (see
     /// [`frame_hash_file`]); empty otherwise.
@@ -74,7 +74,7 @@ pub fn submit_frame(
     gpu: &Gpu,
     scene: &mut SceneGpu,
     scenario: &Scenario,
-    technique: &mut dyn Technique,
+    technique: &mut dyn Renderer,
     timers: &mut Timers,
     index: u32,
 ) -> wgpu::SubmissionIndex {
@@ -115,7 +115,7 @@ fn pipelined(
     gpu: &Gpu,
     scene: &mut SceneGpu,
     scenario: &Scenario,
-    technique: &mut dyn Technique,
+    technique: &mut dyn Renderer,
     timers: &mut Timers,
     frames: impl Iterator<Item = u32>,
     done: &mut dyn FnMut(u32, BTreeMap<String, f64>),
@@ -156,7 +156,7 @@ pub fn render(
     gpu: &Gpu,
     scene: &mut SceneGpu,
     scenario: &Scenario,
-    technique: &mut dyn Technique,
+    technique: &mut dyn Renderer,
     keep_frames: bool,
     keep_hdr: bool,
     on_frame: &mut dyn FnMut(),
@@ -284,7 +284,7 @@ pub fn render(
 fn read_output(
     gpu: &Gpu,
     readback: &Readback,
-    technique: &dyn Technique,
+    technique: &dyn Renderer,
 ) -> Result<crate::render::readback::CpuFrame, RenderError> {
     let mut encoder = gpu
         .device
