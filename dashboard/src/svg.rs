@@ -224,7 +224,7 @@ pub fn stacked_bars(bars: &[Bar], unit: &str) -> String {
     let _ = write!(
         out,
         "<text x='{:.1}' y='14' font-size='10' text-anchor='end'>{}</text>",
-        left - 6.0,
+        left - 14.0,
         esc(unit)
     );
     for (i, b) in bars.iter().enumerate() {

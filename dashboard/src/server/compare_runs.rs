@@ -533,6 +533,15 @@ pub async fn api(
     })
 }
 
+/// A verdict as the page words it.
+fn shown(v: &str) -> &str {
+    if v == "same" {
+        "within noise"
+    } else {
+        v
+    }
+}
+
 fn verdict_class(v: &str) -> &'static str {
     match v {
         "slower" | "worse" => "worse",
@@ -608,7 +617,7 @@ pub fn render(c: &RunComparison) -> String {
                         esc(&p.name),
                         verdict_class(&p.verdict),
                         change(p.change),
-                        esc(&p.verdict)
+                        esc(shown(&p.verdict))
                     )
                 })
                 .collect();
@@ -666,7 +675,7 @@ pub fn render(c: &RunComparison) -> String {
                 verdict_class(&v.time.verdict),
                 change(v.time.change),
                 verdict_class(&v.time.verdict),
-                esc(&v.time.verdict),
+                esc(shown(&v.time.verdict)),
                 p_value(v.time.p),
                 passes.join(", "),
                 metrics.join(", "),

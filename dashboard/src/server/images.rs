@@ -202,11 +202,8 @@ pub fn render(v: &Viewer<'_>) -> Result<String, AppError> {
     if has_ref {
         let _ = write!(
             out,
-            "<figure><figcaption id=ab-label>B: variant</figcaption><div class=pane>{}</div></figure>",
-            format!(
-                "<img class=px id=img-ab src=\"{}\" alt=\"A/B flicker\"{size}>",
-                esc(&first("output")),
-            )
+            "<figure><figcaption id=ab-label>B: variant</figcaption><div class=pane><img class=px id=img-ab src=\"{}\" alt=\"A/B flicker\"{size}></div></figure>",
+            esc(&first("output")),
         );
         let _ = write!(
             out,
