@@ -170,7 +170,11 @@ fn parse_ids(with: Option<&str>) -> Result<Vec<i64>, AppError> {
 async fn load(state: &AppState, id: i64, overlay: Vec<i64>) -> Result<SeriesView, AppError> {
     state
         .db(move |c| {
-            let detail = read::series(c, id)?;
+            // The key and changes only: the points are read once, with their bands.
+            let key = browse::series_keys(c, &[id])?
+                .pop()
+                .ok_or_else(|| AppError::NotFound(format!("series {id} not found")))?;
+            let regressions = read::regressions(c, None, Some(id), 1000)?;
             let points = browse::band_points(c, id)?;
             let mut segment_starts = Vec::new();
             for i in 0..points.len() {
@@ -185,12 +189,12 @@ async fn load(state: &AppState, id: i64, overlay: Vec<i64>) -> Result<SeriesView
                     overlays.push((key, pts));
                 }
             }
-            let related = browse::related_series(c, &detail.series)?;
+            let related = browse::related_series(c, &key)?;
             Ok(SeriesView {
-                series: detail.series,
+                series: key,
                 points,
                 segment_starts,
-                regressions: detail.regressions,
+                regressions,
                 overlays,
                 related,
             })
