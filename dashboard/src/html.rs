@@ -80,24 +80,32 @@ pub fn commit(c: Option<&str>) -> String {
 
 const STYLE: &str = "body{font:14px/1.4 system-ui,sans-serif;margin:0;color:#222}
 nav{background:#1d2733;padding:8px 16px}nav a{color:#dde;margin-right:18px;text-decoration:none}
-nav a.on{color:#fff;font-weight:bold}main{padding:12px 16px}h1{font-size:20px}h2{font-size:16px;margin-top:24px}
+nav a.on{color:#fff;font-weight:bold}main{padding:12px 16px;max-width:1600px}h1{font-size:20px;overflow-wrap:anywhere}h2{font-size:16px;margin-top:24px}
 table{border-collapse:collapse;margin:8px 0}td,th{border-bottom:1px solid #ddd;padding:3px 8px;text-align:left;vertical-align:top}
-td.n{text-align:right;font-variant-numeric:tabular-nums}.ok{color:#17803d}.skipped{color:#8a6d00}.failed{color:#b3261e}
-.worse{color:#b3261e}.better{color:#17803d}.muted{color:#777}svg{background:#fff;border:1px solid #eee}
-form.inline{display:inline}img.shot{image-rendering:pixelated;border:1px solid #ccc;max-width:32%}";
+td.n,th.n{text-align:right;font-variant-numeric:tabular-nums}.ok{color:#17803d}.skipped{color:#8a6d00}.failed{color:#b3261e}
+.worse{color:#b3261e}.better{color:#17803d}.muted{color:#777}svg{background:#fff;border:1px solid #eee;max-width:100%;height:auto}
+form.inline{display:inline}.scroll{overflow-x:auto;max-width:100%}td.wrap{max-width:28em;overflow-wrap:anywhere;font-size:12px}
+.chart{width:100%;max-width:1400px;margin:8px 0}.chart-controls{margin:4px 0;font-size:13px}.chart-hover{font-size:12px;color:#444;min-height:1.4em;font-variant-numeric:tabular-nums}
+.alert{background:#b3261e;color:#fff;border-radius:8px;padding:0 6px;font-size:12px}.pager{margin:8px 0}.pager a{margin-right:12px}
+.viewer .panes{display:flex;flex-wrap:wrap;gap:8px}.viewer figure{margin:0}.viewer figcaption{font-size:12px;color:#555}
+.pane{overflow:auto;max-width:min(100%,720px);max-height:600px;border:1px solid #ccc;background:#333;cursor:grab}
+img.px{image-rendering:pixelated;display:block;max-width:none}.stack{position:relative}.stack img.top{position:absolute;left:0;top:0}.stack img.overlay{opacity:.5}
+#wipe-line{position:absolute;top:0;bottom:0;width:1px;background:#ff0;pointer-events:none}.viewer .controls{margin:8px 0;display:flex;flex-wrap:wrap;gap:16px;align-items:center}
+kbd{border:1px solid #aaa;border-radius:3px;padding:0 4px;font-size:12px}";
 
 /// The whole page around `body`; `active` names the navigation entry to highlight.
 pub fn page(title: &str, active: &str, body: &str) -> String {
     let mut out = String::with_capacity(body.len() + 2048);
     let _ = write!(
         out,
-        "<!doctype html><html lang=en><head><meta charset=utf-8><link rel=icon href=\"data:,\"><title>{} · Tessera</title><style>{STYLE}</style></head><body><nav>",
+        "<!doctype html><html lang=en><head><meta charset=utf-8><link rel=icon href=\"data:,\"><title>{} · Tessera</title><style>{STYLE}</style><link rel=stylesheet href=\"/assets/uPlot.min.css\"><script src=\"/assets/uPlot.iife.min.js\" defer></script><script src=\"/assets/tessera.js\" defer></script></head><body><nav>",
         esc(title)
     );
     for (href, label) in [
         ("/", "runs"),
         ("/series", "series"),
         ("/regressions", "regressions"),
+        ("/compare/runs", "compare"),
         ("/compare", "adapters"),
         ("/pareto", "error vs time"),
     ] {
@@ -109,6 +117,50 @@ pub fn page(title: &str, active: &str, body: &str) -> String {
         "</nav><main><h1>{}</h1>{body}</main></body></html>",
         esc(title)
     );
+    out
+}
+
+/// JSON for a `<script type=application/json>` element: `<` escaped so that no text in it can
+/// close the element.
+pub fn script_json<T: serde::Serialize>(value: &T) -> String {
+    serde_json::to_string(value)
+        .expect("page data serialises")
+        .replace('<', "\\u003c")
+}
+
+/// A chart the page's script draws with uPlot from `spec` (JSON), over `fallback` (server-drawn
+/// SVG or a table) that stays when the script does not run.
+pub fn chart(id: &str, spec: &str, fallback: &str) -> String {
+    format!(
+        "<div class=chart id=\"{id}\" data-chart=\"{id}-data\">{fallback}</div><script type=application/json id=\"{id}-data\">{spec}</script>"
+    )
+}
+
+/// Links to pages of a list: `offset` and `limit` in `base` (a URL with its other query
+/// parameters, ending in `?` or `&`), with how many items there are.
+pub fn pager(base: &str, offset: i64, limit: i64, total: i64, shown: usize) -> String {
+    let mut out = format!(
+        "<p class=pager>{}–{} of {total}",
+        if shown == 0 { 0 } else { offset + 1 },
+        offset + shown as i64
+    );
+    if offset > 0 {
+        let _ = write!(
+            out,
+            " <a href=\"{}offset={}&limit={limit}\">previous</a>",
+            esc(base),
+            (offset - limit).max(0)
+        );
+    }
+    if offset + (shown as i64) < total {
+        let _ = write!(
+            out,
+            " <a href=\"{}offset={}&limit={limit}\">next</a>",
+            esc(base),
+            offset + limit
+        );
+    }
+    out.push_str("</p>");
     out
 }
 

@@ -6,6 +6,7 @@
 //! applies it to stored series, [`server`] serves pages and API, [`html`] and [`svg`] draw them.
 
 pub mod bundle;
+pub mod chart;
 pub mod db;
 pub mod detect;
 pub mod html;

@@ -95,6 +95,9 @@ enum Command {
         /// Copies of the template's scenarios in each run.
         #[arg(long, default_value_t = 1)]
         scenarios: usize,
+        /// Run ids are `<prefix>-<index>`: a second generate into one store needs another prefix.
+        #[arg(long, default_value = "gen")]
+        prefix: String,
         #[arg(long, env = "TESSERA_DASHBOARD_DB", default_value = DEFAULT_DB)]
         db: String,
         /// Then time this many further runs stored as an upload stores them (run and detection
@@ -197,6 +200,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             template,
             runs,
             scenarios,
+            prefix,
             db,
             then_upload,
             upload_scenarios,
@@ -210,7 +214,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let mut results = 0;
             let mut touched = std::collections::BTreeSet::new();
             for i in 0..runs {
-                let b = synth::run_from(&template, "gen", i, 1.0, 0.01, &mut rng);
+                let b = synth::run_from(&template, &prefix, i, 1.0, 0.01, &mut rng);
                 if let Ingested::Stored {
                     results: n, series, ..
                 } = ingest(&mut *conn, &b)?

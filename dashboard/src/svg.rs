@@ -185,8 +185,27 @@ pub fn stacked_bars(bars: &[Bar], unit: &str) -> String {
             }
         }
     }
-    let (w, left, bar_h) = (900.0, 200.0, 18.0);
-    let h = 30.0 + bars.len() as f64 * (bar_h + 6.0) + 24.0;
+    // The label column fits the longest variant name (about 6.6 px a character at 11 px), and the
+    // legend wraps onto as many rows as it needs, so nothing is clipped.
+    let longest = bars
+        .iter()
+        .map(|b| b.label.chars().count())
+        .max()
+        .unwrap_or(0);
+    let left = (longest as f64 * 6.6 + 14.0).max(80.0);
+    let (w, bar_h) = (left + 720.0, 18.0);
+    let item_w = |n: &str| 24.0 + 7.0 * n.chars().count() as f64;
+    let mut legend_rows = 1;
+    let mut lx = 0.0;
+    for n in &names {
+        if lx > 0.0 && lx + item_w(n) > w - 20.0 {
+            legend_rows += 1;
+            lx = 0.0;
+        }
+        lx += item_w(n);
+    }
+    let chart_h = 30.0 + bars.len() as f64 * (bar_h + 6.0);
+    let h = chart_h + 18.0 * legend_rows as f64 + 6.0;
     let max = bars
         .iter()
         .map(|b| b.parts.iter().map(|p| p.1).sum::<f64>())
@@ -200,12 +219,12 @@ pub fn stacked_bars(bars: &[Bar], unit: &str) -> String {
     let mut out = format!("<svg xmlns='http://www.w3.org/2000/svg' width='{w}' height='{h}' viewBox='0 0 {w} {h}' role=img>");
     for t in ticks(0.0, x.d1) {
         let px = x.at(t);
-        let _ = write!(out, "<line x1='{px:.1}' x2='{px:.1}' y1='20' y2='{:.1}' stroke='#eee'/><text x='{px:.1}' y='14' font-size='10' text-anchor='middle'>{}</text>", h - 24.0, num(t));
+        let _ = write!(out, "<line x1='{px:.1}' x2='{px:.1}' y1='20' y2='{:.1}' stroke='#eee'/><text x='{px:.1}' y='14' font-size='10' text-anchor='middle'>{}</text>", chart_h - 6.0, num(t));
     }
     let _ = write!(
         out,
-        "<text x='{:.1}' y='14' font-size='10'>{}</text>",
-        w - 18.0,
+        "<text x='{:.1}' y='14' font-size='10' text-anchor='end'>{}</text>",
+        left - 14.0,
         esc(unit)
     );
     for (i, b) in bars.iter().enumerate() {
@@ -233,10 +252,14 @@ pub fn stacked_bars(bars: &[Bar], unit: &str) -> String {
             acc += v;
         }
     }
-    let mut lx = left;
+    let (mut lx, mut ly) = (10.0, chart_h);
     for (i, n) in names.iter().enumerate() {
-        let _ = write!(out, "<rect x='{lx:.1}' y='{:.1}' width='10' height='10' fill='{}'/><text x='{:.1}' y='{:.1}' font-size='11'>{}</text>", h - 16.0, colour(i), lx + 14.0, h - 7.0, esc(n));
-        lx += 24.0 + 7.0 * n.len() as f64;
+        if lx > 10.0 && lx + item_w(n) > w - 10.0 {
+            lx = 10.0;
+            ly += 18.0;
+        }
+        let _ = write!(out, "<rect x='{lx:.1}' y='{ly:.1}' width='10' height='10' fill='{}'/><text x='{:.1}' y='{:.1}' font-size='11'>{}</text>", colour(i), lx + 14.0, ly + 9.0, esc(n));
+        lx += item_w(n);
     }
     out.push_str("</svg>");
     out
@@ -250,6 +273,9 @@ pub struct ScatterPoint {
     /// 0: the newer run, 1: the older one (drawn hollow).
     pub group: usize,
     pub on_front: bool,
+    /// Drawn beside a point of the newer run: a short tag (its row number), so that labels do not
+    /// collide; the label is its tooltip.
+    pub tag: String,
 }
 
 /// Error (y) against GPU time (x): every variant a point, the Pareto front of each group joined
@@ -335,7 +361,7 @@ pub fn scatter(points: &[ScatterPoint], x_label: &str, y_label: &str) -> String 
                 "<text x='{:.1}' y='{:.1}' font-size='10'>{}</text>",
                 x.at(p.x) + 6.0,
                 y.at(p.y) - 4.0,
-                esc(&p.label)
+                esc(&p.tag)
             );
         }
     }

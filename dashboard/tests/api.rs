@@ -86,7 +86,17 @@ async fn every_page_renders_with_imported_runs() {
             .await
             .2,
     );
-    assert_eq!(series.as_array().unwrap().len(), 3);
+    // Filters match any part of the name: the frame time of 3 variants and their passes' times.
+    let list = series.as_array().unwrap();
+    assert!(list
+        .iter()
+        .all(|s| s["measure"].as_str().unwrap().contains("gpu_ms.median")));
+    assert_eq!(
+        list.iter()
+            .filter(|s| s["measure"] == "gpu_ms.median")
+            .count(),
+        3
+    );
     let id = series[0]["id"].as_i64().unwrap();
     let (s, _, body) = get(&app, &format!("/series/{id}")).await;
     assert_eq!(s, StatusCode::OK);
@@ -134,7 +144,14 @@ async fn every_page_renders_with_imported_runs() {
     )
     .await;
     assert_eq!(s, StatusCode::OK, "{body}");
-    assert!(body.contains("id=\"img-reference\" src=\"/images/") && body.contains("type=range"));
+    // Reference and variant without JavaScript, with the viewer's controls.
+    assert!(
+        body.contains("data-kind=\"reference\" src=\"/images/")
+            && body.contains("data-kind=\"output\" src=\"/images/")
+            && body.contains("id=zoom type=range min=1 max=32")
+            && body.contains("id=wipe"),
+        "{body}"
+    );
 }
 
 #[tokio::test]
@@ -586,4 +603,177 @@ async fn alert_groups_api_triage_markdown_and_feed() {
         get(&app, "/regressions/feed.atom?state=closed").await.0,
         StatusCode::BAD_REQUEST
     );
+}
+
+/// The browsing queries (filters, paging, suites, previous run, compare, exports, gzip) on every
+/// store: SQLite, and PostgreSQL when `TESSERA_TEST_POSTGRES_URL` is set. The synchronous
+/// PostgreSQL client is set up outside the async runtime.
+#[test]
+fn browsing_filters_compare_and_exports_on_every_store() {
+    let viewer =
+        std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/viewer-runs");
+    for store in common::stores("browsing_filters_compare_and_exports_on_every_store") {
+        import(&store.pool, &common::fixtures(), &Params::default()).unwrap();
+        import(&store.pool, &viewer, &Params::default()).unwrap();
+        let app = app(AppState::new(store.pool.clone(), None));
+        tokio::runtime::Builder::new_multi_thread()
+            .worker_threads(2)
+            .enable_all()
+            .build()
+            .unwrap()
+            .block_on(browse_checks(app, store.name));
+    }
+}
+
+async fn browse_checks(app: Router, name: &str) {
+    {
+        let ok = |r: &(StatusCode, String, String), what: &str| {
+            assert_eq!(r.0, StatusCode::OK, "{name} {what}: {}", r.2);
+        };
+        // Runs list: suite and branch recorded, filters, paging with the total in a header.
+        let all = json(&get(&app, "/api/runs").await.2);
+        assert_eq!(all.as_array().unwrap().len(), 4, "{name}");
+        let smoke = json(
+            &get(
+                &app,
+                "/api/runs?suite=smoke-viewer&branch=main&status=complete&q=AB7188",
+            )
+            .await
+            .2,
+        );
+        assert_eq!(smoke.as_array().unwrap().len(), 2, "{name}: {smoke}");
+        assert_eq!(smoke[0]["suite"], "smoke-viewer");
+        let (a, b) = (
+            smoke[1]["run_id"].as_str().unwrap().to_string(),
+            smoke[0]["run_id"].as_str().unwrap().to_string(),
+        );
+        let res = app
+            .clone()
+            .oneshot(
+                Request::get("/api/runs?offset=1&limit=2")
+                    .body(Body::empty())
+                    .unwrap(),
+            )
+            .await
+            .unwrap();
+        assert_eq!(res.headers()["x-total-count"], "4", "{name}");
+        let r = get(&app, "/?suite=fx&alerts=1&q=34ab").await;
+        ok(&r, "runs page with filters");
+        assert!(
+            r.2.contains("0–0 of 0"),
+            "{name}: no run of fx has alerts: {}",
+            r.2
+        );
+        assert_eq!(get(&app, "/?status=bogus").await.0, StatusCode::BAD_REQUEST);
+        // Series finder: substrings, ignoring case, and an adapter.
+        let found = json(
+            &get(
+                &app,
+                "/api/series?scenario=BAS&variant=board%5B&measure=gpu_ms.med&adapter=1",
+            )
+            .await
+            .2,
+        );
+        let found = found.as_array().unwrap();
+        assert!(!found.is_empty(), "{name}");
+        assert!(found
+            .iter()
+            .all(|s| s["variant"].as_str().unwrap().contains("board[")));
+        let id = found[0]["id"].as_i64().unwrap();
+        let series = json(&get(&app, &format!("/api/series/{id}")).await.2);
+        assert_eq!(series["points"].as_array().unwrap().len(), 2, "{name}");
+        assert!(
+            series["points"][0]["p95"].as_f64().unwrap()
+                >= series["points"][0]["value"].as_f64().unwrap()
+        );
+        let csv = get(&app, &format!("/api/series/{id}?format=csv")).await;
+        assert!(
+            csv.1.starts_with("text/csv") && csv.2.starts_with("run_id,commit,started_at"),
+            "{name}"
+        );
+        ok(
+            &get(
+                &app,
+                &format!("/series/{id}?with={}", found.last().unwrap()["id"]),
+            )
+            .await,
+            "overlay",
+        );
+        // The run page names the previous run of its suite; the CSV has results.csv's columns.
+        let run = get(&app, &format!("/runs/{b}")).await;
+        ok(&run, "run page");
+        assert!(
+            run.2.contains(&format!("/compare/runs?a={a}&amp;b={b}"))
+                || run.2.contains(&format!("/compare/runs?a={a}&b={b}")),
+            "{name}: {}",
+            run.2
+        );
+        let csv = get(&app, &format!("/api/runs/{b}?format=csv")).await;
+        assert!(csv.2.starts_with(
+            "run_id,scenario,variant,technique,adapter,backend,status,measure,value,unit"
+        ));
+        assert!(
+            csv.2
+                .contains("checkerboard[sampling=msaa2x],checkerboard,\"llvmpipe (LLVM 15.0.6, 256 bits)\",vulkan,skipped,status,,"),
+            "the skipped variant has its status row"
+        );
+        // Compare: by run ids, by commit with suite and adapter, as Markdown and CSV.
+        let c = json(&get(&app, &format!("/api/compare/runs?a={a}&b={b}")).await.2);
+        assert_eq!(c["by_speedup"], false);
+        assert!(c["scenarios"].as_array().unwrap().len() == 2, "{name}");
+        let by_commit = get(
+            &app,
+            "/api/compare/runs?a=ab7188d&b=34ab2b4&suite=smoke-viewer&adapter=1",
+        )
+        .await;
+        assert_eq!(
+            by_commit.0,
+            StatusCode::NOT_FOUND,
+            "34ab2b4 has no smoke-viewer run: {}",
+            by_commit.2
+        );
+        let md = get(&app, &format!("/api/compare/runs?a={a}&b={b}&format=md")).await;
+        assert!(
+            md.1.starts_with("text/markdown") && md.2.contains("| variant | status A → B |"),
+            "{name}"
+        );
+        let csv = get(&app, &format!("/api/compare/runs?a={a}&b={b}&format=csv")).await;
+        assert!(
+            csv.2
+                .starts_with("scenario,variant,measure,a,b,change,p,verdict\n"),
+            "{name}"
+        );
+        ok(
+            &get(&app, &format!("/compare/runs?pick={b}&pick={a}")).await,
+            "ticked runs",
+        );
+        assert_eq!(
+            get(&app, &format!("/compare/runs?pick={a}")).await.0,
+            StatusCode::BAD_REQUEST
+        );
+        // Adapters and the viewer with another run.
+        ok(&get(&app, "/compare?a=1&b=1&suite=fx").await, "adapters");
+        ok(
+            &get(
+                &app,
+                &format!(
+                    "/runs/{b}/images/adaptive/adaptive-shading%5Bthreshold%3D0.5%5D?other={a}"
+                ),
+            )
+            .await,
+            "viewer",
+        );
+        // gzip when asked for.
+        let res = app
+            .clone()
+            .oneshot(
+                Request::get(format!("/api/runs/{b}"))
+                    .header(header::ACCEPT_ENCODING, "gzip")
+                    .body(Body::empty())
+                    .unwrap(),
+            )
+            .await
+            .unwrap();
+        assert_eq!(res.headers()[header::CONTENT_ENCODING], "gzip", "{name}");
+    }
 }

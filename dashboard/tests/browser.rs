@@ -1,9 +1,13 @@
 //! Browser tests: the dashboard served on a loopback port from a temporary SQLite store, every page
-//! type loaded in headless Chromium (driven over WebDriver by chromedriver), charts checked as
-//! drawn (their marks have a non-empty box in the laid-out page), no error text and no console
-//! errors, and every same-origin link and image of every page reached by crawling answers 200.
+//! type loaded in headless Chromium (driven over WebDriver by chromedriver) at 1400 px wide, canvas
+//! charts checked as painted (pixels read back) with axis labels and a legend, no error text and
+//! no console errors, images displayed at no less than their natural size, and every same-origin
+//! link and image of every page reached by crawling answers 200. Chart zoom, the viewer's zoom,
+//! wipe, A/B flicker and frame slider are driven by the test. A screenshot of each page type is
+//! kept in `target/browser-screenshots/`.
 //!
-//! The store holds the committed real lavapipe runs (imported with `import`), plus runs derived
+//! The store holds the committed real lavapipe runs (imported with `import`: the `tiny` runs and two
+//! runs of a smoke suite with FLIP heat maps and a shading-rate image), plus runs derived
 //! from the newest real run because this machine has one adapter and two runs: 20 on the same
 //! adapter with a 25% step half-way (so that a regression, a change point and triage forms exist)
 //! and 2 under another adapter name (so that the adapter comparison has two sides).
@@ -244,7 +248,7 @@ impl Browser {
                     "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
                     "--no-first-run", "--disable-background-networking",
                     "--disable-component-update", "--disable-sync",
-                    "--disable-dev-shm-usage", "--window-size=1280,1000",
+                    "--disable-dev-shm-usage", "--window-size=1400,1000",
                     format!("--user-data-dir={}", profile.path().display()),
                 ]
             }
@@ -293,6 +297,15 @@ impl Browser {
         )
     }
 
+    /// A PNG of the viewport.
+    fn screenshot(&self) -> Vec<u8> {
+        use base64::Engine;
+        let v = self.call("GET", "screenshot", None);
+        base64::engine::general_purpose::STANDARD
+            .decode(v.as_str().unwrap_or_default())
+            .unwrap_or_default()
+    }
+
     /// The first element matching a CSS selector (its WebDriver reference).
     fn find(&self, css: &str) -> String {
         let v = self.call(
@@ -323,12 +336,9 @@ impl Browser {
     }
 
     /// Saves a PNG of the viewport to `path`.
-    fn screenshot(&self, path: &Path) {
-        use base64::Engine;
-        let v = self.call("GET", "screenshot", None);
-        let png = base64::engine::general_purpose::STANDARD
-            .decode(v.as_str().unwrap())
-            .unwrap();
+    fn screenshot_to(&self, path: &Path) {
+        let png = self.screenshot();
+        assert!(!png.is_empty(), "no screenshot for {}", path.display());
         std::fs::create_dir_all(path.parent().unwrap()).unwrap();
         std::fs::write(path, png).unwrap();
     }
@@ -378,7 +388,25 @@ return {
     text: s.textContent,
   })),
   links: Array.from(document.querySelectorAll('a')).map(href),
-  images: Array.from(document.images).map(i => ({src: i.src, ok: i.complete && i.naturalWidth > 0, hidden: !!i.closest('[hidden]')})),
+  images: Array.from(document.images).map(i => ({src: i.src, ok: i.complete && i.naturalWidth > 0, hidden: !!i.closest('[hidden]'),
+    natural: i.naturalWidth, shown: i.getBoundingClientRect().width})),
+  canvases: Array.from(document.querySelectorAll('.chart')).map(c => {
+    const cv = c.querySelector('canvas');
+    const u = c.uplot;
+    if (!cv || !u) return {drawn: false};
+    const px = cv.getContext('2d').getImageData(0, 0, cv.width, cv.height).data;
+    let painted = 0;
+    for (let i = 3; i < px.length; i += 4) if (px[i] > 0) painted++;
+    const spec = JSON.parse(document.getElementById(c.dataset.chart).textContent);
+    return {drawn: true, width: cv.getBoundingClientRect().width, painted, rows: u.data[0].length,
+      changes: (spec.marks || []).filter(m => m.kind === 'change').length,
+      fronts: (spec.points || []).filter(p => p.front).length,
+      bands: (u.bands || []).length,
+      x_labels: (u.axes[0]._values || []).filter(v => v !== '' && v != null).length,
+      y_labels: (u.axes[1]._values || []).filter(v => v !== '' && v != null).length,
+      legend: Array.from(c.querySelectorAll('.u-legend .u-series .u-label')).map(l => l.textContent)};
+  }),
+  overflow: Math.max(0, ...Array.from(document.querySelectorAll('main table')).map(t => t.getBoundingClientRect().right)) - window.innerWidth,
   tables: Array.from(document.querySelectorAll('main table')).map(t => ({id: t.id, rows: t.rows.length})),
   forms: document.forms.length,
 };
@@ -389,13 +417,21 @@ return {
 
 const SECOND_ADAPTER: &str = "llvmpipe (second adapter, derived from a real run)";
 
+/// The two real runs of the smoke suite (with heat maps and a shading-rate image).
+fn viewer_fixtures() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/viewer-runs")
+}
+
 /// Imports the real fixture runs, then the derived runs described at the top.
-fn fill(pool: &tessera_dashboard::db::Pool) -> Vec<String> {
+/// Returns the run ids of the `tiny` fixture runs and of the smoke runs, oldest first.
+fn fill(pool: &tessera_dashboard::db::Pool) -> (Vec<String>, Vec<String>) {
     let summary = import(pool, &common::fixtures(), &Params::default()).unwrap();
     assert!(
         summary.failed.is_empty() && summary.stored >= 2,
         "{summary:?}"
     );
+    let smoke = import(pool, &viewer_fixtures(), &Params::default()).unwrap();
+    assert!(smoke.failed.is_empty() && smoke.stored == 2, "{smoke:?}");
     let newest = tessera_dashboard::import::find_run_folders(&common::fixtures())
         .unwrap()
         .pop()
@@ -421,10 +457,15 @@ fn fill(pool: &tessera_dashboard::db::Pool) -> Vec<String> {
     let touched: Vec<i64> = touched.into_iter().collect();
     let added = regressions::update(&mut *conn, &touched, &Params::default()).unwrap();
     assert!(added > 0, "the 25% step found no change point");
-    std::fs::read_dir(common::fixtures())
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect()
+    let names = |d: PathBuf| -> Vec<String> {
+        let mut v: Vec<String> = std::fs::read_dir(d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    };
+    (names(common::fixtures()), names(viewer_fixtures()))
 }
 
 /// Serves `app` on a free loopback port from a thread of its own; returns the address.
@@ -476,6 +517,8 @@ fn page_type(path: &str) -> &'static str {
         ["regressions"] => "regressions",
         ["regressions", "groups", _] => "alert group",
         ["compare"] => "adapter comparison",
+        ["compare", "runs"] => "run comparison",
+        ["assets", _] => "asset",
         ["pareto"] => "error vs time",
         ["images", _] => "png",
         ["api", ..] => "api",
@@ -490,7 +533,11 @@ fn every_page_draws_in_chromium_and_its_links_resolve() {
     };
     let start = Instant::now();
     let store = common::sqlite();
-    let real_runs = fill(&store.pool);
+    let (tiny_runs, smoke_runs) = fill(&store.pool);
+    let real_runs: Vec<String> = tiny_runs.iter().chain(&smoke_runs).cloned().collect();
+    let shots = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../target/browser-screenshots");
+    let _ = std::fs::remove_dir_all(&shots);
+    std::fs::create_dir_all(&shots).unwrap();
     let addr = serve(AppState::new(
         store.pool.clone(),
         Some("browser-test".into()),
@@ -504,15 +551,40 @@ fn every_page_draws_in_chromium_and_its_links_resolve() {
     // 200 to a plain GET.
     let mut queue: VecDeque<String> = VecDeque::new();
     let mut seen: BTreeSet<String> = BTreeSet::new();
+    // The native frame-time series of `tiny` has the 22-run history with the step.
+    let found: Value = serde_json::from_slice(
+        &http(
+            addr,
+            "GET",
+            "/api/series?scenario=tiny&variant=native&measure=gpu_ms.median&adapter=1",
+            None,
+        )
+        .body,
+    )
+    .unwrap();
+    let stepped = format!("/series/{}", found[0]["id"].as_i64().expect("tiny series"));
     for p in ["/", "/series", "/regressions", "/compare", "/pareto"]
         .into_iter()
         .map(String::from)
+        .chain([stepped.clone()])
         .chain(real_runs.iter().map(|r| format!("/runs/{r}")))
         .chain(
-            real_runs
+            tiny_runs
                 .iter()
                 .map(|r| format!("/runs/{r}/images/tiny/native")),
         )
+        .chain([
+            format!("/compare/runs?a={}&b={}", smoke_runs[0], smoke_runs[1]),
+            format!(
+                "/runs/{}/images/basic/checkerboard%5Bsampling%3Dtwo-pass%5D",
+                smoke_runs[1]
+            ),
+            format!(
+                "/runs/{}/images/adaptive/adaptive-shading%5Bthreshold%3D0.5%5D",
+                smoke_runs[1]
+            ),
+            "/compare/runs".to_string(),
+        ])
     {
         seen.insert(p.clone());
         queue.push_back(p);
@@ -543,6 +615,11 @@ fn every_page_draws_in_chromium_and_its_links_resolve() {
         }
         browser.goto(&format!("{origin}{path}"));
         let page = browser.eval(INSPECT);
+        let n = loaded.iter().filter(|(p, _)| page_type(p) == kind).count();
+        if n < 2 {
+            let name = format!("{}-{n}.png", kind.replace(' ', "-"));
+            std::fs::write(shots.join(name), browser.screenshot()).unwrap();
+        }
         for msg in browser.console() {
             // Pages declare an empty inline icon, so no request for /favicon.ico may fail.
             if msg.starts_with("SEVERE") || msg.starts_with("WARNING") {
@@ -563,9 +640,44 @@ fn every_page_draws_in_chromium_and_its_links_resolve() {
             }
         }
         for img in page["images"].as_array().into_iter().flatten() {
-            if !img["ok"].as_bool().unwrap_or(false) && !img["hidden"].as_bool().unwrap_or(false) {
+            if img["hidden"].as_bool().unwrap_or(false) {
+                continue;
+            }
+            if !img["ok"].as_bool().unwrap_or(false) {
                 problems.push(format!("{path}: image did not decode: {img}"));
             }
+            let (natural, shown) = (
+                img["natural"].as_f64().unwrap_or(0.0),
+                img["shown"].as_f64().unwrap_or(0.0),
+            );
+            if shown + 0.5 < natural {
+                problems.push(format!(
+                    "{path}: image shown at {shown} px, below its natural {natural} px: {img}"
+                ));
+            }
+        }
+        for (i, c) in page["canvases"]
+            .as_array()
+            .into_iter()
+            .flatten()
+            .enumerate()
+        {
+            let ok = c["drawn"] == true
+                && c["painted"].as_u64().unwrap_or(0) > 1000
+                && c["x_labels"].as_u64().unwrap_or(0) >= 2
+                && c["y_labels"].as_u64().unwrap_or(0) >= 2
+                && c["legend"].as_array().is_some_and(|l| l.len() >= 2);
+            if !ok {
+                problems.push(format!(
+                    "{path}: canvas chart {i} not painted with axis labels and legend: {c}"
+                ));
+            }
+        }
+        if page["overflow"].as_f64().unwrap_or(0.0) > 0.5 {
+            problems.push(format!(
+                "{path}: a table runs {} px past the 1400 px window",
+                page["overflow"]
+            ));
         }
         let links = page["links"].as_array().cloned().unwrap_or_default();
         let srcs = page["images"].as_array().cloned().unwrap_or_default();
@@ -644,15 +756,24 @@ fn every_page_draws_in_chromium_and_its_links_resolve() {
             "real run {r} not loaded"
         );
     }
-    // Series: points for every run of the series (22 on the first adapter), and the change point.
+    let canvas_sum = |pages: &[&Value], key: &str| -> u64 {
+        pages
+            .iter()
+            .flat_map(|p| p["canvases"].as_array().cloned().unwrap_or_default())
+            .map(|c| c[key].as_u64().unwrap_or(0))
+            .sum()
+    };
+    // Series: a canvas chart over every run of the series (22 on the first adapter) with the
+    // change point marked and the p5-p95 band of the stored samples.
     let series = of("series");
     assert!(
-        series
-            .iter()
-            .any(|p| chart_sum(&[p], "points") >= 22 && chart_sum(&[p], "change_points") >= 1),
-        "no series page draws 22 points with a change point"
+        series.iter().any(|p| canvas_sum(&[p], "rows") >= 22
+            && canvas_sum(&[p], "changes") >= 1
+            && canvas_sum(&[p], "bands") >= 1),
+        "no series chart with 22 runs, a change point and a band: {:?}",
+        series.iter().map(|p| &p["canvases"]).collect::<Vec<_>>()
     );
-    assert!(series.iter().all(|p| chart_sum(&[p], "lines") >= 1));
+    assert!(series.iter().all(|p| canvas_sum(&[p], "painted") > 0));
     // Images: reference and variant shown and decoded, the frame slider works.
     for page in of("images") {
         let shown = page["images"]
@@ -672,6 +793,129 @@ fn every_page_draws_in_chromium_and_its_links_resolve() {
         frame.as_str().is_some_and(|f| !f.is_empty()),
         "frame slider: {frame}"
     );
+    // The viewer on a smoke run with a reference: zoom to 8x (pixels stay square, panes scroll
+    // together), wipe to 25%, flicker to the reference with the F key, step the frame slider.
+    browser.goto(&format!(
+        "{origin}/runs/{}/images/basic/checkerboard%5Bsampling%3Dtwo-pass%5D",
+        smoke_runs[1]
+    ));
+    let v = browser.eval(
+        r#"
+const root = document.getElementById('viewer');
+const img = root.querySelector('img[data-kind="output"]');
+const natural = img.naturalWidth;
+const zoom = document.getElementById('zoom');
+zoom.value = 8; zoom.dispatchEvent(new Event('input'));
+const zoomed = img.getBoundingClientRect().width;
+const rendering = getComputedStyle(img).imageRendering;
+const panes = root.querySelectorAll('.pane');
+panes[0].scrollLeft = 200; panes[0].dispatchEvent(new Event('scroll'));
+const synced = panes[panes.length - 1].scrollLeft;
+const wipe = document.getElementById('wipe');
+wipe.value = 25; wipe.dispatchEvent(new Event('input'));
+const clip = document.getElementById('wipe-top').style.clipPath;
+const ab = document.getElementById('img-ab');
+const before = ab.src;
+document.dispatchEvent(new KeyboardEvent('keydown', {key: 'f', bubbles: true}));
+const after = ab.src;
+const label = document.getElementById('ab-label').textContent;
+const ref = root.querySelector('img[data-kind="reference"]').src;
+const frame = document.getElementById('frame');
+frame.value = frame.max; frame.dispatchEvent(new Event('input'));
+return {natural, zoomed, rendering, synced, clip, before, after, label, ref,
+        frameno: document.getElementById('frameno').textContent,
+        heatmaps: root.querySelectorAll('img[data-kind="heatmap"]').length};
+"#,
+    );
+    std::fs::write(shots.join("images-zoomed-8x.png"), browser.screenshot()).unwrap();
+    let natural = v["natural"].as_f64().unwrap_or(0.0);
+    assert!(natural > 0.0, "viewer: {v}");
+    assert_eq!(v["zoomed"].as_f64(), Some(natural * 8.0), "zoom 8x: {v}");
+    assert_eq!(v["rendering"], "pixelated", "{v}");
+    assert!(
+        v["synced"].as_f64().unwrap_or(0.0) > 0.0,
+        "panes pan together: {v}"
+    );
+    assert_eq!(v["clip"], "inset(0px 75% 0px 0px)", "wipe: {v}");
+    assert!(
+        v["before"] != v["after"] && v["after"] == v["ref"],
+        "flicker to A: {v}"
+    );
+    assert_eq!(v["label"], "A: reference", "{v}");
+    assert_eq!(
+        v["frameno"], "5",
+        "frame slider reaches the last saved frame: {v}"
+    );
+    assert!(
+        v["heatmaps"].as_u64() >= Some(1),
+        "FLIP heat map shown: {v}"
+    );
+    // The shading-rate image and its overlay on the adaptive-shading viewer.
+    browser.goto(&format!(
+        "{origin}/runs/{}/images/adaptive/adaptive-shading%5Bthreshold%3D0.5%5D",
+        smoke_runs[1]
+    ));
+    let rate =
+        browser.eval("return document.querySelectorAll('#viewer img[data-kind=\"rate\"]').length;");
+    assert!(
+        rate.as_u64() >= Some(2),
+        "rate image alone and over the variant: {rate}"
+    );
+    std::fs::write(shots.join("images-adaptive.png"), browser.screenshot()).unwrap();
+
+    // Chart zoom on a series page: the mouse wheel and a drag both narrow the x range.
+    let series_url = series
+        .iter()
+        .find(|p| canvas_sum(&[p], "rows") >= 22)
+        .map(|p| p["url"].as_str().unwrap().to_string())
+        .unwrap();
+    browser.goto(&series_url);
+    let z = browser.eval(
+        r#"
+// uPlot applies scale changes in a microtask: wait a little after each step.
+const tick = () => new Promise(r => setTimeout(r, 50));
+return (async () => {
+const u = document.querySelector('.chart').uplot;
+const r = u.over.getBoundingClientRect();
+const full = u.scales.x.max - u.scales.x.min;
+u.over.dispatchEvent(new WheelEvent('wheel', {deltaY: -100, clientX: r.left + r.width / 2, clientY: r.top + 10, bubbles: true, cancelable: true}));
+await tick();
+const wheeled = u.scales.x.max - u.scales.x.min;
+u.setScale('x', {min: u.data[0][0], max: u.data[0][u.data[0].length - 1]});
+await tick();
+return {full, wheeled, left: r.left, top: r.top, width: r.width, height: r.height};
+})();
+"#,
+    );
+    // A real drag (WebDriver pointer actions) over 30% of the plot selects a range to zoom into.
+    let (l, t, w, h) = (
+        z["left"].as_f64().unwrap(),
+        z["top"].as_f64().unwrap(),
+        z["width"].as_f64().unwrap(),
+        z["height"].as_f64().unwrap(),
+    );
+    let at = |f: f64| json!({"type": "pointerMove", "duration": 100, "origin": "viewport", "x": (l + w * f) as i64, "y": (t + h / 2.0) as i64});
+    browser.call(
+        "POST",
+        "actions",
+        Some(json!({"actions": [{"type": "pointer", "id": "mouse", "parameters": {"pointerType": "mouse"},
+            "actions": [at(0.2), {"type": "pointerDown", "button": 0}, at(0.35), at(0.5), {"type": "pointerUp", "button": 0}]}]})),
+    );
+    let dragged = browser.eval(
+        "return new Promise(r => setTimeout(() => { const u = document.querySelector('.chart').uplot; r(u.scales.x.max - u.scales.x.min); }, 100));",
+    );
+    let z = json!({"full": z["full"], "wheeled": z["wheeled"], "dragged": dragged});
+    let full = z["full"].as_f64().unwrap_or(0.0);
+    assert!(full > 0.0, "{z}");
+    assert!(
+        z["wheeled"].as_f64().unwrap_or(full) < full * 0.9,
+        "wheel zoom: {z}"
+    );
+    assert!(
+        z["dragged"].as_f64().unwrap_or(full) < full * 0.5,
+        "drag zoom: {z}"
+    );
+    std::fs::write(shots.join("series-zoomed.png"), browser.screenshot()).unwrap();
     let regressions = of("regressions");
     assert!(
         regressions
@@ -690,9 +934,28 @@ fn every_page_draws_in_chromium_and_its_links_resolve() {
     assert!(
         pareto
             .iter()
-            .any(|p| chart_sum(&[p], "points") >= 3 && chart_sum(&[p], "fronts") >= 1),
+            .any(|p| canvas_sum(&[p], "rows") >= 3 && canvas_sum(&[p], "fronts") >= 1),
         "error-vs-time chart without points and front: {}",
-        pareto[0]["charts"]
+        pareto[0]["canvases"]
+    );
+    // The default view is not empty: the scenario's metrics are offered and one is shown.
+    assert!(
+        pareto[0]["text"].as_str().unwrap().contains("on front"),
+        "default error-vs-time view is empty: {}",
+        pareto[0]["text"]
+    );
+    let compared = of("run comparison");
+    assert!(
+        compared.iter().any(|p| {
+            let t = p["text"].as_str().unwrap();
+            t.contains("checkerboard") && t.contains("Mann-Whitney") && t.contains("permalink")
+        }),
+        "compare page of the two smoke runs: {}",
+        compared[0]["text"]
+    );
+    assert!(
+        runs[0]["text"].as_str().unwrap().contains("smoke-viewer"),
+        "runs list shows the suite"
     );
     for msg in browser.console() {
         if msg.starts_with("SEVERE") {
@@ -773,7 +1036,7 @@ fn regressions_page_triages_groups_with_the_token_entered_once() {
     assert_eq!(groups[0]["worse_colour"], "rgb(161, 20, 15)");
     assert_ne!(groups[0]["link_colour"], groups[0]["worse_colour"]);
     assert!(groups.iter().all(|g| g["state"] == "new"));
-    browser.screenshot(&shots.join("regressions.png"));
+    browser.screenshot_to(&shots.join("regressions.png"));
 
     // The token, typed once; the first group triaged on this page.
     browser.type_into("#token", "browser-test");
@@ -808,7 +1071,7 @@ fn regressions_page_triages_groups_with_the_token_entered_once() {
             .starts_with(&format!("saved for {} series", rows.len())),
         "{said}"
     );
-    browser.screenshot(&shots.join("regressions-triaged.png"));
+    browser.screenshot_to(&shots.join("regressions-triaged.png"));
 
     // A new page load (a filter), the second group triaged without typing the token again.
     browser.goto(&format!("{origin}/regressions?state=new"));
@@ -879,7 +1142,7 @@ fn regressions_page_triages_groups_with_the_token_entered_once() {
         .iter()
         .all(|r| r[0] == common::SECOND));
     assert!(second[0]["rows"].as_array().unwrap().len() < rows.len());
-    browser.screenshot(&shots.join("regressions-filtered.png"));
+    browser.screenshot_to(&shots.join("regressions-filtered.png"));
     for (query, n) in [
         ("direction=better", 0),
         ("direction=worse", 2),
@@ -911,9 +1174,9 @@ fn regressions_page_triages_groups_with_the_token_entered_once() {
         .as_str()
         .unwrap()
         .contains("https://bugs.example/42"));
-    browser.screenshot(&shots.join("alert-group.png"));
+    browser.screenshot_to(&shots.join("alert-group.png"));
     browser.eval("document.querySelector('.charts').scrollIntoView(); return true;");
-    browser.screenshot(&shots.join("alert-group-charts.png"));
+    browser.screenshot_to(&shots.join("alert-group-charts.png"));
     // Better (none in this history) has a colour of its own, also inside a link.
     let better = browser.eval(
         "const a = document.createElement('a'); a.href = '#'; a.innerHTML = '<span class=\"chg better\">x</span>'; document.querySelector('#regressions td').append(a); return getComputedStyle(a.firstChild).color;",

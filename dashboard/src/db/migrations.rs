@@ -151,6 +151,22 @@ CREATE TABLE webhook_deliveries (
     PRIMARY KEY (target, group_key)
 );
 "#,
+    // Suite and branch of each run (runs list filters, same-suite comparisons), the p5-p95 band
+    // of each timed point (series charts), and regressions by the run they appeared in (the
+    // runs list's alert marker).
+    r#"
+ALTER TABLE runs ADD COLUMN suite TEXT;
+ALTER TABLE runs ADD COLUMN branch TEXT;
+CREATE INDEX runs_suite ON runs (suite, adapter_id, started_at);
+CREATE TABLE point_bands (
+    series_id BIGINT NOT NULL REFERENCES series (id),
+    run_pk BIGINT NOT NULL REFERENCES runs (id),
+    p5 {real} NOT NULL,
+    p95 {real} NOT NULL,
+    PRIMARY KEY (series_id, run_pk)
+);
+CREATE INDEX regressions_after ON regressions (run_pk_after);
+"#,
 ];
 
 fn render(step: &str, backend: Backend) -> String {

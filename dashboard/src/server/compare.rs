@@ -1,6 +1,8 @@
-//! Adapter comparison (`/compare?a=&b=`, `/api/compare`): the newest run on each of two adapters,
-//! side by side per scenario and variant, by speedup against native on each adapter (raw
-//! milliseconds across vendors mix hardware with technique effects).
+//! Adapter comparison (`/compare?a=&b=&suite=`, `/api/compare`): the newest run on adapter A (of
+//! `suite` when given) and the run on adapter B of the same suite at the same commit, or else the
+//! nearest in time (the page says which), side by side per scenario and variant, by speedup
+//! against native on each adapter (raw milliseconds across vendors mix hardware with technique
+//! effects).
 
 use std::fmt::Write;
 
@@ -18,6 +20,7 @@ use crate::store::read::{self, AdapterRow};
 pub struct CompareQuery {
     pub a: Option<i64>,
     pub b: Option<i64>,
+    pub suite: Option<String>,
 }
 
 #[derive(Debug, Serialize, Clone, PartialEq)]
@@ -39,6 +42,9 @@ pub struct Comparison {
     pub b: Option<i64>,
     pub run_a: Option<String>,
     pub run_b: Option<String>,
+    /// How run B was matched to run A: `same commit` or `nearest in time`.
+    pub matched_by: Option<String>,
+    pub suite: Option<String>,
     pub rows: Vec<CompareRow>,
 }
 
@@ -49,16 +55,35 @@ async fn load(state: &AppState, q: CompareQuery) -> Result<Comparison, AppError>
             let a = q.a.or_else(|| adapters.first().map(|x| x.id));
             let b =
                 q.b.or_else(|| adapters.iter().map(|x| x.id).find(|&id| Some(id) != a));
-            let newest = |c: &mut dyn crate::db::Connection,
-                          id: Option<i64>|
-             -> Result<Option<String>, AppError> {
-                Ok(match id {
-                    Some(id) => read::latest_runs_with(c, id, None, 1)?.into_iter().next(),
-                    None => None,
-                })
+            let suite = q.suite.filter(|s| !s.is_empty());
+            let run_a = match (a, b) {
+                // Without a suite: the newest run on A of a suite B has runs of too.
+                (Some(a), Some(b)) if suite.is_none() => {
+                    crate::store::browse::newest_with_shared_suite(c, a, b)?
+                }
+                (Some(a), _) => crate::store::browse::run_list(
+                    c,
+                    &crate::store::browse::RunFilter {
+                        adapter: Some(a),
+                        suite: suite.clone(),
+                        ..Default::default()
+                    },
+                    0,
+                    1,
+                )?
+                .runs
+                .into_iter()
+                .next()
+                .map(|r| r.run.run_id),
+                (None, _) => None,
             };
-            let run_a = newest(c, a)?;
-            let run_b = newest(c, b)?;
+            let (run_b, matched_by) = match (&run_a, b) {
+                (Some(ra), Some(b)) => match crate::store::browse::counterpart(c, ra, b)? {
+                    Some(m) => (Some(m.run_id), Some(m.how)),
+                    None => (None, None),
+                },
+                _ => (None, None),
+            };
             let mut rows = Vec::new();
             if let (Some(ra), Some(rb)) = (&run_a, &run_b) {
                 let sa = read::run_scenarios(c, ra)?;
@@ -91,6 +116,8 @@ async fn load(state: &AppState, q: CompareQuery) -> Result<Comparison, AppError>
                 b,
                 run_a,
                 run_b,
+                matched_by,
+                suite,
                 rows,
             })
         })
@@ -131,7 +158,11 @@ pub fn render(c: &Comparison) -> String {
         }
         b.push_str("</select> ");
     }
-    b.push_str("<button>compare</button></form>");
+    let _ = write!(
+        b,
+        "suite <input name=suite size=10 value=\"{}\" placeholder=\"any\"> <button>compare</button></form>",
+        esc(c.suite.as_deref().unwrap_or(""))
+    );
     let link = |r: &Option<String>| {
         r.as_ref().map_or("–".into(), |r| {
             format!("<a href=\"/runs/{}\">{}</a>", enc(r), esc(r))
@@ -139,12 +170,32 @@ pub fn render(c: &Comparison) -> String {
     };
     let _ = write!(
         b,
-        "<p>a: {} · newest run {}<br>b: {} · newest run {}</p><table id=compare><tr><th>scenario</th><th>variant</th><th class=n>speedup a</th><th class=n>speedup b</th><th class=n>b / a</th><th class=n>GPU ms a</th><th class=n>GPU ms b</th></tr>",
+        "<p>a: {} · newest run{} with runs on b too: {}<br>b: {} · {} {}</p>",
         esc(&name(c.a)),
+        c.suite
+            .as_deref()
+            .map_or(String::new(), |s| format!(" of suite {}", esc(s))),
         link(&c.run_a),
         esc(&name(c.b)),
+        match c.matched_by.as_deref() {
+            Some("same commit") => "the run of the same suite at the same commit:".to_string(),
+            Some(how) => format!(
+                "no run of that commit; the run of the same suite {}:",
+                esc(how)
+            ),
+            None => "no run of the same suite".to_string(),
+        },
         link(&c.run_b)
     );
+    if let (Some(ra), Some(rb)) = (&c.run_a, &c.run_b) {
+        let _ = write!(
+            b,
+            "<p><a href=\"/compare/runs?a={}&b={}\">compare these two runs in detail</a></p>",
+            enc(ra),
+            enc(rb)
+        );
+    }
+    b.push_str("<table id=compare><tr><th>scenario</th><th>variant</th><th class=n>speedup a</th><th class=n>speedup b</th><th class=n>b / a</th><th class=n>GPU ms a</th><th class=n>GPU ms b</th></tr>");
     for r in &c.rows {
         let ratio = match (r.speedup_a, r.speedup_b) {
             (Some(x), Some(y)) => format!("{:.2}", y / x),

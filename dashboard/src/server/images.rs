@@ -1,17 +1,25 @@
-//! Images: the viewer page (`/runs/{run}/images/{scenario}/{variant}`: reference, variant output
-//! and FLIP heat map side by side with a frame slider), the list API, and `/images/{digest}` which
-//! serves stored PNG bytes by SHA-256. Images live in the store, never on disk, so no route can
-//! reach a file: a digest is 64 hex digits or a 404.
+//! Images: the viewer (`/runs/{run}/images/{scenario}/{variant}?other=RUN`), the list API, and
+//! `/images/{digest}`, which serves stored PNG bytes by SHA-256. Images live in the store, never on
+//! disk, so no route can reach a file: a digest is 64 hex digits or a 404.
+//!
+//! The viewer shows one saved frame at a time: A/B flicker between reference and variant (button
+//! or the F key), a wipe between them, reference, variant, the FLIP heat map and the shading-rate
+//! image (alone and over the variant) where stored, and the same variant's frame in another run.
+//! Frames are shown at their natural size and zoom up to 32x with nearest-neighbour pixels; all
+//! panes pan together. A frame slider and playback step through the saved frames. Without
+//! JavaScript every image is still shown at natural size.
 
 use std::fmt::Write;
 
-use axum::extract::{Path, State};
+use axum::extract::{Path, Query, State};
 use axum::http::header;
 use axum::response::{Html, IntoResponse, Response};
 use axum::Json;
+use serde::{Deserialize, Serialize};
 
 use super::{AppError, AppState};
-use crate::html::{enc, esc, page as layout};
+use crate::html::{enc, esc, page as layout, script_json};
+use crate::store::browse;
 use crate::store::read::{self, ImageRow};
 
 pub async fn api(
@@ -51,87 +59,196 @@ pub async fn blob(
         .into_response())
 }
 
-/// Columns shown, in order: (image kind, heading). The reference may be listed under any variant
-/// of the scenario.
-const KINDS: [(&str, &str); 4] = [
-    ("reference", "reference"),
-    ("output", "variant"),
-    ("heatmap", "FLIP heat map"),
+/// Image kinds of the viewer, in order: (kind, heading). The reference may be stored under any
+/// variant of the scenario; `other` is the variant's output in the other run.
+const KINDS: [(&str, &str); 6] = [
+    ("reference", "reference (A)"),
+    ("output", "variant (B)"),
+    ("heatmap", "FLIP error (magma)"),
+    ("heatmap-hdr", "HDR-FLIP error (magma)"),
     ("rate", "shading rate"),
+    ("other", "variant in the other run"),
 ];
 
-pub fn render(
-    run_id: &str,
-    scenario: &str,
-    variant: &str,
-    images: &[ImageRow],
-) -> Result<String, AppError> {
-    let mut frames: Vec<i64> = images
+#[derive(Debug, Deserialize, Default)]
+pub struct ViewerQuery {
+    /// Another run whose frames of the same variant are shown beside.
+    pub other: Option<String>,
+}
+
+/// What the viewer's script reads: per frame, the URL of each kind (empty when absent).
+#[derive(Debug, Serialize)]
+struct ViewerSpec {
+    frames: Vec<i64>,
+    kinds: Vec<&'static str>,
+    urls: Vec<Vec<String>>,
+    width: u32,
+    height: u32,
+}
+
+pub struct Viewer<'a> {
+    pub run_id: &'a str,
+    pub scenario: &'a str,
+    pub variant: &'a str,
+    pub images: &'a [ImageRow],
+    pub width: u32,
+    pub height: u32,
+    /// The other run and its images of this scenario.
+    pub other: Option<(&'a str, &'a [ImageRow])>,
+    /// Runs that stored images of this variant, for the picker.
+    pub runs_with_images: &'a [String],
+}
+
+fn pick(images: &[ImageRow], variant: &str, frame: i64, kind: &str) -> Option<String> {
+    images
         .iter()
-        .filter(|i| i.variant == variant)
+        .find(|i| i.frame == frame && i.kind == kind && i.variant == variant)
+        .or_else(|| {
+            (kind == "reference")
+                .then(|| images.iter().find(|i| i.frame == frame && i.kind == kind))
+                .flatten()
+        })
+        .map(|i| format!("/images/{}", i.digest))
+}
+
+pub fn render(v: &Viewer<'_>) -> Result<String, AppError> {
+    let mut frames: Vec<i64> = v
+        .images
+        .iter()
+        .filter(|i| i.variant == v.variant)
         .map(|i| i.frame)
         .collect();
     frames.sort();
     frames.dedup();
     if frames.is_empty() {
         return Err(AppError::NotFound(format!(
-            "no images of {variant} in {scenario} of run {run_id}"
+            "no images of {} in {} of run {}",
+            v.variant, v.scenario, v.run_id
         )));
     }
-    let pick = |frame: i64, kind: &str| {
-        images
-            .iter()
-            .find(|i| i.frame == frame && i.kind == kind && i.variant == variant)
-            .or_else(|| {
-                (kind == "reference")
-                    .then(|| images.iter().find(|i| i.frame == frame && i.kind == kind))
-                    .flatten()
-            })
-            .map(|i| format!("/images/{}", i.digest))
-    };
-    let mut out = format!(
-        "<p><a href=\"/runs/{}#s-{}\">back to the run</a></p>",
-        enc(run_id),
-        esc(scenario)
-    );
-    // Each frame's image URLs as data for the slider; absent kinds are empty strings.
-    let data: Vec<Vec<String>> = frames
+    let urls: Vec<Vec<String>> = frames
         .iter()
         .map(|&f| {
             KINDS
                 .iter()
-                .map(|(k, _)| pick(f, k).unwrap_or_default())
+                .map(|(k, _)| match (*k, v.other) {
+                    ("other", Some((_, imgs))) => pick(imgs, v.variant, f, "output"),
+                    ("other", None) => None,
+                    _ => pick(v.images, v.variant, f, k),
+                })
+                .map(Option::unwrap_or_default)
                 .collect()
         })
         .collect();
+    let present: Vec<bool> = (0..KINDS.len())
+        .map(|j| urls.iter().any(|f| !f[j].is_empty()))
+        .collect();
+    let first = |kind: &str| -> String {
+        let j = KINDS.iter().position(|k| k.0 == kind).expect("known kind");
+        urls.iter()
+            .map(|f| f[j].clone())
+            .find(|u| !u.is_empty())
+            .unwrap_or_default()
+    };
+    let mut out = format!(
+        "<p><a href=\"/runs/{}#s-{}\">back to the run</a> · {}×{} px · {} saved frame(s)</p>",
+        enc(v.run_id),
+        esc(v.scenario),
+        v.width,
+        v.height,
+        frames.len()
+    );
+    // Another run's frames of this variant.
     let _ = write!(
         out,
-        "<p>frame <input id=frame type=range min=0 max={} value=0 oninput=\"show(this.value)\"> <span id=frameno>{}</span></p><div>",
-        frames.len() - 1,
-        frames[0]
+        "<form id=other-run>same variant in another run <select name=other><option value=\"\">none</option>"
     );
-    for (i, (kind, heading)) in KINDS.iter().enumerate() {
-        let src = &data[0][i];
-        let hidden = if data.iter().all(|f| f[i].is_empty()) {
-            " hidden"
+    for r in v.runs_with_images.iter().filter(|r| r.as_str() != v.run_id) {
+        let sel = if v.other.is_some_and(|o| o.0 == r.as_str()) {
+            " selected"
         } else {
             ""
         };
-        let _ = write!(
-            out,
-            "<figure style=\"display:inline-block;margin:4px\"{hidden}><figcaption>{heading}</figcaption><img class=shot id=\"img-{kind}\" src=\"{}\" alt=\"{heading}\"></figure>",
-            esc(src)
-        );
+        let _ = write!(out, "<option{sel}>{}</option>", esc(r));
     }
-    let json = serde_json::to_string(&data)
-        .expect("strings serialise")
-        .replace('<', "\\u003c");
-    let frames_json = serde_json::to_string(&frames).expect("numbers serialise");
-    let kinds_json = serde_json::to_string(&KINDS.iter().map(|k| k.0).collect::<Vec<_>>())
-        .expect("strings serialise");
+    out.push_str("</select> <button>show</button></form>");
+    let has_ref = present[0] && present[1];
     let _ = write!(
         out,
-        "</div><script>const F={json},N={frames_json},K={kinds_json};function show(i){{document.getElementById('frameno').textContent=N[i];K.forEach((k,j)=>{{const e=document.getElementById('img-'+k);if(F[i][j])e.src=F[i][j];}});}}</script>"
+        "<div class=viewer id=viewer data-viewer=viewer-data><div class=controls><label>frame <input id=frame type=range min=0 max={} value=0 step=1> <span id=frameno>{}</span></label><button id=play type=button>play</button><label>zoom <input id=zoom type=range min=1 max=32 value=1 step=1> <span id=zoomval>1×</span></label>",
+        frames.len() - 1,
+        frames[0]
+    );
+    if has_ref {
+        out.push_str("<button id=flicker type=button>flicker A/B</button> <span class=muted>(<kbd>F</kbd> or <kbd>space</kbd>)</span><label>wipe <input id=wipe type=range min=0 max=100 value=50></label>");
+    } else {
+        // The script expects the controls; without a reference they do nothing visible.
+        out.push_str("<span hidden><button id=flicker type=button></button><input id=wipe type=range min=0 max=100 value=50></span>");
+    }
+    out.push_str("<span class=muted>drag to pan, <kbd>+</kbd>/<kbd>-</kbd> zoom, <kbd>←</kbd>/<kbd>→</kbd> frames</span></div><div class=panes>");
+    // Every pane shows the scenario's size (a tile-resolution rate image is scaled up to it).
+    let size = if v.width > 0 && v.height > 0 {
+        format!(" width={} height={}", v.width, v.height)
+    } else {
+        String::new()
+    };
+    let img = |kind: &str, url: &str, alt: &str, extra: &str| {
+        format!(
+            "<img class=\"px{extra}\" data-kind=\"{kind}\" src=\"{}\" alt=\"{}\"{size}>",
+            esc(url),
+            esc(alt),
+        )
+    };
+    if has_ref {
+        let _ = write!(
+            out,
+            "<figure><figcaption id=ab-label>B: variant</figcaption><div class=pane><img class=px id=img-ab src=\"{}\" alt=\"A/B flicker\"{size}></div></figure>",
+            esc(&first("output")),
+        );
+        let _ = write!(
+            out,
+            "<figure><figcaption>wipe: A left, B right</figcaption><div class=pane><div class=stack>{}{}<div id=wipe-line></div></div></div></figure>",
+            img("reference", &first("reference"), "wipe: reference", ""),
+            img("output", &first("output"), "wipe: variant", " top\" id=\"wipe-top")
+        );
+    } else {
+        out.push_str("<img hidden id=img-ab alt=\"\"><span hidden id=ab-label></span><span hidden id=wipe-top></span><span hidden id=wipe-line></span>");
+    }
+    for (j, (kind, heading)) in KINDS.iter().enumerate() {
+        if !present[j] {
+            continue;
+        }
+        let heading = match (*kind, v.other) {
+            ("other", Some((r, _))) => format!("variant in run {r}"),
+            _ => heading.to_string(),
+        };
+        let _ = write!(
+            out,
+            "<figure><figcaption>{}</figcaption><div class=pane>{}</div></figure>",
+            esc(&heading),
+            img(kind, &first(kind), &heading, "")
+        );
+        if *kind == "rate" && present[1] {
+            let _ = write!(
+                out,
+                "<figure><figcaption>shading rate over the variant</figcaption><div class=pane><div class=stack>{}{}</div></div></figure>",
+                img("output", &first("output"), "variant under the rate", ""),
+                img("rate", &first("rate"), "shading rate overlay", " top overlay")
+            );
+        }
+    }
+    out.push_str("</div></div>");
+    let spec = ViewerSpec {
+        frames: frames.clone(),
+        kinds: KINDS.iter().map(|k| k.0).collect(),
+        urls,
+        width: v.width,
+        height: v.height,
+    };
+    let _ = write!(
+        out,
+        "<script type=application/json id=viewer-data>{}</script>",
+        script_json(&spec)
     );
     Ok(out)
 }
@@ -139,10 +256,34 @@ pub fn render(
 pub async fn page(
     State(state): State<AppState>,
     Path((run_id, scenario, variant)): Path<(String, String, String)>,
+    Query(q): Query<ViewerQuery>,
 ) -> Result<Html<String>, AppError> {
-    let (r, s) = (run_id.clone(), scenario.clone());
-    let images = state.db(move |c| Ok(read::run_images(c, &r, &s)?)).await?;
-    let body = render(&run_id, &scenario, &variant, &images)?;
+    let (r, s, var) = (run_id.clone(), scenario.clone(), variant.clone());
+    let other_id = q.other.filter(|o| !o.is_empty());
+    let (images, (w, h), other, runs) = state
+        .db(move |c| {
+            let images = read::run_images(c, &r, &s)?;
+            let dims = read::scenario_result(c, &r, &s)
+                .map(|x| (x.width, x.height))
+                .unwrap_or((0, 0));
+            let other = match other_id {
+                Some(o) => Some((o.clone(), read::run_images(c, &o, &s)?)),
+                None => None,
+            };
+            let runs = browse::runs_with_images(c, &s, &var)?;
+            Ok((images, dims, other, runs))
+        })
+        .await?;
+    let body = render(&Viewer {
+        run_id: &run_id,
+        scenario: &scenario,
+        variant: &variant,
+        images: &images,
+        width: w,
+        height: h,
+        other: other.as_ref().map(|(r, i)| (r.as_str(), i.as_slice())),
+        runs_with_images: &runs,
+    })?;
     Ok(Html(layout(
         &format!("{scenario} · {variant} · run {run_id}"),
         "runs",

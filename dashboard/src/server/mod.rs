@@ -4,9 +4,12 @@
 //!
 //! Not for: SQL (see [`crate::store`]) or chart drawing (see [`crate::svg`]).
 
+pub mod assets;
 pub mod auth;
 pub mod compare;
+pub mod compare_runs;
 pub mod error;
+pub mod export;
 pub mod images;
 pub mod pareto;
 pub mod regressions;
@@ -97,9 +100,14 @@ pub fn app(state: AppState) -> Router {
         )
         .route("/compare", get(compare::page))
         .route("/api/compare", get(compare::api))
+        .route("/compare/runs", get(compare_runs::page))
+        .route("/api/compare/runs", get(compare_runs::api))
+        .route("/assets/{name}", get(assets::file))
         .route("/pareto", get(pareto::page))
         .route("/api/pareto", get(pareto::api))
         .fallback(|| async { AppError::NotFound("no such page".into()) })
         .layer(DefaultBodyLimit::max(state.max_upload_bytes))
+        // gzip (or deflate, br) for clients that accept it: pages and JSON shrink about 6x.
+        .layer(tower_http::compression::CompressionLayer::new())
         .with_state(state)
 }

@@ -1,6 +1,8 @@
 //! Error against run time (`/pareto?scenario=&adapter=&metric=&run=&base=`, `/api/pareto`): per
 //! scenario and adapter, every variant as a point (median GPU time, metric), the Pareto front, and
-//! how both moved since an older run (`base`, by default the run before).
+//! how both moved since an older run (`base`, by default the run before). The metric is picked from
+//! those the run's scenario has (by default `flip`, else `psnr`, else the first one); points are
+//! numbered as the table's rows, so labels never collide, and the chart zooms.
 
 use std::fmt::Write;
 
@@ -11,7 +13,8 @@ use serde::{Deserialize, Serialize};
 use tessera_results::{ScenarioResult, Status};
 
 use super::{AppError, AppState};
-use crate::html::{enc, esc, num, page as layout};
+use crate::chart::{ScatterChart, ScatterPoint as ChartPoint};
+use crate::html::{chart, enc, esc, num, page as layout, script_json};
 use crate::store::read;
 use crate::svg::{pareto_front, scatter, ScatterPoint};
 
@@ -45,6 +48,25 @@ pub struct ParetoView {
     pub base: Option<String>,
     pub points: Vec<ParetoPoint>,
     pub base_points: Vec<ParetoPoint>,
+    /// Metrics of the run's scenario with a finite value for some timed variant.
+    pub metrics: Vec<String>,
+}
+
+/// Metric names of ok, timed variants with a finite value, in first-seen order.
+pub fn metrics_present(s: &ScenarioResult) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    for v in s
+        .results
+        .iter()
+        .filter(|v| v.status == Status::Ok && v.gpu_frame_ms.is_some())
+    {
+        for m in v.metrics.iter().filter(|m| m.value.is_finite()) {
+            if !out.contains(&m.name) {
+                out.push(m.name.clone());
+            }
+        }
+    }
+    out
 }
 
 /// Points of one scenario record for `metric`, with the Pareto front marked. Variants without GPU
@@ -84,10 +106,8 @@ async fn load(state: &AppState, q: ParetoQuery) -> Result<ParetoView, AppError> 
                 .scenario
                 .filter(|s| !s.is_empty())
                 .or_else(|| scenarios.first().cloned());
-            let metric = q
-                .metric
-                .filter(|m| !m.is_empty())
-                .unwrap_or_else(|| "flip".into());
+            let asked = q.metric.filter(|m| !m.is_empty());
+            let metric = asked.clone().unwrap_or_else(|| "flip".into());
             let mut view = ParetoView {
                 scenarios,
                 adapters,
@@ -99,6 +119,7 @@ async fn load(state: &AppState, q: ParetoQuery) -> Result<ParetoView, AppError> 
                 base: None,
                 points: vec![],
                 base_points: vec![],
+                metrics: vec![],
             };
             let (Some(scenario), Some(adapter)) = (scenario, adapter) else {
                 return Ok(view);
@@ -108,14 +129,27 @@ async fn load(state: &AppState, q: ParetoQuery) -> Result<ParetoView, AppError> 
             let base = q
                 .base
                 .or_else(|| recent.iter().find(|r| Some(*r) != run.as_ref()).cloned());
+            let mut metric = metric;
             if let Some(run) = &run {
-                let (p, hib) = points(&read::scenario_result(c, run, &scenario)?, &metric);
+                let record = read::scenario_result(c, run, &scenario)?;
+                view.metrics = metrics_present(&record);
+                // Without an explicit choice, open on a metric the scenario has.
+                if asked.is_none() && !view.metrics.contains(&metric) {
+                    metric = ["psnr", "ssim"]
+                        .iter()
+                        .map(|m| m.to_string())
+                        .find(|m| view.metrics.contains(m))
+                        .or_else(|| view.metrics.first().cloned())
+                        .unwrap_or(metric);
+                }
+                let (p, hib) = points(&record, &metric);
                 view.points = p;
                 view.higher_is_better = hib;
             }
             if let Some(base) = &base {
                 view.base_points = points(&read::scenario_result(c, base, &scenario)?, &metric).0;
             }
+            view.metric = metric;
             view.run = run;
             view.base = base;
             Ok(view)
@@ -155,11 +189,16 @@ pub fn render(v: &ParetoView) -> String {
             esc(&a.backend)
         );
     }
-    let _ = write!(
-        b,
-        "</select> metric <input name=metric size=10 value=\"{}\"> <button>show</button></form>",
-        esc(&v.metric)
-    );
+    b.push_str("</select> metric <select name=metric>");
+    let mut names = v.metrics.clone();
+    if !names.contains(&v.metric) {
+        names.push(v.metric.clone());
+    }
+    for m in &names {
+        let sel = if *m == v.metric { " selected" } else { "" };
+        let _ = write!(b, "<option{sel}>{}</option>", esc(m));
+    }
+    b.push_str("</select> <button>show</button></form>");
     let link = |r: &Option<String>| {
         r.as_ref().map_or("–".into(), |r| {
             format!("<a href=\"/runs/{}\">{}</a>", enc(r), esc(r))
@@ -173,26 +212,62 @@ pub fn render(v: &ParetoView) -> String {
         esc(&v.metric),
         if v.higher_is_better { "higher" } else { "lower" }
     );
-    let pts: Vec<ScatterPoint> = v
+    // Row numbers: the newer run's points in table order; a base-only variant gets its own.
+    let mut order: Vec<&str> = v.points.iter().map(|p| p.variant.as_str()).collect();
+    for p in &v.base_points {
+        if !order.contains(&p.variant.as_str()) {
+            order.push(&p.variant);
+        }
+    }
+    let num_of = |variant: &str| order.iter().position(|o| *o == variant).unwrap_or(0) + 1;
+    let tagged = v
         .points
         .iter()
         .map(|p| (p, 0))
-        .chain(v.base_points.iter().map(|p| (p, 1)))
+        .chain(v.base_points.iter().map(|p| (p, 1)));
+    let pts: Vec<ScatterPoint> = tagged
+        .clone()
         .map(|(p, group)| ScatterPoint {
-            label: p.variant.clone(),
+            label: format!("#{} {}", num_of(&p.variant), p.variant),
             x: p.gpu_ms,
             y: p.value,
             group,
             on_front: p.on_front,
+            tag: num_of(&p.variant).to_string(),
         })
         .collect();
-    b.push_str(&scatter(&pts, "GPU ms", &v.metric));
-    b.push_str("<table><tr><th>variant</th><th class=n>GPU ms</th><th class=n>value</th><th>front</th><th class=n>before: GPU ms</th><th class=n>value</th></tr>");
+    let spec = ScatterChart {
+        kind: "scatter",
+        x_label: "GPU ms (median)".into(),
+        y_label: v.metric.clone(),
+        groups: vec![
+            format!("run {}", v.run.as_deref().unwrap_or("–")),
+            format!("run {}", v.base.as_deref().unwrap_or("–")),
+        ],
+        points: tagged
+            .map(|(p, group)| ChartPoint {
+                x: p.gpu_ms,
+                y: p.value,
+                group,
+                num: num_of(&p.variant),
+                label: p.variant.clone(),
+                front: p.on_front,
+            })
+            .collect(),
+    };
+    let fallback = scatter(&pts, "GPU ms", &v.metric);
+    if spec.points.is_empty() {
+        b.push_str(&fallback);
+    } else {
+        b.push_str(&chart("pareto-chart", &script_json(&spec), &fallback));
+    }
+    b.push_str("<table id=pareto><tr><th class=n>#</th><th>variant</th><th class=n>GPU ms</th><th class=n>value</th><th>front</th><th class=n>before: GPU ms</th><th class=n>value</th></tr>");
     for p in &v.points {
         let old = v.base_points.iter().find(|q| q.variant == p.variant);
         let _ = write!(
             b,
-            "<tr><td>{}</td><td class=n>{}</td><td class=n>{}</td><td>{}</td><td class=n>{}</td><td class=n>{}</td></tr>",
+            "<tr><td class=n>{}</td><td>{}</td><td class=n>{}</td><td class=n>{}</td><td>{}</td><td class=n>{}</td><td class=n>{}</td></tr>",
+            num_of(&p.variant),
             esc(&p.variant),
             num(p.gpu_ms),
             num(p.value),

@@ -1,17 +1,22 @@
-//! One run (`/runs/{run_id}`, `/api/runs/{run_id}`): per scenario, every variant with its status
-//! or skip reason, per-pass GPU time (stacked), speedup against native on the same adapter,
-//! metrics, memory, and links to its series and images.
+//! One run (`/runs/{run_id}`, `/api/runs/{run_id}?format=json|csv`): per scenario, every variant
+//! with its status or skip reason, per-pass GPU time (stacked), speedup against native on the same
+//! adapter, the change of GPU time against the previous run of the same suite on the same adapter
+//! (the significance test of `tessera compare`), metrics, memory, and links to its series and
+//! images. The CSV export has the columns of the harness's `results.csv`.
 
 use std::fmt::Write;
 
-use axum::extract::{Path, State};
-use axum::response::Html;
+use axum::extract::{Path, Query, State};
+use axum::response::{Html, IntoResponse, Response};
 use axum::Json;
+use tessera_results::stats::{compare_times, frame_samples, TimeVerdict, DEFAULT_THRESHOLD_PCT};
 use tessera_results::{ScenarioResult, Status};
 
+use super::export::{csv, csv_response, no_markdown, Format, FormatQuery};
 use super::{AppError, AppState};
-use crate::html::{bytes, commit, enc, esc, ms, num, page as layout};
-use crate::store::measures::{native_gpu_ms, speedup};
+use crate::html::{bytes, commit, enc, esc, ms, num, page as layout, pct};
+use crate::store::browse;
+use crate::store::measures::{measures, native_gpu_ms, speedup};
 use crate::store::read::{self, RunDetail};
 use crate::svg::{stacked_bars, Bar};
 
@@ -19,14 +24,101 @@ async fn load(state: &AppState, run_id: String) -> Result<RunDetail, AppError> {
     state.db(move |c| Ok(read::run(c, &run_id)?)).await
 }
 
+/// `format=json` (default): the run with its records; `format=csv`: one row per (scenario,
+/// variant, measure), the columns of `results.csv`.
 pub async fn api(
     State(state): State<AppState>,
     Path(run_id): Path<String>,
-) -> Result<Json<RunDetail>, AppError> {
-    Ok(Json(load(&state, run_id).await?))
+    Query(f): Query<FormatQuery>,
+) -> Result<Response, AppError> {
+    let d = load(&state, run_id).await?;
+    match f.format {
+        Format::Json => Ok(Json(d).into_response()),
+        Format::Csv => {
+            let mut rows = Vec::new();
+            for s in &d.scenarios {
+                let native = native_gpu_ms(s);
+                for v in &s.results {
+                    let base = [
+                        d.run.run_id.clone(),
+                        s.scenario.clone(),
+                        v.variant.clone(),
+                        v.technique.clone(),
+                        d.run.adapter.clone(),
+                        d.run.backend.clone(),
+                        v.status.label().to_string(),
+                    ];
+                    let ms = measures(v, native);
+                    if ms.is_empty() {
+                        let mut r = base.to_vec();
+                        r.extend(["status".into(), String::new(), String::new()]);
+                        rows.push(r);
+                    }
+                    for m in ms {
+                        let unit = if m.name.ends_with("ms.median") {
+                            "ms"
+                        } else if m.name == "allocated_bytes" {
+                            "bytes"
+                        } else if m.name.starts_with("speedup") {
+                            "x"
+                        } else {
+                            ""
+                        };
+                        let mut r = base.to_vec();
+                        r.extend([m.name, m.value.to_string(), unit.to_string()]);
+                        rows.push(r);
+                    }
+                }
+            }
+            let body = csv(&tessera_results::CSV_COLUMNS, &rows);
+            Ok(csv_response(body, &format!("{}.csv", d.run.run_id)))
+        }
+        Format::Md => Err(no_markdown()),
+    }
 }
 
-fn scenario_section(d: &RunDetail, s: &ScenarioResult, out: &mut String) {
+/// The previous run of the same suite on the same adapter, with its scenario records.
+pub struct Previous {
+    pub run_id: String,
+    pub scenarios: Vec<ScenarioResult>,
+}
+
+/// GPU time of `variant` against the previous run: change and verdict, as a table cell.
+fn change_cell(
+    prev: Option<&Previous>,
+    scenario: &str,
+    v: &tessera_results::VariantResult,
+) -> String {
+    let Some(prev) = prev else {
+        return "<td class=n></td>".into();
+    };
+    let before = prev
+        .scenarios
+        .iter()
+        .find(|s| s.scenario == scenario)
+        .and_then(|s| s.results.iter().find(|w| w.variant == v.variant))
+        .filter(|w| w.status == Status::Ok);
+    let (Some(a), Some(b)) = (before.and_then(frame_samples), frame_samples(v)) else {
+        return "<td class=n>–</td>".into();
+    };
+    match compare_times(&a, &b, DEFAULT_THRESHOLD_PCT) {
+        Some(c) => {
+            let (class, word) = match c.verdict {
+                TimeVerdict::Slower => ("worse", "slower"),
+                TimeVerdict::Faster => ("better", "faster"),
+                TimeVerdict::Same => ("muted", "within noise"),
+            };
+            format!(
+                "<td class=\"n {class}\" title=\"{word}, Mann-Whitney U p={:.4}\">{}</td>",
+                c.p,
+                pct(c.change)
+            )
+        }
+        None => "<td class=n>–</td>".into(),
+    }
+}
+
+fn scenario_section(d: &RunDetail, prev: Option<&Previous>, s: &ScenarioResult, out: &mut String) {
     let _ = write!(
         out,
         "<h2 id=\"s-{}\">{}</h2><p class=muted>{}×{}, {} measured frames after {} warm-up, reference: {}, wall {:.0} ms</p>",
@@ -62,7 +154,7 @@ fn scenario_section(d: &RunDetail, s: &ScenarioResult, out: &mut String) {
             metric_names.push(&m.name);
         }
     }
-    let _ = write!(out, "<table class=variants><tr><th>variant</th><th>status</th><th class=n>GPU ms</th><th class=n>CPU ms</th><th class=n>speedup</th>");
+    let _ = write!(out, "<div class=scroll><table class=variants><tr><th>variant</th><th>status</th><th class=n>GPU ms</th><th class=n title=\"GPU time against the previous run of the suite\">vs prev</th><th class=n>CPU ms</th><th class=n>speedup</th>");
     for m in &metric_names {
         let _ = write!(out, "<th class=n>{}</th>", esc(m));
     }
@@ -84,12 +176,15 @@ fn scenario_section(d: &RunDetail, s: &ScenarioResult, out: &mut String) {
             Status::Failed { error } => format!("<span class=failed>failed</span>: {}", esc(error)),
         };
         let sp = speedup(v, native).map_or("–".into(), |x| format!("{x:.2}×"));
+        let ok = v.status == Status::Ok;
+        // Skipped and failed variants measured nothing: no times, no memory.
         let _ = write!(
             out,
-            "<tr><td>{}</td><td>{status}</td><td class=n>{}</td><td class=n>{}</td><td class=n>{sp}</td>",
+            "<tr><td>{}</td><td>{status}</td><td class=n>{}</td>{}<td class=n>{}</td><td class=n>{sp}</td>",
             esc(&v.variant),
-            ms(v.gpu_frame_ms.map(|g| g.median)),
-            ms(Some(v.cpu_frame_ms.median))
+            if ok { ms(v.gpu_frame_ms.map(|g| g.median)) } else { "–".into() },
+            if ok { change_cell(prev, &s.scenario, v) } else { "<td class=n>–</td>".into() },
+            if ok { ms(Some(v.cpu_frame_ms.median)) } else { "–".into() }
         );
         for name in &metric_names {
             let val = v
@@ -126,13 +221,13 @@ fn scenario_section(d: &RunDetail, s: &ScenarioResult, out: &mut String) {
         };
         let _ = write!(
             out,
-            "<td class=n>{}</td><td>{}</td><td>{}</td><td>{series_link}{images}</td></tr>",
-            bytes(v.allocated_bytes),
+            "<td class=n>{}</td><td class=wrap>{}</td><td class=wrap>{}</td><td>{series_link}{images}</td></tr>",
+            if ok { bytes(v.allocated_bytes) } else { "–".into() },
             passes.join(", "),
             gates.join("; ")
         );
     }
-    out.push_str("</table>");
+    out.push_str("</table></div>");
     let _ = write!(
         out,
         "<p><a href=\"/pareto?scenario={}&adapter={}&run={}\">error against time</a></p>",
@@ -143,7 +238,7 @@ fn scenario_section(d: &RunDetail, s: &ScenarioResult, out: &mut String) {
 }
 
 /// The run page body.
-pub fn render(d: &RunDetail) -> String {
+pub fn render(d: &RunDetail, prev: Option<&Previous>) -> String {
     let r = &d.run;
     let mut out = format!(
         "<p>commit <code>{}</code>{} · started {} · finished {} · {} · harness {}</p><p>adapter <a href=\"/?adapter={}\">{}</a> ({}, {}) · driver {} {} · host {}</p><p><span class=ok>{} ok</span> · <span class=skipped>{} skipped</span> · <span class=failed>{} failed</span></p>",
@@ -164,8 +259,29 @@ pub fn render(d: &RunDetail) -> String {
         r.skipped,
         r.failed
     );
+    let _ = write!(
+        out,
+        "<p>suite {} · branch {} · export <a href=\"/api/runs/{}?format=csv\">CSV</a> <a href=\"/api/runs/{}\">JSON</a></p>",
+        esc(r.suite.as_deref().unwrap_or("–")),
+        esc(r.branch.as_deref().unwrap_or("–")),
+        enc(&r.run_id),
+        enc(&r.run_id)
+    );
+    match prev {
+        Some(p) => {
+            let _ = write!(
+                out,
+                "<p>Previous run of this suite on this adapter: <a href=\"/runs/{}\">{}</a> · <a id=compare-prev href=\"/compare/runs?a={}&b={}\">compare with it</a>. The <em>vs prev</em> column is the change of median GPU time (red: slower, green: faster beyond noise by the test of <code>tessera compare</code>; grey: within noise).</p>",
+                enc(&p.run_id),
+                esc(&p.run_id),
+                enc(&p.run_id),
+                enc(&r.run_id)
+            );
+        }
+        None => out.push_str("<p class=muted>No earlier run of this suite on this adapter.</p>"),
+    }
     for s in &d.scenarios {
-        scenario_section(d, s, &mut out);
+        scenario_section(d, prev, s, &mut out);
     }
     out
 }
@@ -174,10 +290,22 @@ pub async fn page(
     State(state): State<AppState>,
     Path(run_id): Path<String>,
 ) -> Result<Html<String>, AppError> {
-    let d = load(&state, run_id).await?;
+    let (d, prev) = state
+        .db(move |c| {
+            let d = read::run(c, &run_id)?;
+            let prev = match browse::previous_in_suite(c, &run_id)? {
+                Some(p) => Some(Previous {
+                    scenarios: read::run_scenarios(c, &p)?,
+                    run_id: p,
+                }),
+                None => None,
+            };
+            Ok((d, prev))
+        })
+        .await?;
     Ok(Html(layout(
         &format!("Run {}", d.run.run_id),
         "runs",
-        &render(&d),
+        &render(&d, prev.as_ref()),
     )))
 }

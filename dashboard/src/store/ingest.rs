@@ -284,6 +284,7 @@ fn ingest_once(conn: &mut dyn Connection, bundle: &RunBundle) -> Result<Ingested
         )?;
         series.push(id);
     }
+    super::extras::store(conn, run_pk, adapter, bundle)?;
     Ok(Ingested::Stored {
         run_pk,
         results,

@@ -3,6 +3,8 @@
 //!
 //! Not for: SQL dialect details (see [`crate::db`]), HTTP or HTML.
 
+pub mod browse;
+pub mod extras;
 pub mod groups;
 pub mod ingest;
 pub mod measures;

@@ -25,13 +25,16 @@ pub struct RunRow {
     pub ok: i64,
     pub skipped: i64,
     pub failed: i64,
+    /// Suite and branch (`None` when the run did not record them).
+    pub suite: Option<String>,
+    pub branch: Option<String>,
 }
 
-const RUN_COLUMNS: &str =
+pub(crate) const RUN_COLUMNS: &str =
     "r.run_id, r.commit_sha, r.dirty, r.started_at, r.status, r.harness_version, r.adapter_id,
-    a.name, a.backend, r.driver, r.driver_info, r.n_ok, r.n_skipped, r.n_failed";
+    a.name, a.backend, r.driver, r.driver_info, r.n_ok, r.n_skipped, r.n_failed, r.suite, r.branch";
 
-fn run_row(r: &Row) -> Result<RunRow, StoreError> {
+pub(crate) fn run_row(r: &Row) -> Result<RunRow, StoreError> {
     Ok(RunRow {
         run_id: r.string(0)?,
         commit: r.opt_string(1)?,
@@ -47,6 +50,8 @@ fn run_row(r: &Row) -> Result<RunRow, StoreError> {
         ok: r.i64(11)?,
         skipped: r.i64(12)?,
         failed: r.i64(13)?,
+        suite: r.opt_string(14)?,
+        branch: r.opt_string(15)?,
     })
 }
 
@@ -133,7 +138,7 @@ pub struct RunDetail {
     pub series: Vec<SeriesLink>,
 }
 
-fn run_pk(conn: &mut dyn Connection, run_id: &str) -> Result<i64, StoreError> {
+pub(crate) fn run_pk(conn: &mut dyn Connection, run_id: &str) -> Result<i64, StoreError> {
     conn.query_opt("SELECT id FROM runs WHERE run_id = $1", &[run_id.into()])?
         .ok_or_else(|| StoreError::NotFound(format!("run {run_id}")))?
         .i64(0)
@@ -150,7 +155,7 @@ pub fn run(conn: &mut dyn Connection, run_id: &str) -> Result<RunDetail, StoreEr
     )?;
     let run = run_row(&row[0])?;
     let info: RunInfo =
-        serde_json::from_str(row[0].str(14)?).map_err(|e| StoreError::Corrupt(e.to_string()))?;
+        serde_json::from_str(row[0].str(16)?).map_err(|e| StoreError::Corrupt(e.to_string()))?;
     let scenarios = scenarios_of(conn, pk)?;
     let images = images_of(conn, pk, None)?;
     let series = conn
@@ -173,7 +178,10 @@ pub fn run(conn: &mut dyn Connection, run_id: &str) -> Result<RunDetail, StoreEr
     })
 }
 
-fn scenarios_of(conn: &mut dyn Connection, pk: i64) -> Result<Vec<ScenarioResult>, StoreError> {
+pub(crate) fn scenarios_of(
+    conn: &mut dyn Connection,
+    pk: i64,
+) -> Result<Vec<ScenarioResult>, StoreError> {
     conn.query(
         "SELECT record_json FROM scenario_results WHERE run_pk = $1 ORDER BY scenario",
         &[Value::Int(pk)],
@@ -246,10 +254,10 @@ pub struct SeriesKey {
     pub higher_is_better: bool,
 }
 
-const SERIES_COLUMNS: &str =
+pub(crate) const SERIES_COLUMNS: &str =
     "s.id, s.scenario, s.variant, s.adapter_id, a.name, s.measure, s.higher_is_better";
 
-fn series_key(r: &Row) -> Result<SeriesKey, StoreError> {
+pub(crate) fn series_key(r: &Row) -> Result<SeriesKey, StoreError> {
     Ok(SeriesKey {
         id: r.i64(0)?,
         scenario: r.string(1)?,
