@@ -339,6 +339,28 @@ fn stored_change(c: &ChangePoint) -> Value {
     Value::Real(c.relative_change.clamp(-1e300, 1e300))
 }
 
+/// The stored alerts of every series run `run_pk` has a point in, by series: one query for an
+/// upload instead of one per series.
+fn alerts_of_run(
+    conn: &mut dyn Connection,
+    run_pk: i64,
+) -> Result<HashMap<i64, Vec<StoredAlert>>, StoreError> {
+    let mut out: HashMap<i64, Vec<StoredAlert>> = HashMap::new();
+    for r in conn.query(
+        "SELECT series_id, id, run_pk_after, relative_change, status FROM regressions
+         WHERE series_id IN (SELECT series_id FROM points WHERE run_pk = $1)",
+        &[Value::Int(run_pk)],
+    )? {
+        out.entry(r.i64(0)?).or_default().push(StoredAlert {
+            id: r.i64(1)?,
+            run_pk_after: r.i64(2)?,
+            relative_change: r.opt_f64(3)?.unwrap_or(f64::INFINITY),
+            status: r.string(4)?,
+        });
+    }
+    Ok(out)
+}
+
 /// One detection pass over one series (see the module doc). Runs inside the caller's transaction.
 pub fn update_series(
     conn: &mut dyn Connection,
@@ -346,9 +368,20 @@ pub fn update_series(
     params: &Params,
     envs: &mut Environments,
 ) -> Result<Changes, StoreError> {
+    let alerts = stored_alerts(conn, series_id)?;
+    update_series_with(conn, series_id, params, envs, alerts)
+}
+
+/// [`update_series`] with the series' stored alerts already read.
+fn update_series_with(
+    conn: &mut dyn Connection,
+    series_id: i64,
+    params: &Params,
+    envs: &mut Environments,
+    alerts: Vec<StoredAlert>,
+) -> Result<Changes, StoreError> {
     let pts = window(conn, series_id, params.window, envs)?;
     let found = find(&pts, params);
-    let alerts = stored_alerts(conn, series_id)?;
     if found.is_empty() && alerts.iter().all(|a| a.status == WITHDRAWN) {
         return Ok(Changes::default());
     }
@@ -478,8 +511,10 @@ pub fn ingest_and_detect(
             if let Ingested::Stored { run_pk, series, .. } = &ingested {
                 lock_series_of_run(c, *run_pk)?;
                 let mut envs = Environments::default();
+                let mut alerts = alerts_of_run(c, *run_pk)?;
                 for &id in series {
-                    changes += update_series(c, id, params, &mut envs)?;
+                    let stored = alerts.remove(&id).unwrap_or_default();
+                    changes += update_series_with(c, id, params, &mut envs, stored)?;
                 }
             }
             Ok::<_, StoreError>((ingested, changes))

@@ -91,7 +91,7 @@ struct Schedule {
 }
 
 fn schedule(template: &RunBundle, config: &Config, profile: usize) -> Schedule {
-    let mut rng = Rng::new(config.seed ^ (profile as u64 + 1) * 0x9E37);
+    let mut rng = Rng::new(config.seed ^ ((profile as u64 + 1) * 0x9E37));
     let n = config.nights;
     let driver_change = n * 3 / 5;
     let pick = |rng: &mut Rng, k: usize| (rng.next_u64() % k.max(1) as u64) as usize;

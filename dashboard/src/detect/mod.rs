@@ -66,7 +66,7 @@ impl Default for Params {
 pub struct ChangePoint {
     /// Index of the first point after the change.
     pub index: usize,
-    /// Mean of the sub-segment before and after the change.
+    /// Median of the sub-segment before and after the change (robust to an outlier on either side).
     pub before: f64,
     pub after: f64,
     /// (after − before) / |before|.
@@ -149,8 +149,9 @@ fn split(values: &[f64], offset: usize, params: &Params, found: &mut Vec<ChangeP
     } else {
         k
     };
-    let before = mean(&values[..k]);
-    let after = mean(&values[k..]);
+    // Levels are medians: an outlier on the short side must not cancel (or fake) the step's size.
+    let before = level(&values[..k]);
+    let after = level(&values[k..]);
     let relative_change = if before != 0.0 {
         (after - before) / before.abs()
     } else {
@@ -190,6 +191,18 @@ pub fn refine_at_end(values: &[f64], from: usize) -> usize {
         }
     }
     best.0
+}
+
+/// The median of `v` (mean of the two middle values for an even count): a side's level.
+pub fn level(v: &[f64]) -> f64 {
+    let mut s = v.to_vec();
+    s.sort_by(|a, b| a.total_cmp(b));
+    let n = s.len();
+    if n % 2 == 1 {
+        s[n / 2]
+    } else {
+        (s[n / 2 - 1] + s[n / 2]) / 2.0
+    }
 }
 
 pub fn mean(v: &[f64]) -> f64 {
