@@ -1,13 +1,18 @@
 //! The HTTP server: [`app`] builds the axum router (tested with `oneshot`), [`AppState`] holds
 //! the store and the upload token, [`AppError`] turns every failure into a status and a JSON body.
+//! The write path (tokens, rate limit, timeouts, JSON for every error) is [`auth`], [`listen`]
+//! and the layers at the end of [`app`].
 //! One module per endpoint; each serves its HTML page and the JSON API the page is built from.
 //!
 //! Not for: SQL (see [`crate::store`]) or chart drawing (see [`crate::svg`]).
 
 pub mod auth;
 pub mod compare;
+pub mod delete;
 pub mod error;
+pub mod health;
 pub mod images;
+pub mod listen;
 pub mod pareto;
 pub mod regressions;
 pub mod run;
@@ -16,10 +21,13 @@ pub mod series;
 pub mod upload;
 
 use axum::extract::DefaultBodyLimit;
-use axum::routing::{get, post};
-use axum::Router;
+use axum::http::StatusCode;
+use axum::routing::{delete, get, post};
+use axum::{middleware, Router};
+use tower_http::timeout::{RequestBodyTimeoutLayer, TimeoutLayer};
 
 pub use error::AppError;
+pub use listen::Timeouts;
 
 use crate::db::{Connection, Pool};
 use crate::detect::Params;
@@ -34,6 +42,10 @@ pub struct AppState {
     pub token: Option<String>,
     pub max_upload_bytes: usize,
     pub detect: Params,
+    /// Named tokens, rate limit, read protection (see [`auth`]).
+    pub auth: auth::Auth,
+    /// Header, body and request deadlines (see [`listen`]).
+    pub timeouts: Timeouts,
 }
 
 impl AppState {
@@ -43,6 +55,8 @@ impl AppState {
             token,
             max_upload_bytes: DEFAULT_MAX_UPLOAD_BYTES,
             detect: Params::default(),
+            auth: auth::Auth::default(),
+            timeouts: Timeouts::default(),
         }
     }
 
@@ -86,7 +100,18 @@ pub fn app(state: AppState) -> Router {
         .route("/api/compare", get(compare::api))
         .route("/pareto", get(pareto::page))
         .route("/api/pareto", get(pareto::api))
+        .route("/healthz", get(health::healthz))
+        .route("/api/runs/{run_id}", delete(delete::api))
         .fallback(|| async { AppError::NotFound("no such page".into()) })
         .layer(DefaultBodyLimit::max(state.max_upload_bytes))
+        // Outermost last: JSON errors, request deadline, body idle deadline, then the token
+        // check, which runs before any handler reads a body.
+        .layer(middleware::from_fn_with_state(state.clone(), auth::guard))
+        .layer(RequestBodyTimeoutLayer::new(state.timeouts.body_idle))
+        .layer(TimeoutLayer::with_status_code(
+            StatusCode::REQUEST_TIMEOUT,
+            state.timeouts.request,
+        ))
+        .layer(middleware::from_fn(error::json_errors))
         .with_state(state)
 }

@@ -3,9 +3,11 @@
 //!
 //! Not for: SQL dialect details (see [`crate::db`]), HTTP or HTML.
 
+pub mod delete;
 pub mod ingest;
 pub mod measures;
 pub mod read;
+pub mod tokens;
 pub mod triage;
 
 use crate::db::DbError;
