@@ -62,6 +62,15 @@ async fn send(app: &Router, req: Request<Body>) -> Reply {
     }
 }
 
+/// A runtime for tests that also talk to PostgreSQL: its synchronous client must not be used
+/// from inside a runtime, so store work stays outside `block_on`.
+fn runtime() -> tokio::runtime::Runtime {
+    tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+        .unwrap()
+}
+
 fn req(method: &str, uri: &str, token: Option<&str>, body: impl Into<Body>) -> Request<Body> {
     let mut r = Request::builder()
         .method(method)
@@ -368,11 +377,12 @@ async fn axum_rejections_come_back_as_json_errors() {
     }
 }
 
-#[tokio::test]
-async fn healthz_reports_the_store_and_its_schema() {
+#[test]
+fn healthz_reports_the_store_and_its_schema() {
+    let rt = runtime();
     for store in common::stores("healthz_reports_the_store_and_its_schema") {
         let app = app(AppState::new(store.pool.clone(), None));
-        let r = send(&app, req("GET", "/healthz", None, "")).await;
+        let r = rt.block_on(send(&app, req("GET", "/healthz", None, "")));
         assert_eq!(r.status, StatusCode::OK, "{}", r.body);
         let v = r.json();
         assert_eq!(v["status"], "ok");
@@ -408,8 +418,10 @@ fn count(pool: &Pool, sql: &str) -> i64 {
         .unwrap()
 }
 
-#[tokio::test]
-async fn deleting_a_run_removes_everything_that_hangs_off_it() {
+#[test]
+fn deleting_a_run_removes_everything_that_hangs_off_it() {
+    let rt = runtime();
+    let call = |app: &Router, r: Request<Body>| rt.block_on(send(app, r));
     for store in common::stores("deleting_a_run_removes_everything_that_hangs_off_it") {
         let pool = &store.pool;
         tessera_dashboard::import::import(pool, &common::fixtures(), &Default::default()).unwrap();
@@ -430,21 +442,21 @@ async fn deleting_a_run_removes_everything_that_hangs_off_it() {
         let uri = format!("/api/runs/{alert_run}");
 
         assert_eq!(
-            send(&app, req("DELETE", &uri, None, "")).await.status,
+            call(&app, req("DELETE", &uri, None, "")).status,
             StatusCode::UNAUTHORIZED
         );
-        let r = send(&app, req("DELETE", &uri, Some(&viewer), "")).await;
+        let r = call(&app, req("DELETE", &uri, Some(&viewer), ""));
         assert_eq!(r.status, StatusCode::FORBIDDEN, "{}", r.error());
 
         let runs_before = count(pool, "SELECT COUNT(*) FROM runs");
-        let r = send(&app, req("DELETE", &uri, Some(&writer), "")).await;
+        let r = call(&app, req("DELETE", &uri, Some(&writer), ""));
         assert_eq!(r.status, StatusCode::OK, "{}: {}", store.name, r.body);
         let d = r.json();
         assert_eq!(d["run_id"], alert_run.as_str());
         assert!(d["results"].as_u64().unwrap() > 0 && d["points"].as_u64().unwrap() > 0);
         assert!(d["alerts"].as_u64().unwrap() >= 1, "{d}");
         assert_eq!(count(pool, "SELECT COUNT(*) FROM runs"), runs_before - 1);
-        let gone = send(&app, req("GET", &uri, None, "")).await;
+        let gone = call(&app, req("GET", &uri, None, ""));
         assert_eq!(gone.status, StatusCode::NOT_FOUND);
         for orphan in [
             "SELECT COUNT(*) FROM points p WHERE NOT EXISTS (SELECT 1 FROM runs r WHERE r.id = p.run_pk)",
@@ -473,11 +485,10 @@ async fn deleting_a_run_removes_everything_that_hangs_off_it() {
         let blobs = count(pool, "SELECT COUNT(*) FROM blobs");
         assert!(blobs > 0);
         for run in &real {
-            let r = send(
+            let r = call(
                 &app,
                 req("DELETE", &format!("/api/runs/{run}"), Some(&writer), ""),
-            )
-            .await;
+            );
             assert_eq!(r.status, StatusCode::OK, "{}", r.body);
             let unused = count(
                 pool,
@@ -501,7 +512,7 @@ async fn deleting_a_run_removes_everything_that_hangs_off_it() {
             count(pool, "SELECT COUNT(DISTINCT digest) FROM images")
         );
 
-        let r = send(&app, req("DELETE", "/api/runs/nope", Some(&writer), "")).await;
+        let r = call(&app, req("DELETE", "/api/runs/nope", Some(&writer), ""));
         assert_eq!(r.status, StatusCode::NOT_FOUND);
         assert!(r.error().contains("nope"));
     }

@@ -24,7 +24,9 @@ use axum::extract::DefaultBodyLimit;
 use axum::http::StatusCode;
 use axum::routing::{delete, get, post};
 use axum::{middleware, Router};
-use tower_http::timeout::{RequestBodyTimeoutLayer, TimeoutLayer};
+use axum::body::Body;
+use axum::extract::Request;
+use tower_http::timeout::{RequestBodyTimeoutLayer, TimeoutBody, TimeoutLayer};
 
 pub use error::AppError;
 pub use listen::Timeouts;
@@ -77,7 +79,7 @@ impl AppState {
 
 /// The router with every page and API route.
 pub fn app(state: AppState) -> Router {
-    Router::new()
+    let routes = Router::new()
         .route("/", get(runs::page))
         .route("/api/runs", get(runs::api).post(upload::api))
         .route("/runs/{run_id}", get(run::page))
@@ -104,14 +106,24 @@ pub fn app(state: AppState) -> Router {
         .route("/api/runs/{run_id}", delete(delete::api))
         .fallback(|| async { AppError::NotFound("no such page".into()) })
         .layer(DefaultBodyLimit::max(state.max_upload_bytes))
-        // Outermost last: JSON errors, request deadline, body idle deadline, then the token
-        // check, which runs before any handler reads a body.
-        .layer(middleware::from_fn_with_state(state.clone(), auth::guard))
-        .layer(RequestBodyTimeoutLayer::new(state.timeouts.body_idle))
+        .with_state(state.clone());
+    write_path(routes, &state)
+}
+
+/// The write path's layers around the whole router, outermost first: every error as JSON, the
+/// whole-request deadline (408), the body idle deadline, then the token check and rate limit,
+/// which run before any handler reads a body. Wrapped around the router as a service, not with
+/// `Router::layer`, so that axum still sets `Allow` on its 405s.
+fn write_path(routes: Router, state: &AppState) -> Router {
+    let service = tower::ServiceBuilder::new()
+        .layer(middleware::from_fn(error::json_errors))
         .layer(TimeoutLayer::with_status_code(
             StatusCode::REQUEST_TIMEOUT,
             state.timeouts.request,
         ))
-        .layer(middleware::from_fn(error::json_errors))
-        .with_state(state)
+        .layer(RequestBodyTimeoutLayer::new(state.timeouts.body_idle))
+        .map_request(|req: Request<TimeoutBody<Body>>| req.map(Body::new))
+        .layer(middleware::from_fn_with_state(state.clone(), auth::guard))
+        .service(routes);
+    Router::new().fallback_service(service)
 }
