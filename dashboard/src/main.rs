@@ -50,19 +50,19 @@ enum Command {
         #[arg(long)]
         require_read_token: bool,
         /// Sustained writes per minute per token (0: no limit).
-        #[arg(long, default_value_t = 60)]
+        #[arg(long, default_value_t = AuthConfig::default().writes_per_minute)]
         writes_per_minute: u32,
         /// Writes a token may make at once before the per-minute rate applies.
-        #[arg(long, default_value_t = 30)]
+        #[arg(long, default_value_t = AuthConfig::default().write_burst)]
         write_burst: u32,
         /// A client must send a whole request head within this many seconds of connecting.
-        #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u64).range(1..))]
+        #[arg(long, default_value_t = server::Timeouts::default().header.as_secs(), value_parser = clap::value_parser!(u64).range(1..))]
         header_timeout_secs: u64,
         /// Longest pause between two chunks of a request body.
-        #[arg(long, default_value_t = 30, value_parser = clap::value_parser!(u64).range(1..))]
+        #[arg(long, default_value_t = server::Timeouts::default().body_idle.as_secs(), value_parser = clap::value_parser!(u64).range(1..))]
         body_timeout_secs: u64,
         /// Longest time for a whole request, body and answer included (408 after it).
-        #[arg(long, default_value_t = 300, value_parser = clap::value_parser!(u64).range(1..))]
+        #[arg(long, default_value_t = server::Timeouts::default().request.as_secs(), value_parser = clap::value_parser!(u64).range(1..))]
         request_timeout_secs: u64,
     },
     /// Named API tokens with read or write scope, stored hashed.

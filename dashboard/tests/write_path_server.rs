@@ -1,7 +1,8 @@
 //! The write path against the real `tessera-dashboard serve` process on a loopback port: 8
 //! concurrent 60 MiB uploads without a valid token are refused (401 JSON) without the server's
 //! resident memory growing by 50 MB, and 300 connections that send one byte and stall are closed
-//! by the server within its header timeout. Raw sockets from plain threads keep the tests' own
+//! by the server within its header timeout, and bodies that stall or trickle get a 408 JSON error at
+//! the body idle timeout or the request timeout. Also the `token` and `retention` commands. Raw sockets from plain threads keep the tests' own
 //! cost low (the CI machine has 2 cores). Memory is the server's `VmRSS` from `/proc`.
 
 use std::io::{BufRead, BufReader, Read, Write};
@@ -257,4 +258,131 @@ fn slow_clients_are_dropped_at_the_header_timeout() {
         "closed after {first:?}, before the timeout: by something else?"
     );
     assert!(server.get("/healthz").0.contains("200"), "still serving");
+}
+
+/// Sends an upload head with a valid token and `Content-Length: 1000`, then `trickle` bytes of
+/// body `every` apart; returns the answer and when it came, from the head.
+fn stalled_upload(server: &Server, trickle: usize, every: Duration) -> (String, String, Duration) {
+    let mut s = TcpStream::connect(server.addr).unwrap();
+    s.set_read_timeout(Some(Duration::from_secs(15))).unwrap();
+    write!(
+        s,
+        "POST /api/runs HTTP/1.1\r\nHost: t\r\nAuthorization: Bearer t0ken\r\nContent-Type: application/json\r\nContent-Length: 1000\r\n\r\n{{"
+    )
+    .unwrap();
+    let start = Instant::now();
+    let mut w = s.try_clone().unwrap();
+    let writer = std::thread::spawn(move || {
+        for _ in 0..trickle {
+            std::thread::sleep(every);
+            if w.write_all(b" ").is_err() {
+                break;
+            }
+        }
+    });
+    let mut text = Vec::new();
+    let _ = s.read_to_end(&mut text);
+    let at = start.elapsed();
+    writer.join().unwrap();
+    let (status, body) = split_response(&String::from_utf8_lossy(&text));
+    (status, body, at)
+}
+
+#[test]
+fn stalled_and_trickling_bodies_are_cut_off() {
+    let server = Server::start(&[
+        "--token",
+        "t0ken",
+        "--body-timeout-secs",
+        "1",
+        "--request-timeout-secs",
+        "3",
+    ]);
+    // A body that stops: the body idle timeout (1 s).
+    let (status, body, at) = stalled_upload(&server, 0, Duration::ZERO);
+    eprintln!("stalled body: {status} after {at:?}: {body}");
+    assert!(status.contains(" 408 "), "{status} {body}");
+    assert!(
+        serde_json::from_str::<serde_json::Value>(&body).unwrap()["error"]
+            .as_str()
+            .unwrap()
+            .contains("paused")
+    );
+    assert!(
+        at >= Duration::from_millis(900) && at < Duration::from_millis(2500),
+        "{at:?}"
+    );
+    // A body that never pauses for long but never ends: the request timeout (3 s).
+    let (status, body, at) = stalled_upload(&server, 12, Duration::from_millis(400));
+    eprintln!("trickling body: {status} after {at:?}: {body}");
+    assert!(status.contains(" 408 "), "{status} {body}");
+    assert!(serde_json::from_str::<serde_json::Value>(&body).unwrap()["error"].is_string());
+    assert!(
+        at >= Duration::from_millis(2900) && at < Duration::from_millis(4500),
+        "{at:?}"
+    );
+}
+
+/// Runs the binary with `args`; returns the exit code, stdout and stderr.
+fn cli(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_tessera-dashboard"))
+        .args(args)
+        .env_remove("TESSERA_DASHBOARD_DB")
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn token_and_retention_commands() {
+    let dir = tempfile::tempdir().unwrap();
+    let db = dir.path().join("s.sqlite");
+    let db = db.to_str().unwrap();
+
+    let (code, secret, err) = cli(&["token", "add", "ci", "--scope", "write", "--db", db]);
+    assert_eq!(code, 0, "{err}");
+    let secret = secret.trim();
+    assert!(
+        secret.starts_with("tsr_") && !secret.contains('\n'),
+        "{secret}"
+    );
+    assert!(err.contains("shown only now"), "{err}");
+    let (code, _, err) = cli(&["token", "add", "ci", "--scope", "read", "--db", db]);
+    assert_eq!(code, 1);
+    assert!(err.contains("exists"), "{err}");
+    assert_eq!(
+        cli(&["token", "add", "x", "--scope", "admin", "--db", db]).0,
+        2
+    );
+    let (code, list, _) = cli(&["token", "list", "--db", db]);
+    assert_eq!(code, 0);
+    assert!(list.starts_with("ci\twrite\t"), "{list}");
+    assert!(!list.contains(secret));
+    assert_eq!(cli(&["token", "revoke", "ci", "--db", db]).0, 0);
+    let (code, _, err) = cli(&["token", "revoke", "ci", "--db", db]);
+    assert_eq!(code, 1);
+    assert!(err.contains("not found"), "{err}");
+
+    // Retention over the two committed runs (one adapter): dry run first.
+    let fixtures = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/runs");
+    assert_eq!(cli(&["import", fixtures, "--db", db]).0, 0);
+    assert_eq!(cli(&["retention", "--db", db]).0, 2, "a rule is required");
+    let (code, out, _) = cli(&["retention", "--keep-runs", "1", "--db", db]);
+    assert_eq!(code, 0);
+    assert!(
+        out.starts_with("would delete ")
+            && out.contains("1 runs would be deleted; nothing was changed"),
+        "{out}"
+    );
+    let (_, again, _) = cli(&["retention", "--keep-runs", "1", "--db", db]);
+    assert_eq!(again, out, "a dry run changes nothing");
+    let (code, out, err) = cli(&["retention", "--keep-runs", "1", "--apply", "--db", db]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("deleted 1 runs"), "{out}");
+    let (_, out, _) = cli(&["retention", "--keep-runs", "1", "--db", db]);
+    assert!(out.starts_with("0 runs would be deleted"), "{out}");
 }

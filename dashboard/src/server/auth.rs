@@ -58,8 +58,8 @@ impl Default for AuthConfig {
     fn default() -> Self {
         AuthConfig {
             require_read_token: false,
-            writes_per_minute: 60,
-            write_burst: 30,
+            writes_per_minute: 120,
+            write_burst: 60,
         }
     }
 }

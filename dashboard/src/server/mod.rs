@@ -20,12 +20,12 @@ pub mod runs;
 pub mod series;
 pub mod upload;
 
+use axum::body::Body;
 use axum::extract::DefaultBodyLimit;
+use axum::extract::Request;
 use axum::http::StatusCode;
 use axum::routing::{delete, get, post};
 use axum::{middleware, Router};
-use axum::body::Body;
-use axum::extract::Request;
 use tower_http::timeout::{RequestBodyTimeoutLayer, TimeoutBody, TimeoutLayer};
 
 pub use error::AppError;
