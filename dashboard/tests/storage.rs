@@ -236,7 +236,10 @@ fn store_newer_than_binary_is_refused() {
     match tessera_dashboard::db::open(&path) {
         Err(e @ DbError::SchemaTooNew { .. }) => assert_eq!(
             e.to_string(),
-            "the store has schema version 999, newer than this dashboard knows (1); upgrade tessera-dashboard"
+            format!(
+                "the store has schema version 999, newer than this dashboard knows ({}); upgrade tessera-dashboard",
+                tessera_dashboard::db::known_version()
+            )
         ),
         Err(e) => panic!("{e}"),
         Ok(_) => panic!("opened a newer store"),
