@@ -219,10 +219,17 @@ pub fn rate_limit(state: &AppState, principal: &Principal) -> Result<(), AppErro
     })
 }
 
+/// A browser form's `token` field: a write token, counted against its rate limit here (the guard
+/// cannot see a token inside a body).
+pub fn form_writer(state: &AppState, token: &str) -> Result<Principal, AppError> {
+    let p = require_token(state, Some(token), Scope::Write)?;
+    rate_limit(state, &p)?;
+    Ok(p)
+}
+
 /// Legacy form check (the triage form's `token` field): a write token, rate-limited.
 pub fn check_token(state: &AppState, given: Option<&str>) -> Result<(), AppError> {
-    let p = require_token(state, given, Scope::Write)?;
-    rate_limit(state, &p)
+    form_writer(state, given.unwrap_or_default()).map(drop)
 }
 
 /// Legacy header check: a write bearer token (the guard has already rate-limited it).

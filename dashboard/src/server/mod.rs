@@ -48,6 +48,8 @@ pub struct AppState {
     pub auth: auth::Auth,
     /// Header, body and request deadlines (see [`listen`]).
     pub timeouts: Timeouts,
+    /// The dashboard's public URL for absolute links (feed, Markdown); `None`: from `Host`.
+    pub public_url: Option<String>,
 }
 
 impl AppState {
@@ -59,6 +61,7 @@ impl AppState {
             detect: Params::default(),
             auth: auth::Auth::default(),
             timeouts: Timeouts::default(),
+            public_url: None,
         }
     }
 
@@ -98,6 +101,16 @@ pub fn app(state: AppState) -> Router {
         .route("/api/regressions", get(regressions::api))
         .route("/regressions/{id}", post(regressions::triage_form))
         .route("/api/regressions/{id}", post(regressions::triage_api))
+        .route("/regressions/feed.atom", get(regressions::feed))
+        .route(
+            "/regressions/groups/{key}",
+            get(regressions::group_page).post(regressions::group_form),
+        )
+        .route("/api/regressions/groups", get(regressions::groups_api))
+        .route(
+            "/api/regressions/groups/{key}",
+            get(regressions::group_api).post(regressions::group_triage_api),
+        )
         .route("/compare", get(compare::page))
         .route("/api/compare", get(compare::api))
         .route("/pareto", get(pareto::page))

@@ -3,7 +3,8 @@
 //! (`tessera-dashboard retention`), which then deletes each with the same [`delete_run`].
 //!
 //! What goes with a run: its scenario results, results, points, images, the blobs that no other
-//! run's images use, and every regression (alert) whose before or after run it was. Series stay
+//! run's images use, and every regression (alert) whose before or after run it was, with its
+//! history (`regression_events`). Series stay
 //! (other runs' points may use them; an empty series shows no points). Detection is not re-run
 //! here. Not for: HTTP (see [`crate::server::delete`]).
 
@@ -37,6 +38,11 @@ fn delete_once(c: &mut dyn Connection, run_id: &str) -> Result<Deleted, StoreErr
         return Err(StoreError::NotFound(format!("run {run_id}")));
     };
     let pk = [Value::Int(row.i64(0)?)];
+    c.execute(
+        "DELETE FROM regression_events WHERE regression_id IN \
+         (SELECT id FROM regressions WHERE run_pk_before = $1 OR run_pk_after = $1)",
+        &pk,
+    )?;
     let alerts = c.execute(
         "DELETE FROM regressions WHERE run_pk_before = $1 OR run_pk_after = $1",
         &pk,

@@ -4,8 +4,10 @@
 //! Not for: SQL dialect details (see [`crate::db`]), HTTP or HTML.
 
 pub mod delete;
+pub mod groups;
 pub mod ingest;
 pub mod measures;
+pub mod outbox;
 pub mod read;
 pub mod tokens;
 pub mod triage;
