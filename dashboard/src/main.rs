@@ -1,13 +1,17 @@
 //! `tessera-dashboard`: import run folders into the store, serve the dashboard, re-run regression
-//! detection, write an upload bundle. Errors print their whole chain; exit code 1 for a failed
-//! command, 2 for bad arguments (clap).
+//! detection, write an upload bundle, manage API tokens, apply a retention rule. Errors print their
+//! whole chain; exit code 1 for a failed command, 2 for bad arguments (clap).
 
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::time::Duration;
 
 use clap::{Parser, Subcommand};
 use tessera_dashboard::notify::webhook;
+use tessera_dashboard::server::auth::{AuthConfig, Scope};
+use tessera_dashboard::store::delete::{delete_run, expired, Retention};
 use tessera_dashboard::store::ingest::{ingest, Ingested};
+use tessera_dashboard::store::tokens;
 use tessera_dashboard::{
     bundle::RunBundle, db, detect::Params, import, regressions, replay, server, synth,
 };
@@ -37,12 +41,30 @@ enum Command {
         db: String,
         #[arg(long, default_value = "127.0.0.1:8080")]
         listen: String,
-        /// Bearer token that uploads and triage need; without one, writes are refused.
+        /// Legacy write token (named `legacy`), besides the tokens of `tessera-dashboard token`.
         #[arg(long, env = "TESSERA_DASHBOARD_TOKEN", hide_env_values = true)]
         token: Option<String>,
         /// Largest accepted upload in MiB.
         #[arg(long, default_value_t = 64)]
         max_upload_mib: usize,
+        /// Reads (pages and API, not /healthz) need a read or write token too.
+        #[arg(long)]
+        require_read_token: bool,
+        /// Sustained writes per minute per token (0: no limit).
+        #[arg(long, default_value_t = AuthConfig::default().writes_per_minute)]
+        writes_per_minute: u32,
+        /// Writes a token may make at once before the per-minute rate applies.
+        #[arg(long, default_value_t = AuthConfig::default().write_burst)]
+        write_burst: u32,
+        /// A client must send a whole request head within this many seconds of connecting.
+        #[arg(long, default_value_t = server::Timeouts::default().header.as_secs(), value_parser = clap::value_parser!(u64).range(1..))]
+        header_timeout_secs: u64,
+        /// Longest pause between two chunks of a request body.
+        #[arg(long, default_value_t = server::Timeouts::default().body_idle.as_secs(), value_parser = clap::value_parser!(u64).range(1..))]
+        body_timeout_secs: u64,
+        /// Longest time for a whole request, body and answer included (408 after it).
+        #[arg(long, default_value_t = server::Timeouts::default().request.as_secs(), value_parser = clap::value_parser!(u64).range(1..))]
+        request_timeout_secs: u64,
         /// The dashboard's URL as others reach it, for links in the feed, Markdown and webhook
         /// (default: http:// and the request's Host; the webhook uses http://<listen>).
         #[arg(long, env = "TESSERA_DASHBOARD_PUBLIC_URL")]
@@ -57,6 +79,28 @@ enum Command {
         /// Seconds between two looks for newly confirmed groups.
         #[arg(long, default_value_t = 30)]
         webhook_poll_s: u64,
+    },
+    /// Named API tokens with read or write scope, stored hashed.
+    Token {
+        #[command(subcommand)]
+        command: TokenCommand,
+        #[arg(long, env = "TESSERA_DASHBOARD_DB", default_value = DEFAULT_DB, global = true)]
+        db: String,
+    },
+    /// Delete runs that no retention rule keeps (dry run unless --apply). A run is kept when it
+    /// is younger than --keep-days or among the newest --keep-runs of its adapter.
+    Retention {
+        /// Keep runs that started at most this many days ago.
+        #[arg(long, required_unless_present = "keep_runs")]
+        keep_days: Option<u32>,
+        /// Keep the newest this many runs of each adapter.
+        #[arg(long)]
+        keep_runs: Option<u32>,
+        /// Delete; without it, only list what would be deleted.
+        #[arg(long)]
+        apply: bool,
+        #[arg(long, env = "TESSERA_DASHBOARD_DB", default_value = DEFAULT_DB)]
+        db: String,
     },
     /// Re-run regression detection on every stored series.
     Detect {
@@ -110,6 +154,81 @@ enum Command {
     },
 }
 
+#[derive(Subcommand)]
+enum TokenCommand {
+    /// Make a token and print its secret (shown only this once).
+    Add {
+        name: String,
+        #[arg(long, value_parser = ["read", "write"])]
+        scope: String,
+    },
+    /// List tokens: name, scope, creation time (never secrets).
+    List,
+    /// Delete a token; requests with it are refused from the next request on.
+    Revoke { name: String },
+}
+
+fn token_command(command: TokenCommand, db: &str) -> anyhow::Result<()> {
+    let pool = db::open(db)?;
+    let mut conn = pool.get()?;
+    match command {
+        TokenCommand::Add { name, scope } => {
+            let scope: Scope = scope.parse().map_err(anyhow::Error::msg)?;
+            let secret = tokens::add(&mut *conn, &name, scope)?;
+            eprintln!(
+                "token {name:?} ({}) added; its secret is shown only now:",
+                scope.as_str()
+            );
+            println!("{secret}");
+        }
+        TokenCommand::List => {
+            let list = tokens::list(&mut *conn)?;
+            if list.is_empty() {
+                eprintln!(
+                    "no tokens (add one with `tessera-dashboard token add NAME --scope write`)"
+                );
+            }
+            for t in list {
+                println!("{}\t{}\t{}", t.name, t.scope.as_str(), t.created_at);
+            }
+        }
+        TokenCommand::Revoke { name } => {
+            tokens::revoke(&mut *conn, &name)?;
+            println!("token {name:?} revoked");
+        }
+    }
+    Ok(())
+}
+
+fn retention(rule: Retention, apply: bool, db: &str) -> anyhow::Result<()> {
+    let pool = db::open(db)?;
+    let mut conn = pool.get()?;
+    let runs = expired(&mut *conn, rule, chrono::Utc::now())?;
+    for r in &runs {
+        if apply {
+            let d = delete_run(&mut *conn, &r.run_id)?;
+            println!(
+                "deleted {} ({}, {}): {} results, {} images, {} alerts",
+                r.run_id, r.started_at, r.adapter, d.results, d.images, d.alerts
+            );
+        } else {
+            println!(
+                "would delete {} ({}, {})",
+                r.run_id, r.started_at, r.adapter
+            );
+        }
+    }
+    if apply {
+        println!("deleted {} runs", runs.len());
+    } else {
+        println!(
+            "{} runs would be deleted; nothing was changed (add --apply to delete)",
+            runs.len()
+        );
+    }
+    Ok(())
+}
+
 fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Import { folder, db } => {
@@ -131,14 +250,31 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             listen,
             token,
             max_upload_mib,
+            require_read_token,
+            writes_per_minute,
+            write_burst,
+            header_timeout_secs,
+            body_timeout_secs,
+            request_timeout_secs,
             public_url,
             webhook_url,
             webhook_timeout_s,
             webhook_poll_s,
         } => {
             let pool = db::open(&db)?;
+            let named = tokens::list(&mut *pool.get()?)?;
             let mut state = server::AppState::new(pool, token.filter(|t| !t.is_empty()));
             state.max_upload_bytes = max_upload_mib << 20;
+            state.auth = server::auth::Auth::new(AuthConfig {
+                require_read_token,
+                writes_per_minute,
+                write_burst,
+            });
+            state.timeouts = server::Timeouts {
+                header: Duration::from_secs(header_timeout_secs),
+                body_idle: Duration::from_secs(body_timeout_secs),
+                request: Duration::from_secs(request_timeout_secs),
+            };
             let public_url = public_url.filter(|u| !u.is_empty());
             if let Some(u) = &public_url {
                 if !(u.starts_with("http://") || u.starts_with("https://")) {
@@ -161,9 +297,9 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 );
                 notifier.spawn();
             }
-            if state.token.is_none() {
+            if state.token.is_none() && !named.iter().any(|t| t.scope == Scope::Write) {
                 eprintln!(
-                    "note: no --token or TESSERA_DASHBOARD_TOKEN: uploads and triage are refused"
+                    "note: no write token (tessera-dashboard token add NAME --scope write, or --token): uploads and triage are refused"
                 );
             }
             let rt = tokio::runtime::Runtime::new()?;
@@ -171,15 +307,30 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 let listener = tokio::net::TcpListener::bind(&listen)
                     .await
                     .map_err(|e| anyhow::anyhow!("cannot listen on {listen}: {e}"))?;
-                eprintln!("serving {} on http://{listen}", state.pool.describe());
-                axum::serve(listener, server::app(state))
-                    .with_graceful_shutdown(async {
-                        let _ = tokio::signal::ctrl_c().await;
-                    })
-                    .await?;
+                let addr = listener.local_addr()?;
+                eprintln!("serving {} on http://{addr}", state.pool.describe());
+                let timeouts = state.timeouts;
+                server::listen::serve(listener, server::app(state), timeouts, async {
+                    let _ = tokio::signal::ctrl_c().await;
+                })
+                .await?;
                 anyhow::Ok(())
             })?;
         }
+        Command::Token { command, db } => token_command(command, &db)?,
+        Command::Retention {
+            keep_days,
+            keep_runs,
+            apply,
+            db,
+        } => retention(
+            Retention {
+                keep_days,
+                keep_runs,
+            },
+            apply,
+            &db,
+        )?,
         Command::Detect { db } => {
             let pool = db::open(&db)?;
             let mut conn = pool.get()?;

@@ -540,7 +540,7 @@ async fn alert_groups_api_triage_markdown_and_feed() {
             &serde_json::json!("fixed"),
             &serde_json::json!("reverted in c0ffee"),
             &serde_json::json!("https://bugs.example/7"),
-            &serde_json::json!("write token")
+            &serde_json::json!("legacy")
         )
     );
     // The form without JavaScript: token as a field, back to the group on the list.

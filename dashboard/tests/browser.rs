@@ -1117,7 +1117,7 @@ fn regressions_page_triages_groups_with_the_token_entered_once() {
                 (r.str(0).unwrap(), r.str(1).unwrap(), r.str(2).unwrap()),
                 want
             );
-            assert_eq!(r.str(3).unwrap(), "write token");
+            assert_eq!(r.str(3).unwrap(), "legacy");
         }
     }
 

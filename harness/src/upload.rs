@@ -170,6 +170,9 @@ pub fn post(url: &str, token: &str, body: &[u8]) -> Result<Reply, UploadError> {
         .post(&url)
         .header("Authorization", &format!("Bearer {token}"))
         .header("Content-Type", "application/json")
+        // The dashboard checks the token before it reads a body: with 100-continue a refused
+        // upload gets the dashboard's answer instead of a broken pipe half-way through the body.
+        .header("Expect", "100-continue")
         .send(body)
         .map_err(transport)?;
     let status = response.status().as_u16();

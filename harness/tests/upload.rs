@@ -52,6 +52,17 @@ impl Request {
 
 /// Serves one request with `status` and JSON `answer`; returns the URL and the recorded request.
 fn fake_dashboard(status: &'static str, answer: &'static str) -> (String, JoinHandle<Request>) {
+    fake_dashboard_with(status, answer, true)
+}
+
+/// With `read_body` false it answers right after the request head and closes without reading
+/// the body, as the dashboard does for a request without a valid token (it never sends
+/// `100 Continue` then).
+fn fake_dashboard_with(
+    status: &'static str,
+    answer: &'static str,
+    read_body: bool,
+) -> (String, JoinHandle<Request>) {
     let listener = TcpListener::bind("127.0.0.1:0").unwrap();
     let url = format!("http://{}", listener.local_addr().unwrap());
     let handle = std::thread::spawn(move || {
@@ -75,9 +86,18 @@ fn fake_dashboard(status: &'static str, answer: &'static str) -> (String, JoinHa
             .find(|(k, _)| k.eq_ignore_ascii_case("content-length"))
             .map(|(_, v)| v.parse().unwrap())
             .unwrap_or(0);
-        let mut body = vec![0; length];
-        reader.read_exact(&mut body).unwrap();
         let mut stream = stream;
+        let mut body = Vec::new();
+        if read_body {
+            let expects = headers.iter().any(|(k, v)| {
+                k.eq_ignore_ascii_case("expect") && v.eq_ignore_ascii_case("100-continue")
+            });
+            if expects {
+                stream.write_all(b"HTTP/1.1 100 Continue\r\n\r\n").unwrap();
+            }
+            body = vec![0; length];
+            reader.read_exact(&mut body).unwrap();
+        }
         write!(
             stream,
             "HTTP/1.1 {status}\r\nContent-Type: application/json\r\nContent-Length: {}\r\nConnection: close\r\n\r\n{answer}",
@@ -145,6 +165,7 @@ fn upload_posts_the_bundle_with_the_bearer_token() {
     assert_eq!(req.line, "POST /api/runs HTTP/1.1");
     assert_eq!(req.header("authorization"), Some("Bearer s3cret"));
     assert_eq!(req.header("content-type"), Some("application/json"));
+    assert_eq!(req.header("expect"), Some("100-continue"));
     let body: serde_json::Value = serde_json::from_slice(&req.body).unwrap();
     assert_eq!(body, expected_body());
 }
@@ -183,6 +204,30 @@ fn refused_upload_exits_4_with_the_dashboards_message() {
         Path::new(&run).join("run.json").is_file(),
         "results stay on disk"
     );
+}
+
+#[test]
+fn refusal_before_a_large_body_is_reported_with_the_dashboards_message() {
+    // The dashboard checks the token before reading the body: a client that sent the whole body
+    // regardless would see a broken pipe instead of the answer.
+    let dir = tempfile::tempdir().unwrap();
+    let run = run_folder(dir.path());
+    let big = vec![7u8; 24 << 20];
+    std::fs::write(Path::new(&run).join("images/tiny/native-f000.png"), big).unwrap();
+    let (url, server) = fake_dashboard_with(
+        "401 Unauthorized",
+        r#"{"error":"this request needs a write token"}"#,
+        false,
+    );
+    let (code, _, err) = tessera(&["upload", &run, "--url", &url], Some("wrong"));
+    assert_eq!(
+        (code, err.as_str()),
+        (
+            4,
+            format!("error: the dashboard at {url}/api/runs refused the run with HTTP 401: this request needs a write token\n").as_str()
+        )
+    );
+    assert!(server.join().unwrap().body.is_empty());
 }
 
 #[test]

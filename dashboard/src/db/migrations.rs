@@ -167,6 +167,16 @@ CREATE TABLE point_bands (
 );
 CREATE INDEX regressions_after ON regressions (run_pk_after);
 "#,
+    // i12-write: named API tokens, stored as SHA-256 of the secret (see store/tokens.rs).
+    r#"
+CREATE TABLE api_tokens (
+    id {id},
+    name TEXT NOT NULL UNIQUE,
+    scope TEXT NOT NULL,
+    secret_sha256 TEXT NOT NULL UNIQUE,
+    created_at TEXT NOT NULL
+);
+"#,
 ];
 
 fn render(step: &str, backend: Backend) -> String {
@@ -181,6 +191,23 @@ fn render(step: &str, backend: Backend) -> String {
     step.replace("{id}", id)
         .replace("{real}", real)
         .replace("{blob}", blob)
+}
+
+/// The schema version this binary migrates to.
+pub fn known_version() -> i64 {
+    STEPS.len() as i64
+}
+
+/// The store's schema version (the newest applied step; 0 for an empty store).
+pub fn current_version(conn: &mut dyn Connection) -> Result<i64, DbError> {
+    conn.query(
+        "SELECT COALESCE(MAX(version), 0) FROM schema_migrations",
+        &[],
+    )?
+    .first()
+    .map(|r| r.i64(0))
+    .transpose()
+    .map(|v| v.unwrap_or(0))
 }
 
 /// Brings the store up to the newest schema; refuses a store newer than this binary.

@@ -12,6 +12,7 @@ mod postgres;
 mod sqlite;
 mod value;
 
+pub use migrations::{current_version, known_version};
 pub use pool::{Pool, PooledConnection};
 pub use value::{Row, Value};
 

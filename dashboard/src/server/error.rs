@@ -1,8 +1,11 @@
 //! The one error type of the server: each variant picks the status; the body is always
 //! `{"error": "..."}`. Internal errors are logged with their detail and answered with a generic
-//! message, so store internals never reach a client.
+//! message, so store internals never reach a client. [`json_errors`] gives the same body to the
+//! errors that do not come from a handler (axum's rejections, 405, timeouts).
 
-use axum::http::StatusCode;
+use axum::extract::Request;
+use axum::http::{header, HeaderValue, StatusCode};
+use axum::middleware::Next;
 use axum::response::{IntoResponse, Response};
 use axum::Json;
 
@@ -21,11 +24,19 @@ pub enum AppError {
     #[error("{0}")]
     PayloadTooLarge(String),
     #[error(
-        "this request needs the header `Authorization: Bearer <token>` with the server's token"
+        "this request needs the header `Authorization: Bearer <token>` with a write token (`tessera-dashboard token add NAME --scope write`, or the server's --token)"
     )]
     Unauthorized,
-    #[error("writes are disabled: start the server with --token or TESSERA_DASHBOARD_TOKEN")]
+    #[error("this dashboard needs a read token: `Authorization: Bearer <token>`, or the token as the password of HTTP Basic")]
+    ReadUnauthorized,
+    #[error("{0}")]
+    Forbidden(String),
+    #[error("writes are disabled: start the server with --token or TESSERA_DASHBOARD_TOKEN, or add a write token with `tessera-dashboard token add NAME --scope write`")]
     WritesDisabled,
+    #[error("too many writes with this token: retry after {retry_after_secs} s")]
+    TooManyRequests { retry_after_secs: u64 },
+    #[error("{0}")]
+    RequestTimeout(String),
     #[error("internal error")]
     Internal(String),
 }
@@ -37,8 +48,10 @@ impl AppError {
             AppError::BadRequest(_) => StatusCode::BAD_REQUEST,
             AppError::Unprocessable(_) => StatusCode::UNPROCESSABLE_ENTITY,
             AppError::PayloadTooLarge(_) => StatusCode::PAYLOAD_TOO_LARGE,
-            AppError::Unauthorized => StatusCode::UNAUTHORIZED,
-            AppError::WritesDisabled => StatusCode::FORBIDDEN,
+            AppError::Unauthorized | AppError::ReadUnauthorized => StatusCode::UNAUTHORIZED,
+            AppError::Forbidden(_) | AppError::WritesDisabled => StatusCode::FORBIDDEN,
+            AppError::TooManyRequests { .. } => StatusCode::TOO_MANY_REQUESTS,
+            AppError::RequestTimeout(_) => StatusCode::REQUEST_TIMEOUT,
             AppError::Internal(_) => StatusCode::INTERNAL_SERVER_ERROR,
         }
     }
@@ -54,11 +67,21 @@ impl IntoResponse for AppError {
             Json(serde_json::json!({ "error": self.to_string() })),
         )
             .into_response();
-        if matches!(self, AppError::Unauthorized) {
-            res.headers_mut().insert(
-                "www-authenticate",
-                axum::http::HeaderValue::from_static("Bearer"),
-            );
+        let headers = res.headers_mut();
+        match self {
+            AppError::Unauthorized => {
+                headers.insert(header::WWW_AUTHENTICATE, HeaderValue::from_static("Bearer"));
+            }
+            AppError::ReadUnauthorized => {
+                headers.insert(
+                    header::WWW_AUTHENTICATE,
+                    HeaderValue::from_static("Basic realm=\"tessera-dashboard\""),
+                );
+            }
+            AppError::TooManyRequests { retry_after_secs } => {
+                headers.insert(header::RETRY_AFTER, HeaderValue::from(retry_after_secs));
+            }
+            _ => {}
         }
         res
     }
@@ -88,4 +111,59 @@ impl From<BundleError> for AppError {
             _ => AppError::Unprocessable(e.to_string()),
         }
     }
+}
+
+/// What an error response without a body of its own says, by status.
+fn default_message(status: StatusCode, allow: Option<&str>) -> String {
+    match status {
+        StatusCode::METHOD_NOT_ALLOWED => match allow {
+            Some(a) => format!("method not allowed here; this path takes {a}"),
+            None => "method not allowed here".into(),
+        },
+        StatusCode::REQUEST_TIMEOUT => {
+            "the request was not received in time (see serve --request-timeout-secs)".into()
+        }
+        StatusCode::PAYLOAD_TOO_LARGE => "the request body is too large".into(),
+        s => s
+            .canonical_reason()
+            .map_or_else(|| format!("HTTP {}", s.as_u16()), |r| r.to_lowercase()),
+    }
+}
+
+/// Middleware: turns every 4xx or 5xx response that is not JSON (axum's `text/plain` rejections
+/// of a bad path parameter, query, JSON or form body, body limits, 405s with no body, timeouts)
+/// into `{"error": "..."}` with the same status and headers. The text kept is at most 16 KiB.
+pub async fn json_errors(req: Request, next: Next) -> Response {
+    let res = next.run(req).await;
+    let status = res.status();
+    let is_json = res
+        .headers()
+        .get(header::CONTENT_TYPE)
+        .and_then(|v| v.to_str().ok())
+        .is_some_and(|v| v.starts_with("application/json"));
+    if !(status.is_client_error() || status.is_server_error()) || is_json {
+        return res;
+    }
+    let (mut parts, body) = res.into_parts();
+    let text = axum::body::to_bytes(body, 16 << 10)
+        .await
+        .map(|b| String::from_utf8_lossy(&b).trim().to_string())
+        .unwrap_or_default();
+    let message = if text.is_empty() {
+        let allow = parts
+            .headers
+            .get(header::ALLOW)
+            .and_then(|v| v.to_str().ok());
+        default_message(status, allow)
+    } else {
+        text
+    };
+    parts.headers.remove(header::CONTENT_TYPE);
+    parts.headers.remove(header::CONTENT_LENGTH);
+    let mut out = Json(serde_json::json!({ "error": message })).into_response();
+    *out.status_mut() = status;
+    for (name, value) in parts.headers.iter() {
+        out.headers_mut().append(name.clone(), value.clone());
+    }
+    out
 }

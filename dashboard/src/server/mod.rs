@@ -1,5 +1,7 @@
 //! The HTTP server: [`app`] builds the axum router (tested with `oneshot`), [`AppState`] holds
 //! the store and the upload token, [`AppError`] turns every failure into a status and a JSON body.
+//! The write path (tokens, rate limit, timeouts, JSON for every error) is [`auth`], [`listen`]
+//! and the layers at the end of [`app`].
 //! One module per endpoint; each serves its HTML page and the JSON API the page is built from.
 //!
 //! Not for: SQL (see [`crate::store`]) or chart drawing (see [`crate::svg`]).
@@ -8,9 +10,12 @@ pub mod assets;
 pub mod auth;
 pub mod compare;
 pub mod compare_runs;
+pub mod delete;
 pub mod error;
 pub mod export;
+pub mod health;
 pub mod images;
+pub mod listen;
 pub mod pareto;
 pub mod regressions;
 pub mod run;
@@ -18,11 +23,16 @@ pub mod runs;
 pub mod series;
 pub mod upload;
 
+use axum::body::Body;
 use axum::extract::DefaultBodyLimit;
-use axum::routing::{get, post};
-use axum::Router;
+use axum::extract::Request;
+use axum::http::StatusCode;
+use axum::routing::{delete, get, post};
+use axum::{middleware, Router};
+use tower_http::timeout::{RequestBodyTimeoutLayer, TimeoutBody, TimeoutLayer};
 
 pub use error::AppError;
+pub use listen::Timeouts;
 
 use crate::db::{Connection, Pool};
 use crate::detect::Params;
@@ -37,6 +47,10 @@ pub struct AppState {
     pub token: Option<String>,
     pub max_upload_bytes: usize,
     pub detect: Params,
+    /// Named tokens, rate limit, read protection (see [`auth`]).
+    pub auth: auth::Auth,
+    /// Header, body and request deadlines (see [`listen`]).
+    pub timeouts: Timeouts,
     /// The dashboard's public URL for absolute links (feed, Markdown); `None`: from `Host`.
     pub public_url: Option<String>,
 }
@@ -48,6 +62,8 @@ impl AppState {
             token,
             max_upload_bytes: DEFAULT_MAX_UPLOAD_BYTES,
             detect: Params::default(),
+            auth: auth::Auth::default(),
+            timeouts: Timeouts::default(),
             public_url: None,
         }
     }
@@ -69,7 +85,7 @@ impl AppState {
 
 /// The router with every page and API route.
 pub fn app(state: AppState) -> Router {
-    Router::new()
+    let routes = Router::new()
         .route("/", get(runs::page))
         .route("/api/runs", get(runs::api).post(upload::api))
         .route("/runs/{run_id}", get(run::page))
@@ -105,9 +121,30 @@ pub fn app(state: AppState) -> Router {
         .route("/assets/{name}", get(assets::file))
         .route("/pareto", get(pareto::page))
         .route("/api/pareto", get(pareto::api))
+        .route("/healthz", get(health::healthz))
+        .route("/api/runs/{run_id}", delete(delete::api))
         .fallback(|| async { AppError::NotFound("no such page".into()) })
         .layer(DefaultBodyLimit::max(state.max_upload_bytes))
         // gzip (or deflate, br) for clients that accept it: pages and JSON shrink about 6x.
         .layer(tower_http::compression::CompressionLayer::new())
-        .with_state(state)
+        .with_state(state.clone());
+    write_path(routes, &state)
+}
+
+/// The write path's layers around the whole router, outermost first: every error as JSON, the
+/// whole-request deadline (408), the body idle deadline, then the token check and rate limit,
+/// which run before any handler reads a body. Wrapped around the router as a service, not with
+/// `Router::layer`, so that axum still sets `Allow` on its 405s.
+fn write_path(routes: Router, state: &AppState) -> Router {
+    let service = tower::ServiceBuilder::new()
+        .layer(middleware::from_fn(error::json_errors))
+        .layer(TimeoutLayer::with_status_code(
+            StatusCode::REQUEST_TIMEOUT,
+            state.timeouts.request,
+        ))
+        .layer(RequestBodyTimeoutLayer::new(state.timeouts.body_idle))
+        .map_request(|req: Request<TimeoutBody<Body>>| req.map(Body::new))
+        .layer(middleware::from_fn_with_state(state.clone(), auth::guard))
+        .service(routes);
+    Router::new().fallback_service(service)
 }

@@ -149,11 +149,10 @@ pub fn base_url(state: &AppState, headers: &HeaderMap) -> String {
     format!("http://{host}")
 }
 
-/// Who is changing triage, as recorded in `updated_by`. The one place to switch to named
-/// tokens (`auth::require(&state, &headers, Scope::Write)?.name`) once they exist.
+/// Who is changing triage, as recorded in `updated_by`: the write token's name (`legacy` for
+/// `--token`).
 pub fn writer(state: &AppState, headers: &HeaderMap) -> Result<String, AppError> {
-    auth::require_bearer(state, headers)?;
-    Ok("write token".into())
+    Ok(auth::require(state, headers, auth::Scope::Write)?.name)
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -220,13 +219,13 @@ pub async fn group_form(
     Path(key): Path<String>,
     Form(f): Form<GroupForm>,
 ) -> Result<Redirect, AppError> {
-    auth::check_token(&state, Some(&f.token))?;
+    let who = auth::form_writer(&state, &f.token)?.name;
     let t = Triage {
         state: f.state,
         note: f.note,
         bug_url: f.bug_url,
     };
-    apply_group(&state, key.clone(), t, "write token (form)".into()).await?;
+    apply_group(&state, key.clone(), t, who).await?;
     Ok(Redirect::to(&format!("/regressions#g-{}", enc(&key))))
 }
 
@@ -752,7 +751,7 @@ pub async fn triage_form(
     Path(id): Path<i64>,
     Form(f): Form<TriageForm>,
 ) -> Result<Redirect, AppError> {
-    auth::check_token(&state, Some(&f.token))?;
+    let who = auth::form_writer(&state, &f.token)?.name;
     apply(
         &state,
         id,
@@ -760,7 +759,7 @@ pub async fn triage_form(
             state: f.state,
             note: f.note,
         },
-        "write token (form)".into(),
+        who,
     )
     .await?;
     Ok(Redirect::to(&format!("/regressions#r{id}")))

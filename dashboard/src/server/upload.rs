@@ -1,17 +1,19 @@
 //! `POST /api/runs`: stores a run bundle (JSON: `run`, `scenarios`, base64 `images`; see the
 //! README). Needs the bearer token. Answers 201 with `{"run_id", "stored": true, ...}` for a new run,
 //! 200 with `"stored": false` for a run id already stored (idempotent), 4xx with a JSON error for
-//! bad or oversized input, in which case nothing is stored.
+//! bad or oversized input, in which case nothing is stored. The token is checked by
+//! [`super::auth::guard`] before the body is read; the [`Writer`] extractor comes first for the same reason.
 
 use axum::body::Bytes;
 use axum::extract::rejection::BytesRejection;
 use axum::extract::State;
-use axum::http::{HeaderMap, StatusCode};
+use axum::http::StatusCode;
 use axum::response::{IntoResponse, Response};
 use axum::Json;
 use serde::Serialize;
 
-use super::{auth, AppError, AppState};
+use super::auth::Writer;
+use super::{AppError, AppState};
 use crate::bundle::{RunBundle, UploadBody};
 use crate::store::ingest::Ingested;
 
@@ -25,12 +27,16 @@ pub struct UploadResponse {
 
 pub async fn api(
     State(state): State<AppState>,
-    headers: HeaderMap,
+    Writer(_who): Writer,
     body: Result<Bytes, BytesRejection>,
 ) -> Result<Response, AppError> {
-    auth::require_bearer(&state, &headers)?;
     let body = body.map_err(|e| {
-        if e.status() == StatusCode::PAYLOAD_TOO_LARGE {
+        if is_timeout(&e) {
+            AppError::RequestTimeout(format!(
+                "the body paused for more than {} s",
+                state.timeouts.body_idle.as_secs()
+            ))
+        } else if e.status() == StatusCode::PAYLOAD_TOO_LARGE {
             AppError::PayloadTooLarge(format!(
                 "the upload is larger than {} bytes",
                 state.max_upload_bytes
@@ -83,4 +89,16 @@ pub async fn api(
         )
         .await?;
     Ok((status, Json(response)).into_response())
+}
+
+/// Whether the body failed because tower-http's body timeout fired.
+fn is_timeout(e: &BytesRejection) -> bool {
+    let mut source: Option<&(dyn std::error::Error + 'static)> = Some(e);
+    while let Some(s) = source {
+        if s.is::<tower_http::timeout::TimeoutError>() {
+            return true;
+        }
+        source = s.source();
+    }
+    false
 }

@@ -4,12 +4,14 @@
 //! Not for: SQL dialect details (see [`crate::db`]), HTTP or HTML.
 
 pub mod browse;
+pub mod delete;
 pub mod extras;
 pub mod groups;
 pub mod ingest;
 pub mod measures;
 pub mod outbox;
 pub mod read;
+pub mod tokens;
 pub mod triage;
 
 use crate::db::DbError;
