@@ -79,11 +79,24 @@ fn wrong_types_say_what_was_expected() {
 fn unknown_technique_lists_the_known_and_suggests_the_closest() {
     assert_eq!(
         errors("\n[[techniques]]\ntechnique = \"upscal\"\n"),
-        ["s.toml:18:13: `techniques[1].technique`: unknown technique \"upscal\" (did you mean \"upscale\"?): known techniques are \"native\", \"upscale\", \"checkerboard\", \"checkerboard-2x2\", \"adaptive-shading\", \"native-deferred\""]
+        ["s.toml:18:13: `techniques[1].technique`: unknown technique \"upscal\" (did you mean \"upscale\"?): known techniques are \"native\", \"upscale\", \"checkerboard\", \"checkerboard-2x2\", \"adaptive-shading\", \"native-deferred\", \"interlace\""]
     );
     assert_eq!(
         errors("\n[[techniques]]\ntechnique = \"raytrace\"\n"),
-        ["s.toml:18:13: `techniques[1].technique`: unknown technique \"raytrace\": known techniques are \"native\", \"upscale\", \"checkerboard\", \"checkerboard-2x2\", \"adaptive-shading\", \"native-deferred\""]
+        ["s.toml:18:13: `techniques[1].technique`: unknown technique \"raytrace\": known techniques are \"native\", \"upscale\", \"checkerboard\", \"checkerboard-2x2\", \"adaptive-shading\", \"native-deferred\", \"interlace\""]
+    );
+}
+
+#[test]
+fn parameters_are_checked_against_each_other() {
+    let e = errors(
+        "\n[[techniques]]\ntechnique = \"checkerboard-2x2\"\nblend_min = 0.2\nblend_max = 0.1\n",
+    );
+    assert_eq!(e.len(), 1, "{e:?}");
+    assert!(
+        e[0].contains("`techniques[1]`")
+            && e[0].contains("blend_min (0.2) must be less than blend_max (0.1)"),
+        "{e:?}"
     );
 }
 

@@ -10,6 +10,7 @@ pub mod checkerboard;
 pub mod checkerboard_2x2;
 pub mod definition;
 pub mod docs;
+pub mod interlace;
 pub mod native;
 pub mod registry;
 pub mod upscale;

@@ -6,6 +6,7 @@ use super::adaptive_shading::{AdaptiveShading, NativeDeferred};
 use super::checkerboard::Checkerboard;
 use super::checkerboard_2x2::Checkerboard2x2;
 use super::definition::Technique;
+use super::interlace::Interlace;
 use super::native::Native;
 use super::upscale::Upscale;
 
@@ -17,6 +18,7 @@ pub static ALL: &[&dyn Technique] = &[
     &Checkerboard2x2,
     &AdaptiveShading,
     &NativeDeferred,
+    &Interlace,
 ];
 
 /// The technique called `name`.

@@ -1,0 +1,99 @@
+//! Technique `interlace`: temporal interlaced rendering, the checkerboarding that shipped before
+//! checkerboards (Rainbow Six Siege's "temporal interlaced rendering" as the depth-based report
+//! describes it, `seeds/depth-based-checkerboarding.txt` section 3.3): each frame shades alternate
+//! pixel columns at half width; the other columns are the previous output reprojected through the
+//! camera and the velocity buffer, clamped to the shaded neighbours. Parameters here, the GPU
+//! part in `gpu.rs`, the CPU model in `model.rs`, the shader in `shaders/interlace/`.
+//!
+//! Simpler than the report's account of Siege: no confidence blend back towards the unclamped
+//! colour, no colour-coherency or velocity weights, a bilinear history fetch.
+
+pub mod gpu;
+pub mod model;
+
+use super::definition::{Shader, Target, Technique};
+use crate::gpu::{Gpu, Unsupported};
+use crate::params::{Param, ParamSpec, Variant};
+use crate::render::graph::Plan;
+use crate::render::renderer::Renderer;
+
+pub use gpu::{half_view, InterlaceGpu, LastFrame};
+
+pub static CLAMP: Param<bool> = Param::flag(
+    "clamp",
+    true,
+    "clamp the reprojected colour to the min/max of the six shaded neighbours (left and right columns, rows y-1 to y+1), as Siege clamps to its neighbours; off: the history unclamped",
+);
+pub static VELOCITY: Param<bool> = Param::flag(
+    "velocity",
+    true,
+    "full-resolution velocity pass for animated objects; recorded only when the scene has some (otherwise culled: the camera reprojects by depth)",
+);
+pub static GRADIENT_SCALE: Param<f64> = Param::float(
+    "gradient_scale",
+    (0.0, false, 1.0),
+    1.0,
+    "multiplies screen-space derivatives of the half-width render (the ground filter's width): 1 uncorrected (x derivatives twice native's: blurs horizontally), 0.5 matches native in x and halves y",
+);
+static PARAMS: [&ParamSpec; 3] = [&CLAMP.spec, &VELOCITY.spec, &GRADIENT_SCALE.spec];
+
+/// A variant's options, typed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Options {
+    pub clamp: bool,
+    pub velocity: bool,
+    pub gradient_scale: f32,
+}
+
+impl Options {
+    pub fn from_variant(v: &Variant) -> Options {
+        Options {
+            clamp: v.get(&CLAMP),
+            velocity: v.get(&VELOCITY),
+            gradient_scale: v.get(&GRADIENT_SCALE) as f32,
+        }
+    }
+}
+
+pub struct Interlace;
+
+impl Technique for Interlace {
+    fn name(&self) -> &'static str {
+        "interlace"
+    }
+
+    fn summary(&self) -> &'static str {
+        "temporal interlaced rendering: alternate pixel columns shaded at half width each frame, the others reprojected from the previous output and clamped to their shaded neighbours"
+    }
+
+    fn params(&self) -> &'static [&'static ParamSpec] {
+        &PARAMS
+    }
+
+    fn plan(&self, variant: &Variant, target: Target) -> Plan {
+        let options = Options::from_variant(variant);
+        gpu::graph(&options, target.width, target.height, target.dynamic_scene).0
+    }
+
+    fn build(
+        &self,
+        gpu: &Gpu,
+        variant: &Variant,
+        target: Target,
+    ) -> Result<Box<dyn Renderer>, Unsupported> {
+        Ok(Box::new(InterlaceGpu::new(
+            gpu,
+            Options::from_variant(variant),
+            target.width,
+            target.height,
+            target.dynamic_scene,
+        )))
+    }
+
+    fn shaders(&self) -> Vec<Shader> {
+        vec![Shader::file(
+            "interlace/reconstruct.wgsl",
+            gpu::RECONSTRUCT_WGSL,
+        )]
+    }
+}
