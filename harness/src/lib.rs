@@ -4,9 +4,11 @@
 //! the same code paths.
 
 pub mod compare;
+pub mod conditions;
 pub mod gpu;
 pub mod render;
 pub mod run;
 pub mod scenario;
 pub mod technique;
+pub mod timing;
 pub mod upload;
