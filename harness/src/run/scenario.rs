@@ -18,11 +18,13 @@ use super::frames::{self, Rendered};
 use super::gates;
 use super::motion;
 use super::stability;
+use crate::conditions::Sensors;
 use crate::gpu::Gpu;
 use crate::render::scene::SceneGpu;
 use crate::render::technique::{self, Technique, Unsupported};
 use crate::scenario::{MetricKind, Reference, Scenario};
 use crate::technique::{TechniqueKind, Variant};
+use crate::timing::{pacing, stop};
 
 /// Frames a reference render produced, in measured-frame order.
 struct ReferenceFrames {
@@ -41,6 +43,7 @@ pub fn run(
     scenario: &Scenario,
     run_id: &str,
     run_dir: &Path,
+    sensors: &Sensors,
     on_frame: &mut dyn FnMut(),
 ) -> ScenarioResult {
     let start = Instant::now();
@@ -89,10 +92,11 @@ pub fn run(
         let is_reference = needs_reference && native_is_reference(variant) && reference.is_none();
         let keep = needs_reference || !scenario.save_frames.is_empty();
         let mut result = empty_result(variant, Status::Ok);
-        let outcome = render_variant(gpu, &mut scene, scenario, variant, keep, on_frame);
+        let outcome = render_variant(gpu, &mut scene, scenario, variant, keep, sensors, on_frame);
         let rendered = match outcome {
             Ok(Ok((r, plan_record))) => {
                 fill_timings(&mut result, &r, plan_record);
+                fill_conditions(&mut result, &r, scenario, variant, sensors);
                 r
             }
             Ok(Err(Unsupported(reason))) => {
@@ -253,6 +257,7 @@ fn empty_result(v: &Variant, status: Status) -> VariantResult {
             min: 0.0,
             max: 0.0,
             mean: 0.0,
+            median_ci95: None,
         },
         resources: Vec::new(),
         allocated_bytes: 0,
@@ -261,6 +266,9 @@ fn empty_result(v: &Variant, status: Status) -> VariantResult {
         stability: None,
         images: Vec::new(),
         gates: Vec::new(),
+        conditions: None,
+        sampling: None,
+        pacing: None,
     }
 }
 
@@ -280,6 +288,7 @@ fn render_variant(
     scenario: &Scenario,
     variant: &Variant,
     keep: bool,
+    sensors: &Sensors,
     on_frame: &mut dyn FnMut(),
 ) -> VariantOutcome {
     let validation = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
@@ -296,7 +305,17 @@ fn render_variant(
         Ok(mut t) => {
             let plan = plan_record(t.as_ref());
             let hdr = keep && keep_hdr(scenario);
-            match frames::render(gpu, scene, scenario, t.as_mut(), keep, hdr, on_frame) {
+            let sampler = sensors.sampler();
+            match frames::render_sampled(
+                gpu,
+                scene,
+                scenario,
+                t.as_mut(),
+                keep,
+                hdr,
+                sampler,
+                on_frame,
+            ) {
                 Ok(r) => Ok(Ok((r, plan))),
                 Err(e) => Err(e.to_string()),
             }
@@ -423,6 +442,38 @@ fn fill_timings(result: &mut VariantResult, r: &Rendered, plan: PlanRecord) {
     result.culled_passes = plan.culled;
     result.allocated_bytes = plan.resources.iter().map(|r| r.bytes).sum();
     result.resources = plan.resources;
+}
+
+/// Sampling, pacing and the sensors' record of a rendered variant.
+fn fill_conditions(
+    result: &mut VariantResult,
+    r: &Rendered,
+    scenario: &Scenario,
+    variant: &Variant,
+    sensors: &Sensors,
+) {
+    result.sampling = Some(match scenario.auto {
+        Some(rule) => rule.record(&r.frame_ms, r.ended_by),
+        None => stop::fixed_record(&r.frame_ms),
+    });
+    if r.timestamps {
+        result.pacing = pacing::pacing(
+            &r.frame_ms,
+            scenario.warmup_frames,
+            alternates(variant.technique),
+        );
+    }
+    result.conditions =
+        Some(sensors.result_record(r.conditions.as_deref(), r.frame_ms.len() as u32));
+}
+
+/// Techniques that shade alternate pixel sets on alternate frames: pacing reports even and odd
+/// frames apart.
+fn alternates(t: TechniqueKind) -> bool {
+    matches!(
+        t,
+        TechniqueKind::Checkerboard | TechniqueKind::Checkerboard2x2
+    )
 }
 
 impl ReferenceFrames {
