@@ -77,8 +77,9 @@ fn cpu_adapter_records_not_available_and_pacing() {
         .lines()
         .filter(|l| l.contains(",checkerboard,"))
         .map(|l| {
-            let f: Vec<&str> = l.split(',').collect();
-            (f[7], f[9])
+            // From the end: the adapter's name may hold a quoted comma.
+            let f: Vec<&str> = l.rsplitn(4, ',').collect();
+            (f[2], f[0])
         })
         .collect();
     for (m, unit) in [

@@ -245,8 +245,8 @@ fn measured_auto_defaults_and_errors() {
     assert_eq!(
         errors_of(&auto("{ min = 50, max = 20, precision = 0 }")),
         [
-            "s.toml:6:34: `frames.measured.max`: 20 is below min (50): expected min <= max",
-            "s.toml:6:52: `frames.measured.precision`: 0 is out of range: expected a relative precision above 0 and below 1 (0.005 = 0.5%)",
+            "s.toml:6:30: `frames.measured.max`: 20 is below min (50): expected min <= max",
+            "s.toml:6:46: `frames.measured.precision`: 0 is out of range: expected a relative precision above 0 and below 1 (0.005 = 0.5%)",
         ]
     );
     let unknown = errors_of(&auto("{ mn = 5 }"));
