@@ -160,6 +160,7 @@ fn with_energy(mut v: VariantResult, mj: f64, throttled: bool) -> VariantResult 
             mj_per_frame: mj,
             method: EnergyMethod::Counter,
             frames: 10,
+            window_ms: 1000.0,
         }),
         throttled,
         throttle_causes: if throttled {

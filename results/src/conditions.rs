@@ -105,17 +105,21 @@ impl Spread {
 
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
 pub struct Energy {
-    /// Energy of the measured window divided by its frames, in millijoules.
+    /// Energy of the energy window (frames that continue the measured ones, at least a second)
+    /// divided by its frames, in millijoules.
     pub mj_per_frame: f64,
     pub method: EnergyMethod,
     /// Frames the window holds.
     pub frames: u32,
+    /// Length of the energy window, in milliseconds.
+    pub window_ms: f64,
 }
 
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
 #[serde(rename_all = "kebab-case")]
 pub enum EnergyMethod {
-    /// Difference of the device's total-energy counter at the window's two ends.
+    /// The device's total-energy counter: the mean power between its first and last updates in
+    /// the window, times the window.
     Counter,
     /// Power samples integrated over the window (trapezoids between consecutive samples).
     PowerTimesTime,
@@ -249,6 +253,7 @@ mod tests {
                 mj_per_frame: 2.5,
                 method: EnergyMethod::PowerTimesTime,
                 frames: 10,
+                window_ms: 1000.0,
             }),
             throttled: true,
             throttle_causes: vec!["power cap".into()],

@@ -23,10 +23,16 @@ pub const VENDOR_NVIDIA: u32 = 0x10de;
 pub const VENDOR_AMD: u32 = 0x1002;
 pub const VENDOR_INTEL: u32 = 0x8086;
 
-/// Period of the sampling thread. Every read of a sensor is a driver call on the CPU; 20 ms keeps
-/// the thread's load small next to the frames and still gives several samples per second of
-/// measured frames (plus one at each end of the window, whatever its length).
-pub const SAMPLE_INTERVAL_MS: f64 = 20.0;
+/// Period of the sampling thread. Every read of a sensor is a driver call on the CPU; 10 ms keeps
+/// the thread's load small next to the frames, gives several samples per measured window (plus
+/// one at each end, whatever its length), and locates the energy counter's steps to 1% over
+/// the energy window.
+pub const SAMPLE_INTERVAL_MS: f64 = 10.0;
+
+/// The energy window: after the measured frames, the sequence goes on for at least this long with
+/// the sensors sampled, since an energy counter that steps every ~100 ms cannot measure a window
+/// of a few frames. Only where sensors are available.
+pub const ENERGY_WINDOW_MS: f64 = 1000.0;
 
 /// Why a device's clocks are limited, as NVML's clocks-event reasons name them.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -154,11 +160,16 @@ impl Sensors {
         }
     }
 
-    /// A result's `conditions` from the samples of its `frames` measured frames.
-    pub fn result_record(&self, samples: Option<&[Sample]>, frames: u32) -> Conditions {
+    /// A result's `conditions` from the samples of its measured frames and of its energy window
+    /// (samples and frames).
+    pub fn result_record(
+        &self,
+        samples: Option<&[Sample]>,
+        energy_window: Option<(&[Sample], u32)>,
+    ) -> Conditions {
         match (self, samples) {
             (Sensors::Sampling(s), Some(samples)) if !samples.is_empty() => {
-                Conditions::Recorded(summary::summarise(samples, s.limits(), frames))
+                Conditions::Recorded(summary::summarise(samples, s.limits(), energy_window))
             }
             (Sensors::Sampling(_), _) => Conditions::NotAvailable {
                 reason: "the sampling thread returned no samples".into(),

@@ -1,12 +1,16 @@
-//! A window of sensor samples as one result's record: min / median / max per sensor, the energy
-//! per frame, and whether the result was throttled. Pure functions of the samples.
+//! Windows of sensor samples as one result's record: min / median / max per sensor over the
+//! measured frames, whether they were throttled, and the energy per frame over the energy window.
+//! Pure functions of the samples.
 //!
-//! - **Energy per frame**: the difference of the device's total-energy counter between the
-//!   window's first and last samples, over the window's frames. Without a counter, or when it did
-//!   not move during the window (short windows: the counter updates less often than the sampling
-//!   thread reads it), the power samples are integrated over time instead (trapezoids between
-//!   consecutive samples, [`super::SAMPLE_INTERVAL_MS`] apart, plus the two samples at the
-//!   window's ends).
+//! - **Energy per frame** (over the energy window, [`super::ENERGY_WINDOW_MS`] of frames that
+//!   continue the measured ones): the device's total-energy counter moves in steps (on an H200
+//!   about every 100 ms, by some 13 J under load), so the difference of its values at the window's
+//!   ends is off by up to a step. The steps are located instead: the first sample showing each new
+//!   counter value marks an update (to within one sampling period); the energy between the first
+//!   and the last update over the time between them is the mean power, and the mean power times
+//!   the window over its frames is the energy per frame. With fewer than two updates, or without
+//!   a counter, the power samples are integrated over the window (trapezoids between consecutive
+//!   samples).
 //! - **Throttled**: a sample's graphics clock below [`THROTTLE_CLOCK_FRACTION`] of the device's
 //!   maximum graphics clock (nvbench flags samples below 75% of the default clock), or a thermal
 //!   or power limit among the reported clock-limiting reasons.
@@ -17,8 +21,13 @@ use tessera_results::conditions::{
 
 use super::{DeviceLimits, Sample, ThrottleReason};
 
-/// The record of one window of `frames` frames.
-pub fn summarise(samples: &[Sample], limits: &DeviceLimits, frames: u32) -> RecordedConditions {
+/// The record of a result: `samples` over its measured frames, and the energy window's samples
+/// and frame count where there was one.
+pub fn summarise(
+    samples: &[Sample],
+    limits: &DeviceLimits,
+    energy_window: Option<(&[Sample], u32)>,
+) -> RecordedConditions {
     let spread = |f: fn(&Sample) -> Option<f64>| {
         let values: Vec<f64> = samples.iter().filter_map(f).collect();
         Spread::of(&values)
@@ -40,7 +49,7 @@ pub fn summarise(samples: &[Sample], limits: &DeviceLimits, frames: u32) -> Reco
         temperature_c: spread(|s| s.temperature_c),
         power_w: spread(|s| s.power_w),
         throttle_reasons: reasons.iter().map(|r| r.name().to_string()).collect(),
-        energy: energy(samples, frames),
+        energy: energy_window.and_then(|(s, frames)| energy(s, frames)),
         throttled: !throttle_causes.is_empty(),
         throttle_causes,
     }
@@ -53,22 +62,35 @@ fn window_s(samples: &[Sample]) -> f64 {
     }
 }
 
-/// Energy per frame of the window; `None` without frames, or without a moving counter and at
-/// least two power samples spanning some time.
+/// Energy per frame of a window of `frames` frames; `None` without frames, or with neither two
+/// counter updates nor two power samples spanning some time.
 pub fn energy(samples: &[Sample], frames: u32) -> Option<Energy> {
     if frames == 0 {
         return None;
     }
-    let counter = samples.first().and_then(|a| {
-        let b = samples.last()?;
-        Some(b.energy_mj? - a.energy_mj?)
-    });
-    if let Some(mj) = counter.filter(|mj| *mj > 0.0) {
-        return Some(Energy {
-            mj_per_frame: mj / f64::from(frames),
-            method: EnergyMethod::Counter,
-            frames,
-        });
+    let window_s = window_s(samples);
+    let per_frame = |joules: f64, method| Energy {
+        mj_per_frame: joules * 1000.0 / f64::from(frames),
+        method,
+        frames,
+        window_ms: window_s * 1000.0,
+    };
+    // Counter updates: the first sample showing each new value.
+    let mut updates: Vec<(f64, f64)> = Vec::new();
+    let mut previous: Option<f64> = None;
+    for s in samples {
+        if let Some(e) = s.energy_mj {
+            if previous.is_some_and(|p| p != e) {
+                updates.push((s.at_s, e));
+            }
+            previous = Some(e);
+        }
+    }
+    if let (Some(a), Some(b)) = (updates.first(), updates.last()) {
+        if b.0 > a.0 {
+            let watts = (b.1 - a.1) / 1000.0 / (b.0 - a.0);
+            return Some(per_frame(watts * window_s, EnergyMethod::Counter));
+        }
     }
     let power: Vec<(f64, f64)> = samples
         .iter()
@@ -79,11 +101,7 @@ pub fn energy(samples: &[Sample], frames: u32) -> Option<Energy> {
         .map(|p| (p[1].0 - p[0].0) * (p[0].1 + p[1].1) / 2.0)
         .sum();
     let span = power.last()?.0 - power.first()?.0;
-    (span > 0.0).then(|| Energy {
-        mj_per_frame: joules * 1000.0 / f64::from(frames),
-        method: EnergyMethod::PowerTimesTime,
-        frames,
-    })
+    (span > 0.0).then(|| per_frame(joules, EnergyMethod::PowerTimesTime))
 }
 
 /// Why the window counts as throttled, one sentence per cause; empty when it does not.
@@ -152,13 +170,13 @@ mod tests {
     }
 
     #[test]
-    fn spreads_and_counter_energy() {
+    fn spreads_of_the_measured_window() {
         let s = [
-            sample(0.0, 1980.0, 300.0, Some(1_000.0)),
-            sample(0.02, 1965.0, 320.0, Some(1_006.0)),
-            sample(0.04, 1980.0, 310.0, Some(1_012.0)),
+            sample(0.0, 1980.0, 300.0, None),
+            sample(0.02, 1965.0, 320.0, None),
+            sample(0.04, 1980.0, 310.0, None),
         ];
-        let r = summarise(&s, &limits(), 10);
+        let r = summarise(&s, &limits(), None);
         assert_eq!(r.samples, 3);
         assert!((r.window_ms - 40.0).abs() < 1e-9);
         let clock = r.graphics_clock_mhz.unwrap();
@@ -167,25 +185,55 @@ mod tests {
             (1965.0, 1980.0, 1980.0)
         );
         assert_eq!(r.power_w.unwrap().median, 310.0);
-        let e = r.energy.unwrap();
-        assert_eq!(e.method, EnergyMethod::Counter);
-        assert!((e.mj_per_frame - 1.2).abs() < 1e-12);
+        assert_eq!(r.energy, None, "no energy window");
         assert!(!r.throttled);
         assert!(r.throttle_causes.is_empty());
     }
 
     #[test]
-    fn power_times_time_without_a_moving_counter() {
-        // The counter did not update within the window: 0.1 s at 300 then 400 W.
+    fn counter_steps_are_located_not_differenced() {
+        // A counter that steps by 20 J every 0.1 s (200 W), read every 0.02 s for 1 s; the steps
+        // land at 0.05, 0.15, ... 0.95 s. The ends' difference would read 10 steps (200 J); the
+        // located steps give 200 W over the window: 200 J, whatever the phase of the steps.
+        let s: Vec<Sample> = (0..=50)
+            .map(|i| {
+                let t = f64::from(i) * 0.02;
+                let steps = ((t + 0.05) / 0.1).floor();
+                sample(t, 1980.0, 0.0, Some(20_000.0 * steps))
+            })
+            .collect();
+        let e = energy(&s, 100).unwrap();
+        assert_eq!(e.method, EnergyMethod::Counter);
+        assert!((e.window_ms - 1000.0).abs() < 1e-9);
+        // 200 W x 1 s over 100 frames, to within one sampling period over the steps' span.
+        assert!(
+            (e.mj_per_frame - 2000.0).abs() < 2000.0 * 0.03,
+            "{}",
+            e.mj_per_frame
+        );
+        let r = summarise(&s[..3], &limits(), Some((&s, 100)));
+        assert_eq!(r.energy, Some(e));
+    }
+
+    #[test]
+    fn power_times_time_without_two_counter_steps() {
+        // The counter stepped once in the window: 0.1 s at 300 then 400 W instead.
         let s = [
             sample(0.0, 1980.0, 300.0, Some(5.0)),
-            sample(0.1, 1980.0, 400.0, Some(5.0)),
+            sample(0.05, 1980.0, 350.0, Some(9.0)),
+            sample(0.1, 1980.0, 400.0, Some(9.0)),
         ];
         let e = energy(&s, 7).unwrap();
         assert_eq!(e.method, EnergyMethod::PowerTimesTime);
         // 35 J over 7 frames.
         assert!((e.mj_per_frame - 5000.0).abs() < 1e-9, "{}", e.mj_per_frame);
-        let no_counter = [sample(0.0, 1.0, 300.0, None), sample(0.1, 1.0, 400.0, None)];
+        let no_counter: Vec<Sample> = s
+            .iter()
+            .map(|x| Sample {
+                energy_mj: None,
+                ..x.clone()
+            })
+            .collect();
         assert_eq!(energy(&no_counter, 7), Some(e));
         assert_eq!(energy(&s[..1], 7), None, "one sample spans no time");
         assert_eq!(energy(&s, 0), None);
@@ -198,7 +246,7 @@ mod tests {
             sample(0.02, 1400.0, 300.0, None),
             sample(0.04, 1980.0, 300.0, None),
         ];
-        let r = summarise(&s, &limits(), 3);
+        let r = summarise(&s, &limits(), None);
         assert!(r.throttled);
         assert_eq!(
             r.throttle_causes,
@@ -206,17 +254,17 @@ mod tests {
         );
         // At 1500 MHz, exactly 75%: not below.
         s[1].graphics_clock_mhz = Some(1500.0);
-        assert!(!summarise(&s, &limits(), 3).throttled);
+        assert!(!summarise(&s, &limits(), None).throttled);
         // Idle and application-clock reasons are recorded but flag nothing; a thermal limit does.
         s[0].throttle_reasons = vec![
             ThrottleReason::GpuIdle,
             ThrottleReason::ApplicationsClocksSetting,
         ];
-        let r = summarise(&s, &limits(), 3);
+        let r = summarise(&s, &limits(), None);
         assert!(!r.throttled);
         assert_eq!(r.throttle_reasons, vec!["applications-clocks-setting"]);
         s[2].throttle_reasons = vec![ThrottleReason::SwThermalSlowdown];
-        let r = summarise(&s, &limits(), 3);
+        let r = summarise(&s, &limits(), None);
         assert!(r.throttled);
         assert_eq!(
             r.throttle_causes,

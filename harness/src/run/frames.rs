@@ -12,7 +12,8 @@
 //! measured frame does; under `measured = "auto"` the timed phase renders measured frames until
 //! the stop rule ends it ([`crate::timing::stop`]), and the last compared frame is copied aside as
 //! it completes, for the determinism check (a copy submitted between two frames, outside every
-//! timed pass).
+//! timed pass). With sensors, an energy window follows: the sequence goes on, untimed, for at
+//! least [`ENERGY_WINDOW_MS`] while the sampler reads the energy counter.
 
 use std::cell::Cell;
 use std::collections::{BTreeMap, VecDeque};
@@ -23,7 +24,7 @@ use tessera_results::conditions::StopReason;
 use tessera_metrics::{encode_srgb8, HdrImage, Rgb8Image};
 
 use crate::conditions::sampler::Sampler;
-use crate::conditions::Sample;
+use crate::conditions::{Sample, ENERGY_WINDOW_MS};
 use crate::gpu::Gpu;
 use crate::render::graph::PassKind;
 use crate::render::readback::Readback;
@@ -58,6 +59,8 @@ pub struct Rendered {
     pub ended_by: StopReason,
     /// The sensor samples of the measured frames; `None` without a sampler.
     pub conditions: Option<Vec<Sample>>,
+    /// The sensor samples of the energy window and its frame count; `None` without a sampler.
+    pub energy_window: Option<(Vec<Sample>, u32)>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -227,6 +230,7 @@ pub fn render_sampled(
         frame_ms: Vec::new(),
         ended_by: StopReason::Count,
         conditions: None,
+        energy_window: None,
     };
 
     // Clock warm-up: frame 0 (which never reads history) repeated until the GPU has been busy for
@@ -259,6 +263,8 @@ pub fn render_sampled(
     let stop: Cell<Option<StopReason>> = Cell::new(None);
     // When the first measured frame began: the completion of the frame before it.
     let mut measuring_since: Option<Instant> = None;
+    // The last frame the timed phase rendered (counted or, after an auto stop, not).
+    let mut last_done = 0u32;
     let timestamps = rendered.timestamps;
     if warmup == 0 {
         if let Some(s) = sampler {
@@ -274,6 +280,7 @@ pub fn render_sampled(
         (0..timed_end).take_while(|_| stop.get().is_none()),
         compared_last.map(|i| (i, &readback)),
         &mut |index, times| {
+            last_done = index;
             if stop.get().is_some() {
                 return;
             }
@@ -322,6 +329,27 @@ pub fn render_sampled(
         )),
         None => None,
     };
+
+    // Energy window, with sensors only: the sequence goes on from the last timed frame, pipelined,
+    // for at least ENERGY_WINDOW_MS, while the sampler reads the energy counter.
+    if let Some(s) = sampler {
+        let first = last_done + 1;
+        let window = std::time::Duration::from_secs_f64(ENERGY_WINDOW_MS / 1000.0);
+        let mut frames = 0u32;
+        s.begin();
+        let start = Instant::now();
+        pipelined(
+            gpu,
+            scene,
+            scenario,
+            technique,
+            &mut timers,
+            (first..).take_while(|_| start.elapsed() < window),
+            None,
+            &mut |_, _| frames += 1,
+        );
+        rendered.energy_window = Some((s.end(), frames));
+    }
 
     // Capture phase: the same frames again, one at a time (rendering is deterministic, histories
     // included); each measured frame is counted (fragment invocations) and read back for

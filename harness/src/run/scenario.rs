@@ -463,8 +463,10 @@ fn fill_conditions(
             alternates(variant.technique),
         );
     }
-    result.conditions =
-        Some(sensors.result_record(r.conditions.as_deref(), r.frame_ms.len() as u32));
+    result.conditions = Some(sensors.result_record(
+        r.conditions.as_deref(),
+        r.energy_window.as_ref().map(|(s, n)| (s.as_slice(), *n)),
+    ));
 }
 
 /// Techniques that shade alternate pixel sets on alternate frames: pacing reports even and odd
