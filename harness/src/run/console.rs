@@ -132,7 +132,7 @@ pub fn conditions_line(results: &[VariantResult], r: &VariantResult) -> Option<S
     if let Some(e) = c.energy {
         let saving = gates::energy_saving(results, r)
             .filter(|_| r.variant != "native")
-            .map(|x| format!(", {x:.2}x less than native"))
+            .map(|x| format!(" (saving {x:.2}x against native)"))
             .unwrap_or_default();
         parts.push(format!("{:.3} mJ/frame{saving}", e.mj_per_frame));
     }
