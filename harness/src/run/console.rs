@@ -4,6 +4,7 @@
 
 use std::fmt::Write as _;
 
+use tessera_results::conditions::{SamplingMode, StopReason};
 use tessera_results::{GateLevel, ScenarioResult, Status, VariantResult};
 
 use super::gates;
@@ -115,47 +116,46 @@ pub fn scenario_table(s: &ScenarioResult) -> String {
     out
 }
 
-/// One result's sensors in a line: graphics clock, temperature, power, energy per frame (and
-/// the energy saved against native), sampling; `None` when nothing was recorded.
+/// One result's conditions in a line: graphics clock, temperature, power, energy per frame (and
+/// the energy saved against native), throttling, and the frames `measured = "auto"` took; `None`
+/// when there is none of these.
 pub fn conditions_line(results: &[VariantResult], r: &VariantResult) -> Option<String> {
-    let c = r.conditions.as_ref()?.recorded()?;
     let mut parts = Vec::new();
-    if let Some(g) = c.graphics_clock_mhz {
-        parts.push(format!("clock {:.0} MHz (min {:.0})", g.median, g.min));
+    if let Some(c) = r.conditions.as_ref().and_then(|c| c.recorded()) {
+        if let Some(g) = c.graphics_clock_mhz {
+            parts.push(format!("clock {:.0} MHz (min {:.0})", g.median, g.min));
+        }
+        if let Some(t) = c.temperature_c {
+            parts.push(format!("{:.0}-{:.0} C", t.min, t.max));
+        }
+        if let Some(p) = c.power_w {
+            parts.push(format!("{:.0} W median", p.median));
+        }
+        if let Some(e) = c.energy {
+            let saving = gates::energy_saving(results, r)
+                .filter(|_| r.variant != "native")
+                .map(|x| format!(" (saving {x:.2}x against native)"))
+                .unwrap_or_default();
+            parts.push(format!("{:.3} mJ/frame{saving}", e.mj_per_frame));
+        }
+        if c.throttled {
+            parts.push("THROTTLED".into());
+        }
     }
-    if let Some(t) = c.temperature_c {
-        parts.push(format!("{:.0}-{:.0} C", t.min, t.max));
-    }
-    if let Some(p) = c.power_w {
-        parts.push(format!("{:.0} W median", p.median));
-    }
-    if let Some(e) = c.energy {
-        let saving = gates::energy_saving(results, r)
-            .filter(|_| r.variant != "native")
-            .map(|x| format!(" (saving {x:.2}x against native)"))
-            .unwrap_or_default();
-        parts.push(format!("{:.3} mJ/frame{saving}", e.mj_per_frame));
-    }
-    if let Some(sm) = r
-        .sampling
-        .filter(|s| s.mode == tessera_results::conditions::SamplingMode::Auto)
-    {
+    if let Some(sm) = r.sampling.filter(|s| s.mode == SamplingMode::Auto) {
         let precision = sm
             .precision
             .map(|p| format!("±{:.2}%", p * 100.0))
             .unwrap_or_else(|| "no interval".into());
         let ended = match sm.ended_by {
-            tessera_results::conditions::StopReason::Cap => "frame cap",
-            tessera_results::conditions::StopReason::Timeout => "timeout",
+            StopReason::Cap => "frame cap",
+            StopReason::Timeout => "timeout",
             _ => "target met",
         };
         parts.push(format!(
             "{} frames, median {precision} ({ended})",
             sm.frames
         ));
-    }
-    if c.throttled {
-        parts.push("THROTTLED".into());
     }
     (!parts.is_empty()).then(|| parts.join(", "))
 }
