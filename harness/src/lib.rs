@@ -6,9 +6,10 @@
 pub mod compare;
 pub mod conditions;
 pub mod gpu;
+pub mod params;
 pub mod render;
 pub mod run;
 pub mod scenario;
-pub mod technique;
+pub mod techniques;
 pub mod timing;
 pub mod upload;

@@ -37,6 +37,7 @@ fn run_info(run_id: &str, sha: &str, adapter: AdapterInfo) -> RunInfo {
             sha: sha.into(),
             dirty: false,
         }),
+        commit_time: None,
         started_at: "2026-11-22T03:00:00Z".into(),
         finished_at: Some("2026-11-22T03:01:00Z".into()),
         status: RunStatus::Complete,
@@ -51,6 +52,8 @@ fn run_info(run_id: &str, sha: &str, adapter: AdapterInfo) -> RunInfo {
         command_line: vec!["tessera".into(), "run".into()],
         scenarios: vec!["scenarios/a.toml".into(), "scenarios/b.toml".into()],
         conditions: None,
+        suite: Some("scenarios".into()),
+        branch: Some("main".into()),
     }
 }
 
@@ -147,7 +150,7 @@ const B_ID: &str = "20261122T040000Z-bbbbbbb";
 
 /// `v` with sensors that recorded `mj` millijoules per frame, throttled or not.
 fn with_energy(mut v: VariantResult, mj: f64, throttled: bool) -> VariantResult {
-    v.conditions = Some(Conditions::Recorded(RecordedConditions {
+    v.conditions = Some(Conditions::Recorded(Box::new(RecordedConditions {
         source: "nvml".into(),
         samples: 3,
         window_ms: 40.0,
@@ -168,7 +171,7 @@ fn with_energy(mut v: VariantResult, mj: f64, throttled: bool) -> VariantResult 
         } else {
             vec![]
         },
-    }));
+    })));
     v
 }
 

@@ -25,6 +25,8 @@ fn options(out: &std::path::Path, junit: bool) -> Options {
         junit: junit.then(|| out.join("junit.xml")),
         progress: false,
         command_line: vec!["tessera".into(), "test".into()],
+        suite: None,
+        branch: None,
     }
 }
 
@@ -154,7 +156,7 @@ impl ConditionSource for Throttled {
             temperature_c: Some(87.0),
             power_w: Some(350.0),
             energy_mj: Some(50.0 * f64::from(self.reads)),
-            throttle_reasons: if self.reads % 2 == 0 {
+            throttle_reasons: if self.reads & 1 == 0 {
                 vec![ThrottleReason::SwThermalSlowdown]
             } else {
                 vec![]

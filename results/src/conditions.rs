@@ -45,14 +45,14 @@ pub struct DeviceSensors {
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(tag = "state", rename_all = "kebab-case")]
 pub enum Conditions {
-    Recorded(RecordedConditions),
+    Recorded(Box<RecordedConditions>),
     NotAvailable { reason: String },
 }
 
 impl Conditions {
     pub fn recorded(&self) -> Option<&RecordedConditions> {
         match self {
-            Conditions::Recorded(r) => Some(r),
+            Conditions::Recorded(r) => Some(r.as_ref()),
             Conditions::NotAvailable { .. } => None,
         }
     }
@@ -240,7 +240,7 @@ mod tests {
             json,
             r#"{"state":"not-available","reason":"a CPU adapter"}"#
         );
-        let r = Conditions::Recorded(RecordedConditions {
+        let r = Conditions::Recorded(Box::new(RecordedConditions {
             source: "nvml".into(),
             samples: 3,
             window_ms: 40.0,
@@ -257,7 +257,7 @@ mod tests {
             }),
             throttled: true,
             throttle_causes: vec!["power cap".into()],
-        });
+        }));
         let json = serde_json::to_string(&r).unwrap();
         assert!(
             json.starts_with(r#"{"state":"recorded","source":"nvml""#),

@@ -36,6 +36,8 @@ pub mod layout {
     }
 }
 
+pub mod stats;
+
 /// Version of the result format. Readers refuse versions they do not know.
 pub const SCHEMA_VERSION: u32 = 1;
 
@@ -46,6 +48,11 @@ pub struct RunInfo {
     pub run_id: String,
     /// `None` when the harness was not run from a git checkout.
     pub commit: Option<CommitInfo>,
+    /// Committer date of `commit`, RFC 3339 UTC; `None` without a git checkout and in runs written
+    /// before it was recorded. The dashboard orders a series by it (then by `started_at`), so that
+    /// runs uploaded out of commit order are placed where their commit belongs.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub commit_time: Option<String>,
     /// RFC 3339, UTC.
     pub started_at: String,
     /// RFC 3339, UTC; `None` while the run is going on or when it was interrupted.
@@ -61,6 +68,14 @@ pub struct RunInfo {
     /// recorded.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub conditions: Option<conditions::DeviceConditions>,
+    /// The suite: the name of each scenario folder given on the command line (a file's parent
+    /// folder), in order, joined by `+`. `None` in files written before it existed.
+    #[serde(default)]
+    pub suite: Option<String>,
+    /// The git branch of the checkout (or `--branch`); `None` on a detached head, outside git, or
+    /// in files written before it existed.
+    #[serde(default)]
+    pub branch: Option<String>,
 }
 
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
@@ -340,7 +355,8 @@ pub struct SeriesSummary {
 pub struct ImageRecord {
     /// Measured-frame index.
     pub frame: u32,
-    /// `output` (this variant), `reference`, `heatmap`.
+    /// `output` (this variant), `reference`, `heatmap` (FLIP error map in magma against the
+    /// reference), `heatmap-hdr` (HDR-FLIP's), or a technique's own image such as `rate`.
     pub kind: String,
     pub path: String,
 }

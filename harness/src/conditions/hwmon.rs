@@ -52,7 +52,7 @@ fn max_dpm_level(path: &Path) -> Option<f64> {
     text.lines()
         .filter_map(|l| {
             let (_, rest) = l.split_once(':')?;
-            let mhz = rest.trim().split_whitespace().next()?;
+            let mhz = rest.split_whitespace().next()?;
             mhz.to_ascii_lowercase()
                 .trim_end_matches("mhz")
                 .parse::<f64>()

@@ -168,9 +168,9 @@ impl Sensors {
         energy_window: Option<(&[Sample], u32)>,
     ) -> Conditions {
         match (self, samples) {
-            (Sensors::Sampling(s), Some(samples)) if !samples.is_empty() => {
-                Conditions::Recorded(summary::summarise(samples, s.limits(), energy_window))
-            }
+            (Sensors::Sampling(s), Some(samples)) if !samples.is_empty() => Conditions::Recorded(
+                Box::new(summary::summarise(samples, s.limits(), energy_window)),
+            ),
             (Sensors::Sampling(_), _) => Conditions::NotAvailable {
                 reason: "the sampling thread returned no samples".into(),
             },

@@ -53,20 +53,21 @@ impl NvmlSource {
             .ok_or_else(|| {
                 format!("none of NVML's {count} devices has PCI device id {pci_device:#06x}")
             })?;
-        let device = nvml
-            .device_by_index(index)
-            .map_err(|e| format!("NVML device {index}: {e}"))?;
-        let mhz = |c| device.max_clock_info(c).ok().map(f64::from);
-        let limits = DeviceLimits {
-            source: "nvml",
-            device: device
-                .name()
-                .unwrap_or_else(|_| format!("NVML device {index}")),
-            max_graphics_clock_mhz: mhz(Clock::Graphics),
-            max_memory_clock_mhz: mhz(Clock::Memory),
-            energy_counter: device.total_energy_consumption().is_ok(),
+        let limits = {
+            let device = nvml
+                .device_by_index(index)
+                .map_err(|e| format!("NVML device {index}: {e}"))?;
+            let mhz = |c| device.max_clock_info(c).ok().map(f64::from);
+            DeviceLimits {
+                source: "nvml",
+                device: device
+                    .name()
+                    .unwrap_or_else(|_| format!("NVML device {index}")),
+                max_graphics_clock_mhz: mhz(Clock::Graphics),
+                max_memory_clock_mhz: mhz(Clock::Memory),
+                energy_counter: device.total_energy_consumption().is_ok(),
+            }
         };
-        drop(device);
         Ok(NvmlSource {
             nvml,
             index,

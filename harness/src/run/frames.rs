@@ -28,8 +28,8 @@ use crate::conditions::{Sample, ENERGY_WINDOW_MS};
 use crate::gpu::Gpu;
 use crate::render::graph::PassKind;
 use crate::render::readback::Readback;
+use crate::render::renderer::{FrameExtras, FrameInfo, Renderer};
 use crate::render::scene::SceneGpu;
-use crate::render::technique::{FrameExtras, FrameInfo, Technique};
 use crate::render::timers::{FrameMeasurements, Timers, MAX_PENDING_FRAMES};
 use crate::scenario::Scenario;
 
@@ -50,7 +50,7 @@ pub struct Rendered {
     pub deterministic: Option<bool>,
     pub timestamps: bool,
     pub readback_bytes: u64,
-    /// The technique's extras of every measured frame ([`Technique::frame_extras`]).
+    /// The technique's extras of every measured frame ([`Renderer::frame_extras`]).
     pub extras: Vec<FrameExtras>,
     /// Per timed measured frame, the sum of its pass times (its CPU frame time without
     /// timestamps): what the stop rule read.
@@ -61,6 +61,16 @@ pub struct Rendered {
     pub conditions: Option<Vec<Sample>>,
     /// The sensor samples of the energy window and its frame count; `None` without a sampler.
     pub energy_window: Option<(Vec<Sample>, u32)>,
+    /// Per measured frame, a hash of its exact bits, when `TESSERA_FRAME_HASHES` is set (see
+    /// [`frame_hash_file`]); empty otherwise.
+    pub hashes: Vec<u64>,
+}
+
+/// Where to append every measured frame's bit hash (`<scenario> <variant> <frame> <hash>`), from the
+/// `TESSERA_FRAME_HASHES` environment variable: a check that a refactoring left every frame
+/// bit-identical, not a measure.
+pub fn frame_hash_file() -> Option<std::path::PathBuf> {
+    std::env::var_os("TESSERA_FRAME_HASHES").map(Into::into)
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -85,7 +95,7 @@ pub fn submit_frame(
     gpu: &Gpu,
     scene: &mut SceneGpu,
     scenario: &Scenario,
-    technique: &mut dyn Technique,
+    technique: &mut dyn Renderer,
     timers: &mut Timers,
     index: u32,
 ) -> wgpu::SubmissionIndex {
@@ -122,11 +132,12 @@ pub fn submit_frame(
 
 /// Renders `frames` back to back with up to `MAX_PENDING_FRAMES - 1` in flight, so the GPU never
 /// waits for the CPU; `done(index, pass times)` is called as each frame completes, in order.
+#[allow(clippy::too_many_arguments)]
 fn pipelined(
     gpu: &Gpu,
     scene: &mut SceneGpu,
     scenario: &Scenario,
-    technique: &mut dyn Technique,
+    technique: &mut dyn Renderer,
     timers: &mut Timers,
     frames: impl Iterator<Item = u32>,
     snapshot: Option<(u32, &Readback)>,
@@ -177,7 +188,7 @@ pub fn render(
     gpu: &Gpu,
     scene: &mut SceneGpu,
     scenario: &Scenario,
-    technique: &mut dyn Technique,
+    technique: &mut dyn Renderer,
     keep_frames: bool,
     keep_hdr: bool,
     on_frame: &mut dyn FnMut(),
@@ -200,7 +211,7 @@ pub fn render_sampled(
     gpu: &Gpu,
     scene: &mut SceneGpu,
     scenario: &Scenario,
-    technique: &mut dyn Technique,
+    technique: &mut dyn Renderer,
     keep_frames: bool,
     keep_hdr: bool,
     sampler: Option<&Sampler>,
@@ -231,7 +242,9 @@ pub fn render_sampled(
         ended_by: StopReason::Count,
         conditions: None,
         energy_window: None,
+        hashes: Vec::new(),
     };
+    let hash_frames = frame_hash_file().is_some();
 
     // Clock warm-up: frame 0 (which never reads history) repeated until the GPU has been busy for
     // `warmup_ms`, so that it reaches its working clocks before the first timed frame.
@@ -379,6 +392,9 @@ pub fn render_sampled(
                 .extras
                 .push(technique.frame_extras(gpu, &frame.image, saved));
             rendered.non_finite_masks.push(frame.non_finite_mask);
+            if hash_frames {
+                rendered.hashes.push(image_hash(&frame.image));
+            }
             if index + 1 == scenario.total_frames() {
                 rendered.deterministic = timed_hash.map(|h| h == image_hash(&frame.image));
             }
@@ -397,7 +413,7 @@ pub fn render_sampled(
 fn read_output(
     gpu: &Gpu,
     readback: &Readback,
-    technique: &dyn Technique,
+    technique: &dyn Renderer,
 ) -> Result<crate::render::readback::CpuFrame, RenderError> {
     let mut encoder = gpu
         .device

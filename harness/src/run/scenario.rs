@@ -5,7 +5,6 @@
 //! variant and the scenario goes on. Metrics are computed only after a variant's frames are all
 //! rendered, never while timed GPU work is in flight.
 
-use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Instant;
 
@@ -20,10 +19,11 @@ use super::motion;
 use super::stability;
 use crate::conditions::Sensors;
 use crate::gpu::Gpu;
+use crate::params::Variant;
+use crate::render::renderer::{Renderer, Unsupported};
 use crate::render::scene::SceneGpu;
-use crate::render::technique::{self, Technique, Unsupported};
 use crate::scenario::{MetricKind, Reference, Scenario};
-use crate::technique::{TechniqueKind, Variant};
+use crate::techniques::{self, native, Target};
 use crate::timing::{pacing, stop};
 
 /// Frames a reference render produced, in measured-frame order.
@@ -65,9 +65,8 @@ pub fn run(
     };
 
     let needs_reference = scenario.needs_reference();
-    let native_is_reference = |v: &Variant| {
-        v.technique == TechniqueKind::Native && scenario.reference == Reference::Native
-    };
+    let native_is_reference =
+        |v: &Variant| v.technique.name() == native::NAME && scenario.reference == Reference::Native;
     // The reference renders first; when it is the native variant itself, that render is reused.
     let mut reference: Option<Result<ReferenceFrames, String>> = None;
     if scenario.needs_separate_reference() {
@@ -117,6 +116,7 @@ pub fn run(
             }
         };
         result.non_finite_values = rendered.non_finite;
+        append_hashes(&scenario.name, &variant.name, &rendered.hashes);
         save_images(
             &mut result,
             &rendered.frames,
@@ -158,6 +158,10 @@ pub fn run(
                                 error: format!("metrics: {e}"),
                             }
                         }
+                    }
+                    // The reference against itself has no error to show.
+                    if frames.is_some() {
+                        save_error_maps(&mut result, &inputs, scenario, &image_dir, run_dir);
                     }
                 }
                 Some(Err(e)) => result.status = Status::Failed { error: e.clone() },
@@ -293,12 +297,14 @@ fn render_variant(
 ) -> VariantOutcome {
     let validation = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
     let oom = gpu.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
-    let built = technique::build(
+    let built = techniques::build(
         gpu,
         variant,
-        scenario.width,
-        scenario.height,
-        scenario.scene.has_dynamic_objects(),
+        Target {
+            width: scenario.width,
+            height: scenario.height,
+            dynamic_scene: scenario.scene.has_dynamic_objects(),
+        },
     );
     let result = match built {
         Err(u) => Ok(Err(u)),
@@ -338,7 +344,7 @@ fn first_line(s: &str) -> String {
         .join(" ")
 }
 
-fn plan_record(t: &dyn Technique) -> PlanRecord {
+fn plan_record(t: &dyn Renderer) -> PlanRecord {
     let plan = t.plan();
     PlanRecord {
         passes: plan
@@ -365,18 +371,19 @@ fn render_reference(
     on_frame: &mut dyn FnMut(),
 ) -> Result<ReferenceFrames, String> {
     let validation = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
-    let built: Result<Box<dyn Technique>, Unsupported> = match scenario.reference {
+    let built: Result<Box<dyn Renderer>, Unsupported> = match scenario.reference {
         Reference::GroundTruth { supersample } => {
-            technique::ground_truth(gpu, scenario.width, scenario.height, supersample)
+            native::ground_truth(gpu, scenario.width, scenario.height, supersample)
         }
-        _ => {
-            let native = Variant {
-                name: "native".into(),
-                technique: TechniqueKind::Native,
-                params: BTreeMap::new(),
-            };
-            technique::build(gpu, &native, scenario.width, scenario.height, false)
-        }
+        _ => techniques::build(
+            gpu,
+            &Variant::with_defaults(&native::Native),
+            Target {
+                width: scenario.width,
+                height: scenario.height,
+                dynamic_scene: false,
+            },
+        ),
     };
     let result = match built {
         Err(Unsupported(reason)) => Err(format!("no reference: {reason}")),
@@ -389,7 +396,10 @@ fn render_reference(
             keep_hdr(scenario),
             on_frame,
         )
-        .map(|r| ReferenceFrames::new(r.frames, r.hdr_frames, r.non_finite_masks))
+        .map(|r| {
+            append_hashes(&scenario.name, "(reference)", &r.hashes);
+            ReferenceFrames::new(r.frames, r.hdr_frames, r.non_finite_masks)
+        })
         .map_err(|e| format!("reference render failed: {e}")),
     };
     if let Some(e) = pollster::block_on(validation.pop()) {
@@ -460,22 +470,13 @@ fn fill_conditions(
         result.pacing = pacing::pacing(
             &r.frame_ms,
             scenario.warmup_frames,
-            alternates(variant.technique),
+            variant.technique.alternates_frames(),
         );
     }
     result.conditions = Some(sensors.result_record(
         r.conditions.as_deref(),
         r.energy_window.as_ref().map(|(s, n)| (s.as_slice(), *n)),
     ));
-}
-
-/// Techniques that shade alternate pixel sets on alternate frames: pacing reports even and odd
-/// frames apart.
-fn alternates(t: TechniqueKind) -> bool {
-    matches!(
-        t,
-        TechniqueKind::Checkerboard | TechniqueKind::Checkerboard2x2
-    )
 }
 
 impl ReferenceFrames {
@@ -671,7 +672,7 @@ fn flicker(frames: &[Rgb8Image]) -> MetricRecord {
 /// mean), images of saved frames are saved as `<variant>-<kind>-fNNN.png`.
 fn add_extras(
     result: &mut VariantResult,
-    extras: &[crate::render::technique::FrameExtras],
+    extras: &[crate::render::renderer::FrameExtras],
     scenario: &Scenario,
     dir: &Path,
     run_dir: &Path,
@@ -742,6 +743,46 @@ fn save_images(
     }
 }
 
+/// The per-pixel error maps of each saved frame against the reference, as images of the result:
+/// the FLIP map in magma (kind `heatmap`, `<variant>-flip-fNNN.png`, as `tessera diff --heatmap`
+/// writes it) always, and the HDR-FLIP map (kind `heatmap-hdr`, `<variant>-flip-hdr-fNNN.png`)
+/// when the scenario measures `flip-hdr`. A map that cannot be computed (sizes differ) is left out: the metrics report that.
+fn save_error_maps(
+    result: &mut VariantResult,
+    inputs: &MetricInputs<'_>,
+    scenario: &Scenario,
+    dir: &Path,
+    run_dir: &Path,
+) {
+    let stem = sanitize(&result.variant);
+    let ppd = tessera_metrics::DEFAULT_PIXELS_PER_DEGREE;
+    let hdr = keep_hdr(scenario);
+    for &f in &scenario.save_frames {
+        let i = f as usize;
+        let (Some(r), Some(t)) = (inputs.reference.frames.get(i), inputs.test.get(i)) else {
+            continue;
+        };
+        let _ = std::fs::create_dir_all(dir);
+        if let Ok(map) = tessera_metrics::flip_ldr(r, t, ppd) {
+            let path = dir.join(format!("{stem}-flip-f{f:03}.png"));
+            let img = tessera_metrics::flip_heatmap(&map);
+            save_image(result, &img, &path, run_dir, f, "heatmap");
+        }
+        let hdr_pair = (
+            inputs.reference.hdr.get(i),
+            inputs.test_hdr.get(i),
+            inputs.reference.exposures.get(i),
+        );
+        if let (true, (Some(rh), Some(th), Some(range))) = (hdr, hdr_pair) {
+            if let Ok(map) = tessera_metrics::flip_hdr(rh, th, range, ppd) {
+                let path = dir.join(format!("{stem}-flip-hdr-f{f:03}.png"));
+                let img = tessera_metrics::flip_heatmap(&map);
+                save_image(result, &img, &path, run_dir, f, "heatmap-hdr");
+            }
+        }
+    }
+}
+
 /// Writes one PNG and records it (path relative to the run folder); a failed write is left out.
 fn save_image(
     result: &mut VariantResult,
@@ -793,4 +834,28 @@ pub fn run_failed(scenario: &Scenario, run_id: &str, error: &str) -> ScenarioRes
         })
         .collect();
     finish(scenario, run_id, results, Instant::now())
+}
+
+/// Appends a variant's frame hashes to the `TESSERA_FRAME_HASHES` file, when set.
+fn append_hashes(scenario: &str, variant: &str, hashes: &[u64]) {
+    use std::io::Write;
+    let Some(path) = frames::frame_hash_file() else {
+        return;
+    };
+    let lines: String = hashes
+        .iter()
+        .enumerate()
+        .map(|(i, h)| format!("{scenario} {variant} {i} {h:016x}\n"))
+        .collect();
+    let written = std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(&path)
+        .and_then(|mut f| f.write_all(lines.as_bytes()));
+    if let Err(e) = written {
+        eprintln!(
+            "warning: cannot append frame hashes to {}: {e}",
+            path.display()
+        );
+    }
 }

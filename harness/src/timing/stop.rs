@@ -32,7 +32,8 @@ pub struct AutoRule {
 
 impl AutoRule {
     fn checkpoint(&self, n: u32) -> bool {
-        n == self.min || n >= self.max || n < 64 || n % (n / 32) == 0
+        let step = (n / 32).max(1);
+        n == self.min || n >= self.max || n < 64 || n / step * step == n
     }
 
     /// After `frame_ms.len()` measured frames and `elapsed_s` seconds since the first began:
