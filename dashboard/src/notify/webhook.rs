@@ -213,7 +213,15 @@ impl Notifier {
         for mut d in due {
             let group = {
                 let mut conn = self.pool.get()?;
-                groups::get(&mut *conn, &d.group_key)
+                // Detection never deletes an alert; a group whose alerts were all withdrawn (moved
+                // to another commit, merged, or no longer supported) is gone as far as a
+                // notification goes.
+                match groups::get(&mut *conn, &d.group_key) {
+                    Ok(g) if g.status == "withdrawn" => {
+                        Err(StoreError::NotFound(format!("group {}", g.key)))
+                    }
+                    other => other,
+                }
             };
             let outcome = match group {
                 Ok(g) => self.post(&body(&g, &self.config.public_url), &g.key),

@@ -436,3 +436,27 @@ fn image_hash(image: &HdrImage) -> u64 {
     }
     h.finish()
 }
+
+/// Appends a variant's frame hashes to the `TESSERA_FRAME_HASHES` file, when set.
+pub fn append_hashes(scenario: &str, variant: &str, hashes: &[u64]) {
+    use std::io::Write;
+    let Some(path) = frame_hash_file() else {
+        return;
+    };
+    let lines: String = hashes
+        .iter()
+        .enumerate()
+        .map(|(i, h)| format!("{scenario} {variant} {i} {h:016x}\n"))
+        .collect();
+    let written = std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(&path)
+        .and_then(|mut f| f.write_all(lines.as_bytes()));
+    if let Err(e) = written {
+        eprintln!(
+            "warning: cannot append frame hashes to {}: {e}",
+            path.display()
+        );
+    }
+}

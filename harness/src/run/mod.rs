@@ -7,8 +7,12 @@
 pub mod console;
 pub mod frames;
 pub mod gates;
+pub mod images;
+pub mod metrics;
 pub mod motion;
 pub mod output;
+pub mod record;
+pub mod reference;
 pub mod scenario;
 pub mod stability;
 
@@ -173,7 +177,7 @@ pub fn run_with_sensors(
 }
 
 fn device_lost_result(s: &Scenario, run_id: &str) -> ScenarioResult {
-    let mut r = scenario::run_failed(s, run_id, "the GPU device was lost earlier in the run");
+    let mut r = record::run_failed(s, run_id, "the GPU device was lost earlier in the run");
     for v in &mut r.results {
         v.status = Status::Failed {
             error: "the GPU device was lost earlier in the run".into(),

@@ -1,0 +1,216 @@
+//! A variant's metrics: each of the scenario's metrics per measured frame against the reference's
+//! frame of the same index, aggregated over frames (PSNR from the mean MSE, max-abs-error as the
+//! maximum, the others as the mean); `tde` and `flicker`; and the technique's own per-frame values.
+//!
+//! Pure: frames in, records out. Rendering is `frames.rs`, the reference `reference.rs`.
+
+use tessera_metrics::{HdrImage, Rgb8Image};
+use tessera_results::MetricRecord;
+
+use super::motion;
+use super::reference::ReferenceFrames;
+use crate::render::renderer::FrameExtras;
+use crate::scenario::MetricKind;
+
+/// What a variant's metrics are computed from.
+pub struct MetricInputs<'a> {
+    pub reference: &'a ReferenceFrames,
+    pub test: &'a [Rgb8Image],
+    pub test_hdr: &'a [HdrImage],
+    pub motion: &'a Result<Vec<Option<motion::MotionField>>, String>,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum MetricError {
+    #[error("{0}")]
+    Metric(#[from] tessera_metrics::MetricsError),
+    #[error("no motion for tde: {0}")]
+    Motion(String),
+}
+
+/// Metrics of every measured frame against the reference's frame of the same index.
+pub fn compute(
+    metrics: &[MetricKind],
+    inputs: &MetricInputs<'_>,
+) -> Result<Vec<MetricRecord>, MetricError> {
+    let (reference, test) = (&inputs.reference.frames[..], inputs.test);
+    let frames: Vec<u32> = (0..test.len().min(reference.len()) as u32).collect();
+    let mut out = Vec::new();
+    for &kind in metrics {
+        if kind == MetricKind::Flicker {
+            out.push(flicker(test));
+            continue;
+        }
+        if kind == MetricKind::Tde {
+            let motion = inputs
+                .motion
+                .as_ref()
+                .map_err(|e| MetricError::Motion(e.clone()))?;
+            out.push(tde(reference, test, motion)?);
+            continue;
+        }
+        let mut per_frame = Vec::new();
+        for &f in &frames {
+            let (r, t) = (&reference[f as usize], &test[f as usize]);
+            let v = match kind {
+                MetricKind::Psnr => tessera_metrics::mse_rgb(r, t)?,
+                MetricKind::PsnrLuma => tessera_metrics::mse_luma(r, t)?,
+                MetricKind::MaxAbsError => tessera_metrics::max_abs_error(r, t)? as f64,
+                MetricKind::Ssim => tessera_metrics::ssim_rgb(r, t)?,
+                MetricKind::SsimLuma => tessera_metrics::ssim_luma(r, t)?,
+                MetricKind::Flip => {
+                    tessera_metrics::flip_ldr(r, t, tessera_metrics::DEFAULT_PIXELS_PER_DEGREE)?
+                        .mean
+                }
+                MetricKind::FlipHdr => {
+                    let i = f as usize;
+                    let rh = &inputs.reference.hdr[i];
+                    tessera_metrics::flip_hdr(
+                        rh,
+                        &inputs.test_hdr[i],
+                        &inputs.reference.exposures[i],
+                        tessera_metrics::DEFAULT_PIXELS_PER_DEGREE,
+                    )?
+                    .mean
+                }
+                MetricKind::Flicker | MetricKind::Tde => unreachable!("computed above"),
+            };
+            per_frame.push(v);
+        }
+        // PSNR is aggregated from the mean MSE (the PSNR of the sequence), per frame from each MSE.
+        let (per_frame, value) = match kind {
+            MetricKind::Psnr | MetricKind::PsnrLuma => {
+                let mean_mse = per_frame.iter().sum::<f64>() / per_frame.len().max(1) as f64;
+                let psnr: Vec<f64> = per_frame
+                    .iter()
+                    .map(|m| tessera_metrics::psnr_from_mse(*m, 255.0))
+                    .collect();
+                (psnr, tessera_metrics::psnr_from_mse(mean_mse, 255.0))
+            }
+            MetricKind::MaxAbsError => {
+                let max = per_frame.iter().copied().fold(0.0, f64::max);
+                (per_frame, max)
+            }
+            _ => {
+                let mean = per_frame.iter().sum::<f64>() / per_frame.len().max(1) as f64;
+                (per_frame, mean)
+            }
+        };
+        out.push(MetricRecord {
+            name: kind.name().to_string(),
+            series: series(&per_frame),
+            per_frame,
+            frames: frames.clone(),
+            value,
+            higher_is_better: kind.higher_is_better(),
+        });
+    }
+    Ok(out)
+}
+
+fn series(per_frame: &[f64]) -> Option<tessera_results::SeriesSummary> {
+    tessera_metrics::series_stats(per_frame).map(|s| tessera_results::SeriesSummary {
+        mean: s.mean,
+        p95: s.p95,
+        max: s.max,
+        std_dev: s.std_dev,
+    })
+}
+
+/// Temporal difference error (notes/metrics.md 3.3, item 1) per measured frame that has motion
+/// from a previous measured frame in the same shot; the value is the mean over those frames.
+fn tde(
+    reference: &[Rgb8Image],
+    test: &[Rgb8Image],
+    motion: &[Option<motion::MotionField>],
+) -> Result<MetricRecord, MetricError> {
+    let (mut frames, mut per_frame) = (Vec::new(), Vec::new());
+    for t in 1..test.len().min(reference.len()) {
+        let Some(Some(m)) = motion.get(t) else {
+            continue;
+        };
+        let v = tessera_metrics::temporal_difference_error(
+            &test[t - 1],
+            &test[t],
+            &reference[t - 1],
+            &reference[t],
+            &m.motion,
+            &m.valid,
+        )?;
+        if let Some(v) = v {
+            frames.push(t as u32);
+            per_frame.push(v);
+        }
+    }
+    let value = per_frame.iter().sum::<f64>() / per_frame.len().max(1) as f64;
+    Ok(MetricRecord {
+        name: MetricKind::Tde.name().to_string(),
+        series: series(&per_frame),
+        frames,
+        per_frame,
+        value,
+        higher_is_better: false,
+    })
+}
+
+/// Static-scene flicker (notes/metrics.md section 3.3, SSF): per measured frame after the first,
+/// the mean absolute difference from the previous frame over pixels and RGB channels, in 8-bit
+/// units; the value is the mean over frames. Zero for a converged deterministic technique on a
+/// static scene; on moving scenes it measures change, not error.
+fn flicker(frames: &[Rgb8Image]) -> MetricRecord {
+    let per_frame: Vec<f64> = frames
+        .windows(2)
+        .map(|w| {
+            let sum: u64 = w[0]
+                .data
+                .iter()
+                .zip(&w[1].data)
+                .map(|(a, b)| a.abs_diff(*b) as u64)
+                .sum();
+            sum as f64 / w[1].data.len().max(1) as f64
+        })
+        .collect();
+    let value = per_frame.iter().sum::<f64>() / per_frame.len().max(1) as f64;
+    MetricRecord {
+        name: MetricKind::Flicker.name().to_string(),
+        series: series(&per_frame),
+        frames: (1..frames.len() as u32).collect(),
+        per_frame,
+        value,
+        higher_is_better: false,
+    }
+}
+
+/// A technique's per-frame extra values (e.g. `shading-rate`) as metrics of the variant's own
+/// frames, the value their mean.
+pub fn extra_values(extras: &[FrameExtras]) -> Vec<MetricRecord> {
+    let mut out = Vec::new();
+    let mut names: Vec<&'static str> = Vec::new();
+    for e in extras {
+        for (name, _) in &e.values {
+            if !names.contains(name) {
+                names.push(name);
+            }
+        }
+    }
+    for name in names {
+        let (frames, per_frame): (Vec<u32>, Vec<f64>) = extras
+            .iter()
+            .enumerate()
+            .filter_map(|(f, e)| {
+                let v = e.values.iter().find(|(n, _)| *n == name)?.1;
+                Some((f as u32, v))
+            })
+            .unzip();
+        let value = per_frame.iter().sum::<f64>() / per_frame.len().max(1) as f64;
+        out.push(MetricRecord {
+            name: name.to_string(),
+            series: series(&per_frame),
+            per_frame,
+            frames,
+            value,
+            higher_is_better: false,
+        });
+    }
+    out
+}
