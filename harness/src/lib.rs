@@ -4,10 +4,12 @@
 //! the same code paths.
 
 pub mod compare;
+pub mod conditions;
 pub mod gpu;
 pub mod params;
 pub mod render;
 pub mod run;
 pub mod scenario;
 pub mod techniques;
+pub mod timing;
 pub mod upload;

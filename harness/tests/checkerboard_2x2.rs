@@ -639,7 +639,8 @@ fn the_depth_test_rejects_half_the_samples_native_shades() {
     let t = Checkerboard2x2Gpu::new(&gpu, &variant(&[]), s.width, s.height);
     let native = techniques::build(
         &gpu,
-        &common::variant("native", Target::new(&[]), s.width, s.height, true),
+        &common::variant("native", &[]),
+        Target::new(s.width, s.height, true),
     )
     .unwrap();
     scene.write_objects(&gpu.queue, 0.0, 0.0);

@@ -6,6 +6,7 @@ use std::path::Path;
 use std::process::Command;
 
 use tessera::compare::{self, Options, Run};
+use tessera_results::conditions::{Conditions, Energy, EnergyMethod, RecordedConditions};
 use tessera_results::{
     AdapterFeatures, AdapterInfo, CommitInfo, GateLevel, GateOutcome, HostInfo, MetricRecord,
     PassRecord, RunInfo, RunStatus, ScenarioResult, Status, Summary, VariantResult, SCHEMA_VERSION,
@@ -50,6 +51,7 @@ fn run_info(run_id: &str, sha: &str, adapter: AdapterInfo) -> RunInfo {
         },
         command_line: vec!["tessera".into(), "run".into()],
         scenarios: vec!["scenarios/a.toml".into(), "scenarios/b.toml".into()],
+        conditions: None,
         suite: Some("scenarios".into()),
         branch: Some("main".into()),
     }
@@ -106,6 +108,9 @@ fn variant(name: &str, samples: &[f64], quality: Option<(f64, f64, f64)>) -> Var
         stability: None,
         images: vec![],
         gates: vec![],
+        conditions: None,
+        sampling: None,
+        pacing: None,
     }
 }
 
@@ -142,6 +147,80 @@ fn base() -> Run {
 }
 
 const B_ID: &str = "20261122T040000Z-bbbbbbb";
+
+/// `v` with sensors that recorded `mj` millijoules per frame, throttled or not.
+fn with_energy(mut v: VariantResult, mj: f64, throttled: bool) -> VariantResult {
+    v.conditions = Some(Conditions::Recorded(Box::new(RecordedConditions {
+        source: "nvml".into(),
+        samples: 3,
+        window_ms: 40.0,
+        graphics_clock_mhz: None,
+        memory_clock_mhz: None,
+        temperature_c: None,
+        power_w: None,
+        throttle_reasons: vec![],
+        energy: Some(Energy {
+            mj_per_frame: mj,
+            method: EnergyMethod::Counter,
+            frames: 10,
+            window_ms: 1000.0,
+        }),
+        throttled,
+        throttle_causes: if throttled {
+            vec!["the device reported sw-thermal-slowdown in 2 of 3 samples".into()]
+        } else {
+            vec![]
+        },
+    })));
+    v
+}
+
+#[test]
+fn energy_per_frame_and_throttled_results_are_reported() {
+    let mut a = base();
+    let r = &mut a.scenarios[0].results;
+    r[0] = with_energy(r[0].clone(), 4.0, false);
+    r[1] = with_energy(r[1].clone(), 2.0, false);
+    let b = Run {
+        info: run_info(B_ID, "bbbbbbb000", gpu()),
+        scenarios: vec![scenario(
+            B_ID,
+            "a",
+            vec![
+                with_energy(
+                    variant("native", &frames(1.0), Some((f64::INFINITY, 1.0, 0.0))),
+                    4.0,
+                    false,
+                ),
+                with_energy(
+                    variant("upscale", &frames(0.5), Some((30.0, 0.9, 0.1))),
+                    2.5,
+                    true,
+                ),
+            ],
+        )],
+    };
+    let c = compare::compare(&a, &b, &Options::default());
+    assert_eq!(
+        c.scenarios[0].variants[1].energy_saving,
+        (Some(2.0), Some(1.6))
+    );
+    assert_eq!(
+        c.scenarios[0].variants[1].throttled,
+        (Some(false), Some(true))
+    );
+    // Energy is reported, not judged.
+    assert!(!c.regressed());
+    let md = compare::markdown::render(&c);
+    assert!(md.contains("> **Warning:** throttled during measured frames in run B (their times read lowered clocks): `a` / `upscale`.\n"), "{md}");
+    assert!(!md.contains("in run A"), "{md}");
+    assert!(
+        md.contains(
+            "### Energy per frame\n\n| scenario | variant | mJ/frame | change | saving vs native |\n|---|---|---:|---:|---:|\n| a | native | 4.000 | +0.0% | 1.00x |\n| a | upscale | 2.000 → 2.500 | +25.0% | 2.00x → 1.60x |\n"
+        ),
+        "{md}"
+    );
+}
 
 #[test]
 fn slower_variant_and_worse_psnr_are_regressions_on_one_adapter() {

@@ -232,3 +232,45 @@ fn every_shipped_scenario_is_valid() {
     }
     assert!(count >= 4, "found only {count} scenarios");
 }
+
+#[test]
+fn measured_auto_defaults_and_errors() {
+    let auto = |v: &str| VALID.replace("measured = 3", &format!("measured = {v}"));
+    let s = scenario::parse(Path::new("s.toml"), &auto("\"auto\"")).unwrap();
+    let rule = s.auto.unwrap();
+    assert_eq!(
+        (rule.min, rule.max, rule.precision, rule.timeout_s),
+        (10, 2000, 0.005, 15.0)
+    );
+    assert_eq!(s.measured_frames, 10, "metrics use min frames");
+    let s = scenario::parse(Path::new("s.toml"), &auto("{ min = 20, precision = 0.01 }")).unwrap();
+    let rule = s.auto.unwrap();
+    assert_eq!((rule.min, rule.max, rule.precision), (20, 2000, 0.01));
+    assert!(scenario::parse(Path::new("s.toml"), VALID)
+        .unwrap()
+        .auto
+        .is_none());
+
+    assert_eq!(
+        errors_of(&auto("\"often\"")),
+        ["s.toml:6:12: `frames.measured`: \"often\" is not allowed: expected an integer from 1 to 100000, \"auto\" or a table { min, max, precision, timeout_s }"]
+    );
+    assert_eq!(
+        errors_of(&auto("{ min = 50, max = 20, precision = 0 }")),
+        [
+            "s.toml:6:30: `frames.measured.max`: 20 is below min (50): expected min <= max",
+            "s.toml:6:46: `frames.measured.precision`: 0 is out of range: expected a relative precision above 0 and below 1 (0.005 = 0.5%)",
+        ]
+    );
+    assert_eq!(
+        errors_of(&auto("{ mn = 5 }")),
+        ["s.toml:6:14: `frames.measured.mn`: unknown key `mn`, expected one of `min`, `max`, `precision`, `timeout_s`"]
+    );
+    let wrong = errors_of(&auto("2.5"));
+    assert!(
+        wrong[0].contains(
+            "expected an integer, \"auto\" or a table { min, max, precision, timeout_s }"
+        ),
+        "{wrong:?}"
+    );
+}

@@ -8,6 +8,8 @@ use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
+pub mod conditions;
+
 /// The run folder's layout (`results/README.md`): where each file of a run lives. Both the
 /// dashboard's import and `tessera compare` read run folders through this.
 pub mod layout {
@@ -62,6 +64,10 @@ pub struct RunInfo {
     pub command_line: Vec<String>,
     /// Scenario files of the suite, in the order they run.
     pub scenarios: Vec<String>,
+    /// The adapter's sensors, or why there are none. Absent in files written before they were
+    /// recorded.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub conditions: Option<conditions::DeviceConditions>,
     /// The suite: the name of each scenario folder given on the command line (a file's parent
     /// folder), in order, joined by `+`. `None` in files written before it existed.
     #[serde(default)]
@@ -179,6 +185,16 @@ pub struct VariantResult {
     /// Saved frames (paths relative to the run folder).
     pub images: Vec<ImageRecord>,
     pub gates: Vec<GateOutcome>,
+    /// Clocks, temperature, power, energy and throttling during the measured frames. Absent in
+    /// files written before they were recorded and for variants that did not render.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub conditions: Option<conditions::Conditions>,
+    /// How the number of timed frames was decided (fixed, or `measured = "auto"`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sampling: Option<conditions::Sampling>,
+    /// Frame-time stability of the per-frame GPU times; `None` with fewer than 2 of them.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pacing: Option<conditions::Pacing>,
 }
 
 /// Stability checks of one variant (`results/README.md`, "Stability").
@@ -258,6 +274,10 @@ pub struct Summary {
     pub min: f64,
     pub max: f64,
     pub mean: f64,
+    /// The distribution-free 95% confidence interval of the median, `[low, high]`
+    /// ([`conditions::median_ci95`]); absent below 6 samples and in files written before it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub median_ci95: Option<[f64; 2]>,
 }
 
 impl Summary {
@@ -283,6 +303,7 @@ impl Summary {
             min: sorted[0],
             max: sorted[sorted.len() - 1],
             mean: sorted.iter().sum::<f64>() / sorted.len() as f64,
+            median_ci95: conditions::median_ci95(&sorted).map(|(lo, hi)| [lo, hi]),
         })
     }
 }

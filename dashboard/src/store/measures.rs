@@ -61,5 +61,14 @@ pub fn measures(v: &VariantResult, native_gpu_ms: Option<f64>) -> Vec<Measure> {
     for m in &v.metrics {
         push(m.name.clone(), m.value, m.higher_is_better);
     }
+    // Energy per frame where the adapter's sensors recorded it (`results/README.md`, Conditions).
+    if let Some(e) = v
+        .conditions
+        .as_ref()
+        .and_then(|c| c.recorded())
+        .and_then(|c| c.energy)
+    {
+        push("energy_mj".into(), e.mj_per_frame, false);
+    }
     out
 }

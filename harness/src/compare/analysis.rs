@@ -5,6 +5,7 @@
 use tessera_results::{GateLevel, RunInfo, ScenarioResult, Status, Summary, VariantResult};
 
 use super::load::Run;
+use crate::run::gates;
 use tessera_results::stats::{self, mann_whitney_p};
 pub use tessera_results::stats::{frame_samples, ALPHA};
 
@@ -68,6 +69,13 @@ pub struct VariantChange {
     pub metrics: Vec<MetricChange>,
     pub status: (Option<String>, Option<String>),
     pub status_verdict: Verdict,
+    /// Energy per measured frame (mJ) in A and B, where the adapter's sensors recorded it.
+    pub energy_mj: (Option<f64>, Option<f64>),
+    /// Native's energy per frame over this variant's, in A and B.
+    pub energy_saving: (Option<f64>, Option<f64>),
+    /// Whether the result was throttled during its measured frames, in A and B (`None` without
+    /// sensors): its time then reads lowered clocks.
+    pub throttled: (Option<bool>, Option<bool>),
 }
 
 /// The time verdict and what it was computed from.
@@ -315,6 +323,12 @@ fn compare_scenario(
                     .collect(),
                 status: (va.map(status_label), vb.map(status_label)),
                 status_verdict: compare_status(va, vb, same),
+                energy_mj: (va.and_then(gates::energy_mj), vb.and_then(gates::energy_mj)),
+                energy_saving: (
+                    ra.and_then(|(s, r)| gates::energy_saving(&s.results, r)),
+                    rb.and_then(|(s, r)| gates::energy_saving(&s.results, r)),
+                ),
+                throttled: (va.and_then(gates::throttled), vb.and_then(gates::throttled)),
             }
         })
         .collect();

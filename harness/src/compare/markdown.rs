@@ -176,6 +176,45 @@ fn findings(v: &VariantChange, wanted: Verdict, timings_count: bool) -> Vec<Stri
     lines
 }
 
+/// Energy per frame where either run recorded it: the values, their change and the energy saved
+/// against native. Informational: energy is not judged as a regression.
+fn energy_table(out: &mut String, c: &Comparison) {
+    let rows: Vec<String> = c
+        .scenarios
+        .iter()
+        .flat_map(|s| s.variants.iter().map(move |v| (s, v)))
+        .filter(|(_, v)| v.energy_mj.0.is_some() || v.energy_mj.1.is_some())
+        .map(|(s, v)| {
+            let mj = pair(
+                v.energy_mj.0.map(|x| format!("{x:.3}")),
+                v.energy_mj.1.map(|x| format!("{x:.3}")),
+            );
+            let change = match v.energy_mj {
+                (Some(a), Some(b)) if a > 0.0 => pct(b / a - 1.0),
+                _ => "-".to_string(),
+            };
+            let saving = pair(
+                v.energy_saving.0.map(|x| format!("{x:.2}x")),
+                v.energy_saving.1.map(|x| format!("{x:.2}x")),
+            );
+            format!(
+                "| {} | {} | {mj} | {change} | {saving} |",
+                cell(&s.scenario),
+                cell(&v.variant)
+            )
+        })
+        .collect();
+    if rows.is_empty() {
+        return;
+    }
+    out.push_str("### Energy per frame\n\n| scenario | variant | mJ/frame | change | saving vs native |\n|---|---|---:|---:|---:|\n");
+    for r in rows {
+        out.push_str(&r);
+        out.push('\n');
+    }
+    out.push('\n');
+}
+
 /// The whole comparison as Markdown, ending with the verdict line.
 pub fn render(c: &Comparison) -> String {
     let mut out = String::new();
@@ -207,6 +246,22 @@ pub fn render(c: &Comparison) -> String {
             );
         }
     }
+    for (side, pick) in [("A", 0), ("B", 1)] {
+        let throttled: Vec<String> = c
+            .scenarios
+            .iter()
+            .flat_map(|s| s.variants.iter().map(move |v| (s, v)))
+            .filter(|(_, v)| if pick == 0 { v.throttled.0 } else { v.throttled.1 } == Some(true))
+            .map(|(s, v)| format!("`{}` / `{}`", s.scenario, v.variant))
+            .collect();
+        if !throttled.is_empty() {
+            let _ = writeln!(
+                out,
+                "> **Warning:** throttled during measured frames in run {side} (their times read lowered clocks): {}.\n",
+                throttled.join(", ")
+            );
+        }
+    }
     let metric_headers: Vec<&str> = JUDGED_METRICS.iter().map(|m| m.1).collect();
     for s in &c.scenarios {
         let suffix = match s.only_in {
@@ -230,6 +285,7 @@ pub fn render(c: &Comparison) -> String {
         }
         out.push('\n');
     }
+    energy_table(&mut out, c);
     let mut counts = [0usize; 2];
     for (i, (title, wanted)) in [
         ("Regressions", Verdict::Worse),

@@ -4,6 +4,7 @@
 
 use std::fmt::Write as _;
 
+use tessera_results::conditions::{SamplingMode, StopReason};
 use tessera_results::{GateLevel, ScenarioResult, Status, VariantResult};
 
 use super::gates;
@@ -107,7 +108,74 @@ pub fn scenario_table(s: &ScenarioResult) -> String {
             let _ = writeln!(out, "  stability: {}: {f}", r.variant);
         }
     }
+    for r in &s.results {
+        if let Some(line) = conditions_line(&s.results, r) {
+            let _ = writeln!(out, "  conditions: {}: {line}", r.variant);
+        }
+    }
     out
+}
+
+/// One result's conditions in a line: graphics clock, temperature, power, energy per frame (and
+/// the energy saved against native), throttling, and the frames `measured = "auto"` took; `None`
+/// when there is none of these.
+pub fn conditions_line(results: &[VariantResult], r: &VariantResult) -> Option<String> {
+    let mut parts = Vec::new();
+    if let Some(c) = r.conditions.as_ref().and_then(|c| c.recorded()) {
+        if let Some(g) = c.graphics_clock_mhz {
+            parts.push(format!("clock {:.0} MHz (min {:.0})", g.median, g.min));
+        }
+        if let Some(t) = c.temperature_c {
+            parts.push(format!("{:.0}-{:.0} C", t.min, t.max));
+        }
+        if let Some(p) = c.power_w {
+            parts.push(format!("{:.0} W median", p.median));
+        }
+        if let Some(e) = c.energy {
+            let saving = gates::energy_saving(results, r)
+                .filter(|_| r.variant != "native")
+                .map(|x| format!(" (saving {x:.2}x against native)"))
+                .unwrap_or_default();
+            parts.push(format!("{:.3} mJ/frame{saving}", e.mj_per_frame));
+        }
+        if c.throttled {
+            parts.push("THROTTLED".into());
+        }
+    }
+    if let Some(sm) = r.sampling.filter(|s| s.mode == SamplingMode::Auto) {
+        let precision = sm
+            .precision
+            .map(|p| format!("±{:.2}%", p * 100.0))
+            .unwrap_or_else(|| "no interval".into());
+        let ended = match sm.ended_by {
+            StopReason::Cap => "frame cap",
+            StopReason::Timeout => "timeout",
+            _ => "target met",
+        };
+        parts.push(format!(
+            "{} frames, median {precision} ({ended})",
+            sm.frames
+        ));
+    }
+    (!parts.is_empty()).then(|| parts.join(", "))
+}
+
+/// The stderr hints of one scenario: each throttled result, why, and what to do about it.
+pub fn throttle_hints(s: &ScenarioResult) -> Vec<String> {
+    s.results
+        .iter()
+        .filter_map(|r| {
+            let c = r.conditions.as_ref()?.recorded()?;
+            c.throttled.then(|| {
+                format!(
+                    "hint: {} / {} was throttled during its measured frames ({}): its timings read low clocks. Lengthen `frames.warmup_ms`, let the GPU cool between runs, or lock its clocks on a machine you control (scenarios/perf/README.md); tessera never changes GPU settings",
+                    s.scenario,
+                    r.variant,
+                    c.throttle_causes.join("; ")
+                )
+            })
+        })
+        .collect()
 }
 
 /// What the stability checks found wrong with one result, one line each (nothing when clean).

@@ -7,12 +7,24 @@
 //! (on a real GPU, idle gaps between frames lower its clocks and inflate the next frame's time:
 //! measured on an H200, the same 1080p pass took 3.9 ms or 17.7 ms depending on what ran before).
 //! Timed frames are pipelined, up to three in flight, after a time-based clock warm-up. This module does not compute metrics or write files.
+//!
+//! The sensor window ([`Sampler`]) opens as the last warm-up frame completes and closes as the last
+//! measured frame does; under `measured = "auto"` the timed phase renders measured frames until
+//! the stop rule ends it ([`crate::timing::stop`]), and the last compared frame is copied aside as
+//! it completes, for the determinism check (a copy submitted between two frames, outside every
+//! timed pass). With sensors, an energy window follows: the sequence goes on, untimed, for at
+//! least [`ENERGY_WINDOW_MS`] while the sampler reads the energy counter.
 
+use std::cell::Cell;
 use std::collections::{BTreeMap, VecDeque};
 use std::time::Instant;
 
+use tessera_results::conditions::StopReason;
+
 use tessera_metrics::{encode_srgb8, HdrImage, Rgb8Image};
 
+use crate::conditions::sampler::Sampler;
+use crate::conditions::{Sample, ENERGY_WINDOW_MS};
 use crate::gpu::Gpu;
 use crate::render::graph::PassKind;
 use crate::render::readback::Readback;
@@ -40,6 +52,15 @@ pub struct Rendered {
     pub readback_bytes: u64,
     /// The technique's extras of every measured frame ([`Renderer::frame_extras`]).
     pub extras: Vec<FrameExtras>,
+    /// Per timed measured frame, the sum of its pass times (its CPU frame time without
+    /// timestamps): what the stop rule read.
+    pub frame_ms: Vec<f64>,
+    /// What ended the timed phase.
+    pub ended_by: StopReason,
+    /// The sensor samples of the measured frames; `None` without a sampler.
+    pub conditions: Option<Vec<Sample>>,
+    /// The sensor samples of the energy window and its frame count; `None` without a sampler.
+    pub energy_window: Option<(Vec<Sample>, u32)>,
     /// Per measured frame, a hash of its exact bits, when `TESSERA_FRAME_HASHES` is set (see
     /// [`frame_hash_file`]); empty otherwise.
     pub hashes: Vec<u64>,
@@ -111,6 +132,7 @@ pub fn submit_frame(
 
 /// Renders `frames` back to back with up to `MAX_PENDING_FRAMES - 1` in flight, so the GPU never
 /// waits for the CPU; `done(index, pass times)` is called as each frame completes, in order.
+#[allow(clippy::too_many_arguments)]
 fn pipelined(
     gpu: &Gpu,
     scene: &mut SceneGpu,
@@ -118,6 +140,7 @@ fn pipelined(
     technique: &mut dyn Renderer,
     timers: &mut Timers,
     frames: impl Iterator<Item = u32>,
+    snapshot: Option<(u32, &Readback)>,
     done: &mut dyn FnMut(u32, BTreeMap<String, f64>),
 ) {
     let mut in_flight: VecDeque<(u32, wgpu::SubmissionIndex)> = VecDeque::new();
@@ -140,7 +163,16 @@ fn pipelined(
         done(index, times.unwrap_or_default());
     };
     for index in frames {
-        let submission = submit_frame(gpu, scene, scenario, technique, timers, index);
+        let mut submission = submit_frame(gpu, scene, scenario, technique, timers, index);
+        if let Some((_, readback)) = snapshot.filter(|(i, _)| *i == index) {
+            let mut encoder = gpu
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some("snapshot"),
+                });
+            readback.copy(&mut encoder, technique.output());
+            submission = gpu.queue.submit([encoder.finish()]);
+        }
         in_flight.push_back((index, submission));
         while in_flight.len() >= MAX_PENDING_FRAMES - 1 {
             drain_one(&mut in_flight, timers);
@@ -151,7 +183,7 @@ fn pipelined(
     }
 }
 
-/// Renders the scenario's frames twice: once timed, once captured.
+/// Renders the scenario's frames twice: once timed, once captured; no sensors.
 pub fn render(
     gpu: &Gpu,
     scene: &mut SceneGpu,
@@ -159,6 +191,30 @@ pub fn render(
     technique: &mut dyn Renderer,
     keep_frames: bool,
     keep_hdr: bool,
+    on_frame: &mut dyn FnMut(),
+) -> Result<Rendered, RenderError> {
+    render_sampled(
+        gpu,
+        scene,
+        scenario,
+        technique,
+        keep_frames,
+        keep_hdr,
+        None,
+        on_frame,
+    )
+}
+
+/// [`render`], with `sampler` reading the sensors during the measured frames.
+#[allow(clippy::too_many_arguments)]
+pub fn render_sampled(
+    gpu: &Gpu,
+    scene: &mut SceneGpu,
+    scenario: &Scenario,
+    technique: &mut dyn Renderer,
+    keep_frames: bool,
+    keep_hdr: bool,
+    sampler: Option<&Sampler>,
     on_frame: &mut dyn FnMut(),
 ) -> Result<Rendered, RenderError> {
     let render_passes: Vec<&'static str> = technique
@@ -182,6 +238,10 @@ pub fn render(
         timestamps: timers.has_timestamps(),
         readback_bytes: readback.bytes(),
         extras: Vec::new(),
+        frame_ms: Vec::new(),
+        ended_by: StopReason::Count,
+        conditions: None,
+        energy_window: None,
         hashes: Vec::new(),
     };
     let hash_frames = frame_hash_file().is_some();
@@ -198,42 +258,111 @@ pub fn render(
             technique,
             &mut timers,
             std::iter::repeat_n(0, 4),
+            None,
             &mut |_, _| {},
         );
     }
 
     // Timed phase: warm-up then measured frames, pipelined, nothing else on the queue. CPU frame
-    // time is the interval between consecutive frame completions.
+    // time is the interval between consecutive frame completions. A fixed count ends after its
+    // frames; `auto` when its rule says so (frames already in flight then are not counted).
     let mut last = Instant::now();
     let warmup = scenario.warmup_frames;
+    let compared_last = scenario
+        .total_frames()
+        .checked_sub(1)
+        .filter(|_| scenario.measured_frames > 0);
+    let timed_end = warmup + scenario.auto.map_or(scenario.measured_frames, |a| a.max);
+    let stop: Cell<Option<StopReason>> = Cell::new(None);
+    // When the first measured frame began: the completion of the frame before it.
+    let mut measuring_since: Option<Instant> = None;
+    // The last frame the timed phase rendered (counted or, after an auto stop, not).
+    let mut last_done = 0u32;
+    let timestamps = rendered.timestamps;
+    if warmup == 0 {
+        if let Some(s) = sampler {
+            s.begin();
+        }
+    }
     pipelined(
         gpu,
         scene,
         scenario,
         technique,
         &mut timers,
-        0..scenario.total_frames(),
+        (0..timed_end).take_while(|_| stop.get().is_none()),
+        compared_last.map(|i| (i, &readback)),
         &mut |index, times| {
+            last_done = index;
+            if stop.get().is_some() {
+                return;
+            }
             let now = Instant::now();
+            let cpu_ms = (now - last).as_secs_f64() * 1000.0;
             if index >= warmup {
+                rendered.frame_ms.push(if timestamps {
+                    times.values().sum()
+                } else {
+                    cpu_ms
+                });
                 rendered.measurements.push(FrameMeasurements {
                     gpu_ms: times,
                     fragment_invocations: BTreeMap::new(),
                 });
-                rendered.cpu_ms.push((now - last).as_secs_f64() * 1000.0);
+                rendered.cpu_ms.push(cpu_ms);
+                let first = *measuring_since.get_or_insert(last);
+                let ended = match scenario.auto {
+                    Some(rule) => rule.decide(&rendered.frame_ms, (now - first).as_secs_f64()),
+                    None => (index + 1 == timed_end).then_some(StopReason::Count),
+                };
+                if let Some(reason) = ended {
+                    stop.set(Some(reason));
+                    rendered.ended_by = reason;
+                    rendered.conditions = sampler.map(Sampler::end);
+                }
+            } else if index + 1 == warmup {
+                if let Some(s) = sampler {
+                    s.begin();
+                }
             }
             last = now;
             on_frame();
         },
     );
 
-    // The timed phase's last frame, kept as a hash: the capture phase renders the sequence again
-    // from frame 0 and must end on the same bits (determinism, histories included).
-    let timed_hash = if scenario.measured_frames > 0 {
-        Some(image_hash(&read_output(gpu, &readback, technique)?.image))
-    } else {
-        None
+    // The last compared frame of the timed phase, copied aside as it completed, kept as a hash:
+    // the capture phase renders the sequence again from frame 0 and must end on the same bits
+    // (determinism, histories included).
+    let timed_hash = match compared_last {
+        Some(_) => Some(image_hash(
+            &readback
+                .read(&gpu.device)
+                .map_err(|_| RenderError::Readback)?
+                .image,
+        )),
+        None => None,
     };
+
+    // Energy window, with sensors only: the sequence goes on from the last timed frame, pipelined,
+    // for at least ENERGY_WINDOW_MS, while the sampler reads the energy counter.
+    if let Some(s) = sampler {
+        let first = last_done + 1;
+        let window = std::time::Duration::from_secs_f64(ENERGY_WINDOW_MS / 1000.0);
+        let mut frames = 0u32;
+        s.begin();
+        let start = Instant::now();
+        pipelined(
+            gpu,
+            scene,
+            scenario,
+            technique,
+            &mut timers,
+            (first..).take_while(|_| start.elapsed() < window),
+            None,
+            &mut |_, _| frames += 1,
+        );
+        rendered.energy_window = Some((s.end(), frames));
+    }
 
     // Capture phase: the same frames again, one at a time (rendering is deterministic, histories
     // included); each measured frame is counted (fragment invocations) and read back for

@@ -29,6 +29,30 @@ pub fn speedup_over(results: &[VariantResult], r: &VariantResult, baseline: &str
     (v > 0.0).then(|| n / v)
 }
 
+/// Energy per measured frame in millijoules; `None` where the adapter's sensors are not available.
+pub fn energy_mj(r: &VariantResult) -> Option<f64> {
+    let c = r.conditions.as_ref()?.recorded()?;
+    c.energy.map(|e| e.mj_per_frame)
+}
+
+/// Energy saved against the `native` variant of the same scenario: native's energy per frame over
+/// this variant's (2 = half the energy per frame), the energy counterpart of [`speedup`].
+pub fn energy_saving(results: &[VariantResult], r: &VariantResult) -> Option<f64> {
+    let native = results
+        .iter()
+        .find(|v| v.variant == "native" && v.status == Status::Ok)?;
+    if r.status != Status::Ok {
+        return None;
+    }
+    let (n, v) = (energy_mj(native)?, energy_mj(r)?);
+    (v > 0.0).then(|| n / v)
+}
+
+/// Whether the result was throttled during its measured frames; `None` without sensors.
+pub fn throttled(r: &VariantResult) -> Option<bool> {
+    Some(r.conditions.as_ref()?.recorded()?.throttled)
+}
+
 /// `*` matches any run of characters; everything else literally.
 pub fn matches(pattern: &str, name: &str) -> bool {
     let parts: Vec<&str> = pattern.split('*').collect();
@@ -73,6 +97,11 @@ fn measure(results: &[VariantResult], r: &VariantResult, name: &str) -> Option<f
             .as_ref()?
             .deterministic
             .map(|d| if d { 0.0 } else { 1.0 }),
+        "energy_mj" => energy_mj(r),
+        "energy_saving" => energy_saving(results, r),
+        "throttled" => throttled(r).map(|t| if t { 1.0 } else { 0.0 }),
+        "pacing.p95_over_p50" => r.pacing.map(|p| p.p95_over_p50),
+        "pacing.mean_abs_delta_ms" => r.pacing.map(|p| p.mean_abs_delta_ms),
         "unrecovered-cuts" => r
             .stability
             .as_ref()

@@ -24,6 +24,7 @@ use tessera_results::{
     CommitInfo, HostInfo, RunInfo, RunStatus, ScenarioResult, Status, SCHEMA_VERSION,
 };
 
+use crate::conditions::Sensors;
 use crate::gpu::{self, Gpu, GpuError};
 use crate::scenario::Scenario;
 use output::{write_atomic, WriteError};
@@ -61,11 +62,22 @@ pub fn run_suite(scenarios: &[Scenario], opts: &Options) -> Result<SuiteOutcome,
     run_on(&gpu, scenarios, opts)
 }
 
-/// Runs every scenario on an open device.
+/// Runs every scenario on an open device, with the adapter's own sensors (or none, and why).
 pub fn run_on(
     gpu: &Gpu,
     scenarios: &[Scenario],
     opts: &Options,
+) -> Result<SuiteOutcome, SuiteError> {
+    run_with_sensors(gpu, scenarios, opts, &Sensors::open(&gpu.info))
+}
+
+/// Runs every scenario on an open device, reading `sensors` during measured frames (tests give a
+/// fake source here).
+pub fn run_with_sensors(
+    gpu: &Gpu,
+    scenarios: &[Scenario],
+    opts: &Options,
+    sensors: &Sensors,
 ) -> Result<SuiteOutcome, SuiteError> {
     let lost = Arc::new(AtomicBool::new(false));
     {
@@ -101,6 +113,7 @@ pub fn run_on(
             .iter()
             .map(|s| s.file.display().to_string())
             .collect(),
+        conditions: Some(sensors.device_record()),
         suite: opts.suite.clone(),
         branch: opts.branch.clone().or_else(git_branch),
     };
@@ -129,7 +142,7 @@ pub fn run_on(
         let result = if lost.load(Ordering::SeqCst) {
             device_lost_result(s, &run_id)
         } else {
-            scenario::run(gpu, s, &run_id, &run_dir, &mut || bar.inc(1))
+            scenario::run(gpu, s, &run_id, &run_dir, sensors, &mut || bar.inc(1))
         };
         write_atomic(
             &run_dir.join("scenarios").join(format!("{}.json", s.name)),
@@ -141,10 +154,11 @@ pub fn run_on(
             &output::results_csv(&run, &results),
         )?;
         bar.suspend(|| {
-            print!(
-                "{}",
-                console::scenario_table(results.last().expect("just pushed"))
-            )
+            let last = results.last().expect("just pushed");
+            print!("{}", console::scenario_table(last));
+            for hint in console::throttle_hints(last) {
+                eprintln!("{hint}");
+            }
         });
     }
     bar.finish_and_clear();

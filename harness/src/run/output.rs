@@ -105,6 +105,47 @@ pub fn results_csv(run: &RunInfo, scenarios: &[ScenarioResult]) -> Vec<u8> {
                     row(&format!("speedup.{b}"), num(sp), "x");
                 }
             }
+            if let Some([lo, hi]) = r.gpu_frame_ms.and_then(|t| t.median_ci95) {
+                row("gpu_ms.median_ci95.low", num(lo), "ms");
+                row("gpu_ms.median_ci95.high", num(hi), "ms");
+            }
+            if let Some(sm) = &r.sampling {
+                row("measured_frames", sm.frames.to_string(), "count");
+                if let Some(p) = sm.precision {
+                    row("gpu_ms.precision", num(p), "ratio");
+                }
+            }
+            if let Some(p) = &r.pacing {
+                row("pacing.p95_over_p50", num(p.p95_over_p50), "x");
+                row("pacing.mean_abs_delta_ms", num(p.mean_abs_delta_ms), "ms");
+                if let Some(par) = &p.parity {
+                    row("pacing.even_ms.median", num(par.even_median_ms), "ms");
+                    row("pacing.odd_ms.median", num(par.odd_median_ms), "ms");
+                    row("pacing.even_over_odd", num(par.even_over_odd), "x");
+                }
+            }
+            if let Some(c) = r.conditions.as_ref().and_then(|c| c.recorded()) {
+                let spreads = [
+                    ("graphics_clock_mhz", "MHz", c.graphics_clock_mhz),
+                    ("memory_clock_mhz", "MHz", c.memory_clock_mhz),
+                    ("temperature_c", "C", c.temperature_c),
+                    ("power_w", "W", c.power_w),
+                ];
+                for (name, unit, spread) in spreads {
+                    if let Some(v) = spread {
+                        row(&format!("{name}.min"), num(v.min), unit);
+                        row(&format!("{name}.median"), num(v.median), unit);
+                        row(&format!("{name}.max"), num(v.max), unit);
+                    }
+                }
+                if let Some(e) = gates::energy_mj(r) {
+                    row("energy_mj", num(e), "mJ");
+                }
+                if let Some(x) = gates::energy_saving(&s.results, r) {
+                    row("energy_saving", num(x), "x");
+                }
+                row("throttled", u8::from(c.throttled).to_string(), "bool");
+            }
             for p in &r.passes {
                 if let Some(t) = p.gpu_ms {
                     row(
@@ -189,11 +230,18 @@ pub fn junit(run: &RunInfo, scenarios: &[ScenarioResult]) -> Vec<u8> {
                     }
                 }
             }
+            let throttled = r
+                .conditions
+                .as_ref()
+                .and_then(|c| c.recorded())
+                .filter(|c| c.throttled)
+                .map(|c| format!("throttled: {}", c.throttle_causes.join("; ")));
             let warnings: Vec<&str> = r
                 .gates
                 .iter()
                 .filter(|g| g.level == GateLevel::Warn)
                 .map(|g| g.message.as_str())
+                .chain(throttled.as_deref())
                 .collect();
             if !warnings.is_empty() {
                 let _ = writeln!(

@@ -1,14 +1,17 @@
 //! Building a scenario's result records: a variant's empty result, its timings and memory from
-//! the rendered frames and the plan, the scenario record, and a scenario whose variants all failed.
+//! the rendered frames and the plan, its sampling, pacing and conditions, the scenario record, and
+//! a scenario whose variants all failed.
 
 use std::time::Instant;
 
 use tessera_results::{PassRecord, ScenarioResult, Status, Summary, VariantResult};
 
 use super::frames::Rendered;
+use crate::conditions::Sensors;
 use crate::params::Variant;
 use crate::render::renderer::Renderer;
 use crate::scenario::Scenario;
+use crate::timing::{pacing, stop};
 
 /// The scenario's record from its variants' results.
 pub fn finish(
@@ -56,6 +59,7 @@ pub fn empty_result(v: &Variant, status: Status) -> VariantResult {
             min: 0.0,
             max: 0.0,
             mean: 0.0,
+            median_ci95: None,
         },
         resources: Vec::new(),
         allocated_bytes: 0,
@@ -64,6 +68,9 @@ pub fn empty_result(v: &Variant, status: Status) -> VariantResult {
         stability: None,
         images: Vec::new(),
         gates: Vec::new(),
+        conditions: None,
+        sampling: None,
+        pacing: None,
     }
 }
 
@@ -150,4 +157,29 @@ pub fn run_failed(scenario: &Scenario, run_id: &str, error: &str) -> ScenarioRes
         })
         .collect();
     finish(scenario, run_id, results, Instant::now())
+}
+
+/// Sampling, pacing and the sensors' record of a rendered variant.
+pub fn fill_conditions(
+    result: &mut VariantResult,
+    r: &Rendered,
+    scenario: &Scenario,
+    variant: &Variant,
+    sensors: &Sensors,
+) {
+    result.sampling = Some(match scenario.auto {
+        Some(rule) => rule.record(&r.frame_ms, r.ended_by),
+        None => stop::fixed_record(&r.frame_ms),
+    });
+    if r.timestamps {
+        result.pacing = pacing::pacing(
+            &r.frame_ms,
+            scenario.warmup_frames,
+            variant.technique.alternates_frames(),
+        );
+    }
+    result.conditions = Some(sensors.result_record(
+        r.conditions.as_deref(),
+        r.energy_window.as_ref().map(|(s, n)| (s.as_slice(), *n)),
+    ));
 }

@@ -12,9 +12,10 @@ use std::time::Instant;
 use tessera_results::{ScenarioResult, Status, VariantResult};
 
 use super::frames::{self, Rendered};
-use super::record::{empty_result, fill_timings, finish, plan_record, PlanRecord};
+use super::record::{empty_result, fill_conditions, fill_timings, finish, plan_record, PlanRecord};
 use super::reference::{self, ReferenceFrames};
 use super::{gates, images, metrics, motion, stability};
+use crate::conditions::Sensors;
 use crate::gpu::Gpu;
 use crate::params::Variant;
 use crate::render::renderer::Unsupported;
@@ -28,6 +29,7 @@ pub fn run(
     scenario: &Scenario,
     run_id: &str,
     run_dir: &Path,
+    sensors: &Sensors,
     on_frame: &mut dyn FnMut(),
 ) -> ScenarioResult {
     let start = Instant::now();
@@ -75,10 +77,11 @@ pub fn run(
         let is_reference = needs_reference && native_is_reference(variant) && reference.is_none();
         let keep = needs_reference || !scenario.save_frames.is_empty();
         let mut result = empty_result(variant, Status::Ok);
-        let outcome = render_variant(gpu, &mut scene, scenario, variant, keep, on_frame);
+        let outcome = render_variant(gpu, &mut scene, scenario, variant, keep, sensors, on_frame);
         let rendered = match outcome {
             Ok(Ok((r, plan_record))) => {
                 fill_timings(&mut result, &r, plan_record);
+                fill_conditions(&mut result, &r, scenario, variant, sensors);
                 r
             }
             Ok(Err(Unsupported(reason))) => {
@@ -232,6 +235,7 @@ fn render_variant(
     scenario: &Scenario,
     variant: &Variant,
     keep: bool,
+    sensors: &Sensors,
     on_frame: &mut dyn FnMut(),
 ) -> VariantOutcome {
     let validation = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
@@ -250,7 +254,17 @@ fn render_variant(
         Ok(mut t) => {
             let plan = plan_record(t.as_ref());
             let hdr = keep && reference::keep_hdr(&scenario.metrics);
-            match frames::render(gpu, scene, scenario, t.as_mut(), keep, hdr, on_frame) {
+            let sampler = sensors.sampler();
+            match frames::render_sampled(
+                gpu,
+                scene,
+                scenario,
+                t.as_mut(),
+                keep,
+                hdr,
+                sampler,
+                on_frame,
+            ) {
                 Ok(r) => Ok(Ok((r, plan))),
                 Err(e) => Err(e.to_string()),
             }

@@ -34,6 +34,10 @@ pub struct Scenario {
     /// picks by adapter (see [`Scenario::clock_warmup_ms`]).
     pub warmup_ms: Option<f64>,
     pub measured_frames: u32,
+    /// `frames.measured = "auto"`: timed frames go on past `measured_frames` (then the rule's
+    /// `min`) until the median GPU frame time is precise enough or the cap is reached; metrics
+    /// still use `measured_frames`. `None` for a fixed count.
+    pub auto: Option<crate::timing::stop::AutoRule>,
     /// Measured-frame indices to save as PNG.
     pub save_frames: Vec<u32>,
     pub time_step: f64,
@@ -443,6 +447,17 @@ pub struct Gate {
 
 /// Measures a gate can name besides metrics.
 pub const TIMING_MEASURES: [&str; 3] = ["gpu_ms", "cpu_ms", "speedup"];
+
+/// Gate measures of the conditions and pacing (`conditions/`, `timing/pacing.rs`): energy per
+/// frame in millijoules, native's energy per frame over the variant's, 1 when the result was
+/// throttled, and the pacing figures.
+pub const CONDITION_MEASURES: [&str; 5] = [
+    "energy_mj",
+    "energy_saving",
+    "throttled",
+    "pacing.p95_over_p50",
+    "pacing.mean_abs_delta_ms",
+];
 
 /// Gate measures of the stability checks (`run/stability.rs`): non-finite output values, pixels
 /// made non-finite beyond the reference's, 1 when the sequence did not render the same twice,

@@ -41,10 +41,58 @@ pub struct RawFrames {
     pub warmup: Option<i64>,
     /// Clock warm-up: frame 0 repeated for at least this long before timing. Default 100.
     pub warmup_ms: Option<f64>,
-    /// Frames timed and compared. Default 8.
-    pub measured: Option<i64>,
+    /// Frames timed and compared (an integer, default 8), or `"auto"` / `{ min, max, precision }`.
+    pub measured: Option<RawMeasured>,
     /// Measured-frame indices saved as PNG; negative counts from the end. Default `[-1]`.
     pub save: Option<Vec<i64>>,
+}
+
+/// `frames.measured`: a count, `"auto"`, or a table of the auto rule's bounds.
+#[derive(Debug)]
+pub enum RawMeasured {
+    Count(i64),
+    /// Any string: validation accepts only `"auto"` and says so.
+    Word(String),
+    Auto(RawAuto),
+}
+
+/// `frames.measured = { min, max, precision }`: each defaults as `"auto"` does.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawAuto {
+    pub min: Option<i64>,
+    pub max: Option<i64>,
+    pub precision: Option<f64>,
+    pub timeout_s: Option<f64>,
+}
+
+impl<'de> Deserialize<'de> for RawMeasured {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Visitor;
+        impl<'de> serde::de::Visitor<'de> for Visitor {
+            type Value = RawMeasured;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("an integer, \"auto\" or a table { min, max, precision, timeout_s }")
+            }
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<RawMeasured, E> {
+                Ok(RawMeasured::Count(v))
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<RawMeasured, E> {
+                Ok(RawMeasured::Count(i64::try_from(v).unwrap_or(i64::MAX)))
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<RawMeasured, E> {
+                Ok(RawMeasured::Word(v.to_string()))
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                map: A,
+            ) -> Result<RawMeasured, A::Error> {
+                RawAuto::deserialize(serde::de::value::MapAccessDeserializer::new(map))
+                    .map(RawMeasured::Auto)
+            }
+        }
+        d.deserialize_any(Visitor)
+    }
 }
 
 #[derive(Debug, Default, Deserialize)]

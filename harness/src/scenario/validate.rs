@@ -15,6 +15,7 @@ use super::span::{line_col, locate, KeyPath};
 use super::*;
 use crate::params::{self, closest, quoted_list, ParamValue, Variant};
 use crate::techniques;
+use crate::timing::stop::{AutoRule, AUTO_MAX, AUTO_MIN, AUTO_TIMEOUT_S, DEFAULT_PRECISION};
 
 /// Collects errors with their key paths; positions are resolved at the end.
 struct Ctx {
@@ -268,12 +269,7 @@ fn build(ctx: &mut Ctx, path: &Path, raw: RawScenario) -> Scenario {
             format!("{ms} is out of range: expected 0 to 60000 milliseconds"),
         );
     }
-    let measured_frames = ctx.count(
-        &frames.key("measured"),
-        raw.frames.measured.unwrap_or(8),
-        1,
-        100_000,
-    );
+    let (measured_frames, auto) = measured(ctx, &frames.key("measured"), &raw.frames.measured);
     let save_frames = save_frames(
         ctx,
         &frames.key("save"),
@@ -309,6 +305,7 @@ fn build(ctx: &mut Ctx, path: &Path, raw: RawScenario) -> Scenario {
         warmup_frames,
         warmup_ms,
         measured_frames,
+        auto,
         save_frames,
         time_step,
         reference,
@@ -950,6 +947,61 @@ fn cartesian(axes: &[(String, Vec<ParamValue>, bool)]) -> Vec<Vec<(String, Param
     combos
 }
 
+/// `frames.measured`: the compared (and, when fixed, timed) frame count, and the auto rule. Under
+/// `auto` the compared frames are the rule's `min`.
+fn measured(ctx: &mut Ctx, path: &KeyPath, raw: &Option<RawMeasured>) -> (u32, Option<AutoRule>) {
+    const MAX: i64 = 100_000;
+    let auto = match raw {
+        None => return (8, None),
+        Some(RawMeasured::Count(n)) => return (ctx.count(path, *n, 1, MAX), None),
+        Some(RawMeasured::Word(w)) if w == "auto" => RawAuto::default(),
+        Some(RawMeasured::Word(w)) => {
+            ctx.err(
+                path,
+                format!("\"{w}\" is not allowed: expected an integer from 1 to {MAX}, \"auto\" or a table {{ min, max, precision, timeout_s }}"),
+            );
+            return (8, None);
+        }
+        Some(RawMeasured::Auto(a)) => RawAuto {
+            min: a.min,
+            max: a.max,
+            precision: a.precision,
+            timeout_s: a.timeout_s,
+        },
+    };
+    let min = ctx.count(&path.key("min"), auto.min.unwrap_or(AUTO_MIN), 1, MAX);
+    let max = ctx.count(&path.key("max"), auto.max.unwrap_or(AUTO_MAX), 1, MAX);
+    if min > max {
+        ctx.err(
+            &path.key("max"),
+            format!("{max} is below min ({min}): expected min <= max"),
+        );
+    }
+    let precision = auto.precision.unwrap_or(DEFAULT_PRECISION);
+    if !(precision.is_finite() && precision > 0.0 && precision < 1.0) {
+        ctx.err(
+            &path.key("precision"),
+            format!("{precision} is out of range: expected a relative precision above 0 and below 1 (0.005 = 0.5%)"),
+        );
+    }
+    let timeout_s = auto.timeout_s.unwrap_or(AUTO_TIMEOUT_S);
+    if !(timeout_s.is_finite() && timeout_s > 0.0 && timeout_s <= 3600.0) {
+        ctx.err(
+            &path.key("timeout_s"),
+            format!("{timeout_s} is out of range: expected seconds above 0, at most 3600"),
+        );
+    }
+    (
+        min,
+        Some(AutoRule {
+            min,
+            max: max.max(min),
+            precision,
+            timeout_s,
+        }),
+    )
+}
+
 fn gates(ctx: &mut Ctx, path: &KeyPath, raw: &[RawGate], metrics: &[MetricKind]) -> Vec<Gate> {
     let mut out = Vec::new();
     for (i, g) in raw.iter().enumerate() {
@@ -957,6 +1009,7 @@ fn gates(ctx: &mut Ctx, path: &KeyPath, raw: &[RawGate], metrics: &[MetricKind])
         let mut allowed: Vec<&str> = metrics.iter().map(|m| m.name()).collect();
         allowed.extend(TIMING_MEASURES);
         allowed.extend(STABILITY_MEASURES);
+        allowed.extend(CONDITION_MEASURES);
         if !allowed.contains(&g.measure.as_str()) {
             let known_metric = MetricKind::ALL.iter().any(|m| m.name() == g.measure);
             if known_metric {

@@ -72,6 +72,13 @@ pub trait Technique: Sync + 'static {
     fn baseline(&self) -> Option<&'static str> {
         None
     }
+
+    /// Whether consecutive frames alternate between two kinds of work (checkerboarding shades
+    /// even and odd pixel sets on alternate frames): frame-time pacing then reports even and odd
+    /// frames apart.
+    fn alternates_frames(&self) -> bool {
+        false
+    }
 }
 
 /// One WGSL module as the GPU sees it, and the files under `shaders/` it is made of.

@@ -164,6 +164,10 @@ impl Technique for Checkerboard {
         "checkerboard"
     }
 
+    fn alternates_frames(&self) -> bool {
+        true
+    }
+
     fn summary(&self) -> &'static str {
         "Intel's checkerboard rendering with mosaiikki's refinements: half the samples each frame, the other half reprojected"
     }

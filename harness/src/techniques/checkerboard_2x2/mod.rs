@@ -125,6 +125,10 @@ impl Technique for Checkerboard2x2 {
         "checkerboard-2x2"
     }
 
+    fn alternates_frames(&self) -> bool {
+        true
+    }
+
     fn summary(&self) -> &'static str {
         "the depth-based report's 2x2 checkerboarding: masked blocks rejected by a pre-conditioned depth buffer, reconstituted by motion reprojection"
     }
