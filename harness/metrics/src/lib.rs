@@ -42,7 +42,9 @@ pub use pixel::{
     max_abs_error, mse_luma, mse_rgb, psnr_from_mse, psnr_luma, psnr_rgb, DATA_RANGE_8BIT,
 };
 pub use report::{diff, diff_at, diff_images, DiffReport};
-pub use sequence::{diff_sequences, load_sequence, load_sequence_images, SequenceReport};
+pub use sequence::{
+    diff_sequence_paths, diff_sequences, load_sequence, load_sequence_images, SequenceReport,
+};
 pub use series::{series_stats, SeriesStats};
 pub use srgb::{encode_srgb8, linear_to_srgb, srgb_to_linear};
 pub use ssim::{ssim_luma, ssim_rgb, SSIM_MIN_SIZE};

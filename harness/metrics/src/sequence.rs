@@ -83,6 +83,19 @@ pub fn load_sequence_images(path: &Path) -> Result<Vec<LoadedImage>, MetricsErro
         .collect()
 }
 
+/// [`diff_sequences`] of two sequences on disk (see [`load_sequence`] for what a path may be).
+pub fn diff_sequence_paths(
+    reference: &Path,
+    test: &Path,
+    settings: &CvvdpSettings,
+) -> Result<SequenceReport, MetricsError> {
+    let (r, t) = (
+        load_sequence_images(reference)?,
+        load_sequence_images(test)?,
+    );
+    diff_sequences(&r, &t, settings)
+}
+
 fn last_number(stem: &str) -> Option<u64> {
     let end = stem.rfind(|c: char| c.is_ascii_digit())? + 1;
     let start = stem[..end]

@@ -97,6 +97,8 @@ fn identical_sequences_score_10() {
     assert_eq!(r.flicker_jod, Some(10.0));
     assert_eq!(r.transient_share, Some(0.0));
     assert_eq!(r.frame_jod, vec![10.0; 6]);
+    assert_eq!(r.frame_flicker_jod, vec![10.0; 6]);
+    assert_eq!(r.frame_transient_share, vec![0.0; 6]);
 }
 
 #[test]

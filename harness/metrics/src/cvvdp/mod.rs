@@ -157,6 +157,10 @@ pub struct CvvdpResult {
     pub flicker_jod: Option<f64>,
     /// The transient channel's share of the visible difference, 0 to 1; `None` as above.
     pub transient_share: Option<f64>,
+    /// Per frame: the transient channel's own JOD and its share (empty when `flicker_jod` is
+    /// `None`; a one-frame shot's frame has no transient difference).
+    pub frame_flicker_jod: Vec<f64>,
+    pub frame_transient_share: Vec<f64>,
     /// Each shot's own JOD (one entry when there is no cut).
     pub shots: Vec<ShotJod>,
     /// The display's label, pixels per degree and peak luminance.
@@ -302,14 +306,19 @@ pub fn cvvdp(
     } else {
         pool::pool_frames(&per_frame) as f64
     };
-    let (flicker_jod, transient_share) = if any_video {
+    let (flicker_jod, transient_share, frame_flicker_jod, frame_transient_share) = if any_video {
         let tq: Vec<f32> = transient.iter().map(|&(q, _)| q).collect();
         (
             Some(pool::pool_frames(&tq) as f64),
             Some(pool::transient_share(&transient)),
+            tq.iter().map(|&q| pool::jod(q) as f64).collect(),
+            transient
+                .iter()
+                .map(|t| pool::transient_share(std::slice::from_ref(t)))
+                .collect(),
         )
     } else {
-        (None, None)
+        (None, None, Vec::new(), Vec::new())
     };
     maps.sort_by_key(|m| m.frame);
     Ok(CvvdpResult {
@@ -317,6 +326,8 @@ pub fn cvvdp(
         frame_jod: per_frame.iter().map(|&q| pool::jod(q) as f64).collect(),
         flicker_jod,
         transient_share,
+        frame_flicker_jod,
+        frame_transient_share,
         shots,
         display: settings.display.label(),
         pixels_per_degree: ppd,
