@@ -33,7 +33,8 @@
 pub mod analysis;
 pub mod load;
 pub mod markdown;
-pub mod stats;
+/// The significance test, shared with the dashboard through `tessera-results`.
+pub use tessera_results::stats;
 
 pub use analysis::{compare, Comparison, Options};
 pub use load::{load_run, LoadError, Run};

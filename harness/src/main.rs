@@ -49,6 +49,9 @@ enum Command {
         /// Then send the run to this dashboard (token from TESSERA_DASHBOARD_TOKEN).
         #[arg(long, value_name = "URL")]
         upload: Option<String>,
+        /// Branch recorded with the run (default: the checkout's git branch).
+        #[arg(long)]
+        branch: Option<String>,
     },
     /// Check scenarios without a GPU.
     Validate {
@@ -109,7 +112,8 @@ fn main() -> ExitCode {
             junit,
             quiet,
             upload,
-        } => run_command(&paths, adapter, out, junit, quiet, upload),
+            branch,
+        } => run_command(&paths, adapter, out, junit, quiet, upload, branch),
         Command::Validate { paths } => validate_command(&paths),
         Command::Adapters { json } => adapters_command(json),
         Command::Compare {
@@ -196,6 +200,7 @@ fn run_command(
     junit: Option<PathBuf>,
     quiet: bool,
     upload: Option<String>,
+    branch: Option<String>,
 ) -> u8 {
     let Some(scenarios) = load_all(paths) else {
         return EXIT_INPUT;
@@ -213,6 +218,8 @@ fn run_command(
         junit,
         progress: !quiet && std::io::IsTerminal::is_terminal(&std::io::stderr()),
         command_line: std::env::args().collect(),
+        suite: run::suite_name(paths),
+        branch,
     };
     let outcome = match run::run_suite(&scenarios, &opts) {
         Ok(o) => o,

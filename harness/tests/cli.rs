@@ -71,7 +71,11 @@ fn bad_arguments_are_exit_2() {
 fn run_writes_results_and_gates_decide_the_exit_code() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");
-    let good = write(dir.path(), "good.toml", SCENE);
+    let good = write(
+        dir.path(),
+        "good.toml",
+        &SCENE.replace("measured = 2", "measured = 2\nsave = [1]"),
+    );
     let junit = dir.path().join("junit.xml");
     let (code, stdout, stderr) = tessera(&[
         "run",
@@ -81,6 +85,8 @@ fn run_writes_results_and_gates_decide_the_exit_code() {
         "--junit",
         junit.to_str().unwrap(),
         "--quiet",
+        "--branch",
+        "feature/x",
     ]);
     assert_eq!(code, 0, "{stdout}\n{stderr}");
     assert!(
@@ -99,6 +105,13 @@ fn run_writes_results_and_gates_decide_the_exit_code() {
     let run: tessera_results::RunInfo =
         serde_json::from_slice(&std::fs::read(run_dir.join("run.json")).unwrap()).unwrap();
     assert_eq!(run.status, tessera_results::RunStatus::Complete);
+    // The suite is the folder the scenario file is in; `--branch` is recorded as given.
+    let folder = dir.path().canonicalize().unwrap();
+    assert_eq!(
+        run.suite.as_deref(),
+        folder.file_name().and_then(|n| n.to_str())
+    );
+    assert_eq!(run.branch.as_deref(), Some("feature/x"));
     let s: tessera_results::ScenarioResult =
         serde_json::from_slice(&std::fs::read(run_dir.join("scenarios/good.json")).unwrap())
             .unwrap();
@@ -111,6 +124,30 @@ fn run_writes_results_and_gates_decide_the_exit_code() {
             .collect::<Vec<_>>(),
         ["scene", "upscale"]
     );
+    // The saved frame of the variant comes with its FLIP heat map; the reference has none.
+    let kinds = |i: usize| {
+        let mut k: Vec<&str> = s.results[i]
+            .images
+            .iter()
+            .map(|im| im.kind.as_str())
+            .collect();
+        k.sort();
+        k
+    };
+    assert_eq!(kinds(0), ["output"]);
+    assert_eq!(kinds(1), ["heatmap", "output", "reference"]);
+    let heatmap = s.results[1]
+        .images
+        .iter()
+        .find(|i| i.kind == "heatmap")
+        .unwrap();
+    assert_eq!(heatmap.path, "images/good/upscale-flip-f001.png");
+    let Ok(tessera_metrics::LoadedImage::Ldr(png)) =
+        tessera_metrics::load_image(&run_dir.join(&heatmap.path))
+    else {
+        panic!("{} is not an 8-bit PNG", heatmap.path);
+    };
+    assert_eq!((png.width, png.height), (32, 24));
     // 16x12 colour (8 B) and depth (4 B) at half scale, 32x24 output (8 B).
     assert_eq!(s.results[1].allocated_bytes, 16 * 12 * 12 + 32 * 24 * 8);
     assert!(std::fs::read_to_string(&junit)

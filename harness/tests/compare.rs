@@ -49,6 +49,8 @@ fn run_info(run_id: &str, sha: &str, adapter: AdapterInfo) -> RunInfo {
         },
         command_line: vec!["tessera".into(), "run".into()],
         scenarios: vec!["scenarios/a.toml".into(), "scenarios/b.toml".into()],
+        suite: Some("scenarios".into()),
+        branch: Some("main".into()),
     }
 }
 

@@ -34,6 +34,8 @@ pub mod layout {
     }
 }
 
+pub mod stats;
+
 /// Version of the result format. Readers refuse versions they do not know.
 pub const SCHEMA_VERSION: u32 = 1;
 
@@ -55,6 +57,14 @@ pub struct RunInfo {
     pub command_line: Vec<String>,
     /// Scenario files of the suite, in the order they run.
     pub scenarios: Vec<String>,
+    /// The suite: the name of each scenario folder given on the command line (a file's parent
+    /// folder), in order, joined by `+`. `None` in files written before it existed.
+    #[serde(default)]
+    pub suite: Option<String>,
+    /// The git branch of the checkout (or `--branch`); `None` on a detached head, outside git, or
+    /// in files written before it existed.
+    #[serde(default)]
+    pub branch: Option<String>,
 }
 
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
@@ -319,7 +329,8 @@ pub struct SeriesSummary {
 pub struct ImageRecord {
     /// Measured-frame index.
     pub frame: u32,
-    /// `output` (this variant), `reference`, `heatmap`.
+    /// `output` (this variant), `reference`, `heatmap` (FLIP error map in magma against the
+    /// reference), `heatmap-hdr` (HDR-FLIP's), or a technique's own image such as `rate`.
     pub kind: String,
     pub path: String,
 }

@@ -5,10 +5,8 @@
 use tessera_results::{GateLevel, RunInfo, ScenarioResult, Status, Summary, VariantResult};
 
 use super::load::Run;
-use super::stats::mann_whitney_p;
-
-/// Significance level of the Mann-Whitney U test on per-frame GPU times.
-pub const ALPHA: f64 = 0.01;
+use tessera_results::stats::{self, mann_whitney_p};
+pub use tessera_results::stats::{frame_samples, ALPHA};
 
 /// Metrics that get a column and a verdict, with the change each must exceed to count.
 pub const JUDGED_METRICS: [(&str, &str, f64); 3] = [
@@ -118,17 +116,6 @@ impl VariantChange {
     }
 }
 
-/// Per-frame GPU times: the sum over passes of each measured frame's sample. `None` without
-/// timestamps (no `gpu_frame_ms`) or without samples.
-pub fn frame_samples(r: &VariantResult) -> Option<Vec<f64>> {
-    r.gpu_frame_ms?;
-    let frames = r.passes.iter().map(|p| p.samples_ms.len()).min()?;
-    let sums: Vec<f64> = (0..frames)
-        .map(|i| r.passes.iter().map(|p| p.samples_ms[i]).sum())
-        .collect();
-    (!sums.is_empty()).then_some(sums)
-}
-
 fn median(samples: &[f64]) -> f64 {
     Summary::of(samples).map_or(f64::NAN, |s| s.median)
 }
@@ -167,12 +154,10 @@ fn native_ms(s: &ScenarioResult) -> Option<f64> {
 }
 
 fn verdict_of(change: f64, p: f64, threshold_pct: f64) -> Verdict {
-    if p >= ALPHA || change.abs() * 100.0 < threshold_pct {
-        Verdict::Same
-    } else if change > 0.0 {
-        Verdict::Worse
-    } else {
-        Verdict::Better
+    match stats::verdict(change, p, threshold_pct) {
+        stats::TimeVerdict::Same => Verdict::Same,
+        stats::TimeVerdict::Slower => Verdict::Worse,
+        stats::TimeVerdict::Faster => Verdict::Better,
     }
 }
 

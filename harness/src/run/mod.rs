@@ -30,6 +30,10 @@ pub struct Options {
     pub junit: Option<PathBuf>,
     pub progress: bool,
     pub command_line: Vec<String>,
+    /// Recorded as the run's suite (see [`suite_name`]).
+    pub suite: Option<String>,
+    /// Recorded as the run's branch; `None` asks git.
+    pub branch: Option<String>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -91,6 +95,8 @@ pub fn run_on(
             .iter()
             .map(|s| s.file.display().to_string())
             .collect(),
+        suite: opts.suite.clone(),
+        branch: opts.branch.clone().or_else(git_branch),
     };
     write_atomic(&run_dir.join("run.json"), &output::run_json(&run))?;
 
@@ -201,6 +207,41 @@ fn git_commit() -> Option<CommitInfo> {
         sha: String::from_utf8_lossy(&sha.stdout).trim().to_string(),
         dirty,
     })
+}
+
+/// The checkout's branch (`git symbolic-ref --short HEAD`); `None` on a detached head or outside
+/// git.
+fn git_branch() -> Option<String> {
+    let out = std::process::Command::new("git")
+        .args(["symbolic-ref", "--quiet", "--short", "HEAD"])
+        .output()
+        .ok()?;
+    let branch = String::from_utf8_lossy(&out.stdout).trim().to_string();
+    (out.status.success() && !branch.is_empty()).then_some(branch)
+}
+
+/// The suite of a run from the paths given on the command line: each folder's name, or a file's
+/// parent folder's name, in order without repeats, joined by `+` (`scenarios/smoke` gives
+/// `smoke`). `None` when no path has a usable name.
+pub fn suite_name(paths: &[PathBuf]) -> Option<String> {
+    let mut names: Vec<String> = Vec::new();
+    for p in paths {
+        let folder = if p.is_dir() {
+            Some(p.as_path())
+        } else {
+            p.parent()
+        };
+        // `canonicalize` resolves `.` and a bare file name's empty parent to a real folder name.
+        let name = folder
+            .and_then(|f| f.canonicalize().ok())
+            .and_then(|f| f.file_name().map(|n| n.to_string_lossy().into_owned()));
+        if let Some(n) = name {
+            if !names.contains(&n) {
+                names.push(n);
+            }
+        }
+    }
+    (!names.is_empty()).then(|| names.join("+"))
 }
 
 fn host_info() -> HostInfo {

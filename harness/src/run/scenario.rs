@@ -155,6 +155,10 @@ pub fn run(
                             }
                         }
                     }
+                    // The reference against itself has no error to show.
+                    if frames.is_some() {
+                        save_error_maps(&mut result, &inputs, scenario, &image_dir, run_dir);
+                    }
                 }
                 Some(Err(e)) => result.status = Status::Failed { error: e.clone() },
                 None => {}
@@ -686,6 +690,46 @@ fn save_images(
         };
         let path = dir.join(format!("{stem}-f{f:03}.png"));
         save_image(result, img, &path, run_dir, f, kind);
+    }
+}
+
+/// The per-pixel error maps of each saved frame against the reference, as images of the result:
+/// the FLIP map in magma (kind `heatmap`, `<variant>-flip-fNNN.png`, as `tessera diff --heatmap`
+/// writes it) always, and the HDR-FLIP map (kind `heatmap-hdr`, `<variant>-flip-hdr-fNNN.png`)
+/// when the scenario measures `flip-hdr`. A map that cannot be computed (sizes differ) is left out: the metrics report that.
+fn save_error_maps(
+    result: &mut VariantResult,
+    inputs: &MetricInputs<'_>,
+    scenario: &Scenario,
+    dir: &Path,
+    run_dir: &Path,
+) {
+    let stem = sanitize(&result.variant);
+    let ppd = tessera_metrics::DEFAULT_PIXELS_PER_DEGREE;
+    let hdr = keep_hdr(scenario);
+    for &f in &scenario.save_frames {
+        let i = f as usize;
+        let (Some(r), Some(t)) = (inputs.reference.frames.get(i), inputs.test.get(i)) else {
+            continue;
+        };
+        let _ = std::fs::create_dir_all(dir);
+        if let Ok(map) = tessera_metrics::flip_ldr(r, t, ppd) {
+            let path = dir.join(format!("{stem}-flip-f{f:03}.png"));
+            let img = tessera_metrics::flip_heatmap(&map);
+            save_image(result, &img, &path, run_dir, f, "heatmap");
+        }
+        let hdr_pair = (
+            inputs.reference.hdr.get(i),
+            inputs.test_hdr.get(i),
+            inputs.reference.exposures.get(i),
+        );
+        if let (true, (Some(rh), Some(th), Some(range))) = (hdr, hdr_pair) {
+            if let Ok(map) = tessera_metrics::flip_hdr(rh, th, range, ppd) {
+                let path = dir.join(format!("{stem}-flip-hdr-f{f:03}.png"));
+                let img = tessera_metrics::flip_heatmap(&map);
+                save_image(result, &img, &path, run_dir, f, "heatmap-hdr");
+            }
+        }
     }
 }
 

@@ -1,10 +1,73 @@
-//! The noise test of `tessera compare`: a two-sided Mann-Whitney U test on two sets of per-frame
-//! GPU times.
+//! The significance test of GPU-time changes between two runs: a two-sided Mann-Whitney U test on
+//! two sets of per-frame GPU times, and the verdict rule built on it (p below [`ALPHA`] and a
+//! median change of at least a threshold). One implementation for `tessera compare` and the
+//! dashboard's compare page.
 //!
-//! Pure functions on samples; what counts as "faster" or "slower" (the test plus a minimum size of
-//! change) is decided in [`super::analysis`]. Exact p-values when both sets are small (at most
+//! Pure functions on samples and records. Exact p-values when both sets are small (at most
 //! [`EXACT_MAX`] samples) and have no ties, otherwise the normal approximation with tie and
-//! continuity corrections (as scipy's `mannwhitneyu` does).
+//! continuity corrections (as scipy's `mannwhitneyu` does). Not for: metric tolerances or status
+//! rules (those stay with each caller).
+
+use crate::{Summary, VariantResult};
+
+/// Significance level of the Mann-Whitney U test on per-frame GPU times.
+pub const ALPHA: f64 = 0.01;
+
+/// Default smallest change of the median (percent) that can be called faster or slower.
+pub const DEFAULT_THRESHOLD_PCT: f64 = 5.0;
+
+/// What a time change means once noise is accounted for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TimeVerdict {
+    /// Not significant, or smaller than the threshold.
+    Same,
+    Slower,
+    Faster,
+}
+
+/// A compared pair of per-frame time sets: B against A.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TimeChange {
+    /// `median(b) / median(a) - 1`.
+    pub change: f64,
+    /// Two-sided Mann-Whitney U p-value.
+    pub p: f64,
+    pub verdict: TimeVerdict,
+}
+
+/// Slower or faster when p < [`ALPHA`] and the median moved by at least `threshold_pct` percent.
+pub fn verdict(change: f64, p: f64, threshold_pct: f64) -> TimeVerdict {
+    if p >= ALPHA || change.abs() * 100.0 < threshold_pct || change.is_nan() {
+        TimeVerdict::Same
+    } else if change > 0.0 {
+        TimeVerdict::Slower
+    } else {
+        TimeVerdict::Faster
+    }
+}
+
+/// Compares per-frame times `b` against `a`; `None` when either set is empty.
+pub fn compare_times(a: &[f64], b: &[f64], threshold_pct: f64) -> Option<TimeChange> {
+    let (ma, mb) = (Summary::of(a)?.median, Summary::of(b)?.median);
+    let change = mb / ma - 1.0;
+    let p = mann_whitney_p(a, b);
+    Some(TimeChange {
+        change,
+        p,
+        verdict: verdict(change, p, threshold_pct),
+    })
+}
+
+/// Per-frame GPU times: the sum over passes of each measured frame's sample. `None` without
+/// timestamps (no `gpu_frame_ms`) or without samples.
+pub fn frame_samples(r: &VariantResult) -> Option<Vec<f64>> {
+    r.gpu_frame_ms?;
+    let frames = r.passes.iter().map(|p| p.samples_ms.len()).min()?;
+    let sums: Vec<f64> = (0..frames)
+        .map(|i| r.passes.iter().map(|p| p.samples_ms[i]).sum())
+        .collect();
+    (!sums.is_empty()).then_some(sums)
+}
 
 /// Largest sample count of either set for which the exact distribution of U is used.
 pub const EXACT_MAX: usize = 20;
@@ -130,6 +193,20 @@ mod tests {
         let a: Vec<f64> = (0..30).map(f64::from).collect();
         let b: Vec<f64> = (0..25).map(|x| f64::from(x) + 5.5).collect();
         close(mann_whitney_p(&a, &b), 0.207_929_272_5);
+    }
+
+    #[test]
+    fn verdict_needs_both_significance_and_size() {
+        assert_eq!(verdict(0.10, 0.001, 5.0), TimeVerdict::Slower);
+        assert_eq!(verdict(-0.10, 0.001, 5.0), TimeVerdict::Faster);
+        assert_eq!(verdict(0.04, 0.001, 5.0), TimeVerdict::Same);
+        assert_eq!(verdict(0.10, 0.02, 5.0), TimeVerdict::Same);
+        let a: Vec<f64> = (0..10).map(|i| 1.0 + 0.01 * f64::from(i)).collect();
+        let b: Vec<f64> = a.iter().map(|x| x * 1.2).collect();
+        let c = compare_times(&a, &b, 5.0).unwrap();
+        assert!((c.change - 0.2).abs() < 1e-9);
+        assert_eq!(c.verdict, TimeVerdict::Slower);
+        assert!(compare_times(&[], &b, 5.0).is_none());
     }
 
     #[test]
