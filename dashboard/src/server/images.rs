@@ -53,10 +53,11 @@ pub async fn blob(
 
 /// Columns shown, in order: (image kind, heading). The reference may be listed under any variant
 /// of the scenario.
-const KINDS: [(&str, &str); 4] = [
+const KINDS: [(&str, &str); 5] = [
     ("reference", "reference"),
     ("output", "variant"),
     ("heatmap", "FLIP heat map"),
+    ("cvvdp", "ColorVideoVDP map (blue: invisible, red: 1 JOD)"),
     ("rate", "shading rate"),
 ];
 

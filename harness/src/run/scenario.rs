@@ -9,7 +9,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Instant;
 
-use tessera_metrics::{ExposureRange, HdrImage, Rgb8Image};
+use tessera_metrics::{DistortionMap, ExposureRange, HdrImage, Rgb8Image};
 use tessera_results::{
     ImageRecord, MetricRecord, PassRecord, ScenarioResult, Status, Summary, VariantResult,
 };
@@ -148,7 +148,10 @@ pub fn run(
                         motion: &motion,
                     };
                     match compute_metrics(scenario, &inputs) {
-                        Ok(m) => result.metrics = m,
+                        Ok((m, maps)) => {
+                            result.metrics = m;
+                            save_cvvdp_maps(&mut result, &maps, &image_dir, run_dir);
+                        }
                         Err(e) => {
                             result.status = Status::Failed {
                                 error: format!("metrics: {e}"),
@@ -444,9 +447,10 @@ impl ReferenceFrames {
     }
 }
 
-/// Linear frames are kept only for HDR-FLIP.
+/// Linear frames are kept only for HDR-FLIP, and for `cvvdp` on an HDR display.
 fn keep_hdr(scenario: &Scenario) -> bool {
     scenario.metrics.contains(&MetricKind::FlipHdr)
+        || (scenario.metrics.contains(&MetricKind::Cvvdp) && super::cvvdp::uses_linear(scenario))
 }
 
 /// What a variant's metrics are computed from.
@@ -465,15 +469,27 @@ enum MetricError {
     Motion(String),
 }
 
-/// Metrics of every measured frame against the reference's frame of the same index.
+/// Metrics of every measured frame against the reference's frame of the same index, and the
+/// `cvvdp` maps of saved frames.
 fn compute_metrics(
     scenario: &Scenario,
     inputs: &MetricInputs<'_>,
-) -> Result<Vec<MetricRecord>, MetricError> {
+) -> Result<(Vec<MetricRecord>, Vec<DistortionMap>), MetricError> {
     let (reference, test) = (&inputs.reference.frames[..], inputs.test);
     let frames: Vec<u32> = (0..test.len().min(reference.len()) as u32).collect();
     let mut out = Vec::new();
+    let mut maps = Vec::new();
     for &kind in &scenario.metrics {
+        if kind == MetricKind::Cvvdp {
+            let (records, m) = super::cvvdp::records(
+                scenario,
+                (reference, &inputs.reference.hdr),
+                (test, inputs.test_hdr),
+            )?;
+            out.extend(records);
+            maps = m;
+            continue;
+        }
         if kind == MetricKind::Flicker {
             out.push(flicker(test));
             continue;
@@ -510,7 +526,9 @@ fn compute_metrics(
                     )?
                     .mean
                 }
-                MetricKind::Flicker | MetricKind::Tde => unreachable!("computed above"),
+                MetricKind::Flicker | MetricKind::Tde | MetricKind::Cvvdp => {
+                    unreachable!("computed above")
+                }
             };
             per_frame.push(v);
         }
@@ -542,10 +560,10 @@ fn compute_metrics(
             higher_is_better: kind.higher_is_better(),
         });
     }
-    Ok(out)
+    Ok((out, maps))
 }
 
-fn series(per_frame: &[f64]) -> Option<tessera_results::SeriesSummary> {
+pub(super) fn series(per_frame: &[f64]) -> Option<tessera_results::SeriesSummary> {
     tessera_metrics::series_stats(per_frame).map(|s| tessera_results::SeriesSummary {
         mean: s.mean,
         p95: s.p95,
@@ -664,6 +682,20 @@ fn add_extras(
             let path = dir.join(format!("{stem}-{kind}-f{f:03}.png"));
             save_image(result, img, &path, run_dir, f, kind);
         }
+    }
+}
+
+/// The `cvvdp` distortion maps of saved frames, as `<variant>-cvvdp-fNNN.png` (kind `cvvdp`).
+fn save_cvvdp_maps(result: &mut VariantResult, maps: &[DistortionMap], dir: &Path, run_dir: &Path) {
+    if maps.is_empty() {
+        return;
+    }
+    let _ = std::fs::create_dir_all(dir);
+    let stem = sanitize(&result.variant);
+    for m in maps {
+        let path = dir.join(format!("{stem}-cvvdp-f{:03}.png", m.frame));
+        let img = tessera_metrics::cvvdp_heatmap(m);
+        save_image(result, &img, &path, run_dir, m.frame as u32, "cvvdp");
     }
 }
 
