@@ -112,6 +112,13 @@ impl RunBundle {
                 run.run_id
             )));
         }
+        if let Some(t) = &run.commit_time {
+            if chrono::DateTime::parse_from_rfc3339(t).is_err() {
+                return Err(BundleError::Inconsistent(format!(
+                    "run.json: commit_time {t:?} is not an RFC 3339 time (like 2026-11-22T03:05:20Z)"
+                )));
+            }
+        }
         let mut parsed: Vec<ScenarioResult> = Vec::with_capacity(scenarios.len());
         for (i, s) in scenarios.into_iter().enumerate() {
             let name = s

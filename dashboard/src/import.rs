@@ -1,17 +1,16 @@
 //! `tessera-dashboard import`: finds run folders (the folder itself when it holds `run.json`,
-//! else its sub-folders that do), stores each in its own transaction, then runs regression
-//! detection once on every series that got a point.
+//! else its sub-folders that do) and stores each as an upload does: the run and detection on the
+//! series it touched in one transaction ([`crate::regressions::ingest_and_detect`]).
 //!
 //! Not for: checking records (see [`crate::bundle`]) or SQL (see [`crate::store::ingest`]).
 
-use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use crate::bundle::RunBundle;
 use crate::db::Pool;
 use crate::detect::Params;
-use crate::store::ingest::{ingest, Ingested};
+use crate::store::ingest::Ingested;
 
 /// What an import did, for the summary line.
 #[derive(Debug, Default, Clone, PartialEq)]
@@ -67,26 +66,24 @@ pub fn import(pool: &Pool, root: &Path, params: &Params) -> anyhow::Result<Impor
         );
     }
     let mut summary = ImportSummary::default();
-    let mut touched = BTreeSet::new();
     let mut conn = pool.get()?;
     for folder in folders {
         let outcome = RunBundle::read_folder(&folder)
             .map_err(anyhow::Error::from)
-            .and_then(|b| ingest(&mut *conn, &b).map_err(anyhow::Error::from));
+            .and_then(|b| {
+                crate::regressions::ingest_and_detect(&mut *conn, &b, params)
+                    .map_err(anyhow::Error::from)
+            });
         match outcome {
-            Ok(Ingested::Stored {
-                results, series, ..
-            }) => {
+            Ok((Ingested::Stored { results, .. }, changes)) => {
                 summary.stored += 1;
                 summary.results += results;
-                touched.extend(series);
+                summary.regressions += changes.detected;
             }
-            Ok(Ingested::AlreadyStored { .. }) => summary.already_stored += 1,
+            Ok((Ingested::AlreadyStored { .. }, _)) => summary.already_stored += 1,
             Err(e) => summary.failed.push((folder, format!("{e:#}"))),
         }
     }
-    let touched: Vec<i64> = touched.into_iter().collect();
-    summary.regressions = crate::regressions::update(&mut *conn, &touched, params)?;
     summary.elapsed = start.elapsed();
     Ok(summary)
 }

@@ -6,9 +6,10 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
+use tessera_dashboard::notify::webhook;
 use tessera_dashboard::store::ingest::{ingest, Ingested};
 use tessera_dashboard::{
-    bundle::RunBundle, db, detect::Params, import, regressions, server, synth,
+    bundle::RunBundle, db, detect::Params, import, regressions, replay, server, synth,
 };
 
 const DEFAULT_DB: &str = "tessera-dashboard.sqlite";
@@ -42,11 +43,46 @@ enum Command {
         /// Largest accepted upload in MiB.
         #[arg(long, default_value_t = 64)]
         max_upload_mib: usize,
+        /// The dashboard's URL as others reach it, for links in the feed, Markdown and webhook
+        /// (default: http:// and the request's Host; the webhook uses http://<listen>).
+        #[arg(long, env = "TESSERA_DASHBOARD_PUBLIC_URL")]
+        public_url: Option<String>,
+        /// POST a JSON body to this URL for each newly confirmed alert group (retried with
+        /// backoff; what was sent is kept in the store).
+        #[arg(long, env = "TESSERA_DASHBOARD_WEBHOOK_URL", hide_env_values = true)]
+        webhook_url: Option<String>,
+        /// Seconds one webhook request may take.
+        #[arg(long, default_value_t = 10)]
+        webhook_timeout_s: u64,
+        /// Seconds between two looks for newly confirmed groups.
+        #[arg(long, default_value_t = 30)]
+        webhook_poll_s: u64,
     },
     /// Re-run regression detection on every stored series.
     Detect {
         #[arg(long, env = "TESSERA_DASHBOARD_DB", default_value = DEFAULT_DB)]
         db: String,
+    },
+    /// Replay benchmark of online detection: synthetic nightly histories made from a real run,
+    /// uploaded run by run as `POST /api/runs` stores them, scored against the injected changes
+    /// and against one batch pass (see docs/regressions.md). Exit code 1 when a target is missed.
+    Replay {
+        /// The run folder to copy (default: the committed lavapipe fixture).
+        #[arg(default_value = "dashboard/tests/fixtures/runs/20261122T030520Z-34ab2b4")]
+        template: PathBuf,
+        #[arg(long, default_value_t = 120)]
+        nights: usize,
+        /// Copies of the template's scenarios in each run.
+        #[arg(long, default_value_t = 16)]
+        scenarios: usize,
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// An empty store to replay into (default: a temporary SQLite file).
+        #[arg(long)]
+        db: Option<String>,
+        /// List the changes not blamed on their exact commit and the false alerts.
+        #[arg(long)]
+        verbose: bool,
     },
     /// Print a run folder as the JSON body that `POST /api/runs` takes.
     Bundle { folder: PathBuf },
@@ -61,6 +97,13 @@ enum Command {
         scenarios: usize,
         #[arg(long, env = "TESSERA_DASHBOARD_DB", default_value = DEFAULT_DB)]
         db: String,
+        /// Then time this many further runs stored as an upload stores them (run and detection
+        /// in one transaction) and print the median and 95th percentile.
+        #[arg(long, default_value_t = 0)]
+        then_upload: u64,
+        /// Scenario copies in each timed upload (default: as many as the generated runs).
+        #[arg(long)]
+        upload_scenarios: Option<usize>,
     },
 }
 
@@ -85,10 +128,36 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             listen,
             token,
             max_upload_mib,
+            public_url,
+            webhook_url,
+            webhook_timeout_s,
+            webhook_poll_s,
         } => {
             let pool = db::open(&db)?;
             let mut state = server::AppState::new(pool, token.filter(|t| !t.is_empty()));
             state.max_upload_bytes = max_upload_mib << 20;
+            let public_url = public_url.filter(|u| !u.is_empty());
+            if let Some(u) = &public_url {
+                if !(u.starts_with("http://") || u.starts_with("https://")) {
+                    anyhow::bail!("--public-url must start with http:// or https://, not {u:?}");
+                }
+            }
+            state.public_url = public_url.clone();
+            if let Some(url) = webhook_url.filter(|u| !u.is_empty()) {
+                if !(url.starts_with("http://") || url.starts_with("https://")) {
+                    anyhow::bail!("--webhook-url must start with http:// or https://");
+                }
+                let base = public_url.unwrap_or_else(|| format!("http://{listen}"));
+                let mut config = webhook::Config::new(&url, &base);
+                config.timeout = std::time::Duration::from_secs(webhook_timeout_s.max(1));
+                config.poll = std::time::Duration::from_secs(webhook_poll_s.max(1));
+                let notifier = webhook::Notifier::new(state.pool.clone(), config);
+                eprintln!(
+                    "webhook: posting newly confirmed alert groups (outbox target {})",
+                    notifier.target()
+                );
+                notifier.spawn();
+            }
             if state.token.is_none() {
                 eprintln!(
                     "note: no --token or TESSERA_DASHBOARD_TOKEN: uploads and triage are refused"
@@ -112,17 +181,29 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let pool = db::open(&db)?;
             let mut conn = pool.get()?;
             let series = regressions::all_series(&mut *conn)?;
-            let added = regressions::update(&mut *conn, &series, &Params::default())?;
-            println!("checked {} series; {added} new change points", series.len());
+            let c = regressions::update_all(&mut *conn, &series, &Params::default())?;
+            println!(
+                "checked {} series: {} new alerts, {} moved, {} merged, {} withdrawn, {} confirmed, {} reinstated",
+                series.len(),
+                c.detected,
+                c.moved,
+                c.merged,
+                c.withdrawn,
+                c.confirmed,
+                c.reinstated
+            );
         }
         Command::Generate {
             template,
             runs,
             scenarios,
             db,
+            then_upload,
+            upload_scenarios,
         } => {
             let pool = db::open(&db)?;
-            let template = synth::widen(&RunBundle::read_folder(&template)?, scenarios);
+            let base = RunBundle::read_folder(&template)?;
+            let template = synth::widen(&base, scenarios);
             let mut rng = tessera_dashboard::detect::Rng::new(1);
             let mut conn = pool.get()?;
             let start = std::time::Instant::now();
@@ -147,6 +228,78 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 touched.len(),
                 start.elapsed().as_secs_f64() - stored
             );
+            if then_upload > 0 {
+                let small = synth::widen(&base, upload_scenarios.unwrap_or(scenarios));
+                let first: u64 = conn.query("SELECT COUNT(*) FROM runs", &[])?[0].i64(0)? as u64;
+                let mut ms = Vec::new();
+                let mut series = 0;
+                for i in first..first + then_upload {
+                    let b = synth::run_from(&small, "gen", i, 1.0, 0.01, &mut rng);
+                    let t = std::time::Instant::now();
+                    let (ingested, _) =
+                        regressions::ingest_and_detect(&mut *conn, &b, &Params::default())?;
+                    ms.push(t.elapsed().as_secs_f64() * 1e3);
+                    if let Ingested::Stored { series: s, .. } = ingested {
+                        series = s.len();
+                    }
+                }
+                ms.sort_by(|a, b| a.total_cmp(b));
+                println!(
+                    "{then_upload} uploads of {} results ({series} series each): p50 {:.1} ms, p95 {:.1} ms",
+                    small.scenarios.iter().map(|s| s.results.len()).sum::<usize>(),
+                    ms[ms.len() / 2],
+                    ms[(ms.len() - 1) * 95 / 100]
+                );
+            }
+        }
+        Command::Replay {
+            template,
+            nights,
+            scenarios,
+            seed,
+            db,
+            verbose,
+        } => {
+            let dir = tempfile_dir()?;
+            let url = db.unwrap_or_else(|| dir.join("replay.sqlite").display().to_string());
+            let pool = db::open(&url)?;
+            {
+                let mut conn = pool.get()?;
+                let runs = conn.query("SELECT COUNT(*) FROM runs", &[])?[0].i64(0)?;
+                if runs > 0 {
+                    anyhow::bail!("{url} already holds {runs} runs; replay needs an empty store");
+                }
+            }
+            let template = RunBundle::read_folder(&template)?;
+            let config = replay::Config {
+                nights,
+                scenarios,
+                seed,
+            };
+            eprintln!(
+                "replaying {nights} nights x {} profiles into {}",
+                replay::PROFILES.len(),
+                pool.describe()
+            );
+            let report = replay::run(&pool, &template, &config, &Params::default())?;
+            for line in report.lines() {
+                println!("{line}");
+            }
+            for d in report.disagreements.iter().take(20) {
+                eprintln!("  {d}");
+            }
+            if verbose {
+                for m in &report.misses {
+                    eprintln!("  not exact: {m}");
+                }
+                for f in &report.false_list {
+                    eprintln!("  false: {f}");
+                }
+            }
+            let _ = std::fs::remove_dir_all(&dir);
+            if !report.meets_targets() {
+                anyhow::bail!("the replay missed a target");
+            }
         }
         Command::Bundle { folder } => {
             let bundle = RunBundle::read_folder(&folder)?;
@@ -154,6 +307,18 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         }
     }
     Ok(())
+}
+
+/// A fresh folder under the system's temporary directory.
+fn tempfile_dir() -> anyhow::Result<PathBuf> {
+    let dir = std::env::temp_dir().join(format!(
+        "tessera-replay-{}-{}",
+        std::process::id(),
+        chrono::Utc::now().timestamp_micros()
+    ));
+    std::fs::create_dir_all(&dir)
+        .map_err(|e| anyhow::anyhow!("cannot create {}: {e}", dir.display()))?;
+    Ok(dir)
 }
 
 fn main() -> ExitCode {

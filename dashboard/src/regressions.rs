@@ -1,17 +1,38 @@
-//! Regression detection applied to stored series: reads a series' points in run order with each
-//! run's environment (driver and harness version), runs [`crate::detect::analyse`], and records
-//! each new change point in `regressions` with triage state `new`. Existing rows (and their triage
-//! state and notes) are never overwritten; a change point that moved by a few points as more runs
-//! arrived is the same regression.
+//! Regression detection applied to stored series, online: every pass over a series re-derives its
+//! alerts from the data and brings the stored ones in line, so that alerts after any sequence of
+//! uploads equal those of one batch pass over the same data.
+//!
+//! One pass over a series ([`update_series`]):
+//! 1. reads the newest `window` points in commit order ([`window`], an index range of `points`);
+//! 2. runs [`crate::detect::analyse`] on them; a change point with fewer than `confirm_after` points
+//!    after it (in its environment segment) is *pending*, otherwise *confirmed*;
+//! 3. reconciles ([`plan`]) with the series' stored alerts in the *open* part of the window (all of
+//!    it while the series is shorter than the window, else all but its oldest quarter, whose alerts
+//!    are final): a change is the alert stored at its commit, else the nearest open alert within
+//!    [`SAME_CHANGE_WITHIN`] points in the same direction (which then *moves* there, triage and
+//!    all); other open alerts near a matched one are *merged* into it; the rest are *withdrawn*.
+//!    Rows are never deleted; every transition is a `regression_events` row.
+//!
+//! [`ingest_and_detect`] stores a run and runs this on the series it touched in one transaction, so
+//! a crash cannot leave a stored run unanalysed.
 //!
 //! Not for: the statistics (see [`crate::detect`]) or triage (see [`crate::store::triage`]).
 
-use crate::db::{Connection, Value};
-use crate::detect::{analyse, Params};
+use std::collections::{BTreeMap, BTreeSet, HashMap};
+
+use crate::bundle::RunBundle;
+use crate::db::{transaction, Backend, Connection, Value};
+use crate::detect::{analyse, ChangePoint, Params};
+use crate::store::ingest::{ingest_in_transaction, Ingested};
 use crate::store::StoreError;
 
-/// A change point within this many points of a stored one is taken to be that one.
-const SAME_CHANGE_WITHIN: usize = 3;
+/// A change point within this many points of an open alert, in the same direction, is that alert.
+pub const SAME_CHANGE_WITHIN: usize = 3;
+
+/// Alert statuses (`regressions.status`).
+pub const PENDING: &str = "pending";
+pub const CONFIRMED: &str = "confirmed";
+pub const WITHDRAWN: &str = "withdrawn";
 
 /// One point of a series with what identifies its environment.
 #[derive(Clone, Debug)]
@@ -24,12 +45,16 @@ pub struct SeriesPoint {
     pub value: f64,
 }
 
-/// Points of a series in run order (start time, then import order).
+fn environment(driver: &str, info: &str, harness: &str) -> String {
+    format!("{driver} {info} / harness {harness}")
+}
+
+/// All points of a series in commit order (commit time, start time, import order): for pages.
 pub fn points(conn: &mut dyn Connection, series_id: i64) -> Result<Vec<SeriesPoint>, StoreError> {
     let rows = conn.query(
         "SELECT r.id, r.run_id, r.commit_sha, r.started_at, r.driver, r.driver_info, r.harness_version, p.value
          FROM points p JOIN runs r ON r.id = p.run_pk
-         WHERE p.series_id = $1 ORDER BY r.started_at, r.id",
+         WHERE p.series_id = $1 ORDER BY p.ord, p.run_pk",
         &[Value::Int(series_id)],
     )?;
     rows.iter()
@@ -39,75 +64,468 @@ pub fn points(conn: &mut dyn Connection, series_id: i64) -> Result<Vec<SeriesPoi
                 run_id: r.string(1)?,
                 commit: r.opt_string(2)?,
                 started_at: r.string(3)?,
-                environment: format!("{} {} / harness {}", r.str(4)?, r.str(5)?, r.str(6)?),
+                environment: environment(r.str(4)?, r.str(5)?, r.str(6)?),
                 value: r.f64(7)?,
             })
         })
         .collect()
 }
 
-/// Runs detection on one series and stores new change points; returns how many were new.
+/// A point as detection reads it: its run, its environment (an id from [`Environments`]) and value.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WindowPoint {
+    pub run_pk: i64,
+    pub environment: u32,
+    pub value: f64,
+}
+
+/// Environment (driver, driver version, harness version) of each run, read once per run and
+/// shared by every series a detection pass reads: a point is then just a run and a value.
+#[derive(Debug, Default)]
+pub struct Environments {
+    by_run: HashMap<i64, u32>,
+    ids: HashMap<String, u32>,
+}
+
+impl Environments {
+    pub fn of(&mut self, conn: &mut dyn Connection, run_pk: i64) -> Result<u32, StoreError> {
+        if let Some(&e) = self.by_run.get(&run_pk) {
+            return Ok(e);
+        }
+        let row = conn.query(
+            "SELECT driver || ' ' || driver_info || ' / harness ' || harness_version FROM runs WHERE id = $1",
+            &[Value::Int(run_pk)],
+        )?;
+        let name = row
+            .first()
+            .map(|r| r.string(0))
+            .transpose()?
+            .unwrap_or_default();
+        let next = self.ids.len() as u32;
+        let id = *self.ids.entry(name).or_insert(next);
+        self.by_run.insert(run_pk, id);
+        Ok(id)
+    }
+}
+
+/// The newest `len` points of a series, oldest first: one range of the covering index
+/// `points_order`, whatever the length of the series.
+pub fn window(
+    conn: &mut dyn Connection,
+    series_id: i64,
+    len: usize,
+    envs: &mut Environments,
+) -> Result<Vec<WindowPoint>, StoreError> {
+    let rows = conn.query(
+        "SELECT run_pk, value FROM points WHERE series_id = $1 ORDER BY ord DESC, run_pk DESC LIMIT $2",
+        &[Value::Int(series_id), Value::Int(len as i64)],
+    )?;
+    let mut pts = Vec::with_capacity(rows.len());
+    for r in rows.iter().rev() {
+        let run_pk = r.i64(0)?;
+        pts.push(WindowPoint {
+            run_pk,
+            environment: envs.of(conn, run_pk)?,
+            value: r.f64(1)?,
+        });
+    }
+    Ok(pts)
+}
+
+/// A stored alert as reconciliation sees it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StoredAlert {
+    pub id: i64,
+    pub run_pk_after: i64,
+    pub relative_change: f64,
+    pub status: String,
+}
+
+/// A change point found in the window, with its status.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Found {
+    pub change: ChangePoint,
+    pub status: &'static str,
+}
+
+/// What reconciliation does to the store.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Action {
+    /// A new alert.
+    Insert { found: usize },
+    /// Alert `id` now describes change `found` (moved if its commit differs, status updated).
+    Update { id: i64, found: usize },
+    /// Alert `id` is withdrawn: the data no longer supports it (`into: None`) or it duplicates the
+    /// alert `into`.
+    Withdraw { id: i64, into: Option<i64> },
+}
+
+/// Counts of what a detection pass did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Changes {
+    pub detected: usize,
+    pub moved: usize,
+    pub merged: usize,
+    pub withdrawn: usize,
+    pub confirmed: usize,
+    pub reinstated: usize,
+}
+
+impl std::ops::AddAssign for Changes {
+    fn add_assign(&mut self, o: Changes) {
+        self.detected += o.detected;
+        self.moved += o.moved;
+        self.merged += o.merged;
+        self.withdrawn += o.withdrawn;
+        self.confirmed += o.confirmed;
+        self.reinstated += o.reinstated;
+    }
+}
+
+/// The change points of a window with their status (pure).
+pub fn find(pts: &[WindowPoint], params: &Params) -> Vec<Found> {
+    let values: Vec<f64> = pts.iter().map(|p| p.value).collect();
+    let env: Vec<u32> = pts.iter().map(|p| p.environment).collect();
+    let analysis = analyse(&values, &env, params);
+    analysis
+        .change_points
+        .iter()
+        .map(|c| Found {
+            status: if analysis.points_after(c.index, pts.len()) < params.confirm_after {
+                PENDING
+            } else {
+                CONFIRMED
+            },
+            change: c.clone(),
+        })
+        .collect()
+}
+
+/// Index of the first point whose alerts are still open: 0 while the series fits in the window.
+pub fn open_from(window_len: usize, params: &Params) -> usize {
+    if window_len < params.window {
+        0
+    } else {
+        params.window / 4
+    }
+}
+
+/// Reconciles found changes with stored alerts (pure). `pks` are the window's run ids in order;
+/// only alerts whose `run_pk_after` lies at or after `open_from` take part.
+pub fn plan(pks: &[i64], open_from: usize, found: &[Found], alerts: &[StoredAlert]) -> Vec<Action> {
+    let pos: BTreeMap<i64, usize> = pks.iter().enumerate().map(|(i, &pk)| (pk, i)).collect();
+    let alerts: Vec<(usize, &StoredAlert)> = alerts
+        .iter()
+        .filter_map(|a| pos.get(&a.run_pk_after).map(|&i| (i, a)))
+        .filter(|&(i, _)| i >= open_from)
+        .collect();
+    let found_idx: Vec<usize> = (0..found.len())
+        .filter(|&f| found[f].change.index >= open_from.max(1))
+        .collect();
+    let mut matched: BTreeMap<usize, i64> = BTreeMap::new(); // found -> alert id
+    let mut used: BTreeSet<i64> = BTreeSet::new();
+    // 1. The alert stored at a change's own commit is that change's, whatever its status.
+    for &f in &found_idx {
+        if let Some(&(_, a)) = alerts.iter().find(|(i, _)| *i == found[f].change.index) {
+            matched.insert(f, a.id);
+            used.insert(a.id);
+        }
+    }
+    // 2. Else the nearest open alert in the same direction moves to it.
+    for &f in &found_idx {
+        if matched.contains_key(&f) {
+            continue;
+        }
+        let c = &found[f].change;
+        let best = alerts
+            .iter()
+            .filter(|(i, a)| {
+                !used.contains(&a.id)
+                    && a.status != WITHDRAWN
+                    && i.abs_diff(c.index) <= SAME_CHANGE_WITHIN
+                    && (a.relative_change > 0.0) == (c.relative_change > 0.0)
+            })
+            .min_by_key(|(i, a)| (i.abs_diff(c.index), a.id));
+        if let Some(&(_, a)) = best {
+            matched.insert(f, a.id);
+            used.insert(a.id);
+        }
+    }
+    let mut actions = Vec::new();
+    for &f in &found_idx {
+        actions.push(match matched.get(&f) {
+            Some(&id) => Action::Update { id, found: f },
+            None => Action::Insert { found: f },
+        });
+    }
+    // 3. Open alerts left over: merged into a kept alert near them, else withdrawn.
+    for &(i, a) in &alerts {
+        if used.contains(&a.id) || a.status == WITHDRAWN {
+            continue;
+        }
+        let into = matched
+            .iter()
+            .filter(|(&f, _)| {
+                let c = &found[f].change;
+                i.abs_diff(c.index) <= SAME_CHANGE_WITHIN
+                    && (a.relative_change > 0.0) == (c.relative_change > 0.0)
+            })
+            .map(|(_, &id)| id)
+            .next();
+        actions.push(Action::Withdraw { id: a.id, into });
+    }
+    actions
+}
+
+fn stored_alerts(
+    conn: &mut dyn Connection,
+    series_id: i64,
+) -> Result<Vec<StoredAlert>, StoreError> {
+    conn.query(
+        "SELECT id, run_pk_after, relative_change, status FROM regressions WHERE series_id = $1",
+        &[Value::Int(series_id)],
+    )?
+    .iter()
+    .map(|r| {
+        Ok(StoredAlert {
+            id: r.i64(0)?,
+            run_pk_after: r.i64(1)?,
+            relative_change: r.opt_f64(2)?.unwrap_or(f64::INFINITY),
+            status: r.string(3)?,
+        })
+    })
+    .collect()
+}
+
+fn event(conn: &mut dyn Connection, id: i64, kind: &str, detail: String) -> Result<(), StoreError> {
+    conn.execute(
+        "INSERT INTO regression_events (regression_id, at, kind, detail) VALUES ($1, $2, $3, $4)",
+        &[
+            Value::Int(id),
+            crate::now_rfc3339().into(),
+            kind.into(),
+            detail.into(),
+        ],
+    )?;
+    Ok(())
+}
+
+fn run_label(conn: &mut dyn Connection, pk: i64) -> Result<String, StoreError> {
+    let row = conn.query(
+        "SELECT run_id, commit_sha FROM runs WHERE id = $1",
+        &[Value::Int(pk)],
+    )?;
+    Ok(match row.first() {
+        Some(r) => match r.opt_string(1)? {
+            Some(sha) => format!("{} ({})", &sha[..sha.len().min(7)], r.str(0)?),
+            None => r.string(0)?,
+        },
+        None => format!("run {pk}"),
+    })
+}
+
+fn describe(f: &Found) -> String {
+    format!(
+        "{:+.1}% ({:.4} -> {:.4}), {}",
+        f.change.relative_change * 100.0,
+        f.change.before,
+        f.change.after,
+        f.status
+    )
+}
+
+/// Stored relative change: finite (a change from 0 is stored as ±1e300).
+fn stored_change(c: &ChangePoint) -> Value {
+    Value::Real(c.relative_change.clamp(-1e300, 1e300))
+}
+
+/// One detection pass over one series (see the module doc). Runs inside the caller's transaction.
 pub fn update_series(
     conn: &mut dyn Connection,
     series_id: i64,
     params: &Params,
-) -> Result<usize, StoreError> {
-    let pts = points(conn, series_id)?;
-    let values: Vec<f64> = pts.iter().map(|p| p.value).collect();
-    let env: Vec<&str> = pts.iter().map(|p| p.environment.as_str()).collect();
-    let analysis = analyse(&values, &env, params);
-    if analysis.change_points.is_empty() {
-        return Ok(0);
+    envs: &mut Environments,
+) -> Result<Changes, StoreError> {
+    let pts = window(conn, series_id, params.window, envs)?;
+    let found = find(&pts, params);
+    let alerts = stored_alerts(conn, series_id)?;
+    if found.is_empty() && alerts.iter().all(|a| a.status == WITHDRAWN) {
+        return Ok(Changes::default());
     }
-    let existing: Vec<usize> = conn
-        .query(
-            "SELECT run_pk_after FROM regressions WHERE series_id = $1",
-            &[Value::Int(series_id)],
-        )?
-        .iter()
-        .filter_map(|r| r.i64(0).ok())
-        .filter_map(|pk| pts.iter().position(|p| p.run_pk == pk))
-        .collect();
-    let mut added = 0;
-    for cp in &analysis.change_points {
-        if existing
-            .iter()
-            .any(|&i| i.abs_diff(cp.index) <= SAME_CHANGE_WITHIN)
-        {
-            continue;
+    let pks: Vec<i64> = pts.iter().map(|p| p.run_pk).collect();
+    let by_id: BTreeMap<i64, &StoredAlert> = alerts.iter().map(|a| (a.id, a)).collect();
+    let mut changes = Changes::default();
+    for action in plan(&pks, open_from(pts.len(), params), &found, &alerts) {
+        match action {
+            Action::Insert { found: f } => {
+                let f = &found[f];
+                let now = crate::now_rfc3339();
+                let row = conn.query(
+                    "INSERT INTO regressions (series_id, run_pk_before, run_pk_after, value_before, value_after,
+                         relative_change, confidence, state, note, detected_at, updated_at, status)
+                     VALUES ($1, $2, $3, $4, $5, $6, $7, 'new', '', $8, $9, $10) RETURNING id",
+                    &[
+                        Value::Int(series_id),
+                        Value::Int(pks[f.change.index - 1]),
+                        Value::Int(pks[f.change.index]),
+                        Value::Real(f.change.before),
+                        Value::Real(f.change.after),
+                        stored_change(&f.change),
+                        Value::Real(f.change.confidence),
+                        now.clone().into(),
+                        now.into(),
+                        f.status.into(),
+                    ],
+                )?;
+                event(conn, row[0].i64(0)?, "detected", describe(f))?;
+                changes.detected += 1;
+            }
+            Action::Update { id, found: f } => {
+                let f = &found[f];
+                let old = by_id[&id];
+                let new_after = pks[f.change.index];
+                if old.run_pk_after != new_after {
+                    let from = run_label(conn, old.run_pk_after)?;
+                    let to = run_label(conn, new_after)?;
+                    event(
+                        conn,
+                        id,
+                        "moved",
+                        format!("from {from} to {to}: {}", describe(f)),
+                    )?;
+                    changes.moved += 1;
+                }
+                if old.status != f.status {
+                    let kind = if old.status == WITHDRAWN {
+                        changes.reinstated += 1;
+                        "reinstated"
+                    } else if f.status == CONFIRMED {
+                        changes.confirmed += 1;
+                        "confirmed"
+                    } else {
+                        "pending"
+                    };
+                    event(conn, id, kind, describe(f))?;
+                }
+                conn.execute(
+                    "UPDATE regressions SET run_pk_before = $1, run_pk_after = $2, value_before = $3,
+                         value_after = $4, relative_change = $5, confidence = $6, status = $7
+                     WHERE id = $8",
+                    &[
+                        Value::Int(pks[f.change.index - 1]),
+                        Value::Int(new_after),
+                        Value::Real(f.change.before),
+                        Value::Real(f.change.after),
+                        stored_change(&f.change),
+                        Value::Real(f.change.confidence),
+                        f.status.into(),
+                        Value::Int(id),
+                    ],
+                )?;
+            }
+            Action::Withdraw { id, into } => {
+                conn.execute(
+                    "UPDATE regressions SET status = $1 WHERE id = $2",
+                    &[WITHDRAWN.into(), Value::Int(id)],
+                )?;
+                match into {
+                    Some(into) => {
+                        event(conn, id, "merged", format!("into alert {into}"))?;
+                        changes.merged += 1;
+                    }
+                    None => {
+                        event(
+                            conn,
+                            id,
+                            "withdrawn",
+                            "no change point here any more".into(),
+                        )?;
+                        changes.withdrawn += 1;
+                    }
+                }
+            }
         }
-        let now = crate::now_rfc3339();
-        added += conn.execute(
-            "INSERT INTO regressions (series_id, run_pk_before, run_pk_after, value_before, value_after,
-                 relative_change, confidence, state, note, detected_at, updated_at)
-             VALUES ($1, $2, $3, $4, $5, $6, $7, 'new', '', $8, $9) ON CONFLICT DO NOTHING",
-            &[
-                Value::Int(series_id),
-                Value::Int(pts[cp.index - 1].run_pk),
-                Value::Int(pts[cp.index].run_pk),
-                Value::Real(cp.before),
-                Value::Real(cp.after),
-                Value::from(cp.relative_change),
-                Value::Real(cp.confidence),
-                now.clone().into(),
-                now.into(),
-            ],
-        )? as usize;
     }
-    Ok(added)
+    Ok(changes)
 }
 
-/// Runs detection on the given series; returns how many change points were new.
+/// On PostgreSQL, locks the series in id order so that two uploads touching one series analyse
+/// it one after the other, each seeing the other's point (SQLite's `BEGIN IMMEDIATE` already
+/// serialises writers).
+fn lock_series_of_run(conn: &mut dyn Connection, run_pk: i64) -> Result<(), StoreError> {
+    if conn.backend() == Backend::Postgres {
+        conn.query(
+            "SELECT id FROM series WHERE id IN (SELECT series_id FROM points WHERE run_pk = $1)
+             ORDER BY id FOR UPDATE",
+            &[Value::Int(run_pk)],
+        )?;
+    }
+    Ok(())
+}
+
+/// Stores `bundle` and runs detection on the series it touched, in one transaction (retried on a
+/// write conflict): the path of every upload and import.
+pub fn ingest_and_detect(
+    conn: &mut dyn Connection,
+    bundle: &RunBundle,
+    params: &Params,
+) -> Result<(Ingested, Changes), StoreError> {
+    let mut attempt = 0;
+    loop {
+        let outcome = transaction(conn, |c| {
+            let ingested = ingest_in_transaction(c, bundle)?;
+            let mut changes = Changes::default();
+            if let Ingested::Stored { run_pk, series, .. } = &ingested {
+                lock_series_of_run(c, *run_pk)?;
+                let mut envs = Environments::default();
+                for &id in series {
+                    changes += update_series(c, id, params, &mut envs)?;
+                }
+            }
+            Ok::<_, StoreError>((ingested, changes))
+        });
+        match outcome {
+            Err(StoreError::Db(e)) if e.is_retryable() && attempt < 5 => attempt += 1,
+            other => return other,
+        }
+    }
+}
+
+/// Runs detection on the given series, 64 series per transaction; returns what changed.
+pub fn update_all(
+    conn: &mut dyn Connection,
+    series: &[i64],
+    params: &Params,
+) -> Result<Changes, StoreError> {
+    let mut changes = Changes::default();
+    let mut envs = Environments::default();
+    for chunk in series.chunks(64) {
+        changes += transaction(conn, |c| {
+            if c.backend() == Backend::Postgres {
+                for &id in chunk {
+                    c.query(
+                        "SELECT id FROM series WHERE id = $1 FOR UPDATE",
+                        &[Value::Int(id)],
+                    )?;
+                }
+            }
+            let mut ch = Changes::default();
+            for &id in chunk {
+                ch += update_series(c, id, params, &mut envs)?;
+            }
+            Ok::<_, StoreError>(ch)
+        })?;
+    }
+    Ok(changes)
+}
+
+/// Runs detection on the given series; returns how many alerts were new.
 pub fn update(
     conn: &mut dyn Connection,
     series: &[i64],
     params: &Params,
 ) -> Result<usize, StoreError> {
-    let mut added = 0;
-    for &id in series {
-        added += update_series(conn, id, params)?;
-    }
-    Ok(added)
+    Ok(update_all(conn, series, params)?.detected)
 }
 
 /// Every series in the store (for `tessera-dashboard detect`).
@@ -118,3 +536,6 @@ pub fn all_series(conn: &mut dyn Connection) -> Result<Vec<i64>, StoreError> {
         .map(|r| r.i64(0))
         .collect::<Result<_, _>>()?)
 }
+
+#[cfg(test)]
+mod tests;

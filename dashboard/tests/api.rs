@@ -430,9 +430,160 @@ fn regression_summary_text() {
         note: String::new(),
         detected_at: String::new(),
         updated_at: String::new(),
+        status: "confirmed".into(),
     };
     assert_eq!(
         tessera_dashboard::server::regressions::summary(&r),
         "tiny · upscale[scale=0.5] · llvmpipe (LLVM 15.0.6, 256 bits) · gpu_ms.median: 3.476 → 3.824 (+10.0%, worse), 100.0% confidence"
+    );
+}
+
+#[tokio::test]
+async fn alert_groups_api_triage_markdown_and_feed() {
+    let (store, app) = setup(false);
+    common::two_adapter_history(&store.pool, 0, 40);
+    let key = common::range(29);
+
+    let groups = json(&get(&app, "/api/regressions/groups").await.2);
+    let keys: Vec<&str> = groups
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|g| g["key"].as_str().unwrap())
+        .collect();
+    assert_eq!(keys, [key.clone(), common::range(14)]);
+    let n = groups[0]["series_count"].as_u64().unwrap();
+    let sized = json(
+        &get(&app, "/api/regressions/groups?sort=size&limit=1")
+            .await
+            .2,
+    );
+    assert_eq!(sized.as_array().unwrap().len(), 1);
+    assert_eq!(sized[0]["key"], common::range(14));
+    for bad in [
+        "state=closed",
+        "direction=up",
+        "status=gone",
+        "sort=name",
+        "adapter=x",
+    ] {
+        let (s, ctype, body) = get(&app, &format!("/api/regressions/groups?{bad}")).await;
+        assert_eq!(
+            (s, ctype.as_str()),
+            (StatusCode::BAD_REQUEST, "application/json"),
+            "{bad}: {body}"
+        );
+        assert!(
+            json(&body)["error"].as_str().unwrap().contains("not"),
+            "{body}"
+        );
+    }
+    // Empty form values mean "all".
+    let all = json(
+        &get(&app, "/api/regressions/groups?adapter=&state=&sort=")
+            .await
+            .2,
+    );
+    assert_eq!(all.as_array().unwrap().len(), 2);
+
+    let triage = |token: Option<&str>, body: &str| {
+        let mut r = Request::post(format!("/api/regressions/groups/{key}"))
+            .header(header::CONTENT_TYPE, "application/json");
+        if let Some(t) = token {
+            r = r.header(header::AUTHORIZATION, format!("Bearer {t}"));
+        }
+        r.body(Body::from(body.to_string())).unwrap()
+    };
+    let ack = r#"{"state":"fixed","note":"reverted in c0ffee","bug_url":"https://bugs.example/7"}"#;
+    assert_eq!(
+        send(&app, triage(None, ack)).await.0,
+        StatusCode::UNAUTHORIZED
+    );
+    assert_eq!(
+        send(
+            &app,
+            triage(Some(TOKEN), r#"{"state":"fixed","bug_url":"javascript:x"}"#)
+        )
+        .await
+        .0,
+        StatusCode::UNPROCESSABLE_ENTITY
+    );
+    let (s, _, body) = send(&app, triage(Some(TOKEN), ack)).await;
+    assert_eq!(s, StatusCode::OK, "{body}");
+    assert_eq!(json(&body)["updated"].as_u64(), Some(n));
+    let one = json(&get(&app, &format!("/api/regressions/groups/{key}")).await.2);
+    assert_eq!(
+        (
+            &one["state"],
+            &one["note"],
+            &one["bug_url"],
+            &one["updated_by"]
+        ),
+        (
+            &serde_json::json!("fixed"),
+            &serde_json::json!("reverted in c0ffee"),
+            &serde_json::json!("https://bugs.example/7"),
+            &serde_json::json!("write token")
+        )
+    );
+    // The form without JavaScript: token as a field, back to the group on the list.
+    let form = Request::post(format!("/regressions/groups/{key}"))
+        .header(header::CONTENT_TYPE, "application/x-www-form-urlencoded")
+        .body(Body::from(format!(
+            "state=ignored&note=&bug_url=&token={TOKEN}"
+        )))
+        .unwrap();
+    assert_eq!(send(&app, form).await.0, StatusCode::SEE_OTHER);
+    let ignored = json(&get(&app, "/api/regressions/groups?state=ignored").await.2);
+    assert_eq!(ignored[0]["key"], key);
+
+    // Markdown at its own URL, absolute links from the Host header.
+    let md = send(
+        &app,
+        Request::get(format!("/regressions/groups/{key}.md"))
+            .header(header::HOST, "dash.example:8080")
+            .body(Body::empty())
+            .unwrap(),
+    )
+    .await;
+    assert_eq!(
+        (md.0, md.1.as_str()),
+        (StatusCode::OK, "text/markdown; charset=utf-8")
+    );
+    assert!(md.2.contains(&format!(
+        "(http://dash.example:8080/regressions/groups/{key})"
+    )));
+    let (s, ctype, page) = get(&app, &format!("/regressions/groups/{key}")).await;
+    assert_eq!(
+        (s, ctype.as_str()),
+        (StatusCode::OK, "text/html; charset=utf-8")
+    );
+    assert!(page.contains("<svg") && page.contains("<option selected>ignored</option>"));
+    for missing in [
+        format!("/regressions/groups/{}", common::range(3)),
+        format!("/regressions/groups/{}.md", common::range(3)),
+        "/regressions/groups/..%2F..%2Fetc".to_string(),
+        "/api/regressions/groups/nope".to_string(),
+    ] {
+        let (s, ctype, _) = get(&app, &missing).await;
+        assert_eq!(
+            (s, ctype.as_str()),
+            (StatusCode::NOT_FOUND, "application/json"),
+            "{missing}"
+        );
+    }
+
+    // The feed: confirmed groups, filterable by state.
+    let (s, ctype, feed) = get(&app, "/regressions/feed.atom").await;
+    assert_eq!(
+        (s, ctype.as_str()),
+        (StatusCode::OK, "application/atom+xml; charset=utf-8")
+    );
+    assert_eq!(feed.matches("<entry>").count(), 2);
+    let (_, _, only_new) = get(&app, "/regressions/feed.atom?state=new").await;
+    assert_eq!(only_new.matches("<entry>").count(), 1);
+    assert_eq!(
+        get(&app, "/regressions/feed.atom?state=closed").await.0,
+        StatusCode::BAD_REQUEST
     );
 }

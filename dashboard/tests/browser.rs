@@ -293,6 +293,59 @@ impl Browser {
         )
     }
 
+    /// The first element matching a CSS selector (its WebDriver reference).
+    fn find(&self, css: &str) -> String {
+        let v = self.call(
+            "POST",
+            "element",
+            Some(json!({"using": "css selector", "value": css})),
+        );
+        v["element-6066-11e4-a52e-4f735466cecf"]
+            .as_str()
+            .unwrap_or_else(|| panic!("no element {css}: {v}"))
+            .to_string()
+    }
+
+    /// Clicks the element as a user would (scrolled into view, hit-tested).
+    fn click(&self, css: &str) {
+        let el = self.find(css);
+        self.call("POST", &format!("element/{el}/click"), Some(json!({})));
+    }
+
+    /// Types `text` into the element as key presses.
+    fn type_into(&self, css: &str, text: &str) {
+        let el = self.find(css);
+        self.call(
+            "POST",
+            &format!("element/{el}/value"),
+            Some(json!({ "text": text })),
+        );
+    }
+
+    /// Saves a PNG of the viewport to `path`.
+    fn screenshot(&self, path: &Path) {
+        use base64::Engine;
+        let v = self.call("GET", "screenshot", None);
+        let png = base64::engine::general_purpose::STANDARD
+            .decode(v.as_str().unwrap())
+            .unwrap();
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        std::fs::write(path, png).unwrap();
+    }
+
+    /// Evaluates `script` (which returns a value) until it is truthy, for at most 10 s.
+    fn wait_for(&self, script: &str) -> Value {
+        let deadline = Instant::now() + Duration::from_secs(10);
+        loop {
+            let v = self.eval(script);
+            if !(v.is_null() || v == false || v == "") {
+                return v;
+            }
+            assert!(Instant::now() < deadline, "timed out waiting for {script}");
+            std::thread::sleep(Duration::from_millis(50));
+        }
+    }
+
     /// Console messages since the last call, as `LEVEL message`.
     fn console(&self) -> Vec<String> {
         let v = self.call("POST", "se/log", Some(json!({"type": "browser"})));
@@ -421,6 +474,7 @@ fn page_type(path: &str) -> &'static str {
         ["series"] => "series list",
         ["series", _] => "series",
         ["regressions"] => "regressions",
+        ["regressions", "groups", _] => "alert group",
         ["compare"] => "adapter comparison",
         ["pareto"] => "error vs time",
         ["images", _] => "png",
@@ -661,4 +715,285 @@ fn every_page_draws_in_chromium_and_its_links_resolve() {
         loaded.len(),
         start.elapsed().as_secs_f64()
     );
+}
+
+// ---------------------------------------------------------------------------------------------
+// The regressions page: alert groups, bulk triage with the token entered once, filters, feed.
+
+/// Where the screenshots of the browser tests are kept (under the workspace's `target/`).
+fn artefacts() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/test-artefacts/browser")
+}
+
+/// What the regressions page shows: its groups, each with its key, state badge and series rows.
+const GROUPS: &str = r#"
+return Array.from(document.querySelectorAll('#regressions tbody.group')).map(g => ({
+  key: g.id.slice(2),
+  title: g.querySelector('h2').textContent,
+  state: g.querySelector('[data-state-of]').textContent,
+  rows: Array.from(g.querySelectorAll('tr.alert')).map(r => Array.from(r.cells).map(c => c.textContent)),
+  worse_colour: (g.querySelector('.chg.worse') ? getComputedStyle(g.querySelector('.chg.worse')).color : ''),
+  link_colour: getComputedStyle(g.querySelector('tr.alert a')).color,
+}));
+"#;
+
+#[test]
+fn regressions_page_triages_groups_with_the_token_entered_once() {
+    let Some((chromium, chromedriver)) = browser_tools() else {
+        return;
+    };
+    let store = common::sqlite();
+    common::two_adapter_history(&store.pool, 0, 40);
+    let addr = serve(AppState::new(
+        store.pool.clone(),
+        Some("browser-test".into()),
+    ));
+    let origin = format!("http://{addr}");
+    let browser = Browser::start(&chromium, &chromedriver);
+    let _ = browser.console();
+    let shots = artefacts();
+
+    // Two groups, newest first: the change at run 30 on both adapters, the one at run 15.
+    browser.goto(&format!("{origin}/regressions"));
+    let groups = browser.eval(GROUPS);
+    let groups = groups.as_array().unwrap();
+    assert_eq!(groups.len(), 2, "{groups:?}");
+    assert_eq!(groups[0]["key"], common::range(29));
+    assert_eq!(groups[1]["key"], common::range(14));
+    let title = groups[0]["title"].as_str().unwrap();
+    assert!(title.contains("series on 2 adapters"), "{title}");
+    let rows = groups[0]["rows"].as_array().unwrap();
+    assert!(rows.len() >= 6, "{rows:?}");
+    let adapters: BTreeSet<&str> = rows.iter().map(|r| r[0].as_str().unwrap()).collect();
+    assert_eq!(adapters.len(), 2, "{adapters:?}");
+    assert!(rows
+        .iter()
+        .all(|r| r[7].as_str().unwrap().contains("worse")));
+    // Worse is red whatever colour links have.
+    assert_eq!(groups[0]["worse_colour"], "rgb(161, 20, 15)");
+    assert_ne!(groups[0]["link_colour"], groups[0]["worse_colour"]);
+    assert!(groups.iter().all(|g| g["state"] == "new"));
+    browser.screenshot(&shots.join("regressions.png"));
+
+    // The token, typed once; the first group triaged on this page.
+    browser.type_into("#token", "browser-test");
+    browser.click("#token-save");
+    assert_eq!(
+        browser.eval("return document.getElementById('token-state').textContent"),
+        "write token set for this browser session"
+    );
+    let key30 = common::range(29);
+    let key15 = common::range(14);
+    let form = |key: &str| format!("form.triage[data-key=\"{key}\"]");
+    browser.eval(&format!(
+        "const f = document.querySelector('{}'); f.elements.state.value = 'acknowledged'; return true;",
+        form(&key30)
+    ));
+    browser.type_into(
+        &format!("{} input[name=note]", form(&key30)),
+        "new reconstruct pass",
+    );
+    browser.type_into(
+        &format!("{} input[name=bug_url]", form(&key30)),
+        "https://bugs.example/42",
+    );
+    browser.click(&format!("{} button", form(&key30)));
+    let said = browser.wait_for(&format!(
+        "const t = document.querySelector('{} .result').textContent; return t.startsWith('saved') || t.startsWith('HTTP') ? t : '';",
+        form(&key30)
+    ));
+    assert!(
+        said.as_str()
+            .unwrap()
+            .starts_with(&format!("saved for {} series", rows.len())),
+        "{said}"
+    );
+    browser.screenshot(&shots.join("regressions-triaged.png"));
+
+    // A new page load (a filter), the second group triaged without typing the token again.
+    browser.goto(&format!("{origin}/regressions?state=new"));
+    let left = browser.eval(GROUPS);
+    assert_eq!(left.as_array().unwrap().len(), 1, "{left}");
+    assert_eq!(left[0]["key"], key15);
+    assert_eq!(
+        browser.eval("return document.getElementById('token').hidden"),
+        true
+    );
+    browser.eval(&format!(
+        "document.querySelector('{}').elements.state.value = 'invalid'; return true;",
+        form(&key15)
+    ));
+    browser.click(&format!("{} button", form(&key15)));
+    let said = browser.wait_for(&format!(
+        "const t = document.querySelector('{} .result').textContent; return t.startsWith('saved') || t.startsWith('HTTP') ? t : '';",
+        form(&key15)
+    ));
+    assert!(said.as_str().unwrap().starts_with("saved for"), "{said}");
+
+    // The store has every alert of both groups triaged, by the token's holder.
+    {
+        let mut c = store.pool.get().unwrap();
+        let rows = c
+            .query(
+                "SELECT g.state, g.note, g.bug_url, g.updated_by, rb.commit_sha FROM regressions g JOIN runs rb ON rb.id = g.run_pk_before",
+                &[],
+            )
+            .unwrap();
+        for r in &rows {
+            let before = r.string(4).unwrap();
+            let want = if before == common::sha(29) {
+                (
+                    "acknowledged",
+                    "new reconstruct pass",
+                    "https://bugs.example/42",
+                )
+            } else {
+                ("invalid", "", "")
+            };
+            assert_eq!(
+                (r.str(0).unwrap(), r.str(1).unwrap(), r.str(2).unwrap()),
+                want
+            );
+            assert_eq!(r.str(3).unwrap(), "write token");
+        }
+    }
+
+    // Filters narrow the list: by adapter (picked in the form), by direction, by state.
+    browser.goto(&format!("{origin}/regressions"));
+    let second_id = browser.eval(&format!(
+        "return Array.from(document.querySelectorAll('select[name=adapter] option')).find(o => o.textContent === '{}').value",
+        common::SECOND
+    ));
+    browser.eval(&format!(
+        "document.querySelector('select[name=adapter]').value = '{}'; return true;",
+        second_id.as_str().unwrap()
+    ));
+    browser.click("#filters button");
+    browser.wait_for("return location.search.includes('adapter=')");
+    let second = browser.eval(GROUPS);
+    let second = second.as_array().unwrap();
+    assert_eq!(second.len(), 1, "{second:?}");
+    assert!(second[0]["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .all(|r| r[0] == common::SECOND));
+    assert!(second[0]["rows"].as_array().unwrap().len() < rows.len());
+    browser.screenshot(&shots.join("regressions-filtered.png"));
+    for (query, n) in [
+        ("direction=better", 0),
+        ("direction=worse", 2),
+        ("state=invalid", 1),
+        ("measure=gpu_ms.median&sort=size", 2),
+    ] {
+        browser.goto(&format!("{origin}/regressions?{query}"));
+        let g = browser.eval(GROUPS);
+        assert_eq!(g.as_array().unwrap().len(), n, "{query}: {g}");
+        if query.starts_with("measure") {
+            assert_eq!(g[0]["key"], key15, "largest change first");
+            assert!(g[0]["rows"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .all(|r| r[4] == "gpu_ms.median"));
+        }
+    }
+
+    // One group's page: a chart per series, drawn.
+    browser.goto(&format!("{origin}/regressions/groups/{key30}"));
+    let page = browser.eval(INSPECT);
+    let charts = page["charts"].as_array().unwrap();
+    assert_eq!(charts.len(), rows.len().min(24));
+    assert!(charts
+        .iter()
+        .all(|c| c["points"].as_u64() > Some(10) && c["change_points"] == 1));
+    assert!(page["text"]
+        .as_str()
+        .unwrap()
+        .contains("https://bugs.example/42"));
+    browser.screenshot(&shots.join("alert-group.png"));
+    browser.eval("document.querySelector('.charts').scrollIntoView(); return true;");
+    browser.screenshot(&shots.join("alert-group-charts.png"));
+    // Better (none in this history) has a colour of its own, also inside a link.
+    let better = browser.eval(
+        "const a = document.createElement('a'); a.href = '#'; a.innerHTML = '<span class=\"chg better\">x</span>'; document.querySelector('#regressions td').append(a); return getComputedStyle(a.firstChild).color;",
+    );
+    assert_eq!(better, "rgb(13, 107, 44)");
+    assert_ne!(better, groups[0]["worse_colour"]);
+    let console: Vec<String> = browser
+        .console()
+        .into_iter()
+        .filter(|m| m.starts_with("SEVERE") || m.starts_with("WARNING"))
+        .collect();
+    assert!(console.is_empty(), "{console:?}");
+
+    // The Markdown a bot pastes.
+    let md = http(
+        addr,
+        "GET",
+        &format!("/regressions/groups/{key30}.md"),
+        None,
+    );
+    assert_eq!(md.status, 200);
+    assert!(md.content_type.starts_with("text/markdown"));
+    let md = String::from_utf8(md.body).unwrap();
+    assert!(md.contains("state **acknowledged**") && md.contains("<https://bugs.example/42>"));
+
+    // The Atom feed parses as Atom 1.0 with the elements RFC 4287 requires.
+    let feed = http(addr, "GET", "/regressions/feed.atom", None);
+    assert_eq!(feed.status, 200);
+    assert!(
+        feed.content_type.starts_with("application/atom+xml"),
+        "{}",
+        feed.content_type
+    );
+    let text = String::from_utf8(feed.body).unwrap();
+    std::fs::write(shots.join("feed.atom"), &text).unwrap();
+    let doc = roxmltree::Document::parse(&text).unwrap();
+    const ATOM: &str = "http://www.w3.org/2005/Atom";
+    let root = doc.root_element();
+    assert_eq!(
+        (root.tag_name().namespace(), root.tag_name().name()),
+        (Some(ATOM), "feed")
+    );
+    fn child<'a, 'i>(n: roxmltree::Node<'a, 'i>, name: &str) -> Option<roxmltree::Node<'a, 'i>> {
+        n.children()
+            .find(|c| c.tag_name().namespace() == Some(ATOM) && c.tag_name().name() == name)
+    }
+    let rfc3339 = |n: roxmltree::Node<'_, '_>| {
+        let t = child(n, "updated").unwrap().text().unwrap();
+        chrono::DateTime::parse_from_rfc3339(t).unwrap_or_else(|e| panic!("{t}: {e}"));
+    };
+    for name in ["id", "title", "updated", "author"] {
+        assert!(child(root, name).is_some(), "feed without {name}");
+    }
+    rfc3339(root);
+    assert!(root
+        .children()
+        .any(|c| c.has_tag_name((ATOM, "link")) && c.attribute("rel") == Some("self")));
+    let entries: Vec<_> = root
+        .children()
+        .filter(|c| c.has_tag_name((ATOM, "entry")))
+        .collect();
+    assert_eq!(entries.len(), 2);
+    let mut ids = BTreeSet::new();
+    for e in &entries {
+        for name in ["id", "title", "updated", "summary"] {
+            assert!(child(*e, name).is_some(), "entry without {name}");
+        }
+        rfc3339(*e);
+        assert!(ids.insert(child(*e, "id").unwrap().text().unwrap().to_string()));
+        let link = e
+            .children()
+            .find(|c| c.has_tag_name((ATOM, "link")) && c.attribute("type") == Some("text/html"))
+            .unwrap();
+        let href = link.attribute("href").unwrap();
+        let path = local(href, &origin).unwrap_or_else(|| panic!("{href}"));
+        assert_eq!(http(addr, "GET", &path, None).status, 200, "{href}");
+    }
+    assert!(child(entries[0], "title")
+        .unwrap()
+        .text()
+        .unwrap()
+        .contains("series on 2 adapters"));
 }

@@ -5,8 +5,9 @@
 
 pub mod compare;
 pub mod gpu;
+pub mod params;
 pub mod render;
 pub mod run;
 pub mod scenario;
-pub mod technique;
+pub mod techniques;
 pub mod upload;

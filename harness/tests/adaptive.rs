@@ -6,16 +6,18 @@
 
 mod common;
 
-use tessera::render::adaptive::{read_texture_raw, Adaptive};
-use tessera::render::adaptive_model::{
-    self, b_half, b_quarter, decode, Inputs, Mode, RateParams, TileStats,
-};
+use tessera::params::{ParamValue, Variant};
+use tessera::render::readback::read_texture_raw;
+use tessera::render::renderer::Renderer;
 use tessera::render::scene::SceneGpu;
-use tessera::render::technique::{self, Technique};
 use tessera::render::timers::Timers;
 use tessera::run::frames;
 use tessera::scenario::Scenario;
-use tessera::technique::{ParamValue, TechniqueKind, Variant};
+use tessera::techniques::adaptive_shading::model::{
+    self, b_half, b_quarter, decode, Inputs, Mode, RateParams, TileStats,
+};
+use tessera::techniques::adaptive_shading::{rates_of, AdaptiveGpu as Adaptive};
+use tessera::techniques::{self, Target};
 
 /// Eq. 20 and 21 against the values in notes/techniques.md section 2 (evaluated from the fits).
 #[test]
@@ -49,7 +51,7 @@ fn standalone(v: f32) -> (u32, u32) {
         min_motion: [v, 0.0],
         disoccluded: 0,
     };
-    decode(adaptive_model::select(&stats, [-1.0; 2], true, &p).code)
+    decode(model::select(&stats, [-1.0; 2], true, &p).code)
 }
 
 /// Section 4.2: with t = 0.03 and e = 0.1, half rate is allowed from 2.8586 px/frame ("2.8") and
@@ -77,14 +79,14 @@ fn worked_example_of_section_4_2() {
         disoccluded: 0,
     };
     assert_eq!(
-        decode(adaptive_model::select(&stats, [-1.0; 2], true, &p).code),
+        decode(model::select(&stats, [-1.0; 2], true, &p).code),
         (4, 4)
     );
     let no44 = RateParams {
         allow_4x4: false,
         ..p
     };
-    let (rx, ry) = decode(adaptive_model::select(&stats, [-1.0; 2], true, &no44).code);
+    let (rx, ry) = decode(model::select(&stats, [-1.0; 2], true, &no44).code);
     assert_eq!(rx * ry, 8, "4x4 off: one axis back to half ({rx}x{ry})");
 }
 
@@ -105,7 +107,7 @@ fn content_thresholds_and_hysteresis() {
             min_motion: [0.0, 0.0],
             disoccluded: 0,
         };
-        decode(adaptive_model::select(&stats, [prev; 2], true, p).code).0
+        decode(model::select(&stats, [prev; 2], true, p).code).0
     };
     assert_eq!(at(tau * 1.01, -1.0, &p), 1);
     assert_eq!(at(tau * 0.99, -1.0, &p), 2);
@@ -132,7 +134,7 @@ fn content_thresholds_and_hysteresis() {
         min_motion: [0.0, 0.0],
         disoccluded: 1,
     };
-    assert_eq!(adaptive_model::select(&stats, [-1.0; 2], true, &p).code, 0);
+    assert_eq!(model::select(&stats, [-1.0; 2], true, &p).code, 0);
 }
 
 /// A small scene with a ground, objects, a dynamic box and a panning camera; `shading_cost` low.
@@ -181,12 +183,17 @@ technique = "native"
 "#;
 
 fn adaptive(params: &[(&str, ParamValue)]) -> Variant {
-    common::variant(TechniqueKind::AdaptiveShading, params)
+    common::variant("adaptive-shading", params)
 }
 
 fn render(gpu: &tessera::gpu::Gpu, s: &Scenario, v: &Variant) -> frames::Rendered {
     let mut scene = SceneGpu::new(&gpu.device, s).unwrap();
-    let mut t = technique::build(gpu, v, s.width, s.height, s.scene.has_dynamic_objects()).unwrap();
+    let mut t = techniques::build(
+        gpu,
+        v,
+        Target::new(s.width, s.height, s.scene.has_dynamic_objects()),
+    )
+    .unwrap();
     frames::render(gpu, &mut scene, s, t.as_mut(), true, true, &mut || {}).unwrap()
 }
 
@@ -194,12 +201,8 @@ fn render(gpu: &tessera::gpu::Gpu, s: &Scenario, v: &Variant) -> frames::Rendere
 fn native_deferred_renders_what_native_renders() {
     let gpu = common::gpu();
     let s = common::scenario(common::TINY);
-    let native = render(&gpu, &s, &common::variant(TechniqueKind::Native, &[]));
-    let deferred = render(
-        &gpu,
-        &s,
-        &common::variant(TechniqueKind::NativeDeferred, &[]),
-    );
+    let native = render(&gpu, &s, &common::variant("native", &[]));
+    let deferred = render(&gpu, &s, &common::variant("native-deferred", &[]));
     // The same shading function on the same interpolated inputs: bitwise identical (lavapipe).
     for (a, b) in native.hdr_frames.iter().zip(&deferred.hdr_frames) {
         let bits = |d: &[f32]| d.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
@@ -223,11 +226,11 @@ fn f32s(bytes: Vec<u8>) -> Vec<f32> {
 fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) -> [usize; 5] {
     let gpu = common::gpu();
     let mut scene = SceneGpu::new(&gpu.device, s).unwrap();
-    let mut t = Adaptive::new(&gpu, v, s.width, s.height);
+    let mut t = Adaptive::new(&gpu, rates_of(v), s.width, s.height);
     let mut timers = Timers::new(&gpu.device, &[]).unwrap();
     let mut histogram = [0usize; 5];
     let mut close_calls = 0;
-    let (tw, th) = adaptive_model::tiles(s.width, s.height);
+    let (tw, th) = model::tiles(s.width, s.height);
     for index in 0..frames {
         frames::submit_frame(&gpu, &mut scene, s, &mut t, &mut timers, index);
         let _ = gpu.device.poll(wgpu::PollType::Wait {
@@ -285,7 +288,7 @@ fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) -> [usize; 5] {
             history: last.history,
             params: last.params,
         };
-        let (decisions, model_rates) = adaptive_model::rates_all(&inputs);
+        let (decisions, model_rates) = model::rates_all(&inputs);
         for (i, d) in decisions.iter().enumerate() {
             if d.margin < 1e-4 {
                 // f32 rounding (fused multiply-adds) may decide the other way this close.
@@ -371,10 +374,10 @@ fn one_shade_per_coarse_pixel_and_object() {
             ("coarse_sample", ParamValue::Str(sample.into())),
         ]);
         let mut scene = SceneGpu::new(&gpu.device, &s).unwrap();
-        let mut t = Adaptive::new(&gpu, &v, s.width, s.height);
+        let mut t = Adaptive::new(&gpu, rates_of(&v), s.width, s.height);
         let mut timers = Timers::new(&gpu.device, &[]).unwrap();
         let (w, h) = (s.width as usize, s.height as usize);
-        let (tw, _) = adaptive_model::tiles(s.width, s.height);
+        let (tw, _) = model::tiles(s.width, s.height);
         let mut coarse_blocks = 0;
         for index in 0..6 {
             frames::submit_frame(&gpu, &mut scene, &s, &mut t, &mut timers, index);
@@ -460,25 +463,25 @@ fn reported_shading_rate_is_within_the_rates_bounds() {
 /// neighbour filter adds one pass and one tile-resolution texture; bytes per pixel as declared.
 #[test]
 fn pass_graphs_run_and_allocate_only_what_each_variant_needs() {
-    use tessera::render::adaptive::graph;
+    use tessera::techniques::adaptive_shading::graph;
     let names = |p: &tessera::render::graph::Plan| -> Vec<&str> {
         p.passes.iter().map(|x| x.name).collect()
     };
     let (w, h) = (64u32, 48u32);
     let px = (w * h) as u64;
-    let deferred = graph(&common::variant(TechniqueKind::NativeDeferred, &[]), w, h);
+    let deferred = graph(None, w, h);
     assert_eq!(names(&deferred), ["gbuffer", "shade"]);
     // Three Rgba32Float G-buffer targets, one Rgba16Float output, one Depth32Float.
     let total = |p: &tessera::render::graph::Plan| p.records().iter().map(|r| r.bytes).sum::<u64>();
     assert_eq!(total(&deferred), px * (3 * 16 + 8 + 4));
 
-    let adaptive_default = graph(&adaptive(&[]), w, h);
+    let adaptive_default = graph(rates_of(&adaptive(&[])).as_ref(), w, h);
     assert_eq!(
         names(&adaptive_default),
         ["gbuffer", "rates", "rate_filter", "shade"]
     );
     let no_filter = graph(
-        &adaptive(&[("neighbour_filter", ParamValue::Bool(false))]),
+        rates_of(&adaptive(&[("neighbour_filter", ParamValue::Bool(false))])).as_ref(),
         w,
         h,
     );

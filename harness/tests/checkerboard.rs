@@ -5,17 +5,18 @@
 mod common;
 
 use glam::Vec4;
-use tessera::render::checkerboard::Checkerboard;
-use tessera::render::checkerboard_model::{self, Inputs, Samples, Source};
+use tessera::params::{ParamValue, Variant};
 use tessera::render::readback::{read_texture, read_texture_layer};
+use tessera::render::renderer::Renderer;
 use tessera::render::scene::SceneGpu;
-use tessera::render::technique::{self, Technique};
 use tessera::render::timers::Timers;
 use tessera::scenario::Scenario;
-use tessera::technique::{ParamValue, TechniqueKind, Variant};
+use tessera::techniques::checkerboard::model::{self, Inputs, Samples, Source};
+use tessera::techniques::checkerboard::{CheckerboardGpu as Checkerboard, Options};
+use tessera::techniques::{self, Target};
 
 fn variant(params: &[(&str, ParamValue)]) -> Variant {
-    common::variant(TechniqueKind::Checkerboard, params)
+    common::variant("checkerboard", params)
 }
 
 fn vec4s(v: Vec<f32>) -> Vec<Vec4> {
@@ -46,8 +47,14 @@ fn samples(gpu: &tessera::gpu::Gpu, cb: &Checkerboard, parity: u32) -> Samples {
 fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) -> Vec<Source> {
     let gpu = common::gpu();
     let mut scene = SceneGpu::new(&gpu.device, s).unwrap();
-    let mut cb =
-        Checkerboard::new(&gpu, v, s.width, s.height, s.scene.has_dynamic_objects()).unwrap();
+    let mut cb = Checkerboard::new(
+        &gpu,
+        Options::from_variant(v),
+        s.width,
+        s.height,
+        s.scene.has_dynamic_objects(),
+    )
+    .unwrap();
     let mut timers = Timers::new(&gpu.device, &[]).unwrap();
     let mut sources = Vec::new();
     for index in 0..frames {
@@ -83,7 +90,7 @@ fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) -> Vec<Source> {
             previous: &previous,
             velocity: velocity.as_deref(),
         };
-        let model = checkerboard_model::reconstruct_all(&inputs);
+        let model = model::reconstruct_all(&inputs);
         let gpu_out = vec4s(read_texture(&gpu.device, &gpu.queue, cb.output()));
         for (i, ((m, src), g)) in model.iter().zip(&gpu_out).enumerate() {
             // The output is Rgba16Float: quantise the model the same way.
@@ -208,18 +215,14 @@ fn static_scene_reconstructs_native_within_one_level() {
     let gpu = common::gpu();
     let render = |v: &Variant| {
         let mut scene = SceneGpu::new(&gpu.device, &s).unwrap();
-        let mut t = technique::build(&gpu, v, s.width, s.height, false).unwrap();
+        let mut t = techniques::build(&gpu, v, Target::new(s.width, s.height, false)).unwrap();
         let mut s2 = s.clone();
         s2.warmup_frames = 3;
         s2.measured_frames = 2;
         tessera::run::frames::render(&gpu, &mut scene, &s2, t.as_mut(), true, false, &mut || {})
             .unwrap()
     };
-    let native = render(&Variant {
-        name: "native".into(),
-        technique: TechniqueKind::Native,
-        params: Default::default(),
-    });
+    let native = render(&common::variant("native", &[]));
     let cb = render(&variant(&[]));
     for (f, (n, c)) in native.frames.iter().zip(&cb.frames).enumerate() {
         let max = n

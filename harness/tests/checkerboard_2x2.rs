@@ -8,16 +8,17 @@ mod common;
 
 use glam::{Vec3, Vec4};
 use tessera::gpu::Gpu;
-use tessera::render::checkerboard_2x2::{
-    Bindings, Checkerboard2x2, Clamp, FrameParams, Options, Reconstitution,
-};
-use tessera::render::checkerboard_2x2_model::{self, shaded, Inputs, Source};
+use tessera::params::{ParamValue, Variant};
 use tessera::render::readback::read_texture;
+use tessera::render::renderer::Renderer;
 use tessera::render::scene::{SceneGpu, ScenePipeline, COLOR_FORMAT, DEPTH_FORMAT};
-use tessera::render::technique::{self, Technique};
 use tessera::render::timers::Timers;
 use tessera::scenario::Scenario;
-use tessera::technique::{ParamValue, TechniqueKind, Variant};
+use tessera::techniques::checkerboard_2x2::model::{self, shaded, Inputs, Source};
+use tessera::techniques::checkerboard_2x2::{
+    Bindings, Checkerboard2x2Gpu, Clamp, FrameParams, Options, Reconstitution,
+};
+use tessera::techniques::{self, Target};
 
 fn vec4s(v: Vec<f32>) -> Vec<Vec4> {
     v.chunks_exact(4).map(Vec4::from_slice).collect()
@@ -35,7 +36,7 @@ fn wait(gpu: &Gpu) {
 }
 
 fn variant(params: &[(&str, ParamValue)]) -> Variant {
-    common::variant(TechniqueKind::Checkerboard2x2, params)
+    common::variant("checkerboard-2x2", params)
 }
 
 fn options(clamp: Clamp, motion_coherency: bool) -> Options {
@@ -51,7 +52,7 @@ fn options(clamp: Clamp, motion_coherency: bool) -> Options {
 /// Asserts that the GPU output equals the model's, quantised to Rgba16Float as the output is.
 /// Returns the model's sources.
 fn assert_matches_model(inputs: &Inputs, gpu_out: &[Vec4], what: &str) -> Vec<Source> {
-    let model = checkerboard_2x2_model::reconstitute_all(inputs);
+    let model = model::reconstitute_all(inputs);
     let w = inputs.frame.width as usize;
     for (i, ((m, src), g)) in model.iter().zip(gpu_out).enumerate() {
         let m16 = Vec4::from_array(m.to_array().map(f16));
@@ -452,7 +453,7 @@ fn scenario(extra: &str) -> Scenario {
 fn compare_rendered(s: &Scenario, v: &Variant, frames: u32) -> Vec<Vec<Source>> {
     let gpu = common::gpu();
     let mut scene = SceneGpu::new(&gpu.device, s).unwrap();
-    let mut t = Checkerboard2x2::new(&gpu, v, s.width, s.height);
+    let mut t = Checkerboard2x2Gpu::new(&gpu, v, s.width, s.height);
     let mut timers = Timers::new(&gpu.device, &[]).unwrap();
     let mut all = Vec::new();
     let n = (s.width * s.height) as usize;
@@ -539,7 +540,12 @@ fn a_camera_cut_resets_history() {
 
 fn render(gpu: &Gpu, s: &Scenario, v: &Variant) -> tessera::run::frames::Rendered {
     let mut scene = SceneGpu::new(&gpu.device, s).unwrap();
-    let mut t = technique::build(gpu, v, s.width, s.height, s.scene.has_dynamic_objects()).unwrap();
+    let mut t = techniques::build(
+        gpu,
+        v,
+        Target::new(s.width, s.height, s.scene.has_dynamic_objects()),
+    )
+    .unwrap();
     tessera::run::frames::render(gpu, &mut scene, s, t.as_mut(), true, true, &mut || {}).unwrap()
 }
 
@@ -556,7 +562,7 @@ fn a_static_scene_converges_to_native_unless_clamped_uniformly() {
     s.warmup_frames = 2;
     s.measured_frames = 4;
     let gpu = common::gpu();
-    let native = render(&gpu, &s, &common::variant(TechniqueKind::Native, &[]));
+    let native = render(&gpu, &s, &common::variant("native", &[]));
     for clamp in ["none", "conditional", "blended", "uniform"] {
         let r = render(
             &gpu,
@@ -585,7 +591,7 @@ fn the_scene_pass_shades_only_the_free_blocks() {
     let gpu = common::gpu();
     let s = common::scenario(common::TINY);
     let mut scene = SceneGpu::new(&gpu.device, &s).unwrap();
-    let mut t = Checkerboard2x2::new(&gpu, &variant(&[]), s.width, s.height);
+    let mut t = Checkerboard2x2Gpu::new(&gpu, &variant(&[]), s.width, s.height);
     let mut timers = Timers::new(&gpu.device, &[]).unwrap();
     let bg = s
         .scene
@@ -630,13 +636,10 @@ fn the_depth_test_rejects_half_the_samples_native_shades() {
     let gpu = common::gpu();
     let s = common::scenario(&common::TINY.replace("[48, 32]", "[64, 48]"));
     let mut scene = SceneGpu::new(&gpu.device, &s).unwrap();
-    let t = Checkerboard2x2::new(&gpu, &variant(&[]), s.width, s.height);
-    let native = technique::build(
+    let t = Checkerboard2x2Gpu::new(&gpu, &variant(&[]), s.width, s.height);
+    let native = techniques::build(
         &gpu,
-        &common::variant(TechniqueKind::Native, &[]),
-        s.width,
-        s.height,
-        true,
+        &common::variant("native", Target::new(&[]), s.width, s.height, true),
     )
     .unwrap();
     scene.write_objects(&gpu.queue, 0.0, 0.0);
@@ -760,7 +763,7 @@ fn fragment_invocations_of_the_scene_pass_against_native() {
         return;
     }
     let s = common::scenario(&common::TINY.replace("[48, 32]", "[64, 48]"));
-    let native = render(&gpu, &s, &common::variant(TechniqueKind::Native, &[]));
+    let native = render(&gpu, &s, &common::variant("native", &[]));
     let cb = render(&gpu, &s, &variant(&[]));
     for (n, c) in native.measurements.iter().zip(&cb.measurements) {
         let n = n.fragment_invocations["scene"];
@@ -784,7 +787,7 @@ fn fragment_invocations_of_the_scene_pass_against_native() {
 
 #[test]
 fn memory_of_every_resource_at_1280x720() {
-    use tessera::render::checkerboard_2x2::graph;
+    use tessera::techniques::checkerboard_2x2::graph;
     let bytes = |o: &Options| -> Vec<(String, u64)> {
         graph(1280, 720, o)
             .plan()
@@ -879,7 +882,7 @@ fn motion_of_static_geometry_is_the_cameras() {
         )
     ));
     let mut scene = SceneGpu::new(&gpu.device, &s).unwrap();
-    let mut t = Checkerboard2x2::new(&gpu, &variant(&[]), s.width, s.height);
+    let mut t = Checkerboard2x2Gpu::new(&gpu, &variant(&[]), s.width, s.height);
     let mut timers = Timers::new(&gpu.device, &[]).unwrap();
     for index in 0..2 {
         tessera::run::frames::submit_frame(&gpu, &mut scene, &s, &mut t, &mut timers, index);

@@ -36,6 +36,7 @@ fn run_info(run_id: &str, sha: &str, adapter: AdapterInfo) -> RunInfo {
             sha: sha.into(),
             dirty: false,
         }),
+        commit_time: None,
         started_at: "2026-11-22T03:00:00Z".into(),
         finished_at: Some("2026-11-22T03:01:00Z".into()),
         status: RunStatus::Complete,

@@ -3,10 +3,10 @@
 
 mod common;
 
+use tessera::params::{ParamValue, Variant};
 use tessera::render::scene::SceneGpu;
-use tessera::render::technique;
 use tessera::run::frames;
-use tessera::technique::{ParamValue, TechniqueKind, Variant};
+use tessera::techniques::{self, Target};
 
 use common::variant;
 
@@ -16,7 +16,12 @@ fn render(
     v: &Variant,
 ) -> frames::Rendered {
     let mut scene = SceneGpu::new(&gpu.device, s).unwrap();
-    let mut t = technique::build(gpu, v, s.width, s.height, s.scene.has_dynamic_objects()).unwrap();
+    let mut t = techniques::build(
+        gpu,
+        v,
+        Target::new(s.width, s.height, s.scene.has_dynamic_objects()),
+    )
+    .unwrap();
     frames::render(gpu, &mut scene, s, t.as_mut(), true, true, &mut || {}).unwrap()
 }
 
@@ -24,7 +29,7 @@ fn render(
 fn tiny_scenario_is_not_blank_and_renders_bitwise_identically_twice() {
     let gpu = common::gpu();
     let s = common::scenario(common::TINY);
-    let v = variant(TechniqueKind::Native, &[]);
+    let v = variant("native", &[]);
     let a = render(&gpu, &s, &v);
     let b = render(&gpu, &s, &v);
     assert_eq!(a.hdr_frames.len(), 2);
@@ -54,10 +59,10 @@ fn tiny_scenario_is_not_blank_and_renders_bitwise_identically_twice() {
 fn upscale_at_scale_one_equals_native() {
     let gpu = common::gpu();
     let s = common::scenario(common::TINY);
-    let native = render(&gpu, &s, &variant(TechniqueKind::Native, &[]));
+    let native = render(&gpu, &s, &variant("native", &[]));
     for filter in ["bilinear", "nearest"] {
         let v = variant(
-            TechniqueKind::Upscale,
+            "upscale",
             &[
                 ("scale", ParamValue::Float(1.0)),
                 ("filter", ParamValue::Str(filter.into())),
@@ -72,7 +77,7 @@ fn upscale_at_scale_one_equals_native() {
 fn timings_and_fragment_counts_are_recorded_per_pass() {
     let gpu = common::gpu();
     let s = common::scenario(common::TINY);
-    let v = variant(TechniqueKind::Upscale, &[("scale", ParamValue::Float(0.5))]);
+    let v = variant("upscale", &[("scale", ParamValue::Float(0.5))]);
     let r = render(&gpu, &s, &v);
     assert_eq!(r.measurements.len(), 2);
     if gpu.info.features.timestamps {

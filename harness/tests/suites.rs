@@ -5,9 +5,8 @@
 
 use std::path::{Path, PathBuf};
 
-use tessera::render::technique::plan;
 use tessera::scenario::{self, Reference, Scenario};
-use tessera::technique::TechniqueKind;
+use tessera::techniques::{plan, Target};
 
 const SUITES: [&str; 6] = [
     "smoke",
@@ -53,9 +52,9 @@ fn velocity_runs_only_where_objects_move() {
             for v in s
                 .variants
                 .iter()
-                .filter(|v| v.technique == TechniqueKind::Checkerboard)
+                .filter(|v| v.technique.name() == "checkerboard")
             {
-                let p = plan(v, s.width, s.height, dynamic);
+                let p = plan(v, Target::new(s.width, s.height, dynamic));
                 let wanted = dynamic && v.flag("velocity");
                 let ran = p.passes.iter().any(|x| x.name == "velocity");
                 assert_eq!(ran, wanted, "{}: {}", s.name, v.name);
@@ -67,7 +66,7 @@ fn velocity_runs_only_where_objects_move() {
                     culled += 1;
                     assert_eq!(bytes_of(&p, "velocity") + bytes_of(&p, "velocity_depth"), 0);
                     // What the same variant would allocate with something moving.
-                    let moving = plan(v, s.width, s.height, true);
+                    let moving = plan(v, Target::new(s.width, s.height, true));
                     if v.flag("velocity") {
                         let velocity =
                             bytes_of(&moving, "velocity") + bytes_of(&moving, "velocity_depth");
@@ -96,10 +95,7 @@ fn the_quality_suite_has_scenes_with_and_without_moving_objects() {
 fn references_are_rendered_only_when_a_metric_reads_them() {
     for name in SUITES {
         for s in suite(name) {
-            let lists_native = s
-                .variants
-                .iter()
-                .any(|v| v.technique == TechniqueKind::Native);
+            let lists_native = s.variants.iter().any(|v| v.technique.name() == "native");
             assert_eq!(
                 s.needs_reference(),
                 !s.metrics.is_empty() && s.reference != Reference::None,

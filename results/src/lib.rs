@@ -46,6 +46,11 @@ pub struct RunInfo {
     pub run_id: String,
     /// `None` when the harness was not run from a git checkout.
     pub commit: Option<CommitInfo>,
+    /// Committer date of `commit`, RFC 3339 UTC; `None` without a git checkout and in runs written
+    /// before it was recorded. The dashboard orders a series by it (then by `started_at`), so that
+    /// runs uploaded out of commit order are placed where their commit belongs.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub commit_time: Option<String>,
     /// RFC 3339, UTC.
     pub started_at: String,
     /// RFC 3339, UTC; `None` while the run is going on or when it was interrupted.

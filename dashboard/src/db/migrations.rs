@@ -110,6 +110,47 @@ CREATE TABLE regressions (
 );
 CREATE INDEX regressions_state ON regressions (state, detected_at);
 "#,
+    // Online detection (issue 12): runs ordered by commit, points carrying that order so that the
+    // newest points of a series are one covering index range, alerts with a status and a history.
+    r#"
+ALTER TABLE runs ADD COLUMN commit_time TEXT;
+ALTER TABLE points ADD COLUMN ord TEXT NOT NULL DEFAULT '';
+UPDATE points SET ord = (SELECT r.started_at || ' ' || r.started_at FROM runs r WHERE r.id = points.run_pk);
+CREATE INDEX points_order ON points (series_id, ord, run_pk, value);
+ALTER TABLE regressions ADD COLUMN status TEXT NOT NULL DEFAULT 'confirmed';
+CREATE TABLE regression_events (
+    id {id},
+    regression_id BIGINT NOT NULL REFERENCES regressions (id),
+    at TEXT NOT NULL,
+    kind TEXT NOT NULL,
+    detail TEXT NOT NULL
+);
+CREATE INDEX regression_events_alert ON regression_events (regression_id, id);
+"#,
+    // i12-triage: triage by alert group (a bug link and who changed an alert last, set on every
+    // alert of a group at once) and the webhook's outbox (what was sent where, so that a restart
+    // neither loses nor repeats a notification). `target` is a hash of the webhook URL, which
+    // may hold a secret.
+    r#"
+ALTER TABLE regressions ADD COLUMN bug_url TEXT NOT NULL DEFAULT '';
+ALTER TABLE regressions ADD COLUMN updated_by TEXT NOT NULL DEFAULT '';
+CREATE INDEX regressions_runs ON regressions (run_pk_after, run_pk_before);
+CREATE TABLE webhook_targets (
+    target TEXT PRIMARY KEY,
+    created_at TEXT NOT NULL
+);
+CREATE TABLE webhook_deliveries (
+    target TEXT NOT NULL REFERENCES webhook_targets (target),
+    group_key TEXT NOT NULL,
+    state TEXT NOT NULL,
+    attempts BIGINT NOT NULL,
+    next_attempt_at TEXT NOT NULL,
+    last_error TEXT NOT NULL,
+    created_at TEXT NOT NULL,
+    sent_at TEXT,
+    PRIMARY KEY (target, group_key)
+);
+"#,
 ];
 
 fn render(step: &str, backend: Backend) -> String {

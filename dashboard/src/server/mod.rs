@@ -34,6 +34,8 @@ pub struct AppState {
     pub token: Option<String>,
     pub max_upload_bytes: usize,
     pub detect: Params,
+    /// The dashboard's public URL for absolute links (feed, Markdown); `None`: from `Host`.
+    pub public_url: Option<String>,
 }
 
 impl AppState {
@@ -43,6 +45,7 @@ impl AppState {
             token,
             max_upload_bytes: DEFAULT_MAX_UPLOAD_BYTES,
             detect: Params::default(),
+            public_url: None,
         }
     }
 
@@ -82,6 +85,16 @@ pub fn app(state: AppState) -> Router {
         .route("/api/regressions", get(regressions::api))
         .route("/regressions/{id}", post(regressions::triage_form))
         .route("/api/regressions/{id}", post(regressions::triage_api))
+        .route("/regressions/feed.atom", get(regressions::feed))
+        .route(
+            "/regressions/groups/{key}",
+            get(regressions::group_page).post(regressions::group_form),
+        )
+        .route("/api/regressions/groups", get(regressions::groups_api))
+        .route(
+            "/api/regressions/groups/{key}",
+            get(regressions::group_api).post(regressions::group_triage_api),
+        )
         .route("/compare", get(compare::page))
         .route("/api/compare", get(compare::api))
         .route("/pareto", get(pareto::page))

@@ -13,7 +13,7 @@ use serde::Serialize;
 
 use super::{auth, AppError, AppState};
 use crate::bundle::{RunBundle, UploadBody};
-use crate::store::ingest::{ingest, Ingested};
+use crate::store::ingest::Ingested;
 
 #[derive(Debug, Serialize, serde::Deserialize, PartialEq)]
 pub struct UploadResponse {
@@ -56,31 +56,31 @@ pub async fn api(
     let run_id = bundle.run.run_id.clone();
     let params = state.detect;
     let (status, response) = state
-        .db(move |conn| match ingest(conn, &bundle)? {
-            Ingested::Stored {
-                results, series, ..
-            } => {
-                let new_regressions = crate::regressions::update(conn, &series, &params)?;
-                Ok((
-                    StatusCode::CREATED,
+        .db(
+            move |conn| match crate::regressions::ingest_and_detect(conn, &bundle, &params)? {
+                (Ingested::Stored { results, .. }, changes) => {
+                    let new_regressions = changes.detected;
+                    Ok((
+                        StatusCode::CREATED,
+                        UploadResponse {
+                            run_id,
+                            stored: true,
+                            results,
+                            new_regressions,
+                        },
+                    ))
+                }
+                (Ingested::AlreadyStored { .. }, _) => Ok((
+                    StatusCode::OK,
                     UploadResponse {
                         run_id,
-                        stored: true,
-                        results,
-                        new_regressions,
+                        stored: false,
+                        results: 0,
+                        new_regressions: 0,
                     },
-                ))
-            }
-            Ingested::AlreadyStored { .. } => Ok((
-                StatusCode::OK,
-                UploadResponse {
-                    run_id,
-                    stored: false,
-                    results: 0,
-                    new_regressions: 0,
-                },
-            )),
-        })
+                )),
+            },
+        )
         .await?;
     Ok((status, Json(response)).into_response())
 }

@@ -2,8 +2,11 @@
 //! safe against concurrent uploads (conflicting inserts are `ON CONFLICT DO NOTHING`, rows are
 //! taken in one global order, and a deadlocked transaction is retried).
 //!
-//! Not for: checking the bundle (see [`crate::bundle`]), regression detection (see
-//! [`crate::regressions`]), which runs after the commit on the series this returns.
+//! Every point carries its run's place in commit order (`points.ord`, see [`order_key`]), so that a
+//! run uploaded late lands where its commit belongs in every series.
+//!
+//! Not for: checking the bundle (see [`crate::bundle`]) or regression detection (see
+//! [`crate::regressions`], whose `ingest_and_detect` runs this and detection in one transaction).
 
 use std::collections::BTreeMap;
 
@@ -74,6 +77,27 @@ pub fn adapter_id(conn: &mut dyn Connection, run: &RunInfo) -> Result<i64, DbErr
         .i64(0)
 }
 
+/// A run's place in commit order, as stored in `points.ord`: the committer date (the start time
+/// when it is unknown), then the start time, both as RFC 3339 UTC to the second so that they
+/// sort as text. Ties are broken by the run's row id.
+pub fn order_key(run: &RunInfo) -> String {
+    let norm = |t: &str| {
+        chrono::DateTime::parse_from_rfc3339(t)
+            .map(|d| {
+                d.with_timezone(&chrono::Utc)
+                    .to_rfc3339_opts(chrono::SecondsFormat::Secs, true)
+            })
+            .unwrap_or_else(|_| t.to_string())
+    };
+    let started = norm(&run.started_at);
+    let commit = run
+        .commit_time
+        .as_deref()
+        .map(norm)
+        .unwrap_or_else(|| started.clone());
+    format!("{commit} {started}")
+}
+
 pub fn digest(bytes: &[u8]) -> String {
     Sha256::digest(bytes)
         .iter()
@@ -103,8 +127,9 @@ fn ingest_once(conn: &mut dyn Connection, bundle: &RunBundle) -> Result<Ingested
     let run_json = serde_json::to_string(run).expect("records serialise");
     let inserted = conn.query(
         "INSERT INTO runs (run_id, commit_sha, dirty, started_at, finished_at, status, harness_version,
-             adapter_id, driver, driver_info, hostname, n_ok, n_skipped, n_failed, run_json, imported_at)
-         VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13, $14, $15, $16)
+             adapter_id, driver, driver_info, hostname, n_ok, n_skipped, n_failed, run_json, imported_at,
+             commit_time)
+         VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13, $14, $15, $16, $17)
          ON CONFLICT (run_id) DO NOTHING RETURNING id",
         &[
             run.run_id.as_str().into(),
@@ -123,6 +148,7 @@ fn ingest_once(conn: &mut dyn Connection, bundle: &RunBundle) -> Result<Ingested
             Value::Int(counts[2]),
             run_json.into(),
             crate::now_rfc3339().into(),
+            run.commit_time.clone().into(),
         ],
     )?;
     let Some(row) = inserted.first() else {
@@ -218,6 +244,7 @@ fn ingest_once(conn: &mut dyn Connection, bundle: &RunBundle) -> Result<Ingested
         }
     }
 
+    let ord = order_key(run);
     let mut series = Vec::with_capacity(points.len());
     for ((scenario, variant, measure), (value, hib)) in points {
         let key = [
@@ -247,8 +274,13 @@ fn ingest_once(conn: &mut dyn Connection, bundle: &RunBundle) -> Result<Ingested
             }
         };
         conn.execute(
-            "INSERT INTO points (series_id, run_pk, value) VALUES ($1, $2, $3)",
-            &[Value::Int(id), Value::Int(run_pk), Value::Real(value)],
+            "INSERT INTO points (series_id, run_pk, value, ord) VALUES ($1, $2, $3, $4)",
+            &[
+                Value::Int(id),
+                Value::Int(run_pk),
+                Value::Real(value),
+                ord.as_str().into(),
+            ],
         )?;
         series.push(id);
     }

@@ -3,8 +3,10 @@
 //!
 //! Not for: SQL dialect details (see [`crate::db`]), HTTP or HTML.
 
+pub mod groups;
 pub mod ingest;
 pub mod measures;
+pub mod outbox;
 pub mod read;
 pub mod triage;
 

@@ -366,9 +366,13 @@ pub struct RegressionRow {
     pub note: String,
     pub detected_at: String,
     pub updated_at: String,
+    /// `pending` (too few runs after it yet; not notified) or `confirmed`; withdrawn alerts are
+    /// not listed.
+    pub status: String,
 }
 
-/// Stored changes, newest first, optionally of one triage state or one series.
+/// Stored changes that the data still supports (pending or confirmed), newest first, optionally
+/// of one triage state or one series.
 pub fn regressions(
     conn: &mut dyn Connection,
     state: Option<&str>,
@@ -379,10 +383,11 @@ pub fn regressions(
         &format!(
             "SELECT {SERIES_COLUMNS}, g.id, rb.run_id, rb.commit_sha, ra.run_id, ra.commit_sha, ra.started_at,
                 g.value_before, g.value_after, g.relative_change, g.confidence, g.state, g.note, g.detected_at,
-                g.updated_at
+                g.updated_at, g.status
              FROM regressions g JOIN series s ON s.id = g.series_id JOIN adapters a ON a.id = s.adapter_id
              JOIN runs rb ON rb.id = g.run_pk_before JOIN runs ra ON ra.id = g.run_pk_after
              WHERE (CAST($1 AS TEXT) IS NULL OR g.state = $1) AND (CAST($2 AS BIGINT) IS NULL OR g.series_id = $2)
+                 AND g.status <> 'withdrawn'
              ORDER BY ra.started_at DESC, g.id DESC LIMIT $3"
         ),
         &[state.map(str::to_string).into(), series.into(), Value::Int(limit)],
@@ -408,6 +413,7 @@ pub fn regressions(
             note: r.string(18)?,
             detected_at: r.string(19)?,
             updated_at: r.string(20)?,
+            status: r.string(21)?,
         })
     })
     .collect()

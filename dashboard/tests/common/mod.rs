@@ -87,3 +87,49 @@ pub fn stores(test: &str) -> Vec<TestStore> {
     v.extend(postgres(test));
     v
 }
+
+/// The second adapter of [`two_adapter_history`].
+pub const SECOND: &str = "llvmpipe (second adapter, derived from a real run)";
+
+/// The commit of run `i` of generated histories (`synth::run_from`).
+pub fn sha(i: u64) -> String {
+    format!("{:040x}", i + 1)
+}
+
+/// The alert group key of the change between runs `before` and `before + 1`.
+pub fn range(before: u64) -> String {
+    format!("{}..{}", sha(before), sha(before + 1))
+}
+
+/// Stores runs `from..to` of a two-adapter history, then runs detection: 40 runs per adapter at
+/// the same commits (`sha(i)`); on the first adapter every GPU time steps by +25% at run 15 and
+/// +10% at run 30, on the second (named [`SECOND`]) by +10% at run 30 only. So the commit range
+/// `range(29)` is one alert group on two adapters, `range(14)` one on the first adapter.
+pub fn two_adapter_history(pool: &tessera_dashboard::db::Pool, from: u64, to: u64) {
+    let template = template();
+    let mut rng = tessera_dashboard::detect::Rng::new(11 + from);
+    let mut c = pool.get().unwrap();
+    for i in from..to {
+        let a = match i {
+            0..15 => 1.0,
+            15..30 => 1.25,
+            _ => 1.25 * 1.10,
+        };
+        let b = if i < 30 { 0.8 } else { 0.8 * 1.10 };
+        tessera_dashboard::store::ingest::ingest(
+            &mut *c,
+            &tessera_dashboard::synth::run_from(&template, "a", i, a, 0.01, &mut rng),
+        )
+        .unwrap();
+        let mut second = tessera_dashboard::synth::run_from(&template, "b", i, b, 0.01, &mut rng);
+        second.run.adapter.name = SECOND.into();
+        tessera_dashboard::store::ingest::ingest(&mut *c, &second).unwrap();
+    }
+    let all = tessera_dashboard::regressions::all_series(&mut *c).unwrap();
+    tessera_dashboard::regressions::update(
+        &mut *c,
+        &all,
+        &tessera_dashboard::detect::Params::default(),
+    )
+    .unwrap();
+}

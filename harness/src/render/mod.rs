@@ -1,14 +1,11 @@
-//! Rendering: scene geometry and passes on the GPU, the pass graph, and the techniques built on them.
+//! Rendering infrastructure that knows no technique: the scene on the GPU (`scene.rs`, `mesh.rs`),
+//! the pass graph, per-pass timers, readback, the [`renderer::Renderer`] interface the run loop
+//! drives, and a kit of GPU helpers techniques build with. Techniques are in `techniques/`.
 
-pub mod adaptive;
-pub mod adaptive_model;
-pub mod checkerboard;
-pub mod checkerboard_2x2;
-pub mod checkerboard_2x2_model;
-pub mod checkerboard_model;
 pub mod graph;
+pub mod kit;
 pub mod mesh;
 pub mod readback;
+pub mod renderer;
 pub mod scene;
-pub mod technique;
 pub mod timers;

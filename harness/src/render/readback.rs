@@ -1,9 +1,12 @@
-//! Copies a frame's Rgba16Float output to the CPU, outside every timed pass.
+//! Copies a frame's Rgba16Float output to the CPU, outside every timed pass; and whole textures
+//! for tests and per-frame extras ([`read_texture`], [`read_texture_raw`]).
 //!
 //! Returns linear RGB floats plus the count of non-finite channel values (NaN and ±Inf are counted
 //! before anything can clamp them). Converting to sRGB for images and metrics is the caller's job.
 
 use tessera_metrics::HdrImage;
+
+use crate::gpu::Gpu;
 
 pub struct Readback {
     buffer: wgpu::Buffer,
@@ -137,11 +140,40 @@ pub fn read_texture_layer(
     texture: &wgpu::Texture,
     layer: u32,
 ) -> Vec<f32> {
+    let raw = read_raw(device, queue, texture, layer);
+    if texture.format() == wgpu::TextureFormat::Depth32Float {
+        bytemuck::pod_collect_to_vec::<u8, f32>(&raw)
+    } else {
+        bytemuck::pod_collect_to_vec::<u8, half::f16>(&raw)
+            .iter()
+            .map(|v| v.to_f32())
+            .collect()
+    }
+}
+
+/// Reads a single-sample texture back as raw texel bytes, rows unpadded (tests, extras).
+pub fn read_texture_raw(gpu: &Gpu, texture: &wgpu::Texture) -> Vec<u8> {
+    read_raw(&gpu.device, &gpu.queue, texture, 0)
+}
+
+/// One array layer of a single-sample texture as raw texel bytes, rows unpadded (the depth
+/// aspect of a depth texture); empty if mapping failed. Blocks until done.
+fn read_raw(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    texture: &wgpu::Texture,
+    layer: u32,
+) -> Vec<u8> {
     let (w, h) = (texture.width(), texture.height());
     let depth = texture.format() == wgpu::TextureFormat::Depth32Float;
-    let texel = if depth { 4 } else { 8 };
-    let padded = (w * texel).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT)
-        * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+    let texel = if depth {
+        4
+    } else {
+        texture.format().block_copy_size(None).unwrap_or(4)
+    };
+    let row = w * texel;
+    let padded =
+        row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
     let buffer = device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("texture readback"),
         size: padded as u64 * h as u64,
@@ -177,19 +209,11 @@ pub fn read_texture_layer(
         submission_index: None,
         timeout: None,
     });
-    let mut out = Vec::new();
+    let mut out = Vec::with_capacity((row * h) as usize);
     if let Ok(data) = slice.get_mapped_range() {
         for y in 0..h as usize {
-            let row = &data[y * padded as usize..y * padded as usize + (w * texel) as usize];
-            if depth {
-                out.extend(bytemuck::cast_slice::<u8, f32>(row));
-            } else {
-                out.extend(
-                    bytemuck::cast_slice::<u8, half::f16>(row)
-                        .iter()
-                        .map(|v| v.to_f32()),
-                );
-            }
+            let start = y * padded as usize;
+            out.extend_from_slice(&data[start..start + row as usize]);
         }
     }
     out

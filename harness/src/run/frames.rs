@@ -16,8 +16,8 @@ use tessera_metrics::{encode_srgb8, HdrImage, Rgb8Image};
 use crate::gpu::Gpu;
 use crate::render::graph::PassKind;
 use crate::render::readback::Readback;
+use crate::render::renderer::{FrameExtras, FrameInfo, Renderer};
 use crate::render::scene::SceneGpu;
-use crate::render::technique::{FrameExtras, FrameInfo, Technique};
 use crate::render::timers::{FrameMeasurements, Timers, MAX_PENDING_FRAMES};
 use crate::scenario::Scenario;
 
@@ -38,8 +38,18 @@ pub struct Rendered {
     pub deterministic: Option<bool>,
     pub timestamps: bool,
     pub readback_bytes: u64,
-    /// The technique's extras of every measured frame ([`Technique::frame_extras`]).
+    /// The technique's extras of every measured frame ([`Renderer::frame_extras`]).
     pub extras: Vec<FrameExtras>,
+    /// Per measured frame, a hash of its exact bits, when `TESSERA_FRAME_HASHES` is set (see
+    /// [`frame_hash_file`]); empty otherwise.
+    pub hashes: Vec<u64>,
+}
+
+/// Where to append every measured frame's bit hash (`<scenario> <variant> <frame> <hash>`), from the
+/// `TESSERA_FRAME_HASHES` environment variable: a check that a refactoring left every frame
+/// bit-identical, not a measure.
+pub fn frame_hash_file() -> Option<std::path::PathBuf> {
+    std::env::var_os("TESSERA_FRAME_HASHES").map(Into::into)
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -64,7 +74,7 @@ pub fn submit_frame(
     gpu: &Gpu,
     scene: &mut SceneGpu,
     scenario: &Scenario,
-    technique: &mut dyn Technique,
+    technique: &mut dyn Renderer,
     timers: &mut Timers,
     index: u32,
 ) -> wgpu::SubmissionIndex {
@@ -105,7 +115,7 @@ fn pipelined(
     gpu: &Gpu,
     scene: &mut SceneGpu,
     scenario: &Scenario,
-    technique: &mut dyn Technique,
+    technique: &mut dyn Renderer,
     timers: &mut Timers,
     frames: impl Iterator<Item = u32>,
     done: &mut dyn FnMut(u32, BTreeMap<String, f64>),
@@ -146,7 +156,7 @@ pub fn render(
     gpu: &Gpu,
     scene: &mut SceneGpu,
     scenario: &Scenario,
-    technique: &mut dyn Technique,
+    technique: &mut dyn Renderer,
     keep_frames: bool,
     keep_hdr: bool,
     on_frame: &mut dyn FnMut(),
@@ -172,7 +182,9 @@ pub fn render(
         timestamps: timers.has_timestamps(),
         readback_bytes: readback.bytes(),
         extras: Vec::new(),
+        hashes: Vec::new(),
     };
+    let hash_frames = frame_hash_file().is_some();
 
     // Clock warm-up: frame 0 (which never reads history) repeated until the GPU has been busy for
     // `warmup_ms`, so that it reaches its working clocks before the first timed frame.
@@ -251,6 +263,9 @@ pub fn render(
                 .extras
                 .push(technique.frame_extras(gpu, &frame.image, saved));
             rendered.non_finite_masks.push(frame.non_finite_mask);
+            if hash_frames {
+                rendered.hashes.push(image_hash(&frame.image));
+            }
             if index + 1 == scenario.total_frames() {
                 rendered.deterministic = timed_hash.map(|h| h == image_hash(&frame.image));
             }
@@ -269,7 +284,7 @@ pub fn render(
 fn read_output(
     gpu: &Gpu,
     readback: &Readback,
-    technique: &dyn Technique,
+    technique: &dyn Renderer,
 ) -> Result<crate::render::readback::CpuFrame, RenderError> {
     let mut encoder = gpu
         .device

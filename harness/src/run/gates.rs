@@ -12,15 +12,16 @@ pub fn frame_ms(r: &VariantResult) -> Option<f64> {
 
 /// Speed-up of `r` against the `native` variant of the same scenario on the same adapter.
 pub fn speedup(results: &[VariantResult], r: &VariantResult) -> Option<f64> {
-    speedup_over(results, r, "native")
+    speedup_over(results, r, crate::techniques::native::NAME)
 }
 
-/// Speed-up of `r` against the variant named `baseline` (e.g. `native-deferred`, the baseline of
-/// `adaptive-shading`) of the same scenario on the same adapter.
+/// Speed-up of `r` against the first ok variant of technique `baseline` (e.g. `native-deferred`,
+/// the baseline of `adaptive-shading`) of the same scenario on the same adapter: found by
+/// technique, as the dashboard finds it, so a `label` on the baseline changes nothing.
 pub fn speedup_over(results: &[VariantResult], r: &VariantResult, baseline: &str) -> Option<f64> {
     let native = results
         .iter()
-        .find(|v| v.variant == baseline && v.status == Status::Ok)?;
+        .find(|v| v.technique == baseline && v.status == Status::Ok)?;
     if r.status != Status::Ok {
         return None;
     }

@@ -79,12 +79,14 @@ pub fn run_on(
 
     let started = chrono::Utc::now();
     let commit = git_commit();
+    let commit_time = commit.as_ref().and_then(|_| git_commit_time());
     let run_id = unique_run_id(&opts.out, &started, commit.as_ref());
     let run_dir = opts.out.join(&run_id);
     let mut run = RunInfo {
         schema_version: SCHEMA_VERSION,
         run_id: run_id.clone(),
         commit,
+        commit_time,
         started_at: started.to_rfc3339_opts(chrono::SecondsFormat::Secs, true),
         finished_at: None,
         status: RunStatus::Running,
@@ -243,6 +245,23 @@ pub fn suite_name(paths: &[PathBuf]) -> Option<String> {
         }
     }
     (!names.is_empty()).then(|| names.join("+"))
+}
+
+/// The committer date of `HEAD`, RFC 3339 in UTC (git prints it with the committer's offset).
+fn git_commit_time() -> Option<String> {
+    let out = std::process::Command::new("git")
+        .args(["show", "-s", "--format=%cI", "HEAD"])
+        .output()
+        .ok()?;
+    if !out.status.success() {
+        return None;
+    }
+    let text = String::from_utf8_lossy(&out.stdout);
+    let t = chrono::DateTime::parse_from_rfc3339(text.trim()).ok()?;
+    Some(
+        t.with_timezone(&chrono::Utc)
+            .to_rfc3339_opts(chrono::SecondsFormat::Secs, true),
+    )
 }
 
 fn host_info() -> HostInfo {

@@ -9,10 +9,11 @@
 use super::frames::{history_valid, submit_frame};
 use crate::gpu::Gpu;
 use crate::render::readback::read_texture;
+use crate::render::renderer::Renderer;
 use crate::render::scene::SceneGpu;
-use crate::render::technique::{Forward, Technique};
 use crate::render::timers::Timers;
 use crate::scenario::Scenario;
+use crate::techniques::native::Forward;
 
 /// How far the previous frame's depth at the reprojected position may be from the point's own
 /// previous depth before the pixel counts as disoccluded: 1% (reversed-Z depth is proportional to

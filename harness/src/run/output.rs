@@ -98,9 +98,11 @@ pub fn results_csv(run: &RunInfo, scenarios: &[ScenarioResult]) -> Vec<u8> {
             if let Some(sp) = gates::speedup(&s.results, r) {
                 row("speedup", num(sp), "x");
             }
-            if r.technique == "adaptive-shading" {
-                if let Some(sp) = gates::speedup_over(&s.results, r, "native-deferred") {
-                    row("speedup.native-deferred", num(sp), "x");
+            // A technique's own baseline (the registry's), beside native.
+            let baseline = crate::techniques::by_name(&r.technique).and_then(|t| t.baseline());
+            if let Some(b) = baseline {
+                if let Some(sp) = gates::speedup_over(&s.results, r, b) {
+                    row(&format!("speedup.{b}"), num(sp), "x");
                 }
             }
             for p in &r.passes {

@@ -5,7 +5,6 @@
 //! variant and the scenario goes on. Metrics are computed only after a variant's frames are all
 //! rendered, never while timed GPU work is in flight.
 
-use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Instant;
 
@@ -19,10 +18,11 @@ use super::gates;
 use super::motion;
 use super::stability;
 use crate::gpu::Gpu;
+use crate::params::Variant;
+use crate::render::renderer::{Renderer, Unsupported};
 use crate::render::scene::SceneGpu;
-use crate::render::technique::{self, Technique, Unsupported};
 use crate::scenario::{MetricKind, Reference, Scenario};
-use crate::technique::{TechniqueKind, Variant};
+use crate::techniques::{self, native, Target};
 
 /// Frames a reference render produced, in measured-frame order.
 struct ReferenceFrames {
@@ -62,9 +62,8 @@ pub fn run(
     };
 
     let needs_reference = scenario.needs_reference();
-    let native_is_reference = |v: &Variant| {
-        v.technique == TechniqueKind::Native && scenario.reference == Reference::Native
-    };
+    let native_is_reference =
+        |v: &Variant| v.technique.name() == native::NAME && scenario.reference == Reference::Native;
     // The reference renders first; when it is the native variant itself, that render is reused.
     let mut reference: Option<Result<ReferenceFrames, String>> = None;
     if scenario.needs_separate_reference() {
@@ -113,6 +112,7 @@ pub fn run(
             }
         };
         result.non_finite_values = rendered.non_finite;
+        append_hashes(&scenario.name, &variant.name, &rendered.hashes);
         save_images(
             &mut result,
             &rendered.frames,
@@ -291,12 +291,14 @@ fn render_variant(
 ) -> VariantOutcome {
     let validation = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
     let oom = gpu.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
-    let built = technique::build(
+    let built = techniques::build(
         gpu,
         variant,
-        scenario.width,
-        scenario.height,
-        scenario.scene.has_dynamic_objects(),
+        Target {
+            width: scenario.width,
+            height: scenario.height,
+            dynamic_scene: scenario.scene.has_dynamic_objects(),
+        },
     );
     let result = match built {
         Err(u) => Ok(Err(u)),
@@ -326,7 +328,7 @@ fn first_line(s: &str) -> String {
         .join(" ")
 }
 
-fn plan_record(t: &dyn Technique) -> PlanRecord {
+fn plan_record(t: &dyn Renderer) -> PlanRecord {
     let plan = t.plan();
     PlanRecord {
         passes: plan
@@ -353,18 +355,19 @@ fn render_reference(
     on_frame: &mut dyn FnMut(),
 ) -> Result<ReferenceFrames, String> {
     let validation = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
-    let built: Result<Box<dyn Technique>, Unsupported> = match scenario.reference {
+    let built: Result<Box<dyn Renderer>, Unsupported> = match scenario.reference {
         Reference::GroundTruth { supersample } => {
-            technique::ground_truth(gpu, scenario.width, scenario.height, supersample)
+            native::ground_truth(gpu, scenario.width, scenario.height, supersample)
         }
-        _ => {
-            let native = Variant {
-                name: "native".into(),
-                technique: TechniqueKind::Native,
-                params: BTreeMap::new(),
-            };
-            technique::build(gpu, &native, scenario.width, scenario.height, false)
-        }
+        _ => techniques::build(
+            gpu,
+            &Variant::with_defaults(&native::Native),
+            Target {
+                width: scenario.width,
+                height: scenario.height,
+                dynamic_scene: false,
+            },
+        ),
     };
     let result = match built {
         Err(Unsupported(reason)) => Err(format!("no reference: {reason}")),
@@ -377,7 +380,10 @@ fn render_reference(
             keep_hdr(scenario),
             on_frame,
         )
-        .map(|r| ReferenceFrames::new(r.frames, r.hdr_frames, r.non_finite_masks))
+        .map(|r| {
+            append_hashes(&scenario.name, "(reference)", &r.hashes);
+            ReferenceFrames::new(r.frames, r.hdr_frames, r.non_finite_masks)
+        })
         .map_err(|e| format!("reference render failed: {e}")),
     };
     if let Some(e) = pollster::block_on(validation.pop()) {
@@ -640,7 +646,7 @@ fn flicker(frames: &[Rgb8Image]) -> MetricRecord {
 /// mean), images of saved frames are saved as `<variant>-<kind>-fNNN.png`.
 fn add_extras(
     result: &mut VariantResult,
-    extras: &[crate::render::technique::FrameExtras],
+    extras: &[crate::render::renderer::FrameExtras],
     scenario: &Scenario,
     dir: &Path,
     run_dir: &Path,
@@ -816,4 +822,28 @@ pub fn run_failed(scenario: &Scenario, run_id: &str, error: &str) -> ScenarioRes
         })
         .collect();
     finish(scenario, run_id, results, Instant::now())
+}
+
+/// Appends a variant's frame hashes to the `TESSERA_FRAME_HASHES` file, when set.
+fn append_hashes(scenario: &str, variant: &str, hashes: &[u64]) {
+    use std::io::Write;
+    let Some(path) = frames::frame_hash_file() else {
+        return;
+    };
+    let lines: String = hashes
+        .iter()
+        .enumerate()
+        .map(|(i, h)| format!("{scenario} {variant} {i} {h:016x}\n"))
+        .collect();
+    let written = std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(&path)
+        .and_then(|mut f| f.write_all(lines.as_bytes()));
+    if let Err(e) = written {
+        eprintln!(
+            "warning: cannot append frame hashes to {}: {e}",
+            path.display()
+        );
+    }
 }

@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 
 use glam::{DMat4, DVec3, Vec3};
 
-use crate::technique::Variant;
+use crate::params::Variant;
 pub use span::KeyPath;
 
 /// Largest width or height accepted without an adapter (wgpu's largest texture limit on any
@@ -61,7 +61,7 @@ impl Scenario {
                 && self
                     .variants
                     .iter()
-                    .any(|v| v.technique == crate::technique::TechniqueKind::Native))
+                    .any(|v| v.technique.name() == crate::techniques::native::NAME))
     }
 
     /// Clock warm-up for an adapter of `device_type`: as set, or 1000 ms on GPUs (an H200 took

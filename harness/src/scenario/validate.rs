@@ -13,7 +13,8 @@ use toml_edit::Document;
 use super::raw::*;
 use super::span::{line_col, locate, KeyPath};
 use super::*;
-use crate::technique::{self, closest, quoted_list, ParamValue, TechniqueKind, Variant};
+use crate::params::{self, closest, quoted_list, ParamValue, Variant};
+use crate::techniques;
 
 /// Collects errors with their key paths; positions are resolved at the end.
 struct Ctx {
@@ -866,14 +867,14 @@ fn variants(ctx: &mut Ctx, path: &KeyPath, raw: &[RawTechnique]) -> Vec<Variant>
             path,
             format!(
                 "at least one [[techniques]] entry is needed; known techniques: {}",
-                quoted_list(&TechniqueKind::known_names())
+                quoted_list(&techniques::names())
             ),
         );
     }
     for (i, t) in raw.iter().enumerate() {
         let p = path.index(i);
-        let known = TechniqueKind::known_names();
-        let Some(kind) = TechniqueKind::from_name(&t.technique) else {
+        let known = techniques::names();
+        let Some(kind) = techniques::by_name(&t.technique) else {
             let hint = closest(&t.technique, &known)
                 .map(|c| format!(" (did you mean \"{c}\"?)"))
                 .unwrap_or_default();
@@ -955,7 +956,7 @@ fn variants(ctx: &mut Ctx, path: &KeyPath, raw: &[RawTechnique]) -> Vec<Variant>
             let name = t
                 .label
                 .clone()
-                .unwrap_or_else(|| technique::variant_name(kind, &shown));
+                .unwrap_or_else(|| params::variant_name(kind, &shown));
             if out.iter().any(|v| v.name == name) {
                 ctx.err(
                     &p,
@@ -964,11 +965,15 @@ fn variants(ctx: &mut Ctx, path: &KeyPath, raw: &[RawTechnique]) -> Vec<Variant>
                     ),
                 );
             }
-            out.push(Variant {
+            let variant = Variant {
                 name,
                 technique: kind,
                 params,
-            });
+            };
+            if let Err(why) = kind.check(&variant) {
+                ctx.err(&p, format!("variant \"{}\": {why}", variant.name));
+            }
+            out.push(variant);
         }
     }
     out

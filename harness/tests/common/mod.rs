@@ -5,8 +5,8 @@
 use std::path::Path;
 
 use tessera::gpu::{self, Gpu};
+use tessera::params::{ParamValue, Variant};
 use tessera::scenario::{self, Scenario};
-use tessera::technique::{ParamValue, TechniqueKind, Variant};
 
 /// Opens the adapter the harness would pick. CI installs lavapipe (ci/setup.sh), so a missing
 /// adapter is a failure, not a skip.
@@ -30,21 +30,19 @@ pub fn scenario(src: &str) -> Scenario {
     scenario::parse(Path::new("test.toml"), src).unwrap_or_else(|e| panic!("{e}"))
 }
 
-/// A variant of `technique` with its defaults and `params` set.
-pub fn variant(technique: TechniqueKind, params: &[(&str, ParamValue)]) -> Variant {
-    let mut all: std::collections::BTreeMap<String, ParamValue> = technique
-        .params()
-        .iter()
-        .map(|p| (p.name.to_string(), p.default.value()))
-        .collect();
-    for (k, v) in params {
-        all.insert(k.to_string(), v.clone());
+/// A variant of the technique named `technique` with its defaults and `params` set.
+pub fn variant(technique: &str, params: &[(&str, ParamValue)]) -> Variant {
+    let technique = tessera::techniques::by_name(technique)
+        .unwrap_or_else(|| panic!("no technique {technique}"));
+    let mut v = Variant::with_defaults(technique);
+    for (k, value) in params {
+        assert!(
+            v.params.contains_key(*k),
+            "{technique:?} has no parameter {k}"
+        );
+        v.params.insert(k.to_string(), value.clone());
     }
-    Variant {
-        name: technique.name().into(),
-        technique,
-        params: all,
-    }
+    v
 }
 
 /// A small scene with every procedural shape, a light and a moving object.

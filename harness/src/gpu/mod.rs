@@ -1,6 +1,11 @@
 //! Adapters and devices: listing, choosing, and opening one with its real limits.
 //!
-//! Only this module talks to `wgpu::Instance`. It does not render; `render/` does.
+//! Only this module talks to `wgpu::Instance`. It does not render; `render/` does. What an
+//! adapter can do beyond its limits and features is probed in `probe.rs`.
+
+mod probe;
+
+pub use probe::{PROBE_WGSL, STANDARD_2X};
 
 use std::collections::BTreeMap;
 
@@ -45,7 +50,22 @@ impl Gpu {
     pub fn max_dimension(&self) -> u32 {
         self.device.limits().max_texture_dimension_2d
     }
+
+    /// Unsupported when `width` x `height` exceeds the adapter's texture size.
+    pub fn check_size(&self, width: u32, height: u32) -> Result<(), Unsupported> {
+        let max = self.max_dimension();
+        if width > max || height > max {
+            return Err(Unsupported(format!(
+                "{width}x{height} exceeds the adapter's maximum texture size {max}"
+            )));
+        }
+        Ok(())
+    }
 }
+
+/// Why a variant cannot run on this adapter: reported as status `skipped`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Unsupported(pub String);
 
 /// Backends searched: `WGPU_BACKEND` if set (e.g. `vulkan`, `gl`), else `default`.
 fn backends(default: wgpu::Backends) -> wgpu::Backends {

@@ -1,12 +1,10 @@
-//! Technique `checkerboard`: Intel's checkerboard rendering with mosaiikki's refinements.
-//!
-//! Each frame shades a quarter-resolution frame with two samples per pixel on the full-resolution
-//! pixel centres of one checkerboard parity (even frames quadrants {0 = TL, 3 = BR}, odd frames
-//! {1 = TR, 2 = BL}, the odd frames shifted one full-resolution pixel right through the
-//! projection); a compute pass rebuilds every full-resolution pixel from this frame's samples and
-//! the previous frame's (`shaders/checkerboard_resolve.wgsl`, CPU model in
-//! `checkerboard_model.rs`). Sampling is either a 2x MSAA target shaded per sample (Intel,
-//! mosaiikki) or two jittered single-sample renders (same samples on any adapter).
+//! The GPU part of `checkerboard`: a quarter-resolution frame with two samples per pixel on the
+//! full-resolution pixel centres of one checkerboard parity (even frames quadrants {0 = TL,
+//! 3 = BR}, odd frames {1 = TR, 2 = BL}, the odd frames shifted one full-resolution pixel right
+//! through the projection), then a compute pass that rebuilds every full-resolution pixel from
+//! this frame's samples and the previous frame's (`shaders/checkerboard/resolve.wgsl`, CPU model
+//! in `model.rs`). Sampling is either a 2x MSAA target shaded per sample (Intel, mosaiikki) or two
+//! jittered single-sample renders (same samples on any adapter).
 //!
 //! The quarter-resolution targets are one pixel wider than `ceil(W / 2)`, so that odd frames also
 //! shade the top-right quadrant of the last block column: every full-resolution pixel is covered
@@ -17,59 +15,19 @@ use std::collections::HashMap;
 
 use glam::Vec2;
 
-use super::graph::{Graph, PassKind, Plan, TextureDesc};
-use super::scene::{SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FORMAT};
-use super::technique::{
-    allocate, compute_pipeline, placeholder_texture, record_scene_pass, FrameInfo, Technique,
-    Unsupported,
+use super::{Occlusion, Options, Sampling};
+use crate::gpu::{Gpu, Unsupported, STANDARD_2X};
+use crate::render::graph::{Graph, PassKind, Plan, TextureDesc};
+use crate::render::kit::{
+    allocate, bind_group, compute_pipeline, placeholder_texture, record_scene_pass,
 };
-use super::timers::Timers;
-use crate::gpu::Gpu;
-use crate::technique::Variant;
+use crate::render::renderer::{FrameInfo, Renderer};
+use crate::render::scene::{SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FORMAT};
+use crate::render::timers::Timers;
 
-pub static RESOLVE_WGSL: &str = include_str!("../../../shaders/checkerboard_resolve.wgsl");
-pub static TWO_PASS_WGSL: &str = include_str!("../../../shaders/checkerboard_two_pass.wgsl");
-pub static MSAA2X_WGSL: &str = include_str!("../../../shaders/checkerboard_msaa2x.wgsl");
-pub static PROBE_WGSL: &str = include_str!("../../../shaders/sample_positions.wgsl");
-
-/// The standard 2x positions (Vulkan/D3D, origin top-left): sample 0, sample 1.
-pub const STANDARD_2X: [[f32; 2]; 2] = [[0.75, 0.75], [0.25, 0.25]];
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Sampling {
-    TwoPass,
-    Msaa2x,
-}
-
-/// Reconstruction options, as the resolve shader's `mode` fields encode them.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Options {
-    pub aso: bool,
-    /// 0 plain, 1 tonemapped, 2 differential.
-    pub fill: u32,
-    /// 0 none, 1 min-max, 2 min-max with depth confidence.
-    pub clamp: u32,
-    pub depth_tolerance: f32,
-}
-
-impl Options {
-    pub fn from_variant(v: &Variant) -> Options {
-        Options {
-            aso: v.choice("occlusion") == "aso",
-            fill: match v.choice("fill") {
-                "plain" => 0,
-                "tonemapped" => 1,
-                _ => 2,
-            },
-            clamp: match v.choice("clamp") {
-                "min-max" => 1,
-                "min-max-confidence" => 2,
-                _ => 0,
-            },
-            depth_tolerance: v.float("depth_tolerance") as f32,
-        }
-    }
-}
+pub static RESOLVE_WGSL: &str = include_str!("../../../../shaders/checkerboard/resolve.wgsl");
+pub static TWO_PASS_WGSL: &str = include_str!("../../../../shaders/checkerboard/two_pass.wgsl");
+pub static MSAA2X_WGSL: &str = include_str!("../../../../shaders/checkerboard/msaa2x.wgsl");
 
 /// Quarter-resolution texture size for a full resolution: one column wider than half (see the
 /// module doc).
@@ -105,7 +63,7 @@ struct ResolveParams {
     depth: [f32; 4],
 }
 
-pub struct Checkerboard {
+pub struct CheckerboardGpu {
     plan: Plan,
     textures: HashMap<&'static str, wgpu::Texture>,
     sampling: Sampling,
@@ -146,18 +104,10 @@ const TWO_PASS_COLOR: &str = "color_samples";
 const TWO_PASS_DEPTH: &str = "depth_samples";
 const MSAA_TARGETS: [(&str, &str); 2] = [("color_even", "depth_even"), ("color_odd", "depth_odd")];
 
-/// `sampling` as the variant names it.
-fn sampling(variant: &Variant) -> Sampling {
-    match variant.choice("sampling") {
-        "msaa2x" => Sampling::Msaa2x,
-        _ => Sampling::TwoPass,
-    }
-}
-
 /// The pass graph of a checkerboard variant, without a GPU (what `tessera` would allocate), and
 /// whether the reconstruction reads the velocity buffer.
-pub fn graph(variant: &Variant, width: u32, height: u32, dynamic_scene: bool) -> (Plan, bool) {
-    let sampling = sampling(variant);
+pub fn graph(options: &Options, width: u32, height: u32, dynamic_scene: bool) -> (Plan, bool) {
+    let sampling = options.sampling;
     let (qw, qh) = quarter_size(width, height);
     let samples = if sampling == Sampling::Msaa2x { 2 } else { 1 };
     let q = |format, layers| TextureDesc {
@@ -223,7 +173,7 @@ pub fn graph(variant: &Variant, width: u32, height: u32, dynamic_scene: bool) ->
         &["velocity", "velocity_depth"],
     );
     // Dynamic objects need the velocity buffer; without them, nothing reads it and it is culled.
-    let use_velocity = variant.flag("velocity") && dynamic_scene;
+    let use_velocity = options.velocity && dynamic_scene;
     if use_velocity {
         reads.push("velocity");
     }
@@ -236,19 +186,22 @@ pub fn graph(variant: &Variant, width: u32, height: u32, dynamic_scene: bool) ->
     )
 }
 
-impl Checkerboard {
+impl CheckerboardGpu {
     pub fn new(
         gpu: &Gpu,
-        variant: &Variant,
+        options: Options,
         width: u32,
         height: u32,
         dynamic_scene: bool,
-    ) -> Result<Checkerboard, Unsupported> {
-        let sampling = sampling(variant);
+    ) -> Result<CheckerboardGpu, Unsupported> {
+        let sampling = options.sampling;
         if sampling == Sampling::Msaa2x {
-            check_msaa2x(gpu)?;
+            gpu.check_msaa2x(&[
+                (COLOR_FORMAT, "rgba16float"),
+                (DEPTH_FORMAT, "depth32float"),
+            ])?;
         }
-        let (plan, use_velocity) = graph(variant, width, height, dynamic_scene);
+        let (plan, use_velocity) = graph(&options, width, height, dynamic_scene);
         let textures = allocate(&gpu.device, &plan);
 
         let device = &gpu.device;
@@ -299,7 +252,7 @@ impl Checkerboard {
             views.push((10, output_view.clone()));
             let views: Vec<(u32, &wgpu::TextureView)> =
                 views.iter().map(|(b, v)| (*b, v)).collect();
-            super::technique::bind_group(device, "reconstruct", &layout, &[(0, &params)], &views)
+            bind_group(device, "reconstruct", &layout, &[(0, &params)], &views)
         };
         let bind_groups = [bind_group(0), bind_group(1)];
         let whole = |name: &str| textures[name].create_view(&Default::default());
@@ -323,12 +276,12 @@ impl Checkerboard {
                 })
                 .collect(),
         };
-        Ok(Checkerboard {
+        Ok(CheckerboardGpu {
             plan,
             textures,
             sampling,
-            gradient_scale: variant.float("gradient_scale") as f32,
-            options: Options::from_variant(variant),
+            gradient_scale: options.gradient_scale,
+            options,
             width,
             height,
             pipeline,
@@ -342,7 +295,7 @@ impl Checkerboard {
     }
 }
 
-impl Checkerboard {
+impl CheckerboardGpu {
     /// A texture of the plan by resource name (`color_even_s0`, `velocity`, ...).
     pub fn texture(&self, name: &str) -> Option<&wgpu::Texture> {
         self.textures.get(name)
@@ -353,7 +306,7 @@ impl Checkerboard {
     }
 }
 
-impl Technique for Checkerboard {
+impl Renderer for CheckerboardGpu {
     fn plan(&self) -> &Plan {
         &self.plan
     }
@@ -462,10 +415,10 @@ impl Technique for Checkerboard {
             mode: [
                 parity as u32,
                 u32::from(!frame.history_valid),
-                u32::from(o.aso),
-                o.fill,
+                u32::from(o.occlusion == Occlusion::Aso),
+                o.fill.code(),
             ],
-            mode2: [o.clamp, u32::from(use_velocity), 0, 0],
+            mode2: [o.clamp.code(), u32::from(use_velocity), 0, 0],
             depth: [o.depth_tolerance, near_far.0, near_far.1, 0.0],
         };
         gpu.queue
@@ -491,163 +444,4 @@ impl Technique for Checkerboard {
         }
         timers.end(encoder, q);
     }
-}
-
-/// Skips `msaa2x` unless the adapter renders 2x MSAA to the formats used at the standard sample
-/// positions (probed once per device).
-fn check_msaa2x(gpu: &Gpu) -> Result<(), Unsupported> {
-    for (format, name) in [
-        (COLOR_FORMAT, "rgba16float"),
-        (DEPTH_FORMAT, "depth32float"),
-    ] {
-        let counts = gpu
-            .adapter
-            .get_texture_format_features(format)
-            .flags
-            .supported_sample_counts();
-        let has_feature = gpu.has(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES);
-        if !has_feature || !counts.contains(&2) {
-            let list: Vec<String> = counts.iter().map(|c| format!("{c}x")).collect();
-            return Err(Unsupported(format!(
-                "needs MULTISAMPLE_X2 for {name} (the adapter has {})",
-                list.join(", ")
-            )));
-        }
-    }
-    let positions = gpu
-        .msaa2x_positions
-        .get_or_init(|| probe_sample_positions(gpu));
-    match positions {
-        Ok(p) if close(p, &STANDARD_2X) => Ok(()),
-        Ok(p) => Err(Unsupported(format!(
-            "2x MSAA sample positions are {p:?}, not the standard {STANDARD_2X:?}"
-        ))),
-        Err(e) => Err(Unsupported(format!(
-            "cannot probe 2x MSAA sample positions: {e}"
-        ))),
-    }
-}
-
-fn close(a: &[[f32; 2]; 2], b: &[[f32; 2]; 2]) -> bool {
-    a.iter()
-        .flatten()
-        .zip(b.iter().flatten())
-        .all(|(x, y)| (x - y).abs() < 1e-3)
-}
-
-/// Renders a 1x1 2x MSAA target whose samples record their own positions, and reads them back.
-pub fn probe_sample_positions(gpu: &Gpu) -> Result<[[f32; 2]; 2], String> {
-    let device = &gpu.device;
-    let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("sample_positions.wgsl"),
-        source: wgpu::ShaderSource::Wgsl(PROBE_WGSL.into()),
-    });
-    let target = device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("sample probe"),
-        size: wgpu::Extent3d {
-            width: 1,
-            height: 1,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 2,
-        dimension: wgpu::TextureDimension::D2,
-        format: COLOR_FORMAT,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-        view_formats: &[],
-    });
-    let render = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some("sample probe"),
-        layout: None,
-        vertex: wgpu::VertexState {
-            module: &module,
-            entry_point: Some("vs_main"),
-            compilation_options: Default::default(),
-            buffers: &[],
-        },
-        fragment: Some(wgpu::FragmentState {
-            module: &module,
-            entry_point: Some("fs_main"),
-            compilation_options: Default::default(),
-            targets: &[Some(COLOR_FORMAT.into())],
-        }),
-        primitive: Default::default(),
-        depth_stencil: None,
-        multisample: wgpu::MultisampleState {
-            count: 2,
-            ..Default::default()
-        },
-        multiview_mask: None,
-        cache: None,
-    });
-    let copy = compute_pipeline(device, "sample probe copy", PROBE_WGSL, "copy_samples");
-    let storage = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("sample positions"),
-        size: 32,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        mapped_at_creation: false,
-    });
-    let readback = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("sample positions readback"),
-        size: 32,
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let view = target.create_view(&Default::default());
-    let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("sample probe"),
-        layout: &copy.get_bind_group_layout(0),
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: wgpu::BindingResource::TextureView(&view),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: storage.as_entire_binding(),
-            },
-        ],
-    });
-    let mut encoder = device.create_command_encoder(&Default::default());
-    {
-        let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("sample probe"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            depth_stencil_attachment: None,
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
-        rp.set_pipeline(&render);
-        rp.draw(0..3, 0..1);
-    }
-    {
-        let mut cp = encoder.begin_compute_pass(&Default::default());
-        cp.set_pipeline(&copy);
-        cp.set_bind_group(0, &bind_group, &[]);
-        cp.dispatch_workgroups(1, 1, 1);
-    }
-    encoder.copy_buffer_to_buffer(&storage, 0, &readback, 0, 32);
-    gpu.queue.submit([encoder.finish()]);
-    if let Some(e) = pollster::block_on(scope.pop()) {
-        return Err(e.to_string());
-    }
-    let slice = readback.slice(..);
-    slice.map_async(wgpu::MapMode::Read, |_| {});
-    let _ = device.poll(wgpu::PollType::Wait {
-        submission_index: None,
-        timeout: None,
-    });
-    let data = slice.get_mapped_range().map_err(|e| format!("{e:?}"))?;
-    let v: &[f32] = bytemuck::cast_slice(&data);
-    Ok([[v[0], v[1]], [v[4], v[5]]])
 }

@@ -1,12 +1,12 @@
-//! Techniques `adaptive-shading` and `native-deferred`: NVIDIA's content and motion adaptive
+//! The GPU part of `adaptive-shading` and `native-deferred`: NVIDIA's content and motion adaptive
 //! shading (Yang et al. 2019, `seeds/nvidia-adaptive-shading.txt`) on software variable-rate
 //! shading, and its baseline.
 //!
 //! Each frame: a `gbuffer` render pass at full resolution (what `shade_surface` in `scene.wgsl`
 //! needs per pixel, plus per-pixel motion); a `rates` compute pass choosing a rate per 16x16 tile
-//! from the previous frame's output (`shaders/adaptive_rate.wgsl`, CPU model in
-//! `adaptive_model.rs`); optionally the `rate_filter` pass (section 5.4); and a `shade` compute pass
-//! shading once per coarse pixel and object (`shaders/adaptive_shade.wgsl`). `native-deferred` is
+//! from the previous frame's output (`shaders/adaptive_shading/rate.wgsl`, CPU model in
+//! `model.rs`); optionally the `rate_filter` pass (section 5.4); and a `shade` compute pass
+//! shading once per coarse pixel and object (`shaders/adaptive_shading/shade.wgsl`). `native-deferred` is
 //! the same G-buffer and shading pass at 1x1 everywhere, with no rate pass, no motion and no
 //! history. Outputs and depth buffers are ping-ponged: the rate pass reads the previous frame's.
 //!
@@ -16,20 +16,21 @@ use std::collections::HashMap;
 
 use tessera_metrics::{encode_srgb8, HdrImage, Rgb8Image};
 
-use super::adaptive_model::{self, CoarseSample, Mode, RateParams, TILE};
-use super::graph::{Graph, PassKind, Plan, TextureDesc};
-use super::scene::{SceneGpu, View, COLOR_FORMAT, DEPTH_FORMAT};
-use super::technique::{allocate, compute_pipeline, FrameExtras, FrameInfo, Technique};
-use super::timers::Timers;
+use super::model::{self, CoarseSample, RateParams, TILE};
 use crate::gpu::Gpu;
-use crate::technique::{TechniqueKind, Variant};
+use crate::render::graph::{Graph, PassKind, Plan, TextureDesc};
+use crate::render::kit::{allocate, bind_group, compute_pipeline, placeholder_texture};
+use crate::render::readback::read_texture_raw;
+use crate::render::renderer::{FrameExtras, FrameInfo, Renderer};
+use crate::render::scene::{SceneGpu, View, COLOR_FORMAT, DEPTH_FORMAT};
+use crate::render::timers::Timers;
 
-pub static RATE_WGSL: &str = include_str!("../../../shaders/adaptive_rate.wgsl");
-pub static SHADE_WGSL: &str = include_str!("../../../shaders/adaptive_shade.wgsl");
+pub static RATE_WGSL: &str = include_str!("../../../../shaders/adaptive_shading/rate.wgsl");
+pub static SHADE_WGSL: &str = include_str!("../../../../shaders/adaptive_shading/shade.wgsl");
 
 /// `scene.wgsl` with the G-buffer and shading entry points appended.
 pub fn shade_source() -> String {
-    format!("{}\n{SHADE_WGSL}", super::scene::SCENE_WGSL)
+    format!("{}\n{SHADE_WGSL}", crate::render::scene::SCENE_WGSL)
 }
 
 const GBUF_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
@@ -53,35 +54,11 @@ struct RateUniforms {
     more: [f32; 4],
 }
 
-/// Rate-selection parameters of a validated `adaptive-shading` variant.
-pub fn rate_params(v: &Variant) -> RateParams {
-    RateParams {
-        threshold: v.float("threshold") as f32,
-        env_luma: v.float("env_luma") as f32,
-        k: v.float("k") as f32,
-        mode: match v.choice("mode") {
-            "content" => Mode::Content,
-            "motion" => Mode::Motion,
-            _ => Mode::ContentMotion,
-        },
-        max_error: v.float("max_error") as f32,
-        hysteresis: v.float("hysteresis") as f32,
-        neighbour_filter: v.flag("neighbour_filter"),
-        allow_4x4: v.flag("allow_4x4"),
-        disocclusion_tolerance: v.float("disocclusion_tolerance") as f32,
-        coarse_sample: match v.choice("coarse_sample") {
-            "pixel" => CoarseSample::Pixel,
-            _ => CoarseSample::Centre,
-        },
-    }
-}
-
-/// The pass graph of a variant of `adaptive-shading` or `native-deferred` at `width` x `height`
-/// (no GPU needed): what runs and what is allocated.
-pub fn graph(variant: &Variant, width: u32, height: u32) -> Plan {
-    let params =
-        (variant.technique == TechniqueKind::AdaptiveShading).then(|| rate_params(variant));
-    let (tw, th) = adaptive_model::tiles(width, height);
+/// The pass graph at `width` x `height` (no GPU needed): what runs and what is allocated;
+/// `rates`: the rate selection of `adaptive-shading`, `None` for `native-deferred`.
+pub fn graph(rates: Option<&RateParams>, width: u32, height: u32) -> Plan {
+    let params = rates;
+    let (tw, th) = model::tiles(width, height);
     let tex = |format, width, height| TextureDesc {
         format,
         width,
@@ -159,7 +136,7 @@ pub struct LastFrame {
     pub far: f32,
 }
 
-pub struct Adaptive {
+pub struct AdaptiveGpu {
     plan: Plan,
     textures: HashMap<&'static str, wgpu::Texture>,
     width: u32,
@@ -182,13 +159,13 @@ pub struct Adaptive {
     last: Option<LastFrame>,
 }
 
-impl Adaptive {
-    pub fn new(gpu: &Gpu, variant: &Variant, width: u32, height: u32) -> Adaptive {
-        let params =
-            (variant.technique == TechniqueKind::AdaptiveShading).then(|| rate_params(variant));
+impl AdaptiveGpu {
+    /// `rates`: the rate selection of `adaptive-shading`, `None` for `native-deferred`.
+    pub fn new(gpu: &Gpu, rates: Option<RateParams>, width: u32, height: u32) -> AdaptiveGpu {
+        let params = rates;
         let history = params.is_some();
         let parities = if history { 2 } else { 1 };
-        let plan = graph(variant, width, height);
+        let plan = graph(params.as_ref(), width, height);
         let textures = allocate(&gpu.device, &plan);
         let device = &gpu.device;
         let view = |name: &str| textures[name].create_view(&Default::default());
@@ -231,8 +208,7 @@ impl Adaptive {
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let dummy_rates = (!history)
-            .then(|| super::technique::placeholder_texture(device, "no rates", RATE_FORMAT));
+        let dummy_rates = (!history).then(|| placeholder_texture(device, "no rates", RATE_FORMAT));
         let rates_view = match &dummy_rates {
             Some(t) => t.create_view(&Default::default()),
             None => view("rates"),
@@ -249,7 +225,7 @@ impl Adaptive {
                 ];
                 let views: Vec<(u32, &wgpu::TextureView)> =
                     views.iter().map(|(b, v)| (*b, v)).collect();
-                super::technique::bind_group(
+                bind_group(
                     device,
                     "shade",
                     &shade_layout,
@@ -285,7 +261,7 @@ impl Adaptive {
                 ];
                 let views: Vec<(u32, &wgpu::TextureView)> =
                     views.iter().map(|(b, v)| (*b, v)).collect();
-                super::technique::bind_group(device, "rates", &layout, &[(0, &uniforms)], &views)
+                bind_group(device, "rates", &layout, &[(0, &uniforms)], &views)
             };
             let bind_groups = [bind_group(0), bind_group(1)];
             let filter = params.neighbour_filter.then(|| {
@@ -324,7 +300,7 @@ impl Adaptive {
             gbuffer_views.push(view("motion"));
         }
         let depth_views = (0..parities).map(|p| view(DEPTHS[p])).collect();
-        Adaptive {
+        AdaptiveGpu {
             plan,
             textures,
             width,
@@ -448,7 +424,7 @@ fn dispatch(
     timers.end(encoder, q);
 }
 
-impl Technique for Adaptive {
+impl Renderer for AdaptiveGpu {
     fn plan(&self) -> &Plan {
         &self.plan
     }
@@ -507,7 +483,7 @@ impl Technique for Adaptive {
         };
         scene.write_view(&gpu.queue, 0, &View::whole(frame.time, frame.prev_time));
         self.gbuffer_pass(encoder, scene, timers);
-        let (tw, th) = adaptive_model::tiles(self.width, self.height);
+        let (tw, th) = model::tiles(self.width, self.height);
         if let Some(r) = &self.rate {
             let (near, far) = scene.near_far();
             let p = r.params;
@@ -584,7 +560,7 @@ impl Technique for Adaptive {
 /// The frame in grey with each tile tinted by its shading-region size, as the paper's Fig. 1 (c).
 pub fn rate_image(frame: &HdrImage, codes: &[u32]) -> Rgb8Image {
     let mut img = encode_srgb8(frame);
-    let (tw, _) = adaptive_model::tiles(img.width, img.height);
+    let (tw, _) = model::tiles(img.width, img.height);
     for y in 0..img.height {
         for x in 0..img.width {
             let i = ((y * img.width + x) * 3) as usize;
@@ -594,7 +570,7 @@ pub fn rate_image(frame: &HdrImage, codes: &[u32]) -> Rgb8Image {
                 .get(((y / TILE) * tw + x / TILE) as usize)
                 .copied()
                 .unwrap_or(0);
-            let tint = adaptive_model::rate_color(code);
+            let tint = model::rate_color(code);
             for c in 0..3 {
                 px[c] = match tint {
                     Some(t) => ((grey as u16 + t[c] as u16) / 2) as u8,
@@ -606,57 +582,10 @@ pub fn rate_image(frame: &HdrImage, codes: &[u32]) -> Rgb8Image {
     img
 }
 
-/// Reads a single-sample colour texture back as raw texel bytes, rows unpadded (tests, extras).
-pub fn read_texture_raw(gpu: &Gpu, texture: &wgpu::Texture) -> Vec<u8> {
-    let (w, h) = (texture.width(), texture.height());
-    let texel = texture.format().block_copy_size(None).unwrap_or(4);
-    let row = w * texel;
-    let padded =
-        row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
-    let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("raw texture readback"),
-        size: padded as u64 * h as u64,
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    encoder.copy_texture_to_buffer(
-        texture.as_image_copy(),
-        wgpu::TexelCopyBufferInfo {
-            buffer: &buffer,
-            layout: wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(padded),
-                rows_per_image: Some(h),
-            },
-        },
-        wgpu::Extent3d {
-            width: w,
-            height: h,
-            depth_or_array_layers: 1,
-        },
-    );
-    gpu.queue.submit([encoder.finish()]);
-    let slice = buffer.slice(..);
-    slice.map_async(wgpu::MapMode::Read, |_| {});
-    let _ = gpu.device.poll(wgpu::PollType::Wait {
-        submission_index: None,
-        timeout: None,
-    });
-    let mut out = Vec::with_capacity((row * h) as usize);
-    if let Ok(data) = slice.get_mapped_range() {
-        for y in 0..h as usize {
-            let start = y * padded as usize;
-            out.extend_from_slice(&data[start..start + row as usize]);
-        }
-    }
-    out
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use adaptive_model::encode;
+    use model::encode;
 
     #[test]
     fn rate_image_tints_coarse_tiles_only() {

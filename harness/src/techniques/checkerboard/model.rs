@@ -7,7 +7,7 @@
 
 use glam::{Mat4, Vec2, Vec3, Vec4};
 
-use super::checkerboard::Options;
+use super::{Clamp, Fill, Occlusion, Options};
 
 /// One frame's quarter-resolution samples: colour and reversed-Z depth per sample index.
 #[derive(Clone, Debug)]
@@ -148,7 +148,7 @@ fn neighbour_depth(inp: &Inputs, x: i32, y: i32) -> f32 {
 }
 
 fn fill(inp: &Inputs, n: &Neighbourhood) -> Vec3 {
-    if inp.options.fill == 2 && n.valid.iter().all(|v| *v) {
+    if inp.options.fill == Fill::Differential && n.valid.iter().all(|v| *v) {
         let wv = 1.0 / (n.c[0] - n.c[1]).length().max(0.001);
         let wh = 1.0 / (n.c[2] - n.c[3]).length().max(0.001);
         return 0.5 * (wv * (n.c[0] + n.c[1]) + wh * (n.c[2] + n.c[3])) / (wv + wh);
@@ -180,7 +180,7 @@ pub enum Source {
 }
 
 fn filled(inp: &Inputs, x: i32, y: i32) -> (Vec4, Source) {
-    let tonemapped = inp.options.fill != 0;
+    let tonemapped = inp.options.fill != Fill::Plain;
     let n = neighbourhood(inp, x, y, tonemapped);
     if let (0.0, Some(c)) = (n.count, n.non_finite) {
         // Inside a non-finite region: it stays non-finite.
@@ -226,23 +226,26 @@ pub fn reconstruct(inp: &Inputs, x: i32, y: i32) -> (Vec4, Source) {
         return filled(inp, x, y);
     }
     let moved_block = (px >> 1) != (x >> 1) || (py >> 1) != (y >> 1);
-    let confidence_clamp = inp.options.clamp == 2;
-    let deviation = if (moved_block && !inp.options.aso) || confidence_clamp {
+    let confidence_clamp = inp.options.clamp == Clamp::MinMaxConfidence;
+    let deviation = if (moved_block && inp.options.occlusion != Occlusion::Aso) || confidence_clamp
+    {
         (neighbour_depth(inp, x, y) - linear_depth(inp, depth_at(inp, px, py))).abs()
     } else {
         0.0
     };
-    if moved_block && (inp.options.aso || deviation >= inp.options.depth_tolerance) {
+    if moved_block
+        && (inp.options.occlusion == Occlusion::Aso || deviation >= inp.options.depth_tolerance)
+    {
         return filled(inp, x, y);
     }
     let history = color_at(inp, px, py);
     if !history.truncate().is_finite() {
         return filled(inp, x, y);
     }
-    if inp.options.clamp == 0 {
+    if inp.options.clamp == Clamp::None {
         return (history, Source::History);
     }
-    let tonemapped = inp.options.fill != 0;
+    let tonemapped = inp.options.fill != Fill::Plain;
     let n = neighbourhood(inp, x, y, tonemapped);
     if n.count == 0.0 {
         return (history, Source::History);
@@ -274,8 +277,9 @@ pub fn reconstruct_all(inp: &Inputs) -> Vec<(Vec4, Source)> {
 
 #[cfg(test)]
 mod tests {
+    use super::super::{quarter_size, quarter_view, two_pass_jitter};
     use super::*;
-    use crate::render::checkerboard::{quarter_size, quarter_view, two_pass_jitter, STANDARD_2X};
+    use crate::gpu::STANDARD_2X;
 
     /// Exhaustive coverage (notes section 2, "Coverage theorem"): with the quarter-resolution
     /// remap, the odd-frame shift and the standard positions, every sample lands on a
@@ -354,12 +358,13 @@ mod tests {
         }
     }
 
-    fn options(fill: u32, clamp: u32) -> Options {
+    fn options(fill: Fill, clamp: Clamp) -> Options {
         Options {
-            aso: false,
+            occlusion: Occlusion::Cso,
             fill,
             clamp,
             depth_tolerance: 0.01,
+            ..Options::default()
         }
     }
 
@@ -398,7 +403,7 @@ mod tests {
                 height: h,
                 parity,
                 reset: false,
-                options: options(2, 0),
+                options: options(Fill::Differential, Clamp::None),
                 near: 0.1,
                 far: 100.0,
                 reproject: Mat4::IDENTITY,
@@ -427,7 +432,7 @@ mod tests {
             height: h,
             parity: 0,
             reset: true,
-            options: options(0, 0),
+            options: options(Fill::Plain, Clamp::None),
             near: 0.1,
             far: 100.0,
             reproject: Mat4::IDENTITY,
@@ -458,7 +463,7 @@ mod tests {
             ..inp
         };
         let plain = reconstruct(&inp, 2, 1).0;
-        inp.options = options(2, 0);
+        inp.options = options(Fill::Differential, Clamp::None);
         let differential = reconstruct(&inp, 2, 1).0;
         assert_ne!(plain, differential);
     }
@@ -475,7 +480,7 @@ mod tests {
             height: h,
             parity: 0,
             reset: false,
-            options: options(0, 0),
+            options: options(Fill::Plain, Clamp::None),
             near: 0.1,
             far: 100.0,
             reproject: Mat4::IDENTITY,
@@ -494,8 +499,8 @@ mod tests {
         // ASO assumes the moved pixel occluded.
         let inp = Inputs {
             options: Options {
-                aso: true,
-                ..options(0, 0)
+                occlusion: Occlusion::Aso,
+                ..options(Fill::Plain, Clamp::None)
             },
             ..inp
         };

@@ -1,4 +1,4 @@
-//! CPU model of adaptive shading's rate selection (`shaders/adaptive_rate.wgsl`), step for step in
+//! CPU model of adaptive shading's rate selection (`shaders/adaptive_shading/rate.wgsl`), step for step in
 //! f32, in the shader's order (the same tree reductions): the oracle the GPU rates are compared
 //! with in tests, and the place where the paper's equations can be checked without a GPU.
 //!
@@ -8,15 +8,16 @@
 /// Side of a screen tile in pixels (section 5.1: one 16x16 tile per shading-rate texel).
 pub const TILE: u32 = 16;
 
-/// How rates are chosen (parameter `mode`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Mode {
-    /// Eq. 22: the error estimate scaled by the motion factors of Eq. 20 and 21.
-    ContentMotion,
-    /// Eq. 16: the error estimate alone (b_H = 1, b_Q = k).
-    Content,
-    /// Eq. 24: standalone motion-adaptive shading, the relative error taken as `max_error`.
-    Motion,
+crate::choice! {
+    /// How rates are chosen (parameter `mode`).
+    pub enum Mode {
+        /// Eq. 22: the error estimate scaled by the motion factors of Eq. 20 and 21.
+        ContentMotion = "content-motion",
+        /// Eq. 16: the error estimate alone (b_H = 1, b_Q = k).
+        Content = "content",
+        /// Eq. 24: standalone motion-adaptive shading, the relative error taken as `max_error`.
+        Motion = "motion",
+    }
 }
 
 impl Mode {
@@ -51,13 +52,14 @@ pub struct RateParams {
     pub coarse_sample: CoarseSample,
 }
 
-/// Where a coarse pixel is shaded (parameter `coarse_sample`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum CoarseSample {
-    /// At its centre, with derivatives across it, as hardware VRS shades.
-    Centre,
-    /// At its shading pixel's own G-buffer sample (a native sample, replicated).
-    Pixel,
+crate::choice! {
+    /// Where a coarse pixel is shaded (parameter `coarse_sample`).
+    pub enum CoarseSample {
+        /// At its centre, with derivatives across it, as hardware VRS shades.
+        Centre = "centre",
+        /// At its shading pixel's own G-buffer sample (a native sample, replicated).
+        Pixel = "pixel",
+    }
 }
 
 impl Default for RateParams {

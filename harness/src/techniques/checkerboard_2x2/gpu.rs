@@ -1,10 +1,10 @@
-//! Technique `checkerboard-2x2`: the depth-based report's 2x2 checkerboarding
+//! The GPU part of `checkerboard-2x2`: the depth-based report's 2x2 checkerboarding
 //! (`seeds/depth-based-checkerboarding.txt`, sections 5.3.1 to 5.3.8), at full resolution.
 //!
 //! Per frame (parity `p = index & 1`):
 //! 1. `precondition` (copy): the scene depth starts as a copy of one of two pre-conditioned depth
 //!    buffers, "white" on even frames and "black" on odd ones, whose masked 2x2 blocks hold the
-//!    nearest depth (5.3.6; drawn once at build time by `shaders/checkerboard_2x2_mask.wgsl`, 5.3.2).
+//!    nearest depth (5.3.6; drawn once at build time by `shaders/checkerboard_2x2/mask.wgsl`, 5.3.2).
 //! 2. `scene` (render): the ordinary forward pipeline, depth loaded, not cleared: the early depth
 //!    test rejects every fragment of a masked block, so about half the pixels are shaded. The
 //!    fragment shader writes no `frag_depth` (early-Z stays on); the depth *attachment* is still
@@ -15,8 +15,8 @@
 //!    rendered only where the frame will be reconstituted (5.3.6).
 //! 4. `reconstitute` (compute, one invocation per pair of blocks): copies the shaded blocks and
 //!    rebuilds the masked ones by motion reprojection into the previous output, with the report's
-//!    clamps (`shaders/checkerboard_2x2_reconstitute.wgsl`; CPU model in
-//!    `checkerboard_2x2_model.rs`).
+//!    clamps (`shaders/checkerboard_2x2/reconstitute.wgsl`; CPU model in
+//!    `model.rs`).
 //!
 //! History. The report copies the back buffer, depth and motion into caches at the end of each
 //! frame (5.3.3, 5.3.7, 5.3.8). Here each of those is a ping-pong pair instead (`color` /
@@ -28,67 +28,19 @@
 
 use std::collections::HashMap;
 
-use super::graph::{Graph, PassKind, Plan, TextureDesc};
-use super::scene::{SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FORMAT};
-use super::technique::{
-    allocate_with, compute_pipeline, placeholder_texture, record_scene_pass_on, FrameInfo,
-    Technique,
-};
-use super::timers::Timers;
+use super::Options;
 use crate::gpu::Gpu;
-use crate::technique::Variant;
+use crate::render::graph::{Graph, PassKind, Plan, TextureDesc};
+use crate::render::kit::{
+    allocate_with, bind_group, compute_pipeline, placeholder_texture, record_scene_pass_on,
+};
+use crate::render::renderer::{FrameInfo, Renderer};
+use crate::render::scene::{SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FORMAT};
+use crate::render::timers::Timers;
 
-pub static MASK_WGSL: &str = include_str!("../../../shaders/checkerboard_2x2_mask.wgsl");
+pub static MASK_WGSL: &str = include_str!("../../../../shaders/checkerboard_2x2/mask.wgsl");
 pub static RECONSTITUTE_WGSL: &str =
-    include_str!("../../../shaders/checkerboard_2x2_reconstitute.wgsl");
-
-/// The report's clamp modes (5.3.3 to 5.3.7), as the shader's `mode.x` encodes them.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
-pub enum Clamp {
-    None = 0,
-    Uniform = 1,
-    Conditional = 2,
-    Blended = 3,
-}
-
-/// Reconstitution options (the variant's parameters).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Options {
-    pub clamp: Clamp,
-    /// Pixels per frame; conditional and blended clamp only above it (5.3.5).
-    pub motion_threshold: f32,
-    /// Linear depth differences in [0, 1] (5.3.7).
-    pub blend_min: f32,
-    pub blend_max: f32,
-    pub motion_coherency: bool,
-}
-
-impl Options {
-    pub fn from_variant(v: &Variant) -> Options {
-        Options {
-            clamp: match v.choice("clamp") {
-                "none" => Clamp::None,
-                "uniform" => Clamp::Uniform,
-                "conditional" => Clamp::Conditional,
-                _ => Clamp::Blended,
-            },
-            motion_threshold: v.float("motion_threshold") as f32,
-            blend_min: v.float("blend_min") as f32,
-            blend_max: v.float("blend_max") as f32,
-            motion_coherency: v.flag("motion_coherency"),
-        }
-    }
-
-    /// The blended clamp compares the reprojected depth with the neighbours' (5.3.7).
-    pub fn reads_depth_history(&self) -> bool {
-        self.clamp == Clamp::Blended
-    }
-
-    /// Motion coherency only matters where clamping is conditional (5.3.8).
-    pub fn reads_motion_history(&self) -> bool {
-        self.motion_coherency && self.clamp >= Clamp::Conditional
-    }
-}
+    include_str!("../../../../shaders/checkerboard_2x2/reconstitute.wgsl");
 
 /// The pass graph at `width` x `height`: pure bookkeeping, so the memory of every resource can be
 /// checked without a GPU. Resource names by role; see the module doc for the ping-pong pairs.
@@ -171,7 +123,7 @@ impl From<&FrameParams> for GpuParams {
         let o = &f.options;
         GpuParams {
             frame: [f.width, f.height, f.parity, u32::from(f.reset)],
-            mode: [o.clamp as u32, u32::from(o.motion_coherency), 0, 0],
+            mode: [o.clamp.code(), u32::from(o.motion_coherency), 0, 0],
             limits: [o.motion_threshold, o.blend_min, o.blend_max, 0.0],
             planes: [f.near, f.far, 0.0, 0.0],
         }
@@ -224,7 +176,7 @@ impl Reconstitution {
             .enumerate()
             .map(|(i, v)| (i as u32 + 1, *v))
             .collect();
-        super::technique::bind_group(
+        bind_group(
             device,
             "reconstitute",
             &self.pipeline.get_bind_group_layout(0),
@@ -282,7 +234,7 @@ const PAIRS: [(&str, &str); 3] = [
     ("motion", "motion_history"),
 ];
 
-pub struct Checkerboard2x2 {
+pub struct Checkerboard2x2Gpu {
     plan: Plan,
     textures: HashMap<&'static str, wgpu::Texture>,
     options: Options,
@@ -298,13 +250,22 @@ pub struct Checkerboard2x2 {
     last: Option<LastFrame>,
 }
 
-impl Checkerboard2x2 {
-    pub fn new(gpu: &Gpu, variant: &Variant, width: u32, height: u32) -> Checkerboard2x2 {
-        let options = Options::from_variant(variant);
-        Self::with_options(gpu, options, width, height)
+impl Checkerboard2x2Gpu {
+    pub fn new(
+        gpu: &Gpu,
+        variant: &crate::params::Variant,
+        width: u32,
+        height: u32,
+    ) -> Checkerboard2x2Gpu {
+        Self::with_options(gpu, Options::from_variant(variant), width, height)
     }
 
-    pub fn with_options(gpu: &Gpu, options: Options, width: u32, height: u32) -> Checkerboard2x2 {
+    pub fn with_options(
+        gpu: &Gpu,
+        options: Options,
+        width: u32,
+        height: u32,
+    ) -> Checkerboard2x2Gpu {
         let device = &gpu.device;
         let plan = graph(width, height, &options)
             .plan()
@@ -376,7 +337,7 @@ impl Checkerboard2x2 {
         }
         let [b0, b1]: [wgpu::BindGroup; 2] = bind_groups.try_into().ok().unwrap();
         let [v0, v1]: [[wgpu::TextureView; 4]; 2] = views.try_into().ok().unwrap();
-        Checkerboard2x2 {
+        Checkerboard2x2Gpu {
             plan,
             textures,
             options,
@@ -421,7 +382,7 @@ impl Checkerboard2x2 {
     }
 }
 
-impl Technique for Checkerboard2x2 {
+impl Renderer for Checkerboard2x2Gpu {
     fn plan(&self) -> &Plan {
         &self.plan
     }

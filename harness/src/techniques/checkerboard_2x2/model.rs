@@ -7,7 +7,8 @@
 
 use glam::{IVec2, Vec2, Vec3, Vec4};
 
-use super::checkerboard_2x2::{Clamp, FrameParams};
+use super::gpu::FrameParams;
+use super::Clamp;
 
 /// Everything the shader reads, row-major, `width * height` entries each.
 pub struct Inputs<'a> {
@@ -185,8 +186,8 @@ pub fn reconstitute_all(inp: &Inputs) -> Vec<(Vec4, Source)> {
 
 #[cfg(test)]
 mod tests {
+    use super::super::Options;
     use super::*;
-    use crate::render::checkerboard_2x2::Options;
 
     fn frame(width: u32, height: u32, parity: u32, clamp: Clamp) -> FrameParams {
         FrameParams {

@@ -1,0 +1,292 @@
+//! The webhook worker of `serve --webhook-url`: every poll it looks for confirmed alert groups
+//! that the target has not seen and POSTs one JSON body per group, with a timeout per request and
+//! retries with exponential backoff. What it sent, what waits for a retry and what it gave up on
+//! is kept in the store's outbox ([`crate::store::outbox`]), so a restart neither loses nor
+//! repeats a notification. The first time a URL is configured, the groups already confirmed are
+//! recorded as its baseline and not sent: a new webhook announces changes from then on.
+//!
+//! Delivery is at least once: a server killed between a successful POST and recording it sends
+//! that group again after the restart; the body's `key` (also the `Idempotency-Key` header) lets
+//! a receiver drop the repeat. Groups triaged `invalid` or `ignored` before they were sent are
+//! not sent. Not for: the feed or Markdown (see [`super::atom`], [`super::markdown`]).
+
+use std::time::Duration;
+
+use chrono::{DateTime, SecondsFormat, Utc};
+use serde_json::json;
+use sha2::{Digest, Sha256};
+
+use crate::db::Pool;
+use crate::store::groups::{self, Filter, Group, Sort};
+use crate::store::outbox::{self, Delivery};
+use crate::store::StoreError;
+
+/// Settings of the worker; [`Config::new`] has the defaults `serve` uses.
+#[derive(Clone, Debug)]
+pub struct Config {
+    /// Where to POST.
+    pub url: String,
+    /// The dashboard's public URL (no trailing slash), for the links in the body.
+    pub public_url: String,
+    /// Limit on one whole request (connect, send, answer).
+    pub timeout: Duration,
+    /// Delay before the first retry; doubled for each further one.
+    pub backoff: Duration,
+    pub max_backoff: Duration,
+    /// Attempts before a group is given up (`failed`, logged, never retried).
+    pub max_attempts: i64,
+    /// Time between two looks at the store.
+    pub poll: Duration,
+}
+
+impl Config {
+    pub fn new(url: &str, public_url: &str) -> Config {
+        Config {
+            url: url.to_string(),
+            public_url: public_url.trim_end_matches('/').to_string(),
+            timeout: Duration::from_secs(10),
+            backoff: Duration::from_secs(30),
+            max_backoff: Duration::from_secs(3600),
+            max_attempts: 8,
+            poll: Duration::from_secs(30),
+        }
+    }
+}
+
+/// What one look at the store did.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Tick {
+    /// Groups recorded as the baseline of a newly configured URL (not sent).
+    pub baseline: usize,
+    /// Newly confirmed groups put in the outbox.
+    pub queued: usize,
+    pub sent: usize,
+    /// Attempts that failed (retried later or, after the last one, given up).
+    pub failed: usize,
+}
+
+pub struct Notifier {
+    pool: Pool,
+    config: Config,
+    target: String,
+    agent: ureq::Agent,
+}
+
+fn ts(t: DateTime<Utc>) -> String {
+    t.to_rfc3339_opts(SecondsFormat::Secs, true)
+}
+
+/// The outbox's name for a URL: the first 16 hex digits of its SHA-256 (the URL may hold a secret).
+pub fn target_of(url: &str) -> String {
+    Sha256::digest(url.as_bytes())
+        .iter()
+        .take(8)
+        .map(|b| format!("{b:02x}"))
+        .collect()
+}
+
+/// The JSON body POSTed for a group. `text` makes it readable by chat webhooks as it is.
+pub fn body(g: &Group, base: &str) -> serde_json::Value {
+    let url = super::group_url(base, &g.key);
+    let alerts: Vec<serde_json::Value> = g
+        .alerts
+        .iter()
+        .filter(|a| a.status != "withdrawn")
+        .map(|a| {
+            json!({
+                "series_id": a.series.id,
+                "series_url": format!("{base}/series/{}", a.series.id),
+                "adapter": a.series.adapter,
+                "suite": a.suite,
+                "scenario": a.series.scenario,
+                "variant": a.series.variant,
+                "measure": a.series.measure,
+                "value_before": a.value_before,
+                "value_after": a.value_after,
+                "relative_change": a.relative_change,
+                "worse": a.is_regression,
+                "confidence": a.confidence,
+                "status": a.status,
+            })
+        })
+        .collect();
+    json!({
+        "event": "regression_group_confirmed",
+        "key": g.key,
+        "title": g.title,
+        "text": format!("{} {url}", g.title),
+        "url": url,
+        "markdown_url": super::markdown_url(base, &g.key),
+        "commit_before": g.commit_before,
+        "commit_after": g.commit_after,
+        "state": g.state,
+        "status": g.status,
+        "adapters": g.adapters,
+        "series_count": g.series_count,
+        "worse": g.worse,
+        "better": g.better,
+        "alerts": alerts,
+    })
+}
+
+impl Notifier {
+    pub fn new(pool: Pool, config: Config) -> Notifier {
+        let agent = ureq::Agent::config_builder()
+            .http_status_as_error(false)
+            .timeout_global(Some(config.timeout))
+            .user_agent("tessera-dashboard")
+            .build()
+            .into();
+        Notifier {
+            pool,
+            target: target_of(&config.url),
+            config,
+            agent,
+        }
+    }
+
+    /// The outbox's name for this notifier's URL.
+    pub fn target(&self) -> &str {
+        &self.target
+    }
+
+    /// POSTs one body; `Err` with what went wrong (transport error or non-2xx answer).
+    fn post(&self, body: &serde_json::Value, key: &str) -> Result<(), String> {
+        let bytes = serde_json::to_vec(body).map_err(|e| e.to_string())?;
+        let mut res = self
+            .agent
+            .post(&self.config.url)
+            .header("Content-Type", "application/json")
+            .header("Idempotency-Key", key)
+            .send(&bytes[..])
+            .map_err(|e| e.to_string())?;
+        let status = res.status().as_u16();
+        if (200..300).contains(&status) {
+            return Ok(());
+        }
+        let text = res
+            .body_mut()
+            .with_config()
+            .limit(2048)
+            .read_to_string()
+            .unwrap_or_default();
+        Err(format!("HTTP {status}: {}", text.trim()))
+    }
+
+    /// One look at the store at time `now`: queue newly confirmed groups, send those due.
+    pub fn tick(&self, now: DateTime<Utc>) -> Result<Tick, StoreError> {
+        let mut tick = Tick::default();
+        let now_s = ts(now);
+        let due = {
+            let mut conn = self.pool.get()?;
+            let confirmed = Filter {
+                status: Some("confirmed".into()),
+                ..Filter::default()
+            };
+            let groups = groups::list(&mut *conn, &confirmed, Sort::Date, usize::MAX)?;
+            let first = outbox::register_target(&mut *conn, &self.target, &now_s)?;
+            let known: std::collections::BTreeSet<String> =
+                outbox::known(&mut *conn, &self.target)?
+                    .into_iter()
+                    .collect();
+            for g in &groups {
+                if known.contains(&g.key)
+                    || (!first && matches!(g.state.as_str(), "invalid" | "ignored"))
+                {
+                    continue;
+                }
+                let state = if first {
+                    outbox::BASELINE
+                } else {
+                    outbox::PENDING
+                };
+                if outbox::add(&mut *conn, &self.target, &g.key, state, &now_s)? {
+                    if first {
+                        tick.baseline += 1;
+                    } else {
+                        tick.queued += 1;
+                    }
+                }
+            }
+            outbox::due(&mut *conn, &self.target, &now_s, 100)?
+        };
+        for mut d in due {
+            let group = {
+                let mut conn = self.pool.get()?;
+                groups::get(&mut *conn, &d.group_key)
+            };
+            let outcome = match group {
+                Ok(g) => self.post(&body(&g, &self.config.public_url), &g.key),
+                // A group that detection has since moved away: nothing left to announce, and
+                // nothing a retry would change.
+                Err(StoreError::NotFound(_)) => {
+                    d.state = outbox::FAILED.into();
+                    d.last_error = "the group no longer exists (its alerts moved)".into();
+                    let mut conn = self.pool.get()?;
+                    outbox::update(&mut *conn, &self.target, &d)?;
+                    continue;
+                }
+                Err(e) => return Err(e),
+            };
+            d.attempts += 1;
+            match outcome {
+                Ok(()) => {
+                    d.state = outbox::SENT.into();
+                    d.sent_at = Some(now_s.clone());
+                    d.last_error.clear();
+                    tick.sent += 1;
+                    eprintln!("webhook: sent alert group {}", d.group_key);
+                }
+                Err(e) => {
+                    tick.failed += 1;
+                    d.last_error = e;
+                    if d.attempts >= self.config.max_attempts {
+                        d.state = outbox::FAILED.into();
+                        eprintln!(
+                            "webhook: gave up on alert group {} after {} attempts: {}",
+                            d.group_key, d.attempts, d.last_error
+                        );
+                    } else {
+                        let delay = self.backoff(d.attempts);
+                        d.next_attempt_at = ts(now + delay);
+                        eprintln!(
+                            "webhook: alert group {}: attempt {} failed ({}); next at {}",
+                            d.group_key, d.attempts, d.last_error, d.next_attempt_at
+                        );
+                    }
+                }
+            }
+            let mut conn = self.pool.get()?;
+            outbox::update(&mut *conn, &self.target, &d)?;
+        }
+        Ok(tick)
+    }
+
+    /// The wait after `attempts` failed attempts: `backoff · 2^(attempts-1)`, at most `max_backoff`.
+    pub fn backoff(&self, attempts: i64) -> chrono::TimeDelta {
+        let factor = 1u32 << (attempts - 1).clamp(0, 20);
+        let d = self
+            .config
+            .backoff
+            .saturating_mul(factor)
+            .min(self.config.max_backoff);
+        chrono::TimeDelta::from_std(d).unwrap_or(chrono::TimeDelta::MAX)
+    }
+
+    /// Every delivery this notifier's URL has in the outbox.
+    pub fn deliveries(&self) -> Result<Vec<Delivery>, StoreError> {
+        let mut conn = self.pool.get()?;
+        outbox::all(&mut *conn, &self.target)
+    }
+
+    /// Runs [`Notifier::tick`] every poll on a thread of its own, logging errors, until the
+    /// process ends.
+    pub fn spawn(self) -> std::thread::JoinHandle<()> {
+        std::thread::spawn(move || loop {
+            if let Err(e) = self.tick(Utc::now()) {
+                eprintln!("webhook: {e}");
+            }
+            std::thread::sleep(self.config.poll);
+        })
+    }
+}

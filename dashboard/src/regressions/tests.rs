@@ -1,0 +1,93 @@
+//! Reconciliation planning on hand-made windows.
+
+use super::*;
+
+fn found(index: usize, rel: f64, status: &'static str) -> Found {
+    Found {
+        change: ChangePoint {
+            index,
+            before: 1.0,
+            after: 1.0 + rel,
+            relative_change: rel,
+            confidence: 0.999,
+            sigma: 0.01,
+        },
+        status,
+    }
+}
+
+fn alert(id: i64, pk: i64, rel: f64, status: &str) -> StoredAlert {
+    StoredAlert {
+        id,
+        run_pk_after: pk,
+        relative_change: rel,
+        status: status.into(),
+    }
+}
+
+#[test]
+fn an_alert_one_commit_early_moves_to_the_change() {
+    let pks: Vec<i64> = (100..130).collect();
+    let actions = plan(
+        &pks,
+        0,
+        &[found(20, 0.2, CONFIRMED)],
+        &[alert(7, 119, 0.133, PENDING)],
+    );
+    assert_eq!(actions, vec![Action::Update { id: 7, found: 0 }]);
+}
+
+#[test]
+fn duplicates_merge_and_unsupported_alerts_are_withdrawn() {
+    let pks: Vec<i64> = (0..40).collect();
+    let alerts = [
+        alert(1, 20, 0.1, CONFIRMED),
+        alert(2, 22, 0.1, PENDING),
+        alert(3, 30, -0.05, CONFIRMED),
+        alert(4, 10, 0.1, WITHDRAWN),
+    ];
+    let actions = plan(&pks, 0, &[found(21, 0.1, CONFIRMED)], &alerts);
+    assert_eq!(
+        actions,
+        vec![
+            Action::Update { id: 1, found: 0 },
+            Action::Withdraw {
+                id: 2,
+                into: Some(1)
+            },
+            Action::Withdraw { id: 3, into: None },
+        ]
+    );
+}
+
+#[test]
+fn a_withdrawn_alert_at_the_change_is_reinstated_and_direction_matters() {
+    let pks: Vec<i64> = (0..40).collect();
+    let alerts = [alert(1, 20, 0.1, WITHDRAWN), alert(2, 25, -0.1, PENDING)];
+    let actions = plan(
+        &pks,
+        0,
+        &[found(20, 0.1, CONFIRMED), found(26, 0.1, PENDING)],
+        &alerts,
+    );
+    assert_eq!(
+        actions,
+        vec![
+            Action::Update { id: 1, found: 0 },
+            Action::Insert { found: 1 },
+            Action::Withdraw { id: 2, into: None },
+        ]
+    );
+}
+
+#[test]
+fn alerts_before_the_open_part_are_final() {
+    let pks: Vec<i64> = (0..300).collect();
+    let actions = plan(
+        &pks,
+        64,
+        &[found(10, 0.1, CONFIRMED)],
+        &[alert(1, 30, 0.1, CONFIRMED)],
+    );
+    assert_eq!(actions, vec![]);
+}

@@ -1,0 +1,201 @@
+//! A kit of GPU helpers techniques build with: allocating a plan's textures, the timed scene
+//! pass, bind groups, compute pipelines, placeholder textures.
+//!
+//! Infrastructure: it knows no technique.
+
+use std::collections::HashMap;
+
+use super::graph::Plan;
+use super::scene::{SceneGpu, ScenePipeline};
+use super::timers::Timers;
+use crate::gpu::Gpu;
+
+/// Allocates every texture the plan keeps.
+pub fn allocate(device: &wgpu::Device, plan: &Plan) -> HashMap<&'static str, wgpu::Texture> {
+    allocate_with(device, plan, wgpu::TextureUsages::empty())
+}
+
+/// [`allocate`], every texture also with `extra` usages (e.g. `COPY_DST` for textures a
+/// technique fills by copying).
+pub fn allocate_with(
+    device: &wgpu::Device,
+    plan: &Plan,
+    extra: wgpu::TextureUsages,
+) -> HashMap<&'static str, wgpu::Texture> {
+    plan.resources
+        .iter()
+        .map(|r| {
+            let d = &r.desc;
+            let mut usage = wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::TEXTURE_BINDING
+                | extra;
+            if d.samples == 1 {
+                usage |= wgpu::TextureUsages::COPY_SRC;
+                if !d.format.is_depth_stencil_format() {
+                    usage |= wgpu::TextureUsages::STORAGE_BINDING;
+                }
+            }
+            let t = device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(r.name),
+                size: wgpu::Extent3d {
+                    width: d.width,
+                    height: d.height,
+                    depth_or_array_layers: d.layers,
+                },
+                mip_level_count: 1,
+                sample_count: d.samples,
+                dimension: wgpu::TextureDimension::D2,
+                format: d.format,
+                usage,
+                view_formats: &[],
+            });
+            (r.name, t)
+        })
+        .collect()
+}
+
+/// The forward `scene` pass into `color` and `depth`, timed and counted.
+#[allow(clippy::too_many_arguments)]
+pub fn record_scene_pass(
+    gpu: &Gpu,
+    scene: &mut SceneGpu,
+    timers: &Timers,
+    encoder: &mut wgpu::CommandEncoder,
+    name: &'static str,
+    color_view: &wgpu::TextureView,
+    depth_view: &wgpu::TextureView,
+    slot: u32,
+    kind: ScenePipeline,
+) {
+    record_scene_pass_on(
+        gpu,
+        scene,
+        timers,
+        encoder,
+        (name, slot, kind),
+        color_view,
+        depth_view,
+        wgpu::LoadOp::Clear(0.0),
+    );
+}
+
+/// [`record_scene_pass`] with the depth buffer's load op: `Load` draws over a pre-conditioned
+/// depth buffer (checkerboard-2x2's masks), `Clear(0.0)` starts from the far plane (reversed-Z).
+#[allow(clippy::too_many_arguments)]
+pub fn record_scene_pass_on(
+    gpu: &Gpu,
+    scene: &mut SceneGpu,
+    timers: &Timers,
+    encoder: &mut wgpu::CommandEncoder,
+    (name, slot, kind): (&'static str, u32, ScenePipeline),
+    color_view: &wgpu::TextureView,
+    depth_view: &wgpu::TextureView,
+    depth_load: wgpu::LoadOp<f32>,
+) {
+    // Velocity targets hold motion, not colour: nothing drawn means no motion.
+    let clear = match kind {
+        ScenePipeline::Velocity => wgpu::Color::TRANSPARENT,
+        _ => scene.clear_color(),
+    };
+    let pipeline = scene.pipeline(&gpu.device, kind).clone();
+    let q = timers.begin(name, encoder);
+    {
+        let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some(name),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: color_view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(clear),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: depth_view,
+                depth_ops: Some(wgpu::Operations {
+                    load: depth_load,
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: q.render_pass_timestamp_writes(),
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        timers.begin_stats(&mut rp, name);
+        scene.draw(&mut rp, &pipeline, slot);
+        timers.end_stats(&mut rp, name);
+    }
+    timers.end(encoder, q);
+}
+
+/// A 1x1 texture bound where a technique's optional input (a history, a velocity buffer) is not
+/// kept, so one bind group layout serves with and without it.
+pub fn placeholder_texture(
+    device: &wgpu::Device,
+    label: &str,
+    format: wgpu::TextureFormat,
+) -> wgpu::Texture {
+    device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: 1,
+            height: 1,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING,
+        view_formats: &[],
+    })
+}
+
+/// A bind group of whole buffers and texture views, each at its binding number.
+pub fn bind_group(
+    device: &wgpu::Device,
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    buffers: &[(u32, &wgpu::Buffer)],
+    views: &[(u32, &wgpu::TextureView)],
+) -> wgpu::BindGroup {
+    let mut entries: Vec<wgpu::BindGroupEntry> = buffers
+        .iter()
+        .map(|(binding, b)| wgpu::BindGroupEntry {
+            binding: *binding,
+            resource: b.as_entire_binding(),
+        })
+        .collect();
+    entries.extend(views.iter().map(|(binding, v)| wgpu::BindGroupEntry {
+        binding: *binding,
+        resource: wgpu::BindingResource::TextureView(v),
+    }));
+    device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(label),
+        layout,
+        entries: &entries,
+    })
+}
+
+/// A compute pipeline with an automatic layout from WGSL `source`.
+pub fn compute_pipeline(
+    device: &wgpu::Device,
+    label: &str,
+    source: &str,
+    entry_point: &str,
+) -> wgpu::ComputePipeline {
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(label),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
+    });
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(label),
+        layout: None,
+        module: &module,
+        entry_point: Some(entry_point),
+        compilation_options: Default::default(),
+        cache: None,
+    })
+}

@@ -1,0 +1,212 @@
+//! Techniques `adaptive-shading` and `native-deferred`: NVIDIA's content and motion adaptive
+//! shading (Yang et al. 2019, `seeds/nvidia-adaptive-shading.txt`) on software variable-rate
+//! shading, and its baseline, the same deferred path at 1x1 everywhere. Parameters here, the GPU
+//! part in `gpu.rs`, the CPU model of rate selection in `model.rs`, shaders under
+//! `shaders/adaptive_shading/`.
+//!
+//! Defaults are the paper's: t = 0.15 and l = 0.05 (section 6), k = 2.13 (Eq. 14), e = 0.1
+//! (section 4.2's example), 4x4 off (section 3.4), the 2x neighbour filter on (section 5.4). The
+//! paper gives no value for the hysteresis epsilon nor for the depth-rejection tolerance (section
+//! 5.1 cites Nehab et al.): those defaults are ours.
+
+pub mod gpu;
+pub mod model;
+
+use super::definition::{Shader, Target, Technique};
+use crate::gpu::{Gpu, Unsupported};
+use crate::params::{Param, ParamSpec, Variant};
+use crate::render::graph::Plan;
+use crate::render::renderer::Renderer;
+
+pub use gpu::{graph, rate_image, AdaptiveGpu, LastFrame};
+pub use model::{CoarseSample, Mode, RateParams};
+
+pub static THRESHOLD: Param<f64> = Param::float(
+    "threshold",
+    (0.0, false, 100.0),
+    0.15,
+    "sensitivity threshold t of the just-noticeable-difference threshold t (I_avg + l) (Eq. 15; the paper's value). Sweep it for the paper's Fig. 10 (error against average shading rate)",
+);
+pub static ENV_LUMA: Param<f64> = Param::float(
+    "env_luma",
+    (0.0, true, 100.0),
+    0.05,
+    "environment luminance l (Eq. 15; the paper's value)",
+);
+pub static K: Param<f64> = Param::float(
+    "k",
+    (0.0, false, 100.0),
+    2.13,
+    "quarter-rate error over half-rate error (Eq. 14); also the scale of the quarter-rate motion factor (Eq. 21)",
+);
+pub static MODE: Param<Mode> = Mode::param(
+    "mode",
+    Mode::ContentMotion,
+    "`content-motion`: Eq. 22, the error estimate scaled by the motion factors b_H, b_Q (Eq. 20, 21) of the tile's minimum motion per axis; `content`: Eq. 16, no motion factors; `motion`: standalone motion-adaptive shading (Eq. 24), no error estimate, the relative error taken as `max_error`",
+);
+pub static MAX_ERROR: Param<f64> = Param::float(
+    "max_error",
+    (0.0, false, 100.0),
+    0.1,
+    "`motion` mode only: the bound e on the relative error (Eq. 24); 0.1 as the paper's example (section 4.2: with t = 0.03, half rate from 2.86 px/frame, quarter from 9.49)",
+);
+pub static HYSTERESIS: Param<f64> = Param::float(
+    "hysteresis",
+    (0.0, true, 0.99),
+    0.2,
+    "epsilon of the thresholds t(1 + epsilon) and t(1 - epsilon) (section 5.4; the paper gives no value; 0 turns it off. A tile shaded coarsely shows about sqrt 2 more error estimate next frame than at full rate (replicated pixels step at coarse-pixel borders: the feedback loop of section 5.4), so without hysteresis rates oscillate frame to frame on a static scene: on a small `detailed.toml` flicker was 0.53 at epsilon 0, 0.19 at 0.1, 0.055 at 0.2 and above, native 0.052), a Schmitt trigger on each tile's previous rate per axis (before the neighbour filter): a rise of the predicted error to a finer rate must pass t(1 + epsilon), a fall to a coarser rate t(1 - epsilon)",
+);
+pub static NEIGHBOUR_FILTER: Param<bool> = Param::flag(
+    "neighbour_filter",
+    true,
+    "a `rate_filter` pass limiting neighbouring tiles (8-neighbourhood) to a 2x rate difference per axis, quarter raised to half (section 5.4)",
+);
+pub static ALLOW_4X4: Param<bool> = Param::flag(
+    "allow_4x4",
+    false,
+    "quarter rate on both axes at once; off in the paper (section 3.4): the axis with the larger error gets half rate",
+);
+pub static COARSE_SAMPLE: Param<CoarseSample> = CoarseSample::param(
+    "coarse_sample",
+    CoarseSample::Centre,
+    "where the shading pass shades a coarse pixel: `centre` as hardware VRS does (the paper's setting): at the mean of the G-buffer attributes of the object's pixels in it, with the ground filter's derivatives scaled across it (coarse pixels blur rather than alias); `pixel`: at the G-buffer sample of its shading pixel (the centre pixel, or the object's first pixel in it), replicated (a native sample: smaller error against a `native` reference where native itself aliases)",
+);
+pub static DISOCCLUSION_TOLERANCE: Param<f64> = Param::float(
+    "disocclusion_tolerance",
+    (0.0, false, 1.0e9),
+    0.05,
+    "depth-based rejection (section 5.1): a covered pixel whose reprojected position is off screen, or whose previous-frame view depth differs from its surface's by more than this fraction, is disoccluded, and its tile shaded at 1x1",
+);
+static PARAMS: [&ParamSpec; 10] = [
+    &THRESHOLD.spec,
+    &ENV_LUMA.spec,
+    &K.spec,
+    &MODE.spec,
+    &MAX_ERROR.spec,
+    &HYSTERESIS.spec,
+    &NEIGHBOUR_FILTER.spec,
+    &ALLOW_4X4.spec,
+    &COARSE_SAMPLE.spec,
+    &DISOCCLUSION_TOLERANCE.spec,
+];
+
+/// Rate-selection parameters of an `adaptive-shading` variant.
+pub fn rate_params(v: &Variant) -> RateParams {
+    RateParams {
+        threshold: v.get(&THRESHOLD) as f32,
+        env_luma: v.get(&ENV_LUMA) as f32,
+        k: v.get(&K) as f32,
+        mode: v.get(&MODE),
+        max_error: v.get(&MAX_ERROR) as f32,
+        hysteresis: v.get(&HYSTERESIS) as f32,
+        neighbour_filter: v.get(&NEIGHBOUR_FILTER),
+        allow_4x4: v.get(&ALLOW_4X4),
+        disocclusion_tolerance: v.get(&DISOCCLUSION_TOLERANCE) as f32,
+        coarse_sample: v.get(&COARSE_SAMPLE),
+    }
+}
+
+/// The rate selection a variant runs: its parameters for `adaptive-shading`, `None` (every tile at
+/// 1x1, no rate pass) for `native-deferred`.
+pub fn rates_of(v: &Variant) -> Option<RateParams> {
+    (v.technique.name() == AdaptiveShading.name()).then(|| rate_params(v))
+}
+
+fn shaders() -> Vec<Shader> {
+    vec![
+        Shader::file("adaptive_shading/rate.wgsl", gpu::RATE_WGSL),
+        Shader {
+            name: "adaptive shade".into(),
+            source: gpu::shade_source(),
+            files: vec!["scene.wgsl", "adaptive_shading/shade.wgsl"],
+        },
+    ]
+}
+
+pub struct AdaptiveShading;
+
+impl Technique for AdaptiveShading {
+    fn name(&self) -> &'static str {
+        "adaptive-shading"
+    }
+
+    fn summary(&self) -> &'static str {
+        "NVIDIA's content and motion adaptive shading on software variable-rate shading: a rate per 16x16 tile from the previous frame"
+    }
+
+    fn params(&self) -> &'static [&'static ParamSpec] {
+        &PARAMS
+    }
+
+    fn plan(&self, variant: &Variant, target: Target) -> Plan {
+        graph(Some(&rate_params(variant)), target.width, target.height)
+    }
+
+    fn build(
+        &self,
+        gpu: &Gpu,
+        variant: &Variant,
+        target: Target,
+    ) -> Result<Box<dyn Renderer>, Unsupported> {
+        let rates = Some(rate_params(variant));
+        Ok(Box::new(AdaptiveGpu::new(
+            gpu,
+            rates,
+            target.width,
+            target.height,
+        )))
+    }
+
+    fn shaders(&self) -> Vec<Shader> {
+        shaders()
+    }
+
+    fn baseline(&self) -> Option<&'static str> {
+        Some(NativeDeferred.name())
+    }
+}
+
+pub struct NativeDeferred;
+
+impl Technique for NativeDeferred {
+    fn name(&self) -> &'static str {
+        "native-deferred"
+    }
+
+    fn summary(&self) -> &'static str {
+        "the deferred path of `adaptive-shading` with every tile at 1x1: a full-resolution G-buffer pass, then a compute pass shading every pixel with the forward path's shading function (bitwise the same image as `native` on lavapipe); the baseline `adaptive-shading` is compared with"
+    }
+
+    fn plan(&self, _variant: &Variant, target: Target) -> Plan {
+        graph(None, target.width, target.height)
+    }
+
+    fn build(
+        &self,
+        gpu: &Gpu,
+        _variant: &Variant,
+        target: Target,
+    ) -> Result<Box<dyn Renderer>, Unsupported> {
+        Ok(Box::new(AdaptiveGpu::new(
+            gpu,
+            None,
+            target.width,
+            target.height,
+        )))
+    }
+
+    fn shaders(&self) -> Vec<Shader> {
+        shaders()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_models_defaults_are_the_parameters_defaults() {
+        let v = Variant::with_defaults(&AdaptiveShading);
+        assert_eq!(rate_params(&v), RateParams::default());
+    }
+}

@@ -1,0 +1,210 @@
+//! Technique `checkerboard`: Intel's checkerboard rendering (McFerron & Lake 2018) with
+//! mosaiikki's refinements: its parameters and options here, the GPU part in `gpu.rs`, the CPU
+//! model of the reconstruction in `model.rs`, shaders under `shaders/checkerboard/`.
+//!
+//! Defaults trace to the sources: sampling portable; gradients as Intel's code (DDXY_BIAS 0.5);
+//! CSO with mosaiikki's tolerance (view units); mosaiikki's differential fill; Intel's unclamped
+//! history (mosaiikki's clamps are options); mosaiikki's velocity buffer.
+
+pub mod gpu;
+pub mod model;
+
+use super::definition::{Shader, Target, Technique};
+use crate::gpu::{Gpu, Unsupported};
+use crate::params::{Param, ParamSpec, Variant};
+use crate::render::graph::Plan;
+use crate::render::renderer::Renderer;
+
+pub use gpu::{quarter_size, quarter_view, two_pass_jitter, CheckerboardGpu, LastFrame};
+
+crate::choice! {
+    /// How the quarter-resolution samples are shaded.
+    pub enum Sampling {
+        /// Two jittered single-sample renders: the same samples on any adapter.
+        TwoPass = "two-pass",
+        /// A 2x MSAA target shaded per sample (needs MULTISAMPLE_X2 and standard positions).
+        Msaa2x = "msaa2x",
+    }
+}
+
+crate::choice! {
+    /// When a pixel whose history moved to another 2x2 block is taken as occluded.
+    pub enum Occlusion {
+        /// When its old view depth differs from its neighbours' mean by the tolerance or more.
+        Cso = "cso",
+        /// Always.
+        Aso = "aso",
+    }
+}
+
+crate::choice! {
+    /// How a missing pixel is filled from its 4 neighbours.
+    pub enum Fill {
+        Plain = "plain",
+        Tonemapped = "tonemapped",
+        Differential = "differential",
+    }
+}
+
+crate::choice! {
+    /// How the history is clamped to the neighbours.
+    pub enum Clamp {
+        None = "none",
+        MinMax = "min-max",
+        MinMaxConfidence = "min-max-confidence",
+    }
+}
+
+impl Fill {
+    /// The resolve shader's code (`mode.w`).
+    pub fn code(self) -> u32 {
+        match self {
+            Fill::Plain => 0,
+            Fill::Tonemapped => 1,
+            Fill::Differential => 2,
+        }
+    }
+}
+
+impl Clamp {
+    /// The resolve shader's code (`mode2.x`).
+    pub fn code(self) -> u32 {
+        match self {
+            Clamp::None => 0,
+            Clamp::MinMax => 1,
+            Clamp::MinMaxConfidence => 2,
+        }
+    }
+}
+
+pub static SAMPLING: Param<Sampling> = Sampling::param(
+    "sampling",
+    Sampling::TwoPass,
+    "`msaa2x`: 2x MSAA quarter-resolution targets shaded per sample (Intel, mosaiikki); needs `MULTISAMPLE_X2` for rgba16float and depth32float and the standard sample positions (probed once per adapter), else the variant is skipped with the reason. `two-pass`: two single-sample quarter-resolution renders, the projection jittered a quarter of a quarter-resolution pixel each way: the same samples on any adapter, vertex work twice",
+);
+pub static GRADIENT_SCALE: Param<f64> = Param::float(
+    "gradient_scale",
+    (0.0, false, 1.0),
+    0.5,
+    "multiplies screen-space derivatives at quarter resolution (the ground filter's width): 0.5 as Intel's code (`DDXY_BIAS`, -1 LOD), 0.7071 as mosaiikki's -0.5 LOD bias",
+);
+pub static OCCLUSION: Param<Occlusion> = Occlusion::param(
+    "occlusion",
+    Occlusion::Cso,
+    "a pixel whose history moved to another 2x2 block is occluded (filled spatially) when its old view depth differs from its neighbours' mean by `depth_tolerance` or more (CSO), or always (ASO)",
+);
+pub static DEPTH_TOLERANCE: Param<f64> = Param::float(
+    "depth_tolerance",
+    (0.0, false, 1.0e9),
+    0.01,
+    "CSO tolerance in view-space units (mosaiikki's default)",
+);
+pub static FILL: Param<Fill> = Fill::param(
+    "fill",
+    Fill::Differential,
+    "missing pixels from the 4 neighbours: plain mean, mean under AMD's reversible tonemap, or mosaiikki's differential blend",
+);
+pub static CLAMP: Param<Clamp> = Clamp::param(
+    "clamp",
+    Clamp::None,
+    "history clamped to the neighbours' min/max (mosaiikki), optionally blended back by depth confidence; `none` as Intel",
+);
+pub static VELOCITY: Param<bool> = Param::flag(
+    "velocity",
+    true,
+    "full-resolution velocity pass for dynamic objects; recorded only when the scene has animated objects (otherwise culled)",
+);
+static PARAMS: [&ParamSpec; 7] = [
+    &SAMPLING.spec,
+    &GRADIENT_SCALE.spec,
+    &OCCLUSION.spec,
+    &DEPTH_TOLERANCE.spec,
+    &FILL.spec,
+    &CLAMP.spec,
+    &VELOCITY.spec,
+];
+
+/// A variant's options, typed; the resolve shader's `mode` fields encode them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Options {
+    pub sampling: Sampling,
+    pub gradient_scale: f32,
+    pub occlusion: Occlusion,
+    pub depth_tolerance: f32,
+    pub fill: Fill,
+    pub clamp: Clamp,
+    pub velocity: bool,
+}
+
+impl Options {
+    pub fn from_variant(v: &Variant) -> Options {
+        Options {
+            sampling: v.get(&SAMPLING),
+            gradient_scale: v.get(&GRADIENT_SCALE) as f32,
+            occlusion: v.get(&OCCLUSION),
+            depth_tolerance: v.get(&DEPTH_TOLERANCE) as f32,
+            fill: v.get(&FILL),
+            clamp: v.get(&CLAMP),
+            velocity: v.get(&VELOCITY),
+        }
+    }
+}
+
+impl Default for Options {
+    /// Every parameter at its default.
+    fn default() -> Options {
+        Options::from_variant(&Variant::with_defaults(&Checkerboard))
+    }
+}
+
+pub struct Checkerboard;
+
+impl Technique for Checkerboard {
+    fn name(&self) -> &'static str {
+        "checkerboard"
+    }
+
+    fn summary(&self) -> &'static str {
+        "Intel's checkerboard rendering with mosaiikki's refinements: half the samples each frame, the other half reprojected"
+    }
+
+    fn params(&self) -> &'static [&'static ParamSpec] {
+        &PARAMS
+    }
+
+    fn plan(&self, variant: &Variant, target: Target) -> Plan {
+        let options = Options::from_variant(variant);
+        gpu::graph(&options, target.width, target.height, target.dynamic_scene).0
+    }
+
+    fn build(
+        &self,
+        gpu: &Gpu,
+        variant: &Variant,
+        target: Target,
+    ) -> Result<Box<dyn Renderer>, Unsupported> {
+        Ok(Box::new(CheckerboardGpu::new(
+            gpu,
+            Options::from_variant(variant),
+            target.width,
+            target.height,
+            target.dynamic_scene,
+        )?))
+    }
+
+    fn shaders(&self) -> Vec<Shader> {
+        use gpu::{MSAA2X_WGSL, RESOLVE_WGSL, TWO_PASS_WGSL};
+        vec![
+            Shader {
+                name: "checkerboard two-pass".into(),
+                source: format!("{TWO_PASS_WGSL}\n{RESOLVE_WGSL}"),
+                files: vec!["checkerboard/two_pass.wgsl", "checkerboard/resolve.wgsl"],
+            },
+            Shader {
+                name: "checkerboard msaa2x".into(),
+                source: format!("{MSAA2X_WGSL}\n{RESOLVE_WGSL}"),
+                files: vec!["checkerboard/msaa2x.wgsl", "checkerboard/resolve.wgsl"],
+            },
+        ]
+    }
+}

@@ -1,0 +1,172 @@
+//! Technique `checkerboard-2x2`: the depth-based report's 2x2 checkerboarding
+//! (`seeds/depth-based-checkerboarding.txt`, sections 5.3.1 to 5.3.8): its parameters and options
+//! here, the GPU part in `gpu.rs`, the CPU model of the reconstitution in `model.rs`, shaders
+//! under `shaders/checkerboard_2x2/`.
+//!
+//! Defaults are the report's final implementation (sections 5.3.4 to 5.3.8): blended clamping
+//! with motion coherency, its small-motion constant and its blend limits. Motion is in pixels per
+//! frame; depth differences are in linear depth normalised to [0, 1] between the camera's near
+//! and far planes (section 5.3.7).
+
+pub mod gpu;
+pub mod model;
+
+use super::definition::{Shader, Target, Technique};
+use crate::gpu::{Gpu, Unsupported};
+use crate::params::{Param, ParamSpec, Variant};
+use crate::render::graph::Plan;
+use crate::render::renderer::Renderer;
+
+pub use gpu::{
+    graph, workgroups, Bindings, Checkerboard2x2Gpu, FrameParams, LastFrame, Reconstitution,
+};
+
+crate::choice! {
+    /// The report's clamp modes (5.3.3 to 5.3.7).
+    pub enum Clamp {
+        None = "none",
+        Uniform = "uniform",
+        Conditional = "conditional",
+        Blended = "blended",
+    }
+}
+
+impl Clamp {
+    /// The reconstitution shader's code (`mode.x`).
+    pub fn code(self) -> u32 {
+        match self {
+            Clamp::None => 0,
+            Clamp::Uniform => 1,
+            Clamp::Conditional => 2,
+            Clamp::Blended => 3,
+        }
+    }
+
+    /// Conditional and blended clamp only where the pixel moves (5.3.5).
+    pub fn is_conditional(self) -> bool {
+        matches!(self, Clamp::Conditional | Clamp::Blended)
+    }
+}
+
+pub static CLAMP: Param<Clamp> = Clamp::param(
+    "clamp",
+    Clamp::Blended,
+    "the reprojected colour against the range (min/max) of the masked pixel's two shaded direct neighbours: never clamped (report 5.3.3), always (5.3.4), only where the pixel moves more than `motion_threshold` (5.3.5), or conditional with the clamp blended back by depth difference (5.3.7, the report's final version)",
+);
+pub static MOTION_THRESHOLD: Param<f64> = Param::float(
+    "motion_threshold",
+    (0.0, true, 1.0e9),
+    1.0e-7,
+    "pixels per frame; `conditional` and `blended` do not clamp a pixel moving less than this (the report's 0.0000001: only rounding-level motion escapes the clamp)",
+);
+pub static BLEND_MIN: Param<f64> = Param::float(
+    "blend_min",
+    (0.0, true, 1.0),
+    0.005,
+    "`blended`: linear depth difference (normalised to [0, 1] between the camera's `near` and `far`) between the reprojected depth and a neighbour's below which that direction keeps the reprojected colour (the report's minimum blend difference); less than `blend_max`",
+);
+pub static BLEND_MAX: Param<f64> = Param::float(
+    "blend_max",
+    (0.0, false, 1.0),
+    0.1,
+    "`blended`: the clamp weight of a direction is its difference / `blend_max`, capped at 1 (the report's maximum blend difference); the two directions' blends are averaged",
+);
+pub static MOTION_COHERENCY: Param<bool> = Param::flag(
+    "motion_coherency",
+    true,
+    "`conditional` and `blended`: also clamp where a shaded neighbour's previous motion differs from the pixel's motion by more than `motion_threshold` (5.3.8); keeps the motion history (otherwise not allocated)",
+);
+static PARAMS: [&ParamSpec; 5] = [
+    &CLAMP.spec,
+    &MOTION_THRESHOLD.spec,
+    &BLEND_MIN.spec,
+    &BLEND_MAX.spec,
+    &MOTION_COHERENCY.spec,
+];
+
+/// Reconstitution options (the variant's parameters).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Options {
+    pub clamp: Clamp,
+    /// Pixels per frame; conditional and blended clamp only above it (5.3.5).
+    pub motion_threshold: f32,
+    /// Linear depth differences in [0, 1] (5.3.7).
+    pub blend_min: f32,
+    pub blend_max: f32,
+    pub motion_coherency: bool,
+}
+
+impl Options {
+    pub fn from_variant(v: &Variant) -> Options {
+        Options {
+            clamp: v.get(&CLAMP),
+            motion_threshold: v.get(&MOTION_THRESHOLD) as f32,
+            blend_min: v.get(&BLEND_MIN) as f32,
+            blend_max: v.get(&BLEND_MAX) as f32,
+            motion_coherency: v.get(&MOTION_COHERENCY),
+        }
+    }
+
+    /// The blended clamp compares the reprojected depth with the neighbours' (5.3.7).
+    pub fn reads_depth_history(&self) -> bool {
+        self.clamp == Clamp::Blended
+    }
+
+    /// Motion coherency only matters where clamping is conditional (5.3.8).
+    pub fn reads_motion_history(&self) -> bool {
+        self.motion_coherency && self.clamp.is_conditional()
+    }
+}
+
+pub struct Checkerboard2x2;
+
+impl Technique for Checkerboard2x2 {
+    fn name(&self) -> &'static str {
+        "checkerboard-2x2"
+    }
+
+    fn summary(&self) -> &'static str {
+        "the depth-based report's 2x2 checkerboarding: masked blocks rejected by a pre-conditioned depth buffer, reconstituted by motion reprojection"
+    }
+
+    fn params(&self) -> &'static [&'static ParamSpec] {
+        &PARAMS
+    }
+
+    fn check(&self, variant: &Variant) -> Result<(), String> {
+        let (min, max) = (variant.get(&BLEND_MIN), variant.get(&BLEND_MAX));
+        if min >= max {
+            return Err(format!(
+                "blend_min ({min}) must be less than blend_max ({max}): depth differences between them blend the clamp in"
+            ));
+        }
+        Ok(())
+    }
+
+    fn plan(&self, variant: &Variant, target: Target) -> Plan {
+        graph(target.width, target.height, &Options::from_variant(variant))
+            .plan()
+            .expect("built-in graphs are well formed")
+    }
+
+    fn build(
+        &self,
+        gpu: &Gpu,
+        variant: &Variant,
+        target: Target,
+    ) -> Result<Box<dyn Renderer>, Unsupported> {
+        Ok(Box::new(Checkerboard2x2Gpu::new(
+            gpu,
+            variant,
+            target.width,
+            target.height,
+        )))
+    }
+
+    fn shaders(&self) -> Vec<Shader> {
+        vec![
+            Shader::file("checkerboard_2x2/mask.wgsl", gpu::MASK_WGSL),
+            Shader::file("checkerboard_2x2/reconstitute.wgsl", gpu::RECONSTITUTE_WGSL),
+        ]
+    }
+}

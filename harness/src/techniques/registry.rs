@@ -1,0 +1,30 @@
+//! The one list of techniques. Everything that enumerates techniques (validation and its
+//! messages, plan and build, the shader test, the speedup baselines, the parameter table of
+//! `scenarios/README.md`) reads it.
+
+use super::adaptive_shading::{AdaptiveShading, NativeDeferred};
+use super::checkerboard::Checkerboard;
+use super::checkerboard_2x2::Checkerboard2x2;
+use super::definition::Technique;
+use super::native::Native;
+use super::upscale::Upscale;
+
+/// Every technique, in the order the docs and error messages list them.
+pub static ALL: &[&dyn Technique] = &[
+    &Native,
+    &Upscale,
+    &Checkerboard,
+    &Checkerboard2x2,
+    &AdaptiveShading,
+    &NativeDeferred,
+];
+
+/// The technique called `name`.
+pub fn by_name(name: &str) -> Option<&'static dyn Technique> {
+    ALL.iter().copied().find(|t| t.name() == name)
+}
+
+/// Names of every technique, for error messages.
+pub fn names() -> Vec<&'static str> {
+    ALL.iter().map(|t| t.name()).collect()
+}

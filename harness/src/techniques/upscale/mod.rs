@@ -1,0 +1,126 @@
+//! Technique `upscale`: render at a scale factor, then upscale to the output with a bilinear or
+//! nearest filter (a compute pass): what a user would pick instead of a technique.
+
+use super::definition::{Shader, Target, Technique};
+use super::native::gpu::{forward_graph, Forward, MakeResample, Resample};
+use crate::gpu::Gpu;
+use crate::params::{Param, ParamSpec, Variant};
+use crate::render::graph::Plan;
+use crate::render::kit::compute_pipeline;
+use crate::render::renderer::{Renderer, Unsupported};
+
+pub static UPSCALE_WGSL: &str = include_str!("../../../../shaders/upscale/upscale.wgsl");
+
+crate::choice! {
+    /// The upscaling filter.
+    pub enum Filter {
+        Bilinear = "bilinear",
+        Nearest = "nearest",
+    }
+}
+
+pub static SCALE: Param<f64> = Param::float(
+    "scale",
+    (0.0, false, 1.0),
+    0.5,
+    "render width and height as a fraction of the output resolution",
+);
+pub static FILTER: Param<Filter> = Filter::param(
+    "filter",
+    Filter::Bilinear,
+    "upscaling filter (compute pass at output resolution)",
+);
+static PARAMS: [&ParamSpec; 2] = [&SCALE.spec, &FILTER.spec];
+
+pub struct Upscale;
+
+/// Render size and the upscale pass of a variant at `target`.
+fn setup(variant: &Variant, target: Target) -> (u32, u32, Resample, Filter) {
+    let s = variant.get(&SCALE);
+    let lw = ((target.width as f64 * s).round() as u32).max(1);
+    let lh = ((target.height as f64 * s).round() as u32).max(1);
+    let resample = Resample {
+        pass: "upscale",
+        color: "color_low",
+        depth: "depth_low",
+        width: target.width,
+        height: target.height,
+    };
+    (lw, lh, resample, variant.get(&FILTER))
+}
+
+impl Technique for Upscale {
+    fn name(&self) -> &'static str {
+        "upscale"
+    }
+
+    fn summary(&self) -> &'static str {
+        "render at a fraction of the output resolution, then upscale"
+    }
+
+    fn params(&self) -> &'static [&'static ParamSpec] {
+        &PARAMS
+    }
+
+    fn plan(&self, variant: &Variant, target: Target) -> Plan {
+        let (w, h, resample, _) = setup(variant, target);
+        forward_graph(w, h, Some(&resample))
+    }
+
+    fn build(
+        &self,
+        gpu: &Gpu,
+        variant: &Variant,
+        target: Target,
+    ) -> Result<Box<dyn Renderer>, Unsupported> {
+        let (w, h, resample, filter) = setup(variant, target);
+        let filter = match filter {
+            Filter::Bilinear => wgpu::FilterMode::Linear,
+            Filter::Nearest => wgpu::FilterMode::Nearest,
+        };
+        let make: MakeResample =
+            Box::new(move |gpu, src, dst| upscale_pipeline(gpu, src, dst, filter));
+        Ok(Box::new(Forward::new(gpu, w, h, Some((resample, make)))))
+    }
+
+    fn shaders(&self) -> Vec<Shader> {
+        vec![Shader::file("upscale/upscale.wgsl", UPSCALE_WGSL)]
+    }
+}
+
+fn upscale_pipeline(
+    gpu: &Gpu,
+    src: &wgpu::Texture,
+    dst: &wgpu::Texture,
+    filter: wgpu::FilterMode,
+) -> (wgpu::ComputePipeline, wgpu::BindGroup) {
+    let device = &gpu.device;
+    let pipeline = compute_pipeline(device, "upscale", UPSCALE_WGSL, "main");
+    let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+        label: Some("upscale"),
+        mag_filter: filter,
+        min_filter: filter,
+        address_mode_u: wgpu::AddressMode::ClampToEdge,
+        address_mode_v: wgpu::AddressMode::ClampToEdge,
+        ..Default::default()
+    });
+    let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("upscale"),
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &[
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::TextureView(&src.create_view(&Default::default())),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: wgpu::BindingResource::Sampler(&sampler),
+            },
+            wgpu::BindGroupEntry {
+                binding: 2,
+                resource: wgpu::BindingResource::TextureView(&dst.create_view(&Default::default())),
+            },
+        ],
+    });
+    (pipeline, bind_group)
+}
