@@ -364,8 +364,8 @@ pub fn cvvdp_heatmap(map: &DistortionMap) -> Rgb8Image {
         let x = v.clamp(0.0, 0.1) / 0.1 * 4.0;
         let i = (x.floor() as usize).min(3);
         let t = x - i as f32;
-        for c in 0..3 {
-            let value = (chroma[i][c] * (1.0 - t) + chroma[i + 1][c] * t) * 0.5;
+        for (a, b) in chroma[i].iter().zip(&chroma[i + 1]) {
+            let value = (a * (1.0 - t) + b * t) * 0.5;
             data.push((value.clamp(0.0, 1.0) * 255.0).round() as u8);
         }
     }

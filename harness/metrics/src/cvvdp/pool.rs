@@ -18,19 +18,20 @@ const BETA_SCH: f32 = 4.0;
 const BETA_TCH: f32 = 4.0;
 /// beta_t: Lp exponent across frames (mean-normalised).
 const BETA_T: f32 = 2.0;
+// The JSON's digits, kept verbatim as f64 and rounded to f32 as serde does when the crate loads them.
 /// Channel weights: achromatic, red-green, yellow-violet (ch_chrom_w), transient (ch_trans_w).
-const CHANNEL_WEIGHTS: [f32; 4] = [1.0, 1.0, 1.0, 0.808_113_455_772_399_9];
+const CHANNEL_WEIGHTS: [f32; 4] = [1.0, 1.0, 1.0, 0.808_113_455_772_399_9_f64 as f32];
 /// Weights of the baseband (the last band), per channel.
 const BASEBAND_WEIGHT: [f32; 4] = [
-    0.003_633_448_621_258_139_6,
-    1.662_772_417_068_481_4,
-    4.118_745_326_995_85,
-    25.259_698_867_797_85,
+    0.003_633_448_621_258_139_6_f64 as f32,
+    1.662_772_417_068_481_4_f64 as f32,
+    4.118_745_326_995_85_f64 as f32,
+    25.259_698_867_797_85_f64 as f32,
 ];
 /// image_int: images are scaled by this before `met2jod`.
-const IMAGE_INT: f32 = 0.577_918_291_091_919;
-const JOD_A: f32 = 0.043_956_939_131_021_5;
-const JOD_EXP: f32 = 0.930_204_272_270_202_6;
+const IMAGE_INT: f32 = 0.577_918_291_091_919_f64 as f32;
+const JOD_A: f32 = 0.043_956_939_131_021_5_f64 as f32;
+const JOD_EXP: f32 = 0.930_204_272_270_202_6_f64 as f32;
 
 /// The transient channel's index in a video's `quality_per_channel`.
 pub(crate) const TRANSIENT: usize = 3;
