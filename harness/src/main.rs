@@ -81,16 +81,25 @@ enum Command {
         #[arg(long)]
         url: String,
     },
-    /// Compare two images: PSNR, SSIM, FLIP and more.
+    /// Compare two images (PSNR, SSIM, FLIP and more), or two image sequences (folders of
+    /// numbered PNG/EXR frames, or run-folder variant stems like `<run>/<scenario>/checkerboard`):
+    /// the same averaged over frames, plus ColorVideoVDP (JOD).
     Diff {
         reference: PathBuf,
         test: PathBuf,
         /// Print JSON instead of text.
         #[arg(long)]
         json: bool,
-        /// Write the FLIP error map in magma colours here.
+        /// Write the FLIP error map in magma colours here (image pairs only).
         #[arg(long)]
         heatmap: Option<PathBuf>,
+        /// Sequences: the ColorVideoVDP display, a name (standard_4k, paper_27in_4k, ...) or
+        /// key=value pairs (base=standard_4k,diagonal_inches=27,distance_m=0.6,peak_luminance=400).
+        #[arg(long, default_value = tessera_metrics::DEFAULT_DISPLAY)]
+        display: String,
+        /// Sequences: frames per second.
+        #[arg(long, default_value_t = 60.0)]
+        fps: f64,
     },
 }
 
@@ -127,6 +136,17 @@ fn main() -> ExitCode {
             test,
             json,
             heatmap,
+            display,
+            fps,
+        } if heatmap.is_none() && !(reference.is_file() && test.is_file()) => {
+            diff_sequence_command(&reference, &test, json, &display, fps)
+        }
+        Command::Diff {
+            reference,
+            test,
+            json,
+            heatmap,
+            ..
         } => diff_command(&reference, &test, json, heatmap),
     })
 }
@@ -347,6 +367,32 @@ fn adapters_command(json: bool) -> u8 {
         for (format, counts) in &f.msaa {
             let c: Vec<String> = counts.iter().map(|n| format!("{n}x")).collect();
             println!("  msaa {format:<12}  {}", c.join(" "));
+        }
+    }
+    0
+}
+
+fn diff_sequence_command(
+    reference: &std::path::Path,
+    test: &std::path::Path,
+    json: bool,
+    display: &str,
+    fps: f64,
+) -> u8 {
+    let report = tessera_metrics::DisplaySpec::parse(display).and_then(|display| {
+        let settings = tessera_metrics::CvvdpSettings {
+            display,
+            fps,
+            ..Default::default()
+        };
+        tessera_metrics::diff_sequence_paths(reference, test, &settings)
+    });
+    match report {
+        Ok(r) if json => println!("{}", serde_json::to_string_pretty(&r).unwrap_or_default()),
+        Ok(r) => print!("{}", r.to_text()),
+        Err(e) => {
+            eprintln!("error: {e}");
+            return EXIT_INPUT;
         }
     }
     0

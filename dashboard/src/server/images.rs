@@ -61,11 +61,12 @@ pub async fn blob(
 
 /// Image kinds of the viewer, in order: (kind, heading). The reference may be stored under any
 /// variant of the scenario; `other` is the variant's output in the other run.
-const KINDS: [(&str, &str); 6] = [
+const KINDS: [(&str, &str); 7] = [
     ("reference", "reference (A)"),
     ("output", "variant (B)"),
     ("heatmap", "FLIP error (magma)"),
     ("heatmap-hdr", "HDR-FLIP error (magma)"),
+    ("cvvdp", "ColorVideoVDP map (blue: invisible, red: 1 JOD)"),
     ("rate", "shading rate"),
     ("other", "variant in the other run"),
 ];

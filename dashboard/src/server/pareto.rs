@@ -72,7 +72,9 @@ pub fn metrics_present(s: &ScenarioResult) -> Vec<String> {
 /// Points of one scenario record for `metric`, with the Pareto front marked. Variants without GPU
 /// time or without a finite metric value are left out.
 pub fn points(s: &ScenarioResult, metric: &str) -> (Vec<ParetoPoint>, bool) {
-    let mut hib = metric.starts_with("psnr") || metric == "ssim";
+    // Until a record says (its `higher_is_better`): the measures known to grow with quality.
+    let mut hib = metric.starts_with("psnr")
+        || matches!(metric, "ssim" | "ssim-luma" | "cvvdp" | "cvvdp-flicker");
     let mut pts: Vec<ParetoPoint> = Vec::new();
     for v in s.results.iter().filter(|v| v.status == Status::Ok) {
         let Some(g) = v.gpu_frame_ms else { continue };

@@ -83,4 +83,31 @@ pub enum MetricsError {
     /// Encoding an output image failed.
     #[error("cannot encode {path}: {reason}")]
     Encode { path: PathBuf, reason: String },
+    /// A ColorVideoVDP display could not be built from what was given.
+    #[error("invalid display `{spec}`: {reason}")]
+    InvalidDisplay { spec: String, reason: String },
+    /// The `colorvideovdp` crate refused the input or failed (its message).
+    #[error("ColorVideoVDP: {reason}")]
+    Cvvdp { reason: String },
+    /// Two sequences of a comparison differ in length, or are empty.
+    #[error(
+        "sequences differ in length or are empty: reference has {reference} frames, test has \
+         {test}; both need the same number, at least one"
+    )]
+    SequenceLength { reference: usize, test: usize },
+    /// A path given as an image sequence holds no numbered frames.
+    #[error(
+        "{path} holds no numbered PNG/EXR/HDR frames (expected a folder of files like \
+             `0001.png`, or a run folder's `<variant>` stem with `<variant>-f000.png`)"
+    )]
+    NoFrames { path: PathBuf },
+    /// Two files of one sequence folder carry the same frame number.
+    #[error(
+        "{first} and {second} both hold frame {number}; a sequence folder needs one file per frame"
+    )]
+    DuplicateFrame {
+        number: u64,
+        first: PathBuf,
+        second: PathBuf,
+    },
 }

@@ -1,13 +1,15 @@
 //! Image error metrics for Tessera, computed on the CPU exactly as their reference
 //! implementations compute them: PSNR/MSE as scikit-image, SSIM as Wang et al. 2004 (scikit-image
 //! with `gaussian_weights=True, sigma=1.5, use_sample_covariance=False`), and NVIDIA FLIP (LDR and
-//! HDR) as the `flip-evaluator` package.
+//! HDR) as the `flip-evaluator` package; ColorVideoVDP (JOD) of frame sequences through the
+//! `colorvideovdp` crate, as PyPI's `cvvdp` 0.5.7.
 //!
-//! For: numbers from a reference/test pair of frames, loading and saving the images they come
+//! For: numbers from a reference/test pair of frames or sequences, loading and saving the images they come
 //! from, and summarising per-frame series. Not for: rendering, GPU work or deciding pass/fail
 //! (gates belong to the harness). See the crate README for exact settings and measured
 //! agreement with the reference implementations.
 
+mod cvvdp;
 mod deep;
 mod error;
 mod flip;
@@ -16,11 +18,17 @@ mod io;
 mod luma;
 mod pixel;
 mod report;
+mod sequence;
 mod series;
 mod srgb;
 mod ssim;
 mod temporal;
 
+pub use cvvdp::{
+    cvvdp, cvvdp_heatmap, display_names, CustomDisplay, CvvdpResult, CvvdpSettings, DisplaySpec,
+    DistortionMap, Frames, ShotJod, DEFAULT_DISPLAY, DEFAULT_HDR_WHITE, PAPER_27IN_4K,
+    PAPER_27IN_4K_PPD,
+};
 pub use deep::{mse_luma16, mse_rgb16, ssim_luma16, ssim_rgb16, Rgb16Image, DATA_RANGE_16BIT};
 pub use error::MetricsError;
 pub use flip::{
@@ -34,6 +42,9 @@ pub use pixel::{
     max_abs_error, mse_luma, mse_rgb, psnr_from_mse, psnr_luma, psnr_rgb, DATA_RANGE_8BIT,
 };
 pub use report::{diff, diff_at, diff_images, DiffReport};
+pub use sequence::{
+    diff_sequence_paths, diff_sequences, load_sequence, load_sequence_images, SequenceReport,
+};
 pub use series::{series_stats, SeriesStats};
 pub use srgb::{encode_srgb8, linear_to_srgb, srgb_to_linear};
 pub use ssim::{ssim_luma, ssim_rgb, SSIM_MIN_SIZE};

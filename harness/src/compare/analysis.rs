@@ -1,5 +1,5 @@
 //! What changed between two runs, per scenario and variant: GPU time with a noise-aware verdict,
-//! speedup against native, PSNR / SSIM / FLIP beyond a tolerance, and status. Pure: records in,
+//! speedup against native, PSNR / SSIM / FLIP / JOD beyond a tolerance, and status. Pure: records in,
 //! a [`Comparison`] out; the rules are written down in [`crate::compare`]'s module doc.
 
 use tessera_results::{GateLevel, RunInfo, ScenarioResult, Status, Summary, VariantResult};
@@ -10,10 +10,13 @@ use tessera_results::stats::{self, mann_whitney_p};
 pub use tessera_results::stats::{frame_samples, ALPHA};
 
 /// Metrics that get a column and a verdict, with the change each must exceed to count.
-pub const JUDGED_METRICS: [(&str, &str, f64); 3] = [
+/// JOD: ColorVideoVDP (higher is better); 0.05 JOD is 1/20 of the step at which 75 % of viewers
+/// prefer one over the other.
+pub const JUDGED_METRICS: [(&str, &str, f64); 4] = [
     ("psnr", "PSNR dB", 0.1),
     ("ssim", "SSIM", 0.001),
     ("flip", "FLIP", 0.001),
+    ("cvvdp", "JOD", 0.05),
 ];
 
 #[derive(Clone, Debug, PartialEq)]

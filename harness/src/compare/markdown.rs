@@ -115,7 +115,7 @@ fn run_rows(out: &mut String, a: &RunInfo, b: &RunInfo) {
     }
 }
 
-fn variant_row(out: &mut String, v: &VariantChange, timings_count: bool) {
+fn variant_row(out: &mut String, v: &VariantChange, timings_count: bool, shown: &[bool]) {
     let name = match v.only_in {
         Some(Side::A) => format!("{} (only in A)", v.variant),
         Some(Side::B) => format!("{} (only in B)", v.variant),
@@ -130,7 +130,13 @@ fn variant_row(out: &mut String, v: &VariantChange, timings_count: bool) {
         v.speedup.0.map(|x| format!("{x:.2}x")),
         v.speedup.1.map(|x| format!("{x:.2}x")),
     );
-    let metrics: Vec<String> = v.metrics.iter().map(metric_cell).collect();
+    let metrics: Vec<String> = v
+        .metrics
+        .iter()
+        .zip(shown)
+        .filter(|(_, &show)| show)
+        .map(|(m, _)| metric_cell(m))
+        .collect();
     let mut status = cell(&pair(v.status.0.clone(), v.status.1.clone()));
     if v.status_verdict == Verdict::Worse {
         status = format!("**{status}**");
@@ -262,8 +268,25 @@ pub fn render(c: &Comparison) -> String {
             );
         }
     }
-    let metric_headers: Vec<&str> = JUDGED_METRICS.iter().map(|m| m.1).collect();
     for s in &c.scenarios {
+        // PSNR, SSIM and FLIP always have a column; later judged metrics (JOD) only where a
+        // variant of the scenario has them.
+        let shown: Vec<bool> = (0..JUDGED_METRICS.len())
+            .map(|i| {
+                i < 3
+                    || s.variants.iter().any(|v| {
+                        v.metrics
+                            .get(i)
+                            .is_some_and(|m| m.values.0.is_some() || m.values.1.is_some())
+                    })
+            })
+            .collect();
+        let metric_headers: Vec<&str> = JUDGED_METRICS
+            .iter()
+            .zip(&shown)
+            .filter(|(_, &show)| show)
+            .map(|(m, _)| m.1)
+            .collect();
         let suffix = match s.only_in {
             Some(Side::A) => " (only in A)",
             Some(Side::B) => " (only in B)",
@@ -281,7 +304,7 @@ pub fn render(c: &Comparison) -> String {
             "---:|".repeat(metric_headers.len())
         );
         for v in &s.variants {
-            variant_row(&mut out, v, c.timings_count);
+            variant_row(&mut out, v, c.timings_count, &shown);
         }
         out.push('\n');
     }

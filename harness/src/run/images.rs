@@ -78,6 +78,25 @@ pub fn save_error_maps(
     }
 }
 
+/// The `cvvdp` distortion maps of saved frames, as `<variant>-cvvdp-fNNN.png` (kind `cvvdp`).
+pub fn save_cvvdp_maps(
+    result: &mut VariantResult,
+    maps: &[tessera_metrics::DistortionMap],
+    dir: &Path,
+    run_dir: &Path,
+) {
+    if maps.is_empty() {
+        return;
+    }
+    let _ = std::fs::create_dir_all(dir);
+    let stem = sanitize(&result.variant);
+    for m in maps {
+        let path = dir.join(format!("{stem}-cvvdp-f{:03}.png", m.frame));
+        let img = tessera_metrics::cvvdp_heatmap(m);
+        save_image(result, &img, &path, run_dir, m.frame as u32, "cvvdp");
+    }
+}
+
 /// Writes one PNG and records it (path relative to the run folder); a failed write is left out.
 fn save_image(
     result: &mut VariantResult,

@@ -37,6 +37,10 @@ pub fn compute(
     let frames: Vec<u32> = (0..test.len().min(reference.len()) as u32).collect();
     let mut out = Vec::new();
     for &kind in metrics {
+        // A video metric over the whole sequence, with a display model: `run::cvvdp`.
+        if kind == MetricKind::Cvvdp {
+            continue;
+        }
         if kind == MetricKind::Flicker {
             out.push(flicker(test));
             continue;
@@ -73,7 +77,9 @@ pub fn compute(
                     )?
                     .mean
                 }
-                MetricKind::Flicker | MetricKind::Tde => unreachable!("computed above"),
+                MetricKind::Flicker | MetricKind::Tde | MetricKind::Cvvdp => {
+                    unreachable!("computed above")
+                }
             };
             per_frame.push(v);
         }
@@ -108,7 +114,7 @@ pub fn compute(
     Ok(out)
 }
 
-fn series(per_frame: &[f64]) -> Option<tessera_results::SeriesSummary> {
+pub(super) fn series(per_frame: &[f64]) -> Option<tessera_results::SeriesSummary> {
     tessera_metrics::series_stats(per_frame).map(|s| tessera_results::SeriesSummary {
         mean: s.mean,
         p95: s.p95,

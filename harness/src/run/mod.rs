@@ -5,6 +5,7 @@
 //! scenario, so an interrupted run keeps what it completed.
 
 pub mod console;
+pub mod cvvdp;
 pub mod frames;
 pub mod gates;
 pub mod images;

@@ -169,7 +169,13 @@ pub fn results_csv(run: &RunInfo, scenarios: &[ScenarioResult]) -> Vec<u8> {
                 "count",
             );
             for m in &r.metrics {
-                let unit = if m.name.starts_with("psnr") { "dB" } else { "" };
+                let unit = if m.name.starts_with("psnr") {
+                    "dB"
+                } else if m.name == "cvvdp" || m.name == "cvvdp-flicker" {
+                    "JOD"
+                } else {
+                    ""
+                };
                 row(&m.name, num(m.value), unit);
             }
         }
@@ -217,6 +223,24 @@ pub fn junit(run: &RunInfo, scenarios: &[ScenarioResult]) -> Vec<u8> {
                 xml(&r.variant)
             );
             let mut body = String::new();
+            // Every metric as a property, its direction in the name: `cvvdp (higher is better)`.
+            if !r.metrics.is_empty() {
+                body.push_str("      <properties>\n");
+                for m in &r.metrics {
+                    let dir = if m.higher_is_better {
+                        "higher"
+                    } else {
+                        "lower"
+                    };
+                    let _ = writeln!(
+                        body,
+                        "        <property name=\"{} ({dir} is better)\" value=\"{}\"/>",
+                        xml(&m.name),
+                        num(m.value)
+                    );
+                }
+                body.push_str("      </properties>\n");
+            }
             match &r.status {
                 Status::Skipped { reason } => {
                     let _ = writeln!(body, "      <skipped message=\"{}\"/>", xml(reason));

@@ -40,8 +40,10 @@ impl ReferenceFrames {
 }
 
 /// Linear frames are kept only for HDR-FLIP.
-pub fn keep_hdr(metrics: &[MetricKind]) -> bool {
-    metrics.contains(&MetricKind::FlipHdr)
+/// Linear frames are kept only for HDR-FLIP, and for `cvvdp` on an HDR display.
+pub fn keep_hdr(scenario: &Scenario) -> bool {
+    scenario.metrics.contains(&MetricKind::FlipHdr)
+        || (scenario.metrics.contains(&MetricKind::Cvvdp) && super::cvvdp::uses_linear(scenario))
 }
 
 /// Renders the scenario's separate reference (ground truth, or native when the native variant
@@ -75,7 +77,7 @@ pub fn render(
             scenario,
             t.as_mut(),
             true,
-            keep_hdr(&scenario.metrics),
+            keep_hdr(scenario),
             on_frame,
         )
         .map(|r| {

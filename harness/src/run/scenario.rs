@@ -14,7 +14,7 @@ use tessera_results::{ScenarioResult, Status, VariantResult};
 use super::frames::{self, Rendered};
 use super::record::{empty_result, fill_conditions, fill_timings, finish, plan_record, PlanRecord};
 use super::reference::{self, ReferenceFrames};
-use super::{gates, images, metrics, motion, stability};
+use super::{cvvdp, gates, images, metrics, motion, stability};
 use crate::conditions::Sensors;
 use crate::gpu::Gpu;
 use crate::params::Variant;
@@ -137,8 +137,36 @@ pub fn run(
                         test_hdr: hdr.as_deref().unwrap_or(&r.hdr),
                         motion: &motion,
                     };
+                    let video = if scenario.metrics.contains(&MetricKind::Cvvdp) {
+                        Some(cvvdp::records(
+                            scenario,
+                            (&r.frames, &r.hdr),
+                            (inputs.test, inputs.test_hdr),
+                        ))
+                    } else {
+                        None
+                    };
                     match metrics::compute(&scenario.metrics, &inputs) {
-                        Ok(m) => result.metrics = m,
+                        Ok(mut m) => {
+                            match video {
+                                Some(Ok((records, maps))) => {
+                                    m.extend(records);
+                                    images::save_cvvdp_maps(
+                                        &mut result,
+                                        &maps,
+                                        &image_dir,
+                                        run_dir,
+                                    );
+                                }
+                                Some(Err(e)) => {
+                                    result.status = Status::Failed {
+                                        error: format!("metrics: {e}"),
+                                    }
+                                }
+                                None => {}
+                            }
+                            result.metrics = m;
+                        }
                         Err(e) => {
                             result.status = Status::Failed {
                                 error: format!("metrics: {e}"),
@@ -151,7 +179,7 @@ pub fn run(
                             &mut result,
                             &inputs,
                             &scenario.save_frames,
-                            reference::keep_hdr(&scenario.metrics),
+                            reference::keep_hdr(scenario),
                             &image_dir,
                             run_dir,
                         );
@@ -253,7 +281,7 @@ fn render_variant(
         Err(u) => Ok(Err(u)),
         Ok(mut t) => {
             let plan = plan_record(t.as_ref());
-            let hdr = keep && reference::keep_hdr(&scenario.metrics);
+            let hdr = keep && reference::keep_hdr(scenario);
             let sampler = sensors.sampler();
             match frames::render_sampled(
                 gpu,

@@ -43,6 +43,8 @@ pub struct Scenario {
     pub time_step: f64,
     pub reference: Reference,
     pub metrics: Vec<MetricKind>,
+    /// The display ColorVideoVDP (`cvvdp`) sees the frames on.
+    pub display: tessera_metrics::DisplaySpec,
     pub scene: Scene,
     pub camera: CameraTrack,
     pub variants: Vec<Variant>,
@@ -103,6 +105,10 @@ impl Reference {
     }
 }
 
+/// The measures `cvvdp` records besides `cvvdp` (JOD): the transient channel's own JOD (higher is
+/// better) and its share of the visible difference (lower is better).
+pub const CVVDP_MEASURES: [&str; 2] = ["cvvdp-flicker", "cvvdp-transient-share"];
+
 /// Image metrics a scenario can ask for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MetricKind {
@@ -118,10 +124,12 @@ pub enum MetricKind {
     FlipHdr,
     /// Temporal difference error with the renderer's exact motion (notes/metrics.md 3.3).
     Tde,
+    /// ColorVideoVDP in JOD on the scenario's `display`, plus its perceptual-flicker measures.
+    Cvvdp,
 }
 
 impl MetricKind {
-    pub const ALL: [MetricKind; 9] = [
+    pub const ALL: [MetricKind; 10] = [
         MetricKind::Psnr,
         MetricKind::PsnrLuma,
         MetricKind::MaxAbsError,
@@ -131,6 +139,7 @@ impl MetricKind {
         MetricKind::Flicker,
         MetricKind::FlipHdr,
         MetricKind::Tde,
+        MetricKind::Cvvdp,
     ];
     pub const DEFAULT: [MetricKind; 3] = [
         MetricKind::Psnr,
@@ -149,13 +158,18 @@ impl MetricKind {
             MetricKind::Flicker => "flicker",
             MetricKind::FlipHdr => "flip-hdr",
             MetricKind::Tde => "tde",
+            MetricKind::Cvvdp => "cvvdp",
         }
     }
 
     pub fn higher_is_better(self) -> bool {
         matches!(
             self,
-            MetricKind::Psnr | MetricKind::PsnrLuma | MetricKind::Ssim | MetricKind::SsimLuma
+            MetricKind::Psnr
+                | MetricKind::PsnrLuma
+                | MetricKind::Ssim
+                | MetricKind::SsimLuma
+                | MetricKind::Cvvdp
         )
     }
 }

@@ -21,6 +21,10 @@ pub struct RawScenario {
     /// Image metrics computed against the reference. Default `["psnr", "psnr-luma", "max-abs-error"]`
     /// when there is a reference.
     pub metrics: Option<Vec<String>>,
+    /// The display `cvvdp` sees the frames on: a name (default `standard_4k`) or a table
+    /// (`base`, `diagonal_inches`, `distance_m`, `pixels_per_degree`, `resolution`,
+    /// `peak_luminance`, `contrast`, `ambient_lux`).
+    pub display: Option<toml::Value>,
     #[serde(default)]
     pub frames: RawFrames,
     #[serde(default)]

@@ -291,6 +291,7 @@ fn build(ctx: &mut Ctx, path: &Path, raw: RawScenario) -> Scenario {
             );
         }
     }
+    let display = display(ctx, &root.key("display"), raw.display.as_ref(), &metrics);
     let scene = scene(ctx, &root.key("scene"), path, &raw.scene);
     let camera = camera(ctx, &root.key("camera"), &raw.camera);
     let variants = variants(ctx, &root.key("techniques"), &raw.techniques);
@@ -310,6 +311,7 @@ fn build(ctx: &mut Ctx, path: &Path, raw: RawScenario) -> Scenario {
         time_step,
         reference,
         metrics,
+        display,
         scene,
         camera,
         variants,
@@ -413,6 +415,54 @@ fn metrics(
         }
     }
     out
+}
+
+/// `display`: a ColorVideoVDP display name or a table of changes to one; only with `cvvdp`.
+fn display(
+    ctx: &mut Ctx,
+    path: &KeyPath,
+    raw: Option<&toml::Value>,
+    metrics: &[MetricKind],
+) -> tessera_metrics::DisplaySpec {
+    use serde::Deserialize;
+    use tessera_metrics::{CustomDisplay, DisplaySpec};
+    let Some(raw) = raw else {
+        return DisplaySpec::default();
+    };
+    if !metrics.contains(&MetricKind::Cvvdp) {
+        ctx.err(
+            path,
+            "display is what cvvdp sees the frames on: add \"cvvdp\" to metrics",
+        );
+    }
+    let spec = match raw {
+        toml::Value::String(name) => DisplaySpec::Named(name.clone()),
+        toml::Value::Table(_) => match CustomDisplay::deserialize(raw.clone()) {
+            Ok(c) => DisplaySpec::Custom(c),
+            Err(e) => {
+                ctx.err(path, format!("{e}"));
+                return DisplaySpec::default();
+            }
+        },
+        other => {
+            ctx.err(
+                path,
+                format!(
+                    "expected a display name (\"standard_4k\", \"paper_27in_4k\", ...) or a table, \
+                     got {}",
+                    other.type_str()
+                ),
+            );
+            return DisplaySpec::default();
+        }
+    };
+    match spec.model() {
+        Ok(_) => spec,
+        Err(e) => {
+            ctx.err(path, e.to_string());
+            DisplaySpec::default()
+        }
+    }
 }
 
 fn scene(ctx: &mut Ctx, path: &KeyPath, file: &Path, raw: &RawScene) -> Scene {
@@ -1010,6 +1060,9 @@ fn gates(ctx: &mut Ctx, path: &KeyPath, raw: &[RawGate], metrics: &[MetricKind])
         allowed.extend(TIMING_MEASURES);
         allowed.extend(STABILITY_MEASURES);
         allowed.extend(CONDITION_MEASURES);
+        if metrics.contains(&MetricKind::Cvvdp) {
+            allowed.extend(CVVDP_MEASURES);
+        }
         if !allowed.contains(&g.measure.as_str()) {
             let known_metric = MetricKind::ALL.iter().any(|m| m.name() == g.measure);
             if known_metric {

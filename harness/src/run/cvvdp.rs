@@ -1,0 +1,105 @@
+//! The `cvvdp` metric of one variant: ColorVideoVDP of its measured frames against the
+//! reference's, as a video at the scenario's frame rate (`1 / time_step`) on its `display`,
+//! scored per shot across camera cuts, with the maps of saved frames.
+//!
+//! For: turning a scenario and two frame sequences into metric records. Not for: the metric
+//! itself (`tessera_metrics::cvvdp`) or saving images (the caller does, as for other extras).
+//! Called once the variant's frames are all rendered, so it never overlaps timed GPU work.
+
+use tessera_metrics::{
+    CvvdpSettings, DistortionMap, Frames, HdrImage, MetricsError, Rgb8Image, DEFAULT_HDR_WHITE,
+};
+use tessera_results::MetricRecord;
+
+use crate::scenario::{Scenario, CVVDP_MEASURES};
+
+/// Whether the scenario's display takes linear frames (an HDR display: its colour space is not
+/// sRGB, e.g. `standard_hdr_linear`); SDR displays take the 8-bit sRGB output.
+pub fn uses_linear(scenario: &Scenario) -> bool {
+    scenario
+        .display
+        .model()
+        .is_ok_and(|m| m.color_space != "sRGB")
+}
+
+/// Measured frames that start a new shot: the camera changed segment (a cut) since the previous
+/// measured frame.
+pub fn cuts(scenario: &Scenario) -> Vec<usize> {
+    let segment = |i: u32| {
+        let t = scenario.frame_time(scenario.warmup_frames + i);
+        scenario.camera.pose_at(t).segment
+    };
+    (1..scenario.measured_frames)
+        .filter(|&i| segment(i) != segment(i - 1))
+        .map(|i| i as usize)
+        .collect()
+}
+
+/// Records `cvvdp` (JOD), `cvvdp-flicker` (the transient channel's JOD) and
+/// `cvvdp-transient-share`, each with per-frame values, and the maps of the saved frames.
+pub fn records(
+    scenario: &Scenario,
+    reference: (&[Rgb8Image], &[HdrImage]),
+    test: (&[Rgb8Image], &[HdrImage]),
+) -> Result<(Vec<MetricRecord>, Vec<DistortionMap>), MetricsError> {
+    let n = reference.0.len().min(test.0.len());
+    let settings = CvvdpSettings {
+        display: scenario.display.clone(),
+        fps: 1.0 / scenario.time_step,
+        cuts: cuts(scenario).into_iter().filter(|&c| c < n).collect(),
+        map_frames: scenario
+            .save_frames
+            .iter()
+            .map(|&f| f as usize)
+            .filter(|&f| f < n)
+            .collect(),
+        ..CvvdpSettings::default()
+    };
+    let white = DEFAULT_HDR_WHITE;
+    let linear = uses_linear(scenario) && reference.1.len() >= n && test.1.len() >= n;
+    let r = if linear {
+        tessera_metrics::cvvdp(
+            Frames::Linear {
+                frames: &reference.1[..n],
+                white,
+            },
+            Frames::Linear {
+                frames: &test.1[..n],
+                white,
+            },
+            &settings,
+        )?
+    } else {
+        tessera_metrics::cvvdp(
+            Frames::Srgb(&reference.0[..n]),
+            Frames::Srgb(&test.0[..n]),
+            &settings,
+        )?
+    };
+    let frames: Vec<u32> = (0..n as u32).collect();
+    let record =
+        |name: &str, per_frame: Vec<f64>, value: f64, higher_is_better: bool| MetricRecord {
+            name: name.to_string(),
+            series: super::metrics::series(&per_frame),
+            frames: frames[..per_frame.len()].to_vec(),
+            per_frame,
+            value,
+            higher_is_better,
+        };
+    let mut out = vec![record("cvvdp", r.frame_jod.clone(), r.jod, true)];
+    if let (Some(flicker), Some(share)) = (r.flicker_jod, r.transient_share) {
+        out.push(record(
+            CVVDP_MEASURES[0],
+            r.frame_flicker_jod.clone(),
+            flicker,
+            true,
+        ));
+        out.push(record(
+            CVVDP_MEASURES[1],
+            r.frame_transient_share.clone(),
+            share,
+            false,
+        ));
+    }
+    Ok((out, r.maps))
+}
