@@ -2,6 +2,9 @@
 // fragment-shading-rate attachment (VK_KHR_fragment_shading_rate). Compiled to SPIR-V by naga and
 // run by a raw Vulkan pipeline (`harness/src/gpu/vrs.rs`), since wgpu has no VRS.
 //
+// Drawn twice in one render pass: a depth pre-pass (this vertex shader alone), then the shading
+// draw with depth test EQUAL, so every covered pixel is shaded by its visible primitive only.
+//
 // The colour is `fs_main`'s: the same `shade`, so at 1x1 everywhere the image is native's. The
 // hardware runs this fragment shader once per coarse pixel and primitive, and derivatives (the
 // ground filter's footprint) span the coarse pixel, as the software path's `centre` sampling does.
@@ -12,8 +15,10 @@
 // this motion as the estimate of the next frame's (constant velocity), rejects tiles where the
 // depth along the motion is not continuous; w = 1 where something is drawn.
 
+// The position is invariant: the depth pre-pass and the shading draw (depth test EQUAL) run this
+// vertex shader in two pipelines and must agree on every depth bit.
 struct VrsVs {
-    @builtin(position) clip: vec4<f32>,
+    @builtin(position) @invariant clip: vec4<f32>,
     @location(0) rel_pos: vec3<f32>,
     @location(1) normal: vec3<f32>,
     @location(2) local: vec3<f32>,

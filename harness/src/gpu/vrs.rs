@@ -14,6 +14,9 @@
 //! of the targets then hold, since its tracked state is still true. The encoders are submitted
 //! together, in order.
 //!
+//! The pass draws the scene twice in one render pass: a depth pre-pass (vertex shader only), then
+//! the shading draw with depth test EQUAL and no depth writes, so that every covered pixel is
+//! shaded once by its visible primitive (the engines of the paper's section 5 have one).
 //! The pipeline is the project's WGSL (`scene.wgsl` + `adaptive_shading/vrs.wgsl`) compiled to
 //! SPIR-V by naga with the options wgpu uses (no coordinate flip in the shader; the viewport is
 //! flipped, as wgpu-hal does), with `VkPipelineFragmentShadingRateStateCreateInfoKHR` at 1x1 and
@@ -181,6 +184,7 @@ pub struct RawVrsPass {
     set: vk::DescriptorSet,
     layout: vk::PipelineLayout,
     pipeline: vk::Pipeline,
+    prepass: vk::Pipeline,
     modules: [vk::ShaderModule; 2],
     stats: vk::QueryPool,
     recorded: bool,
@@ -276,6 +280,7 @@ impl RawVrsPass {
             set: vk::DescriptorSet::null(),
             layout: vk::PipelineLayout::null(),
             pipeline: vk::Pipeline::null(),
+            prepass: vk::Pipeline::null(),
             modules: [vk::ShaderModule::null(); 2],
             stats: vk::QueryPool::null(),
             recorded: false,
@@ -591,10 +596,19 @@ impl RawVrsPass {
             .line_width(1.0);
         let multisample = vk::PipelineMultisampleStateCreateInfo::default()
             .rasterization_samples(vk::SampleCountFlags::TYPE_1);
+        // The shading draw tests EQUAL against the depth pre-pass and writes no depth: each
+        // covered pixel is shaded by its visible primitive only (no overdraw), so at 1x1 the
+        // invocation count is the covered pixels exactly (the shade-count model's premise).
         let depth = vk::PipelineDepthStencilStateCreateInfo::default()
+            .depth_test_enable(true)
+            .depth_write_enable(false)
+            .depth_compare_op(vk::CompareOp::EQUAL);
+        let prepass_depth = vk::PipelineDepthStencilStateCreateInfo::default()
             .depth_test_enable(true)
             .depth_write_enable(true)
             .depth_compare_op(vk::CompareOp::GREATER);
+        let no_color = [vk::PipelineColorBlendAttachmentState::default(); 2];
+        let prepass_blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&no_color);
         let blend_attachments = [vk::PipelineColorBlendAttachmentState::default()
             .color_write_mask(vk::ColorComponentFlags::RGBA); 2];
         let blend =
@@ -624,12 +638,32 @@ impl RawVrsPass {
             .render_pass(pass.render_pass)
             .subpass(0)
             .push_next(&mut rate_state);
-        // SAFETY: every state struct and the shading-rate chain live across the call; the render
-        // pass and layout are alive; the pipeline features are enabled on this device (`open`).
-        pass.pipeline = unsafe {
-            d.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None)
-                .map_err(|(_, e)| format!("VRS pipeline: {e}"))?[0]
-        };
+        // The depth pre-pass: the same vertex shader (its position is `@invariant`), no
+        // fragment shader, no colour writes, depth test greater and write.
+        let prepass_info = vk::GraphicsPipelineCreateInfo::default()
+            .stages(&stage_infos[..1])
+            .vertex_input_state(&vertex_input)
+            .input_assembly_state(&assembly)
+            .viewport_state(&viewport)
+            .rasterization_state(&raster)
+            .multisample_state(&multisample)
+            .depth_stencil_state(&prepass_depth)
+            .color_blend_state(&prepass_blend)
+            .dynamic_state(&dynamic)
+            .layout(pass.layout)
+            .render_pass(pass.render_pass)
+            .subpass(0);
+        // SAFETY: every state struct and the shading-rate chain live across the calls; the
+        // render pass and layout are alive; the pipeline features are enabled on this device
+        // (`open`).
+        unsafe {
+            pass.pipeline = d
+                .create_graphics_pipelines(vk::PipelineCache::null(), &[info], None)
+                .map_err(|(_, e)| format!("VRS pipeline: {e}"))?[0];
+            pass.prepass = d
+                .create_graphics_pipelines(vk::PipelineCache::null(), &[prepass_info], None)
+                .map_err(|(_, e)| format!("depth pre-pass pipeline: {e}"))?[0];
+        }
         // SAFETY: a one-query pool of fragment-shader invocations; pipelineStatisticsQuery is on
         // when wgpu has PIPELINE_STATISTICS_QUERY (the caller checks).
         pass.stats = unsafe {
@@ -711,7 +745,13 @@ impl RawVrsPass {
             .framebuffer(self.framebuffers[parity % self.framebuffers.len()])
             .render_area(area);
         let subpass = vk::SubpassBeginInfo::default().contents(vk::SubpassContents::INLINE);
-        let (pipeline, layout, set, stats) = (self.pipeline, self.layout, self.set, self.stats);
+        let (pipeline, prepass, layout, set, stats) = (
+            self.pipeline,
+            self.prepass,
+            self.layout,
+            self.set,
+            self.stats,
+        );
         let (vertex, index, staging, rate_image) =
             (self.vertex, self.index, self.staging, self.rate_image);
         let draws = &self.draws;
@@ -765,7 +805,6 @@ impl RawVrsPass {
                 d.cmd_begin_render_pass2(cb, &begin, &subpass);
                 d.cmd_set_viewport(cb, 0, &[viewport]);
                 d.cmd_set_scissor(cb, 0, &[area]);
-                d.cmd_bind_pipeline(cb, vk::PipelineBindPoint::GRAPHICS, pipeline);
                 d.cmd_bind_descriptor_sets(
                     cb,
                     vk::PipelineBindPoint::GRAPHICS,
@@ -776,8 +815,11 @@ impl RawVrsPass {
                 );
                 d.cmd_bind_vertex_buffers(cb, 0, &[vertex], &[0]);
                 d.cmd_bind_index_buffer(cb, index, 0, vk::IndexType::UINT32);
-                for (i, &(first, count, base)) in draws.iter().enumerate() {
-                    d.cmd_draw_indexed(cb, count, 1, first, base, i as u32);
+                for p in [prepass, pipeline] {
+                    d.cmd_bind_pipeline(cb, vk::PipelineBindPoint::GRAPHICS, p);
+                    for (i, &(first, count, base)) in draws.iter().enumerate() {
+                        d.cmd_draw_indexed(cb, count, 1, first, base, i as u32);
+                    }
                 }
                 d.cmd_end_render_pass2(cb, &vk::SubpassEndInfo::default());
                 d.cmd_end_query(cb, stats, 0);
@@ -828,6 +870,7 @@ impl Drop for RawVrsPass {
             let _ = d.device_wait_idle();
             d.destroy_query_pool(self.stats, None);
             d.destroy_pipeline(self.pipeline, None);
+            d.destroy_pipeline(self.prepass, None);
             for m in self.modules {
                 d.destroy_shader_module(m, None);
             }

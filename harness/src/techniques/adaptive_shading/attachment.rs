@@ -17,11 +17,12 @@
 //!
 //! The shade-count model: hardware VRS shades a fragment area of `w` x `h` pixels aligned to
 //! multiples of `w` and `h` in framebuffer coordinates, once per primitive that covers a sample of
-//! it. Counted per coarse pixel that holds at least one covered pixel (partial coarse pixels at the
-//! image's right and bottom edges count once), the model is exact for one primitive per coarse
-//! pixel; where a coarse pixel straddles a triangle edge or an object's silhouette the hardware
-//! shades it once more per extra primitive (and overdraw before the depth test adds more), so the
-//! GPU count is at least the model's, and their difference is what edges cost.
+//! it and passes the depth test. The hardware pass has a depth pre-pass and shades with depth test
+//! EQUAL (`gpu/vrs.rs`), so only visible primitives are shaded. Counted per coarse pixel that holds
+//! at least one covered pixel (partial coarse pixels at the image's right and bottom edges count
+//! once), the model is exact at 1x1 and wherever one visible primitive fills a coarse pixel; where
+//! a coarse pixel straddles a triangle edge or an object's silhouette the hardware shades it once
+//! more per extra visible primitive, so the GPU count is the model's plus what edges cost.
 
 use super::model::TILE;
 
