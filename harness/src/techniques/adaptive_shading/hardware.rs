@@ -158,6 +158,8 @@ pub struct HardwareGpu {
     staging_readback: wgpu::Buffer,
     /// Made on the first frame, when the scene is known.
     raw: Option<RawVrsPass>,
+    /// Building `raw` failed (reported once on stderr).
+    raw_failed: bool,
     parities: usize,
     parity: usize,
     last: Option<LastFrame>,
@@ -239,6 +241,7 @@ impl HardwareGpu {
             staging,
             staging_readback,
             raw: None,
+            raw_failed: false,
             parities,
             parity: 0,
             last: None,
@@ -416,12 +419,16 @@ impl Renderer for HardwareGpu {
         frame: FrameInfo,
     ) {
         if self.raw.is_none() {
+            if self.raw_failed {
+                return;
+            }
             match self.make_raw(gpu, scene) {
                 Ok(r) => self.raw = Some(r),
                 Err(e) => {
                     // Construction failed on an adapter that offers the extension: a bug or a
-                    // driver problem, not user input. Say so and draw nothing.
+                    // driver problem, not user input. Say so once and draw nothing.
                     eprintln!("tessera: the hardware VRS pass could not be built: {e}");
+                    self.raw_failed = true;
                     return;
                 }
             }
