@@ -80,7 +80,7 @@ pub fn records(
     let record =
         |name: &str, per_frame: Vec<f64>, value: f64, higher_is_better: bool| MetricRecord {
             name: name.to_string(),
-            series: super::metrics::series(&per_frame),
+            frame_stats: super::metrics::frame_stats(&per_frame),
             frames: frames[..per_frame.len()].to_vec(),
             per_frame,
             value,
