@@ -36,7 +36,7 @@ pub enum ReadError {
 
 /// A record whose `schema_version` this reader does not know.
 #[derive(Debug, thiserror::Error, PartialEq, Eq)]
-#[error("{what} has schema_version {found}; this reader knows versions {OLDEST_SCHEMA_VERSION} to {SCHEMA_VERSION}")]
+#[error("{what} has schema_version {found}; this reader knows versions {OLDEST_SCHEMA_VERSION} to {SCHEMA_VERSION}: read it with the newer tessera or tessera-dashboard that wrote it")]
 pub struct SchemaError {
     /// The file, or the record's place in an upload.
     pub what: String,
@@ -269,7 +269,7 @@ mod tests {
             assert_eq!(e.found, found);
             assert_eq!(
                 e.to_string(),
-                format!("run.json has schema_version {found}; this reader knows versions 1 to 2")
+                format!("run.json has schema_version {found}; this reader knows versions 1 to 2: read it with the newer tessera or tessera-dashboard that wrote it")
             );
         }
     }

@@ -155,7 +155,7 @@ fn tde(
         frames,
         per_frame,
         value,
-        higher_is_better: false,
+        higher_is_better: MetricKind::Tde.higher_is_better(),
     })
 }
 
@@ -183,7 +183,7 @@ fn flicker(frames: &[Rgb8Image]) -> MetricRecord {
         frames: (1..frames.len() as u32).collect(),
         per_frame,
         value,
-        higher_is_better: false,
+        higher_is_better: MetricKind::Flicker.higher_is_better(),
     }
 }
 
@@ -215,7 +215,9 @@ pub fn extra_values(extras: &[FrameExtras]) -> Vec<MetricRecord> {
             per_frame,
             frames,
             value,
-            higher_is_better: false,
+            // A technique's own values are lower-is-better unless the measure table says.
+            higher_is_better: tessera_results::measure::Measure::from_name(name)
+                .is_some_and(|m| m.direction().higher_is_better()),
         });
     }
     out
