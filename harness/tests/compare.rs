@@ -69,7 +69,7 @@ fn metric(name: &str, value: f64, higher_is_better: bool) -> MetricRecord {
         frames: vec![0],
         value,
         higher_is_better,
-        series: None,
+        frame_stats: None,
     }
 }
 

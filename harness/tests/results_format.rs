@@ -17,7 +17,12 @@ fn the_csv_of_a_version_1_folder_is_unchanged() {
     let run = tessera::compare::load_run(&fixture()).unwrap();
     let csv = tessera::run::output::results_csv(&run.info, &run.scenarios);
     let expected = std::fs::read_to_string(fixture().join("results.csv")).unwrap();
-    assert_eq!(String::from_utf8(csv).unwrap(), expected);
+    let csv = String::from_utf8(csv).unwrap();
+    for (i, (got, want)) in csv.lines().zip(expected.lines()).enumerate() {
+        assert_eq!(got, want, "line {}", i + 1);
+    }
+    assert_eq!(csv.lines().count(), expected.lines().count());
+    assert_eq!(csv, expected);
 }
 
 #[test]

@@ -99,7 +99,7 @@ pub struct Info {
 
 macro_rules! measures {
     ($($variant:ident => $info:expr,)*) => {
-        /// Every named quantity of a result. [`Measure::ALL`] lists them in `results.csv` order.
+        /// Every named quantity of a result; [`Measure::ALL`] lists them all.
         #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
         pub enum Measure { $($variant,)* }
 
