@@ -31,9 +31,9 @@ use crate::bundle::RunBundle;
 use crate::db::{Connection, Pool};
 use crate::detect::{Params, Rng};
 use crate::regressions::{self, WITHDRAWN};
-use tessera_results::measure::points;
 use crate::store::StoreError;
 use crate::synth::{time_after, widen};
+use tessera_results::measure::points;
 
 /// What to replay.
 #[derive(Clone, Debug)]

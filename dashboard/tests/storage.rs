@@ -283,7 +283,14 @@ fn stored_series_take_the_measure_tables_names_and_directions() {
             );
             seen.insert(key.measure.name());
         }
-        for m in ["gpu_ms", "speedup", "psnr", "flip", "tde", "allocated_bytes"] {
+        for m in [
+            "gpu_ms",
+            "speedup",
+            "psnr",
+            "flip",
+            "tde",
+            "allocated_bytes",
+        ] {
             assert!(seen.contains(m), "{}: no {m} series", store.name);
         }
     }

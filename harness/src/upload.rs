@@ -48,10 +48,7 @@ impl UploadError {
     /// The run folder or the URL is unusable (as opposed to the token, the dashboard or the
     /// network).
     pub fn is_bad_input(&self) -> bool {
-        matches!(
-            self,
-            UploadError::Load(_) | UploadError::BadUrl(_)
-        )
+        matches!(self, UploadError::Load(_) | UploadError::BadUrl(_))
     }
 }
 

@@ -31,10 +31,7 @@ fn metric_kinds_are_measures_of_the_table() {
         let measure = Measure::from_name(m.name()).unwrap();
         assert_eq!(measure, m.measure());
         assert!(measure.is_metric() && measure.info().gate, "{}", m.name());
-        assert_eq!(
-            m.higher_is_better(),
-            measure.direction().higher_is_better()
-        );
+        assert_eq!(m.higher_is_better(), measure.direction().higher_is_better());
     }
 }
 
@@ -94,7 +91,11 @@ fn gates_take_canonical_names_older_spellings_and_medians() {
         .collect();
     assert_eq!(gate_measures(&names).unwrap(), names);
     // A per-pass time or another statistic is not a gate's measure.
-    for bad in ["pass.scene.gpu_ms.median", "gpu_ms.p95", "speedup.native-deferred"] {
+    for bad in [
+        "pass.scene.gpu_ms.median",
+        "gpu_ms.p95",
+        "speedup.native-deferred",
+    ] {
         let e = gate_measures(&[bad]).unwrap_err();
         assert!(e.contains(&format!("unknown measure \"{bad}\"")), "{e}");
         assert!(Key::parse(bad).is_some(), "{bad} is a CSV key");

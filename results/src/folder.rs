@@ -55,7 +55,8 @@ pub struct SchemaError {
 /// format is named as such rather than as a parse error.
 pub fn upgrade(what: &str, mut value: serde_json::Value) -> Result<serde_json::Value, SchemaError> {
     let version = value.get("schema_version").and_then(|v| v.as_u64());
-    let known = version.filter(|v| (OLDEST_SCHEMA_VERSION as u64..=SCHEMA_VERSION as u64).contains(v));
+    let known =
+        version.filter(|v| (OLDEST_SCHEMA_VERSION as u64..=SCHEMA_VERSION as u64).contains(v));
     let Some(version) = known else {
         return Err(SchemaError {
             what: what.to_string(),

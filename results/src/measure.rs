@@ -133,7 +133,12 @@ const fn info(
     }
 }
 
-const fn metric(name: &'static str, unit: &'static str, direction: Direction, label: &'static str) -> Info {
+const fn metric(
+    name: &'static str,
+    unit: &'static str,
+    direction: Direction,
+    label: &'static str,
+) -> Info {
     Info {
         gate: true,
         stored: true,
@@ -295,7 +300,10 @@ impl Key {
             return Some(Key::of(m));
         }
         if let Some(rest) = key.strip_prefix("pass.") {
-            for m in Measure::ALL.iter().filter(|m| m.info().source == Source::Pass || **m == Measure::GpuMs) {
+            for m in Measure::ALL
+                .iter()
+                .filter(|m| m.info().source == Source::Pass || **m == Measure::GpuMs)
+            {
                 for stat in std::iter::once(None).chain(STATISTICS.iter().map(Some)) {
                     let suffix = match stat {
                         Some(s) => format!(".{}.{s}", m.name()),
@@ -389,7 +397,11 @@ pub fn gpu_ms(r: &VariantResult) -> Option<f64> {
 
 /// Energy per measured frame in millijoules; `None` without sensors.
 pub fn energy_mj(r: &VariantResult) -> Option<f64> {
-    r.conditions.as_ref()?.recorded()?.energy.map(|e| e.mj_per_frame)
+    r.conditions
+        .as_ref()?
+        .recorded()?
+        .energy
+        .map(|e| e.mj_per_frame)
 }
 
 /// The baseline's median GPU time over `r`'s: `speedup` (with [`DEFAULT_BASELINE`]) or
@@ -449,7 +461,11 @@ pub fn value(results: &[VariantResult], r: &VariantResult, m: Measure) -> Option
         SpreadNonFinite => stability?.spread_pixels.map(|v| v as f64),
         Nondeterministic => stability?.deterministic.map(|d| flag(!d)),
         UnrecoveredCuts => stability.map(|s| unrecovered_cuts(s) as f64),
-        _ => r.metrics.iter().find(|x| x.name == m.name()).map(|x| x.value),
+        _ => r
+            .metrics
+            .iter()
+            .find(|x| x.name == m.name())
+            .map(|x| x.value),
     }
 }
 
@@ -488,7 +504,12 @@ pub fn points(results: &[VariantResult], r: &VariantResult) -> Vec<Point> {
     }
     let mut out = Vec::new();
     let hib = |m: Measure| m.direction().higher_is_better();
-    push_named(&mut out, Key::of(Measure::GpuMs).statistic("median").render(), gpu_ms(r), hib(Measure::GpuMs));
+    push_named(
+        &mut out,
+        Key::of(Measure::GpuMs).statistic("median").render(),
+        gpu_ms(r),
+        hib(Measure::GpuMs),
+    );
     push_named(
         &mut out,
         Key::of(Measure::CpuMs).statistic("median").render(),
@@ -498,7 +519,10 @@ pub fn points(results: &[VariantResult], r: &VariantResult) -> Vec<Point> {
     for p in &r.passes {
         push_named(
             &mut out,
-            Key::of(Measure::GpuMs).pass(&p.name).statistic("median").render(),
+            Key::of(Measure::GpuMs)
+                .pass(&p.name)
+                .statistic("median")
+                .render(),
             p.gpu_ms.map(|g| g.median),
             hib(Measure::GpuMs),
         );
@@ -524,7 +548,12 @@ pub fn points(results: &[VariantResult], r: &VariantResult) -> Vec<Point> {
         let key = measure.map_or_else(|| m.name.clone(), |x| x.name().to_string());
         push_named(&mut out, key, Some(m.value), dir);
     }
-    push_named(&mut out, Measure::EnergyMj.store_key(), energy_mj(r), hib(Measure::EnergyMj));
+    push_named(
+        &mut out,
+        Measure::EnergyMj.store_key(),
+        energy_mj(r),
+        hib(Measure::EnergyMj),
+    );
     out
 }
 
@@ -575,8 +604,19 @@ mod tests {
             Key::parse("speedup.native-deferred").unwrap().label(),
             "speedup over native-deferred"
         );
-        assert_eq!(Key::parse("non-finite").unwrap().render(), "non_finite_values");
-        for bad in ["", "gpu", "pass.", "pass.x", "psnr.median", "speedup.", "cpu_ms.p7"] {
+        assert_eq!(
+            Key::parse("non-finite").unwrap().render(),
+            "non_finite_values"
+        );
+        for bad in [
+            "",
+            "gpu",
+            "pass.",
+            "pass.x",
+            "psnr.median",
+            "speedup.",
+            "cpu_ms.p7",
+        ] {
             assert_eq!(Key::parse(bad), None, "{bad}");
         }
     }
@@ -599,7 +639,13 @@ mod tests {
         ] {
             assert_eq!(direction_of(name), Some(dir), "{name}");
         }
-        assert_eq!(direction_of("pass.scene.gpu_ms.median"), Some(LowerIsBetter));
-        assert_eq!(direction_of("speedup.native-deferred"), Some(HigherIsBetter));
+        assert_eq!(
+            direction_of("pass.scene.gpu_ms.median"),
+            Some(LowerIsBetter)
+        );
+        assert_eq!(
+            direction_of("speedup.native-deferred"),
+            Some(HigherIsBetter)
+        );
     }
 }

@@ -66,7 +66,8 @@ mod tests {
     #[test]
     fn images_round_trip_and_bad_base64_is_named() {
         let mut body = UploadBody::default();
-        body.images.insert("images/a.png".into(), encode(b"\x89PNG"));
+        body.images
+            .insert("images/a.png".into(), encode(b"\x89PNG"));
         assert_eq!(body.decode_images().unwrap()["images/a.png"], b"\x89PNG");
         body.images.insert("images/b.png".into(), "%%%".into());
         let (path, _) = body.decode_images().unwrap_err();

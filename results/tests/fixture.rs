@@ -101,19 +101,22 @@ fn version_1_reads_as_the_current_version_without_losing_values() {
             assert_eq!(g.message, g1["message"].as_str().unwrap());
         }
     }
-    assert!(stats > 10, "the fixture has per-frame statistics to carry over");
-    let gates: Vec<&str> = s.results[1].gates.iter().map(|g| g.measure.as_str()).collect();
+    assert!(
+        stats > 10,
+        "the fixture has per-frame statistics to carry over"
+    );
+    let gates: Vec<&str> = s.results[1]
+        .gates
+        .iter()
+        .map(|g| g.measure.as_str())
+        .collect();
     assert_eq!(gates, ["non_finite_values", "spread_non_finite", "gpu_ms"]);
 
     // Written in the current format and read back, nothing changes.
     let dir = std::env::temp_dir().join(format!("tessera-fixture-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(dir.join("scenarios")).unwrap();
-    std::fs::write(
-        dir.join("run.json"),
-        serde_json::to_vec(&run.info).unwrap(),
-    )
-    .unwrap();
+    std::fs::write(dir.join("run.json"), serde_json::to_vec(&run.info).unwrap()).unwrap();
     std::fs::write(
         dir.join("scenarios/mini.json"),
         serde_json::to_vec(s).unwrap(),
@@ -132,9 +135,7 @@ fn the_raw_reader_upgrades_and_lists_the_images_the_folder_holds() {
     assert_eq!(raw.run["schema_version"], SCHEMA_VERSION);
     let images = raw.read_images().unwrap();
     assert_eq!(images.len(), 11);
-    assert!(images
-        .values()
-        .all(|b| b.starts_with(b"\x89PNG\r\n\x1a\n")));
+    assert!(images.values().all(|b| b.starts_with(b"\x89PNG\r\n\x1a\n")));
     let body = tessera_results::upload::UploadBody::from_folder(&raw).unwrap();
     assert_eq!(body.decode_images().unwrap(), images);
     assert_eq!(body.scenarios[0]["schema_version"], SCHEMA_VERSION);
@@ -215,7 +216,10 @@ fn speedups_are_found_by_technique() {
     }
     let adaptive = &s.results[2];
     let own = measure::speedup(&s.results, adaptive, "native-deferred").unwrap();
-    assert_eq!(Some(own), csv("adaptive-shading", "speedup.native-deferred"));
+    assert_eq!(
+        Some(own),
+        csv("adaptive-shading", "speedup.native-deferred")
+    );
 
     // A label on the baseline changes nothing: it is found by technique.
     let mut relabelled = s.results.clone();

@@ -13,8 +13,8 @@ use serde::{Deserialize, Serialize};
 
 use super::{AppError, AppState};
 use crate::html::{enc, esc, ms, page as layout};
-use tessera_results::measure::{speedup, DEFAULT_BASELINE};
 use crate::store::read::{self, AdapterRow};
+use tessera_results::measure::{speedup, DEFAULT_BASELINE};
 
 #[derive(Debug, Deserialize, Default)]
 pub struct CompareQuery {

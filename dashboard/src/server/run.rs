@@ -9,8 +9,8 @@ use std::fmt::Write;
 use axum::extract::{Path, Query, State};
 use axum::response::{Html, IntoResponse, Response};
 use axum::Json;
-use tessera_results::stats::{compare_times, frame_samples, TimeVerdict, DEFAULT_THRESHOLD_PCT};
 use tessera_results::measure::{self, points, Key, Measure, DEFAULT_BASELINE};
+use tessera_results::stats::{compare_times, frame_samples, TimeVerdict, DEFAULT_THRESHOLD_PCT};
 use tessera_results::{ScenarioResult, Status};
 
 use super::export::{csv, csv_response, no_markdown, Format, FormatQuery};
@@ -148,7 +148,11 @@ fn scenario_section(d: &RunDetail, prev: Option<&Previous>, s: &ScenarioResult, 
     // Column heads are the measures' names; the title says the unit and which way is better.
     let head = |m: Measure| {
         let i = m.info();
-        let unit = if i.unit.is_empty() { String::new() } else { format!(" ({})", i.unit) };
+        let unit = if i.unit.is_empty() {
+            String::new()
+        } else {
+            format!(" ({})", i.unit)
+        };
         format!(
             "<th class=n title=\"{}{unit}, {}\">{}</th>",
             esc(i.label),
@@ -181,7 +185,9 @@ fn scenario_section(d: &RunDetail, prev: Option<&Previous>, s: &ScenarioResult, 
             .series
             .iter()
             .find(|l| {
-                l.scenario == s.scenario && l.variant == v.variant && l.measure == Measure::GpuMs.store_key()
+                l.scenario == s.scenario
+                    && l.variant == v.variant
+                    && l.measure == Measure::GpuMs.store_key()
             })
             .map(|l| format!("<a href=\"/series/{}\">history</a>", l.series_id))
             .unwrap_or_default();
@@ -192,7 +198,8 @@ fn scenario_section(d: &RunDetail, prev: Option<&Previous>, s: &ScenarioResult, 
             }
             Status::Failed { error } => format!("<span class=failed>failed</span>: {}", esc(error)),
         };
-        let sp = measure::speedup(&s.results, v, DEFAULT_BASELINE).map_or("–".into(), |x| format!("{x:.2}×"));
+        let sp = measure::speedup(&s.results, v, DEFAULT_BASELINE)
+            .map_or("–".into(), |x| format!("{x:.2}×"));
         let ok = v.status == Status::Ok;
         // Skipped and failed variants measured nothing: no times, no memory.
         let _ = write!(

@@ -348,7 +348,9 @@ pub fn measure_label(measure: &str) -> &str {
     // The parts of the key are the measure table's (`tessera_results::measure::Key`): a pass's GPU
     // time is named by its pass, a median by its measure.
     match tessera_results::measure::Key::parse(measure) {
-        Some(k) if k.measure == Measure::GpuMs && k.pass.is_some() && k.statistic == Some("median") => {
+        Some(k)
+            if k.measure == Measure::GpuMs && k.pass.is_some() && k.statistic == Some("median") =>
+        {
             let pass = k.pass.as_deref().unwrap_or_default();
             &measure["pass.".len().."pass.".len() + pass.len()]
         }
@@ -647,6 +649,9 @@ mod tests {
         );
         assert_eq!(measure_label("flip"), "flip");
         assert_eq!(measure_label("pass.a.b.gpu_ms.median"), "a.b");
-        assert_eq!(measure_label("not-a-measure.median"), "not-a-measure.median");
+        assert_eq!(
+            measure_label("not-a-measure.median"),
+            "not-a-measure.median"
+        );
     }
 }

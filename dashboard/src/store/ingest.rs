@@ -13,10 +13,10 @@ use std::collections::BTreeMap;
 use sha2::{Digest, Sha256};
 use tessera_results::{RunInfo, Status};
 
-use tessera_results::measure::{points, speedup, DEFAULT_BASELINE};
 use super::StoreError;
 use crate::bundle::RunBundle;
 use crate::db::{transaction, Connection, DbError, Value};
+use tessera_results::measure::{points, speedup, DEFAULT_BASELINE};
 
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Ingested {

@@ -3,4 +3,6 @@
 //! reader the dashboard's import uses too, so the three accept and refuse the same folders. Not
 //! for: writing runs (see [`crate::run::output`]).
 
-pub use tessera_results::folder::{read as load_run, read_raw, RawRun, ReadError as LoadError, Run};
+pub use tessera_results::folder::{
+    read as load_run, read_raw, RawRun, ReadError as LoadError, Run,
+};

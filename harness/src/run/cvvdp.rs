@@ -78,15 +78,14 @@ pub fn records(
         )?
     };
     let frames: Vec<u32> = (0..n as u32).collect();
-    let record =
-        |m: Measure, per_frame: Vec<f64>, value: f64| MetricRecord {
-            name: m.name().to_string(),
-            frame_stats: super::metrics::frame_stats(&per_frame),
-            frames: frames[..per_frame.len()].to_vec(),
-            per_frame,
-            value,
-            higher_is_better: m.direction().higher_is_better(),
-        };
+    let record = |m: Measure, per_frame: Vec<f64>, value: f64| MetricRecord {
+        name: m.name().to_string(),
+        frame_stats: super::metrics::frame_stats(&per_frame),
+        frames: frames[..per_frame.len()].to_vec(),
+        per_frame,
+        value,
+        higher_is_better: m.direction().higher_is_better(),
+    };
     let mut out = vec![record(Measure::Cvvdp, r.frame_jod.clone(), r.jod)];
     if let (Some(flicker), Some(share)) = (r.flicker_jod, r.transient_share) {
         out.push(record(

@@ -76,7 +76,10 @@ fn applies(gate: &Gate, scenario: &Scenario, r: &VariantResult) -> bool {
 /// `<name>.median` reads the same. Validation allows only measures of the table.
 fn measure(results: &[VariantResult], r: &VariantResult, name: &str) -> Option<f64> {
     let key = measure::Key::parse(name)?;
-    if key.pass.is_some() || key.baseline.is_some() || !matches!(key.statistic, None | Some("median")) {
+    if key.pass.is_some()
+        || key.baseline.is_some()
+        || !matches!(key.statistic, None | Some("median"))
+    {
         return None;
     }
     measure::value(results, r, key.measure)

@@ -94,89 +94,99 @@ pub fn results_csv(run: &RunInfo, scenarios: &[ScenarioResult]) -> Vec<u8> {
 
 /// The (measure, value, unit) rows of one result, in `results.csv` order: names and units from
 /// the measure table (`tessera_results::measure`).
-fn csv_rows(results: &[VariantResult], r: &VariantResult, rows: &mut Vec<(String, String, &'static str)>) {
+fn csv_rows(
+    results: &[VariantResult],
+    r: &VariantResult,
+    rows: &mut Vec<(String, String, &'static str)>,
+) {
     let row = |key: Key, value: String| (key.render(), value, key.measure.unit());
     if r.status != Status::Ok {
         // The only row of a skipped or failed variant.
         rows.push(("status".to_string(), String::new(), ""));
         return;
     }
-            let stat = |m: Measure, st: &'static str| Key::of(m).statistic(st);
-            if let Some(t) = r.gpu_frame_ms {
-                rows.push(row(stat(GpuMs, "median"), num(t.median)));
-                rows.push(row(stat(GpuMs, "p5"), num(t.p5)));
-                rows.push(row(stat(GpuMs, "p95"), num(t.p95)));
-                rows.push(row(stat(GpuMs, "min"), num(t.min)));
+    let stat = |m: Measure, st: &'static str| Key::of(m).statistic(st);
+    if let Some(t) = r.gpu_frame_ms {
+        rows.push(row(stat(GpuMs, "median"), num(t.median)));
+        rows.push(row(stat(GpuMs, "p5"), num(t.p5)));
+        rows.push(row(stat(GpuMs, "p95"), num(t.p95)));
+        rows.push(row(stat(GpuMs, "min"), num(t.min)));
+    }
+    rows.push(row(stat(CpuMs, "median"), num(r.cpu_frame_ms.median)));
+    if let Some(sp) = measure::speedup(results, r, DEFAULT_BASELINE) {
+        rows.push(row(Key::of(Speedup), num(sp)));
+    }
+    // A technique's own baseline (the registry's), beside native.
+    let baseline = crate::techniques::by_name(&r.technique).and_then(|t| t.baseline());
+    if let Some(b) = baseline {
+        if let Some(sp) = measure::speedup(results, r, b) {
+            rows.push(row(Key::speedup_over(b), num(sp)));
+        }
+    }
+    if let Some([lo, hi]) = r.gpu_frame_ms.and_then(|t| t.median_ci95) {
+        rows.push(row(stat(GpuMs, "median_ci95.low"), num(lo)));
+        rows.push(row(stat(GpuMs, "median_ci95.high"), num(hi)));
+    }
+    if let Some(sm) = &r.sampling {
+        rows.push(row(Key::of(MeasuredFrames), sm.frames.to_string()));
+        if let Some(p) = sm.precision {
+            rows.push(row(Key::of(GpuMsPrecision), num(p)));
+        }
+    }
+    if let Some(p) = &r.pacing {
+        rows.push(row(Key::of(PacingP95OverP50), num(p.p95_over_p50)));
+        rows.push(row(Key::of(PacingMeanAbsDeltaMs), num(p.mean_abs_delta_ms)));
+        if let Some(par) = &p.parity {
+            rows.push(row(stat(PacingEvenMs, "median"), num(par.even_median_ms)));
+            rows.push(row(stat(PacingOddMs, "median"), num(par.odd_median_ms)));
+            rows.push(row(Key::of(PacingEvenOverOdd), num(par.even_over_odd)));
+        }
+    }
+    if let Some(c) = r.conditions.as_ref().and_then(|c| c.recorded()) {
+        let spreads = [
+            (GraphicsClockMhz, c.graphics_clock_mhz),
+            (MemoryClockMhz, c.memory_clock_mhz),
+            (TemperatureC, c.temperature_c),
+            (PowerW, c.power_w),
+        ];
+        for (m, spread) in spreads {
+            if let Some(v) = spread {
+                rows.push(row(stat(m, "min"), num(v.min)));
+                rows.push(row(stat(m, "median"), num(v.median)));
+                rows.push(row(stat(m, "max"), num(v.max)));
             }
-            rows.push(row(stat(CpuMs, "median"), num(r.cpu_frame_ms.median)));
-            if let Some(sp) = measure::speedup(results, r, DEFAULT_BASELINE) {
-                rows.push(row(Key::of(Speedup), num(sp)));
-            }
-            // A technique's own baseline (the registry's), beside native.
-            let baseline = crate::techniques::by_name(&r.technique).and_then(|t| t.baseline());
-            if let Some(b) = baseline {
-                if let Some(sp) = measure::speedup(results, r, b) {
-                    rows.push(row(Key::speedup_over(b), num(sp)));
-                }
-            }
-            if let Some([lo, hi]) = r.gpu_frame_ms.and_then(|t| t.median_ci95) {
-                rows.push(row(stat(GpuMs, "median_ci95.low"), num(lo)));
-                rows.push(row(stat(GpuMs, "median_ci95.high"), num(hi)));
-            }
-            if let Some(sm) = &r.sampling {
-                rows.push(row(Key::of(MeasuredFrames), sm.frames.to_string()));
-                if let Some(p) = sm.precision {
-                    rows.push(row(Key::of(GpuMsPrecision), num(p)));
-                }
-            }
-            if let Some(p) = &r.pacing {
-                rows.push(row(Key::of(PacingP95OverP50), num(p.p95_over_p50)));
-                rows.push(row(Key::of(PacingMeanAbsDeltaMs), num(p.mean_abs_delta_ms)));
-                if let Some(par) = &p.parity {
-                    rows.push(row(stat(PacingEvenMs, "median"), num(par.even_median_ms)));
-                    rows.push(row(stat(PacingOddMs, "median"), num(par.odd_median_ms)));
-                    rows.push(row(Key::of(PacingEvenOverOdd), num(par.even_over_odd)));
-                }
-            }
-            if let Some(c) = r.conditions.as_ref().and_then(|c| c.recorded()) {
-                let spreads = [
-                    (GraphicsClockMhz, c.graphics_clock_mhz),
-                    (MemoryClockMhz, c.memory_clock_mhz),
-                    (TemperatureC, c.temperature_c),
-                    (PowerW, c.power_w),
-                ];
-                for (m, spread) in spreads {
-                    if let Some(v) = spread {
-                        rows.push(row(stat(m, "min"), num(v.min)));
-                        rows.push(row(stat(m, "median"), num(v.median)));
-                        rows.push(row(stat(m, "max"), num(v.max)));
-                    }
-                }
-                if let Some(e) = measure::energy_mj(r) {
-                    rows.push(row(Key::of(EnergyMj), num(e)));
-                }
-                if let Some(x) = measure::energy_saving(results, r, DEFAULT_BASELINE) {
-                    rows.push(row(Key::of(EnergySaving), num(x)));
-                }
-                rows.push(row(Key::of(Throttled), u8::from(c.throttled).to_string()));
-            }
-            for p in &r.passes {
-                if let Some(t) = p.gpu_ms {
-                    rows.push(row(stat(GpuMs, "median").pass(&p.name), num(t.median)));
-                }
-                if let Some(f) = p.fragment_invocations {
-                    rows.push(row(Key::of(FragmentInvocations).pass(&p.name), f.to_string()));
-                }
-            }
-            rows.push(row(Key::of(AllocatedBytes), r.allocated_bytes.to_string()));
-            rows.push(row(Key::of(NonFiniteValues), r.non_finite_values.to_string()));
-            for m in &r.metrics {
-                match Measure::from_name(&m.name) {
-                    Some(known) => rows.push(row(Key::of(known), num(m.value))),
-                    // A metric the table does not know: its own name, no unit.
-                    None => rows.push((m.name.clone(), num(m.value), "")),
-                }
-            }
+        }
+        if let Some(e) = measure::energy_mj(r) {
+            rows.push(row(Key::of(EnergyMj), num(e)));
+        }
+        if let Some(x) = measure::energy_saving(results, r, DEFAULT_BASELINE) {
+            rows.push(row(Key::of(EnergySaving), num(x)));
+        }
+        rows.push(row(Key::of(Throttled), u8::from(c.throttled).to_string()));
+    }
+    for p in &r.passes {
+        if let Some(t) = p.gpu_ms {
+            rows.push(row(stat(GpuMs, "median").pass(&p.name), num(t.median)));
+        }
+        if let Some(f) = p.fragment_invocations {
+            rows.push(row(
+                Key::of(FragmentInvocations).pass(&p.name),
+                f.to_string(),
+            ));
+        }
+    }
+    rows.push(row(Key::of(AllocatedBytes), r.allocated_bytes.to_string()));
+    rows.push(row(
+        Key::of(NonFiniteValues),
+        r.non_finite_values.to_string(),
+    ));
+    for m in &r.metrics {
+        match Measure::from_name(&m.name) {
+            Some(known) => rows.push(row(Key::of(known), num(m.value))),
+            // A metric the table does not know: its own name, no unit.
+            None => rows.push((m.name.clone(), num(m.value), "")),
+        }
+    }
 }
 
 fn xml(s: &str) -> String {
