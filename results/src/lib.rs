@@ -1,8 +1,11 @@
-//! Result record types shared by the harness (which writes them) and the dashboard (which reads them).
+//! Result record types shared by the harness (which writes them) and the dashboard (which reads
+//! them), and their meaning: [`measure`] (every measure's name, unit, direction and label, the
+//! baseline lookup by technique, the values that become series), [`folder`] (the one run-folder
+//! reader, upgrading older schema versions) and [`upload`] (the body of `POST /api/runs`).
 //!
-//! This crate holds types and their (de)serialisation only: no I/O policy, no GPU, no HTTP. The file
-//! format built from these types is documented in `results/README.md`; bump [`SCHEMA_VERSION`] on any
-//! change a reader could notice.
+//! No GPU, no HTTP, no writing. The file format built from these types is documented in
+//! `results/README.md`; bump [`SCHEMA_VERSION`] on any change a reader could notice, and teach
+//! [`folder::upgrade`] to read the previous version.
 
 use std::collections::BTreeMap;
 
