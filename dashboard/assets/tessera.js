@@ -236,7 +236,14 @@
     const zoom = q('#zoom'), zoomOut = q('#zoomval'), frame = q('#frame'), frameNo = q('#frameno');
     const play = q('#play'), flick = q('#flicker'), wipe = q('#wipe');
     const wipeImg = q('#wipe-top'), abImg = q('#img-ab');
-    let cur = 0, showingRef = false, timer = null;
+    let cur = 0, showingRef = false, timer = null, userZoom = false;
+    // Until the user picks a zoom, small frames open enlarged (whole steps, at most 8x, about
+    // 360 px wide) so a 96 px test frame is not a thumbnail; large frames open at natural size.
+    function fitZoom() {
+      const first = root.querySelector('img.px');
+      const w0 = spec.width || (first && first.naturalWidth) || 0;
+      return w0 ? Math.max(1, Math.min(8, Math.floor(360 / w0))) : 1;
+    }
     const url = (f, k) => spec.urls[f][spec.kinds.indexOf(k)] || '';
     function setZoom(z) {
       z = Math.max(1, Math.min(32, z));
@@ -286,7 +293,7 @@
       document.addEventListener('mousemove', move);
       document.addEventListener('mouseup', up);
     }));
-    zoom.addEventListener('input', () => setZoom(+zoom.value));
+    zoom.addEventListener('input', () => { userZoom = true; setZoom(+zoom.value); });
     frame.addEventListener('input', () => setFrame(+frame.value));
     wipe.addEventListener('input', () => setWipe(+wipe.value));
     flick.addEventListener('click', () => setAB(!showingRef));
@@ -298,14 +305,14 @@
     document.addEventListener('keydown', e => {
       if (e.target.tagName === 'INPUT' && e.target.type !== 'range') return;
       if (e.key === 'f' || e.key === ' ') { e.preventDefault(); setAB(!showingRef); }
-      else if (e.key === '+' || e.key === '=') setZoom(+zoom.value * 2);
-      else if (e.key === '-') setZoom(Math.floor(+zoom.value / 2));
+      else if (e.key === '+' || e.key === '=') { userZoom = true; setZoom(+zoom.value * 2); }
+      else if (e.key === '-') { userZoom = true; setZoom(Math.floor(+zoom.value / 2)); }
       else if (e.key === 'ArrowRight') setFrame(Math.min(spec.frames.length - 1, cur + 1));
       else if (e.key === 'ArrowLeft') setFrame(Math.max(0, cur - 1));
     });
     root.viewer = { setZoom, setFrame, setWipe, setAB };
-    root.querySelectorAll('img.px').forEach(i => i.addEventListener('load', () => setZoom(+zoom.value)));
-    setZoom(+zoom.value || 1);
+    root.querySelectorAll('img.px').forEach(i => i.addEventListener('load', () => setZoom(userZoom ? +zoom.value : fitZoom())));
+    setZoom(fitZoom());
     setWipe(+wipe.value);
     setFrame(0);
   }

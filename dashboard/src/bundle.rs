@@ -1,28 +1,22 @@
 //! A run bundle: one run's `run.json`, its scenario results and its saved images, as read from a
 //! run folder or received by `POST /api/runs`, checked before anything touches the store.
 //!
-//! The wire format of the upload is documented in the crate README ("Uploading"). Not for:
-//! storing (see [`crate::store`]) or HTTP details (see [`crate::server::upload`]).
+//! The wire format of the upload is documented in the crate README ("Uploading"); its type,
+//! [`UploadBody`], and the run-folder reader are `tessera-results`'s, shared with `tessera upload`
+//! and `tessera compare`, as is the upgrade of schema version 1 records. Not for: storing (see
+//! [`crate::store`]) or HTTP details (see [`crate::server::upload`]).
 
 use std::collections::BTreeMap;
-use std::path::{Component, Path};
+use std::path::Path;
 
-use base64::Engine;
-use serde::{Deserialize, Serialize};
-use tessera_results::{RunInfo, ScenarioResult, SCHEMA_VERSION};
+use tessera_results::folder::{self, ReadError};
+use tessera_results::{RunInfo, ScenarioResult, OLDEST_SCHEMA_VERSION, SCHEMA_VERSION};
+
+pub use tessera_results::folder::safe_relative_path;
+pub use tessera_results::upload::UploadBody;
 
 /// Largest single image accepted, in bytes.
 pub const MAX_IMAGE_BYTES: usize = 16 << 20;
-
-/// What `POST /api/runs` accepts: the run, every scenario result, and the images the results list,
-/// keyed by their path in the run folder (as in `VariantResult::images`) and encoded in base64.
-#[derive(Debug, Deserialize, Serialize)]
-pub struct UploadBody {
-    pub run: serde_json::Value,
-    pub scenarios: Vec<serde_json::Value>,
-    #[serde(default)]
-    pub images: BTreeMap<String, String>,
-}
 
 /// A checked run, ready to store.
 #[derive(Debug, Clone)]
@@ -35,7 +29,7 @@ pub struct RunBundle {
 
 #[derive(Debug, thiserror::Error)]
 pub enum BundleError {
-    #[error("{what} has schema_version {found}; this dashboard reads version {SCHEMA_VERSION} only: upgrade tessera-dashboard to store it")]
+    #[error("{what} has schema_version {found}; this dashboard reads versions {OLDEST_SCHEMA_VERSION} to {SCHEMA_VERSION}: upgrade tessera-dashboard to store it")]
     UnknownSchema { what: String, found: String },
     #[error("{what} is not a valid record: {source}")]
     Invalid {
@@ -55,21 +49,45 @@ pub enum BundleError {
     },
 }
 
-fn check_schema(what: &str, value: &serde_json::Value) -> Result<(), BundleError> {
-    match value.get("schema_version") {
-        Some(v) if v.as_u64() == Some(SCHEMA_VERSION as u64) => Ok(()),
-        other => Err(BundleError::UnknownSchema {
-            what: what.to_string(),
-            found: other.map_or_else(|| "none".to_string(), |v| v.to_string()),
-        }),
+impl From<folder::SchemaError> for BundleError {
+    fn from(e: folder::SchemaError) -> Self {
+        BundleError::UnknownSchema {
+            what: e.what,
+            found: e.found,
+        }
     }
 }
 
+impl From<ReadError> for BundleError {
+    fn from(e: ReadError) -> Self {
+        match e {
+            ReadError::Schema(s) => s.into(),
+            ReadError::Io { path, source } => BundleError::Io {
+                path: path.display().to_string(),
+                source,
+            },
+            ReadError::Invalid { path, source } => BundleError::Invalid {
+                what: path.display().to_string(),
+                source,
+            },
+            ReadError::NotARun(dir) => BundleError::Io {
+                path: dir.join("run.json").display().to_string(),
+                source: std::io::Error::new(
+                    std::io::ErrorKind::NotFound,
+                    "no run.json: not a run folder written by `tessera run`",
+                ),
+            },
+        }
+    }
+}
+
+/// Upgrades a record to the current schema version (version 1 is read, newer ones are named),
+/// then types it.
 fn parse<T: serde::de::DeserializeOwned>(
     what: &str,
     value: serde_json::Value,
 ) -> Result<T, BundleError> {
-    check_schema(what, &value)?;
+    let value = folder::upgrade(what, value)?;
     serde_json::from_value(value).map_err(|source| BundleError::Invalid {
         what: what.to_string(),
         source,
@@ -85,14 +103,6 @@ pub fn valid_run_id(id: &str) -> bool {
         && id
             .chars()
             .all(|c| c.is_ascii_alphanumeric() || matches!(c, '.' | '_' | '-'))
-}
-
-/// An image path must stay inside the run folder: relative, no `..`, no root.
-pub fn safe_relative_path(path: &str) -> bool {
-    let p = Path::new(path);
-    !path.is_empty()
-        && p.components().all(|c| matches!(c, Component::Normal(_)))
-        && !path.contains('\\')
 }
 
 const PNG_SIGNATURE: &[u8] = b"\x89PNG\r\n\x1a\n";
@@ -189,67 +199,22 @@ impl RunBundle {
 
     /// Decodes an upload body.
     pub fn from_upload(body: UploadBody) -> Result<RunBundle, BundleError> {
-        let mut images = BTreeMap::new();
-        for (path, b64) in body.images {
-            let bytes = base64::engine::general_purpose::STANDARD
-                .decode(b64.as_bytes())
-                .map_err(|e| BundleError::Image {
-                    path: path.clone(),
-                    problem: format!("is not valid base64: {e}"),
-                })?;
-            images.insert(path, bytes);
-        }
+        let images = body
+            .decode_images()
+            .map_err(|(path, e)| BundleError::Image {
+                path,
+                problem: format!("is not valid base64: {e}"),
+            })?;
         RunBundle::from_parts(body.run, body.scenarios, images)
     }
 
-    /// Reads a run folder: `run.json`, `scenarios/*.json` (in name order) and every listed image
-    /// that exists (a missing image is left out, not an error: runs may be saved without them).
+    /// Reads a run folder through the shared reader: `run.json`, `scenarios/*.json` (in name
+    /// order, upgraded to the current version) and every listed image that exists (a missing
+    /// image is left out, not an error: runs may be saved without them).
     pub fn read_folder(dir: &Path) -> Result<RunBundle, BundleError> {
-        let read = |p: &Path| {
-            std::fs::read(p).map_err(|source| BundleError::Io {
-                path: p.display().to_string(),
-                source,
-            })
-        };
-        let json = |p: &Path| -> Result<serde_json::Value, BundleError> {
-            serde_json::from_slice(&read(p)?).map_err(|source| BundleError::Invalid {
-                what: p.display().to_string(),
-                source,
-            })
-        };
-        let run = json(&dir.join("run.json"))?;
-        let files =
-            tessera_results::layout::scenario_files(dir).map_err(|source| BundleError::Io {
-                path: dir
-                    .join(tessera_results::layout::SCENARIOS_DIR)
-                    .display()
-                    .to_string(),
-                source,
-            })?;
-        let scenarios = files
-            .iter()
-            .map(|p| json(p))
-            .collect::<Result<Vec<_>, _>>()?;
-        let mut images = BTreeMap::new();
-        for s in &scenarios {
-            let paths = s["results"].as_array().into_iter().flatten().flat_map(|v| {
-                v["images"]
-                    .as_array()
-                    .into_iter()
-                    .flatten()
-                    .filter_map(|i| i["path"].as_str())
-            });
-            for path in paths {
-                if !safe_relative_path(path) || images.contains_key(path) {
-                    continue; // from_parts names unsafe paths; duplicates are read once
-                }
-                let full = dir.join(path);
-                if full.is_file() {
-                    images.insert(path.to_string(), read(&full)?);
-                }
-            }
-        }
-        RunBundle::from_parts(run, scenarios, images)
+        let raw = folder::read_raw(dir)?;
+        let images = raw.read_images()?;
+        RunBundle::from_parts(raw.run, raw.scenarios, images)
     }
 
     /// The upload body for this bundle (what `tessera run --upload` sends).
@@ -264,12 +229,7 @@ impl RunBundle {
             images: self
                 .images
                 .iter()
-                .map(|(p, b)| {
-                    (
-                        p.clone(),
-                        base64::engine::general_purpose::STANDARD.encode(b),
-                    )
-                })
+                .map(|(p, b)| (p.clone(), tessera_results::upload::encode(b)))
                 .collect(),
         }
     }
@@ -278,14 +238,6 @@ impl RunBundle {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn paths_cannot_leave_the_run_folder() {
-        assert!(safe_relative_path("images/tiny/native-f002.png"));
-        for bad in ["../x.png", "/etc/passwd", "images/../../x", "", "a\\..\\b"] {
-            assert!(!safe_relative_path(bad), "{bad}");
-        }
-    }
 
     #[test]
     fn run_ids_are_url_safe() {
@@ -305,7 +257,7 @@ mod tests {
         .unwrap_err();
         assert_eq!(
             err.to_string(),
-            "run.json has schema_version 99; this dashboard reads version 1 only: upgrade tessera-dashboard to store it"
+            "run.json has schema_version 99; this dashboard reads versions 1 to 2: upgrade tessera-dashboard to store it"
         );
     }
 }

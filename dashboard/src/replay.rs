@@ -31,9 +31,9 @@ use crate::bundle::RunBundle;
 use crate::db::{Connection, Pool};
 use crate::detect::{Params, Rng};
 use crate::regressions::{self, WITHDRAWN};
-use crate::store::measures::{measures, native_gpu_ms};
 use crate::store::StoreError;
 use crate::synth::{time_after, widen};
+use tessera_results::measure::points;
 
 /// What to replay.
 #[derive(Clone, Debug)]
@@ -253,10 +253,9 @@ fn night_run(
 fn values(b: &RunBundle) -> BTreeMap<(String, String, String), f64> {
     let mut out = BTreeMap::new();
     for s in &b.scenarios {
-        let native = native_gpu_ms(s);
         for v in &s.results {
-            for m in measures(v, native) {
-                out.insert((s.scenario.clone(), v.variant.clone(), m.name), m.value);
+            for m in points(&s.results, v) {
+                out.insert((s.scenario.clone(), v.variant.clone(), m.key), m.value);
             }
         }
     }

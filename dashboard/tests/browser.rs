@@ -994,9 +994,10 @@ return Array.from(document.querySelectorAll('#regressions tbody.group')).map(g =
   key: g.id.slice(2),
   title: g.querySelector('h2').textContent,
   state: g.querySelector('[data-state-of]').textContent,
-  rows: Array.from(g.querySelectorAll('tr.alert')).map(r => Array.from(r.cells).map(c => c.textContent)),
+  rows: Array.from(g.querySelectorAll('tr.series-row')).map(r => Array.from(r.cells).map(c => c.textContent)),
+  row_background: getComputedStyle(g.querySelector('tr.series-row')).backgroundColor,
   worse_colour: (g.querySelector('.chg.worse') ? getComputedStyle(g.querySelector('.chg.worse')).color : ''),
-  link_colour: getComputedStyle(g.querySelector('tr.alert a')).color,
+  link_colour: getComputedStyle(g.querySelector('tr.series-row a')).color,
 }));
 "#;
 
@@ -1027,6 +1028,13 @@ fn regressions_page_triages_groups_with_the_token_entered_once() {
     assert!(title.contains("series on 2 adapters"), "{title}");
     let rows = groups[0]["rows"].as_array().unwrap();
     assert!(rows.len() >= 6, "{rows:?}");
+    // Series rows keep the page's background: only the change cell carries worse/better colour
+    // (a class shared with the runs list's red alert badge once painted whole rows red).
+    assert_eq!(
+        groups[0]["row_background"], "rgba(0, 0, 0, 0)",
+        "{:?}",
+        groups[0]
+    );
     let adapters: BTreeSet<&str> = rows.iter().map(|r| r[0].as_str().unwrap()).collect();
     assert_eq!(adapters.len(), 2, "{adapters:?}");
     assert!(rows

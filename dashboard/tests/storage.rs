@@ -248,3 +248,50 @@ fn store_newer_than_binary_is_refused() {
         Ok(_) => panic!("opened a newer store"),
     }
 }
+
+/// The harness's schema-version-1 fixture (`results/tests/fixtures/v1/`), read through the shared
+/// reader and stored: every series is named by the measure table, and the direction regression
+/// detection reads (`series.higher_is_better`) is the table's.
+#[test]
+fn stored_series_take_the_measure_tables_names_and_directions() {
+    use tessera_results::measure::Key;
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../results/tests/fixtures/v1/20261201T103009Z");
+    let bundle = RunBundle::read_folder(&dir).unwrap();
+    assert_eq!(bundle.run.schema_version, tessera_results::SCHEMA_VERSION);
+    for store in common::stores("stored_series_take_the_measure_tables_names") {
+        let mut c = store.pool.get().unwrap();
+        assert!(matches!(
+            ingest(&mut *c, &bundle).unwrap(),
+            Ingested::Stored { .. }
+        ));
+        let rows = c
+            .query("SELECT measure, higher_is_better FROM series", &[])
+            .unwrap();
+        assert!(rows.len() > 40, "{}", store.name);
+        let mut seen = std::collections::BTreeSet::new();
+        for r in rows {
+            let (measure, hib) = (r.string(0).unwrap(), r.bool(1).unwrap());
+            let key = Key::parse(&measure)
+                .unwrap_or_else(|| panic!("{}: series {measure} is not a measure", store.name));
+            assert_eq!(key.render(), measure);
+            assert_eq!(
+                hib,
+                key.measure.direction().higher_is_better(),
+                "{}: {measure}",
+                store.name
+            );
+            seen.insert(key.measure.name());
+        }
+        for m in [
+            "gpu_ms",
+            "speedup",
+            "psnr",
+            "flip",
+            "tde",
+            "allocated_bytes",
+        ] {
+            assert!(seen.contains(m), "{}: no {m} series", store.name);
+        }
+    }
+}

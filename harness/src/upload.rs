@@ -2,18 +2,17 @@
 //! `Authorization: Bearer $TESSERA_DASHBOARD_TOKEN` (used by `tessera upload` and
 //! `tessera run --upload`).
 //!
-//! The body is the dashboard's upload format (`dashboard/README.md`, "Uploading"): `run` (run.json
-//! as written), `scenarios` (every `scenarios/*.json`, by file name) and `images` (every PNG the
-//! results list and the folder holds, keyed by its path in the run folder, in base64). It is built
-//! here from the files, not with the dashboard's types: the harness and the dashboard share record
-//! types (`tessera-results`), never code paths. Nothing here changes the run folder: an upload
-//! that fails leaves the results on disk for a later `tessera upload`.
+//! The body is `tessera_results::upload::UploadBody`, the type the dashboard's `POST /api/runs`
+//! reads (`dashboard/README.md`, "Uploading"): `run` (run.json), `scenarios` (every
+//! `scenarios/*.json`, by file name), both brought to the current schema version by the shared
+//! run-folder reader, and `images` (every PNG the results list and the folder holds, keyed by its
+//! path in the run folder, in base64). Nothing here changes the run folder: an upload that fails
+//! leaves the results on disk for a later `tessera upload`.
 
-use std::collections::BTreeMap;
-use std::path::{Component, Path, PathBuf};
+use std::path::Path;
 use std::time::Duration;
 
-use base64::Engine;
+use tessera_results::upload::UploadBody;
 
 use crate::compare::load::{read_raw, LoadError};
 
@@ -27,12 +26,6 @@ const TIMEOUT: Duration = Duration::from_secs(300);
 pub enum UploadError {
     #[error(transparent)]
     Load(#[from] LoadError),
-    #[error("cannot read {path}: {source}")]
-    Image {
-        path: PathBuf,
-        #[source]
-        source: std::io::Error,
-    },
     #[error("{TOKEN_ENV} is not set: export the dashboard's token to upload")]
     NoToken,
     #[error("{0:?} is not a dashboard URL: give http://host:port or https://host")]
@@ -55,10 +48,7 @@ impl UploadError {
     /// The run folder or the URL is unusable (as opposed to the token, the dashboard or the
     /// network).
     pub fn is_bad_input(&self) -> bool {
-        matches!(
-            self,
-            UploadError::Load(_) | UploadError::Image { .. } | UploadError::BadUrl(_)
-        )
+        matches!(self, UploadError::Load(_) | UploadError::BadUrl(_))
     }
 }
 
@@ -88,48 +78,10 @@ impl Reply {
     }
 }
 
-/// An image path that stays inside the run folder (the dashboard refuses any other).
-fn inside_run_folder(path: &str) -> bool {
-    !path.is_empty()
-        && !path.contains('\\')
-        && Path::new(path)
-            .components()
-            .all(|c| matches!(c, Component::Normal(_)))
-}
-
 /// The upload body of a run folder. Listed images that are missing are left out (runs may be
-/// saved without them), as the dashboard's own `bundle` command does.
-pub fn bundle(dir: &Path) -> Result<serde_json::Value, UploadError> {
-    let raw = read_raw(dir)?;
-    let mut images = BTreeMap::new();
-    let listed = raw.scenarios.iter().flat_map(|s| {
-        s["results"].as_array().into_iter().flatten().flat_map(|v| {
-            v["images"]
-                .as_array()
-                .into_iter()
-                .flatten()
-                .filter_map(|i| i["path"].as_str())
-        })
-    });
-    for path in listed {
-        if !inside_run_folder(path) || images.contains_key(path) {
-            continue;
-        }
-        let full = dir.join(path);
-        if full.is_file() {
-            let bytes = std::fs::read(&full).map_err(|source| UploadError::Image {
-                path: full.clone(),
-                source,
-            })?;
-            let b64 = base64::engine::general_purpose::STANDARD.encode(bytes);
-            images.insert(path.to_string(), serde_json::Value::String(b64));
-        }
-    }
-    Ok(serde_json::json!({
-        "run": raw.run,
-        "scenarios": raw.scenarios,
-        "images": images,
-    }))
+/// saved without them), as the dashboard's own import does.
+pub fn bundle(dir: &Path) -> Result<UploadBody, UploadError> {
+    Ok(UploadBody::from_folder(&read_raw(dir)?)?)
 }
 
 /// `<url>/api/runs`, unless `url` already ends with it.
@@ -206,6 +158,6 @@ pub fn post(url: &str, token: &str, body: &[u8]) -> Result<Reply, UploadError> {
 pub fn upload(dir: &Path, url: &str) -> Result<Reply, UploadError> {
     endpoint(url)?;
     let token = token_from_env()?;
-    let body = serde_json::to_vec(&bundle(dir)?).expect("JSON values serialise");
+    let body = serde_json::to_vec(&bundle(dir)?).expect("the upload body serialises");
     post(url, &token, &body)
 }

@@ -69,7 +69,7 @@ fn metric(name: &str, value: f64, higher_is_better: bool) -> MetricRecord {
         frames: vec![0],
         value,
         higher_is_better,
-        series: None,
+        frame_stats: None,
     }
 }
 
@@ -476,13 +476,13 @@ fn exit_codes_of_the_command() {
 
     let newer = dir.path().join("newer");
     std::fs::create_dir_all(&newer).unwrap();
-    std::fs::write(newer.join("run.json"), r#"{"schema_version": 2}"#).unwrap();
+    std::fs::write(newer.join("run.json"), r#"{"schema_version": 3}"#).unwrap();
     let (code, _, err) = tessera(&["compare", &a, newer.to_str().unwrap()]);
     assert_eq!(code, 2);
     assert_eq!(
         err,
         format!(
-            "error: {}/run.json has schema_version 2; this tessera reads version 1 only: use the tessera that wrote it\n",
+            "error: {}/run.json has schema_version 3; this reader knows versions 1 to 2: read it with the newer tessera or tessera-dashboard that wrote it\n",
             newer.display()
         )
     );

@@ -146,7 +146,7 @@ fn the_stress_suite_gates_stability() {
         let measures: Vec<&str> = s.gates.iter().map(|g| g.measure.as_str()).collect();
         assert!(measures.contains(&"nondeterministic"), "{}", s.name);
         assert!(
-            measures.contains(&"non-finite") || measures.contains(&"spread-non-finite"),
+            measures.contains(&"non_finite_values") || measures.contains(&"spread_non_finite"),
             "{}",
             s.name
         );

@@ -7,8 +7,8 @@ use std::path::Path;
 use std::process::Command;
 use std::thread::JoinHandle;
 
-const RUN: &str = r#"{"schema_version": 1, "run_id": "r1", "status": "complete"}"#;
-const SCENARIO: &str = r#"{"schema_version": 1, "run_id": "r1", "scenario": "tiny", "results": [
+const RUN: &str = r#"{"schema_version": 2, "run_id": "r1", "status": "complete"}"#;
+const SCENARIO: &str = r#"{"schema_version": 2, "run_id": "r1", "scenario": "tiny", "results": [
   {"variant": "native", "images": [
     {"frame": 0, "kind": "output", "path": "images/tiny/native-f000.png"},
     {"frame": 1, "kind": "output", "path": "images/tiny/native-f001.png"},
@@ -133,7 +133,7 @@ fn bundle_is_the_dashboards_upload_body() {
     let dir = tempfile::tempdir().unwrap();
     let run = run_folder(dir.path());
     assert_eq!(
-        tessera::upload::bundle(Path::new(&run)).unwrap(),
+        serde_json::to_value(tessera::upload::bundle(Path::new(&run)).unwrap()).unwrap(),
         expected_body()
     );
 }

@@ -1,14 +1,20 @@
-//! Result record types shared by the harness (which writes them) and the dashboard (which reads them).
+//! Result record types shared by the harness (which writes them) and the dashboard (which reads
+//! them), and their meaning: [`measure`] (every measure's name, unit, direction and label, the
+//! baseline lookup by technique, the values that become series), [`folder`] (the one run-folder
+//! reader, upgrading older schema versions) and [`upload`] (the body of `POST /api/runs`).
 //!
-//! This crate holds types and their (de)serialisation only: no I/O policy, no GPU, no HTTP. The file
-//! format built from these types is documented in `results/README.md`; bump [`SCHEMA_VERSION`] on any
-//! change a reader could notice.
+//! No GPU, no HTTP, no writing. The file format built from these types is documented in
+//! `results/README.md`; bump [`SCHEMA_VERSION`] on any change a reader could notice, and teach
+//! [`folder::upgrade`] to read the previous version.
 
 use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
 pub mod conditions;
+pub mod folder;
+pub mod measure;
+pub mod upload;
 
 /// The run folder's layout (`results/README.md`): where each file of a run lives. Both the
 /// dashboard's import and `tessera compare` read run folders through this.
@@ -38,8 +44,12 @@ pub mod layout {
 
 pub mod stats;
 
-/// Version of the result format. Readers refuse versions they do not know.
-pub const SCHEMA_VERSION: u32 = 1;
+/// Version of the result format written now. Readers refuse versions they do not know; version 1
+/// folders are read through [`folder::upgrade`] (`results/README.md`, "Compatibility").
+pub const SCHEMA_VERSION: u32 = 2;
+
+/// The oldest version [`folder`] still reads.
+pub const OLDEST_SCHEMA_VERSION: u32 = 1;
 
 /// `run.json`: one invocation over a suite on one adapter at one commit.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
@@ -334,17 +344,20 @@ pub struct MetricRecord {
     /// Aggregate over frames: mean, or for PSNR the PSNR of the mean MSE. `None` in JSON when infinite.
     #[serde(with = "opt_f64")]
     pub value: f64,
-    /// Whether larger values are better (PSNR, SSIM) or worse (errors).
+    /// Whether larger values are better (PSNR, SSIM) or worse (errors): the direction of its
+    /// [`measure::Measure`] (written so that a reader without this crate can tell).
     pub higher_is_better: bool,
     /// Temporal behaviour of `per_frame`: mean, p95, max and population standard deviation over
-    /// frames (a proxy for quality "pumping"); absent when a frame's value is infinite.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub series: Option<SeriesSummary>,
+    /// frames (a proxy for quality "pumping"); absent when a frame's value is infinite. Called
+    /// `series` in schema version 1 (a series is one measure over commits, in the store); that
+    /// key is still read.
+    #[serde(default, alias = "series", skip_serializing_if = "Option::is_none")]
+    pub frame_stats: Option<FrameStats>,
 }
 
-/// Statistics of a metric's per-frame series.
+/// Statistics of a metric's per-frame values.
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
-pub struct SeriesSummary {
+pub struct FrameStats {
     pub mean: f64,
     pub p95: f64,
     pub max: f64,
@@ -363,7 +376,8 @@ pub struct ImageRecord {
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct GateOutcome {
-    /// What was gated: a metric name or `gpu_ms`, `cpu_ms`, `speedup`.
+    /// What was gated: a [`measure::Measure`] name (`gpu_ms`, `speedup`, `psnr`,
+    /// `non_finite_values`, ...). Version 1 files may hold an older spelling (`non-finite`).
     pub measure: String,
     #[serde(with = "opt_f64")]
     pub value: f64,
@@ -451,7 +465,7 @@ mod tests {
             frames: vec![0, 1],
             value: f64::INFINITY,
             higher_is_better: true,
-            series: None,
+            frame_stats: None,
         };
         let json = serde_json::to_string(&m).unwrap();
         assert!(json.contains("\"per_frame\":[null,42.0]"), "{json}");

@@ -13,8 +13,8 @@ use serde::{Deserialize, Serialize};
 
 use super::{AppError, AppState};
 use crate::html::{enc, esc, ms, page as layout};
-use crate::store::measures::{native_gpu_ms, speedup};
 use crate::store::read::{self, AdapterRow};
+use tessera_results::measure::{speedup, DEFAULT_BASELINE};
 
 #[derive(Debug, Deserialize, Default)]
 pub struct CompareQuery {
@@ -92,7 +92,6 @@ async fn load(state: &AppState, q: CompareQuery) -> Result<Comparison, AppError>
                     let Some(t) = sb.iter().find(|t| t.scenario == s.scenario) else {
                         continue;
                     };
-                    let (na, nb) = (native_gpu_ms(s), native_gpu_ms(t));
                     for v in &s.results {
                         let Some(w) = t.results.iter().find(|w| w.variant == v.variant) else {
                             continue;
@@ -102,8 +101,8 @@ async fn load(state: &AppState, q: CompareQuery) -> Result<Comparison, AppError>
                             variant: v.variant.clone(),
                             gpu_ms_a: v.gpu_frame_ms.map(|g| g.median),
                             gpu_ms_b: w.gpu_frame_ms.map(|g| g.median),
-                            speedup_a: speedup(v, na),
-                            speedup_b: speedup(w, nb),
+                            speedup_a: speedup(&s.results, v, DEFAULT_BASELINE),
+                            speedup_b: speedup(&t.results, w, DEFAULT_BASELINE),
                             status_a: v.status.label().into(),
                             status_b: w.status.label().into(),
                         });

@@ -15,6 +15,7 @@ use axum::extract::{RawQuery, State};
 use axum::response::{Html, IntoResponse, Response};
 use axum::Json;
 use serde::Serialize;
+use tessera_results::measure::{Key, Measure};
 use tessera_results::stats::{
     compare_times, frame_samples, TimeVerdict, ALPHA, DEFAULT_THRESHOLD_PCT,
 };
@@ -256,9 +257,12 @@ fn compare_variant(
     for ma in &va.metrics {
         let mb = vb.metrics.iter().find(|m| m.name == ma.name);
         let b = mb.map(|m| m.value);
+        // The measure table's direction; a metric it does not know takes its record's.
+        let higher_is_better = tessera_results::measure::Measure::from_name(&ma.name)
+            .map_or(ma.higher_is_better, |m| m.direction().higher_is_better());
         let verdict = match b {
             Some(b) if b == ma.value => "same",
-            Some(b) if (b > ma.value) == ma.higher_is_better => "better",
+            Some(b) if (b > ma.value) == higher_is_better => "better",
             Some(_) => "worse",
             None => "only in A",
         };
@@ -266,7 +270,7 @@ fn compare_variant(
             name: ma.name.clone(),
             a: Some(ma.value),
             b,
-            higher_is_better: ma.higher_is_better,
+            higher_is_better,
             verdict: verdict.into(),
         });
     }
@@ -482,16 +486,18 @@ pub fn csv_rows(c: &RunComparison) -> Vec<Vec<String>> {
                     t.verdict.clone(),
                 ]);
             };
+            let gpu_ms = Key::of(Measure::GpuMs).statistic("median");
             time(
                 if c.by_speedup {
+                    // Not a measure of a result: the medians over each run's native median.
                     "gpu_ms.relative_to_native".into()
                 } else {
-                    "gpu_ms.median".into()
+                    gpu_ms.render()
                 },
                 &v.time,
             );
             for p in &v.passes {
-                time(format!("pass.{}.gpu_ms.median", p.name), p);
+                time(gpu_ms.clone().pass(&p.name).render(), p);
             }
             for m in &v.metrics {
                 rows.push(vec![

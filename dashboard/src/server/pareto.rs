@@ -72,16 +72,18 @@ pub fn metrics_present(s: &ScenarioResult) -> Vec<String> {
 /// Points of one scenario record for `metric`, with the Pareto front marked. Variants without GPU
 /// time or without a finite metric value are left out.
 pub fn points(s: &ScenarioResult, metric: &str) -> (Vec<ParetoPoint>, bool) {
-    // Until a record says (its `higher_is_better`): the measures known to grow with quality.
-    let mut hib = metric.starts_with("psnr")
-        || matches!(metric, "ssim" | "ssim-luma" | "cvvdp" | "cvvdp-flicker");
+    // The measure table's direction; a metric it does not know takes its record's.
+    let known = tessera_results::measure::Measure::from_name(metric);
+    let mut hib = known.is_some_and(|m| m.direction().higher_is_better());
     let mut pts: Vec<ParetoPoint> = Vec::new();
     for v in s.results.iter().filter(|v| v.status == Status::Ok) {
         let Some(g) = v.gpu_frame_ms else { continue };
         let Some(m) = v.metrics.iter().find(|m| m.name == metric) else {
             continue;
         };
-        hib = m.higher_is_better;
+        if known.is_none() {
+            hib = m.higher_is_better;
+        }
         if m.value.is_finite() {
             pts.push(ParetoPoint {
                 variant: v.variant.clone(),

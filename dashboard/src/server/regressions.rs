@@ -248,7 +248,7 @@ const STYLE: &str = "<style>
 .stat-pending{border-style:dashed;color:#7a5a00}.stat-withdrawn{color:#777;text-decoration:line-through}
 form.triage{margin:4px 0 0}form.triage input[name=note]{width:260px}form.triage input[name=bug_url]{width:220px}
 .result{margin-left:8px}.result.ok{color:#17803d}.result.failed{color:#b3261e}
-tr.alert td{font-size:13px}tr.alert.stat-withdrawn td{color:#888}
+tr.series-row td{font-size:13px}tr.series-row.stat-withdrawn td{color:#888}
 .charts h3{font-size:14px;margin:16px 0 2px}
 </style>";
 
@@ -474,7 +474,7 @@ fn group_head(g: &Group, b: &mut String, title_link: bool) {
 fn alert_row(a: &Alert, b: &mut String) {
     let _ = write!(
         b,
-        "<tr id=r{} class=\"alert stat-{}\"><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td><a href=\"/series/{}\">{}</a></td><td class=n>{}</td><td class=n>{}</td><td class=n>{}</td><td class=n>{:.1}%</td><td>{}</td></tr>",
+        "<tr id=r{} class=\"series-row stat-{}\"><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td><a href=\"/series/{}\">{}</a></td><td class=n>{}</td><td class=n>{}</td><td class=n>{}</td><td class=n>{:.1}%</td><td>{}</td></tr>",
         a.id,
         esc(&a.status),
         esc(&a.series.adapter),

@@ -1,7 +1,7 @@
 //! One run (`/runs/{run_id}`, `/api/runs/{run_id}?format=json|csv`): per scenario, every variant
 //! with its status or skip reason, per-pass GPU time (stacked), speedup against native on the same
 //! adapter, the change of GPU time against the previous run of the same suite on the same adapter
-//! (the significance test of `tessera compare`), metrics, memory, and links to its series and
+//! (the significance test of `tessera compare`), metrics, allocated bytes, and links to its series and
 //! images. The CSV export has the columns of the harness's `results.csv`.
 
 use std::fmt::Write;
@@ -9,6 +9,7 @@ use std::fmt::Write;
 use axum::extract::{Path, Query, State};
 use axum::response::{Html, IntoResponse, Response};
 use axum::Json;
+use tessera_results::measure::{self, points, Key, Measure, DEFAULT_BASELINE};
 use tessera_results::stats::{compare_times, frame_samples, TimeVerdict, DEFAULT_THRESHOLD_PCT};
 use tessera_results::{ScenarioResult, Status};
 
@@ -16,7 +17,6 @@ use super::export::{csv, csv_response, no_markdown, Format, FormatQuery};
 use super::{AppError, AppState};
 use crate::html::{bytes, commit, enc, esc, ms, num, page as layout, pct};
 use crate::store::browse;
-use crate::store::measures::{measures, native_gpu_ms, speedup};
 use crate::store::read::{self, RunDetail};
 use crate::svg::{stacked_bars, Bar};
 
@@ -37,7 +37,6 @@ pub async fn api(
         Format::Csv => {
             let mut rows = Vec::new();
             for s in &d.scenarios {
-                let native = native_gpu_ms(s);
                 for v in &s.results {
                     let base = [
                         d.run.run_id.clone(),
@@ -48,24 +47,17 @@ pub async fn api(
                         d.run.backend.clone(),
                         v.status.label().to_string(),
                     ];
-                    let ms = measures(v, native);
+                    let ms = points(&s.results, v);
                     if ms.is_empty() {
                         let mut r = base.to_vec();
                         r.extend(["status".into(), String::new(), String::new()]);
                         rows.push(r);
                     }
                     for m in ms {
-                        let unit = if m.name.ends_with("ms.median") {
-                            "ms"
-                        } else if m.name == "allocated_bytes" {
-                            "bytes"
-                        } else if m.name.starts_with("speedup") {
-                            "x"
-                        } else {
-                            ""
-                        };
+                        // The unit of `results.csv`, from the measure table.
+                        let unit = Key::parse(&m.key).map_or("", |k| k.measure.unit());
                         let mut r = base.to_vec();
-                        r.extend([m.name, m.value.to_string(), unit.to_string()]);
+                        r.extend([m.key, m.value.to_string(), unit.to_string()]);
                         rows.push(r);
                     }
                 }
@@ -147,24 +139,55 @@ fn scenario_section(d: &RunDetail, prev: Option<&Previous>, s: &ScenarioResult, 
     if bars.iter().any(|b| !b.parts.is_empty()) {
         out.push_str(&stacked_bars(&bars, "GPU ms (median per pass)"));
     }
-    let native = native_gpu_ms(s);
     let mut metric_names: Vec<&str> = Vec::new();
     for m in s.results.iter().flat_map(|v| &v.metrics) {
         if !metric_names.contains(&m.name.as_str()) {
             metric_names.push(&m.name);
         }
     }
-    let _ = write!(out, "<div class=scroll><table class=variants><tr><th>variant</th><th>status</th><th class=n>GPU ms</th><th class=n title=\"GPU time against the previous run of the suite\">vs prev</th><th class=n>CPU ms</th><th class=n>speedup</th>");
+    // Column heads are the measures' names; the title says the unit and which way is better.
+    let head = |m: Measure| {
+        let i = m.info();
+        let unit = if i.unit.is_empty() {
+            String::new()
+        } else {
+            format!(" ({})", i.unit)
+        };
+        format!(
+            "<th class=n title=\"{}{unit}, {}\">{}</th>",
+            esc(i.label),
+            i.direction.phrase(),
+            esc(i.name)
+        )
+    };
+    let _ = write!(
+        out,
+        "<div class=scroll><table class=variants><tr><th>variant</th><th>status</th>{}<th class=n title=\"GPU time against the previous run of the suite\">vs prev</th>{}{}",
+        head(Measure::GpuMs),
+        head(Measure::CpuMs),
+        head(Measure::Speedup)
+    );
     for m in &metric_names {
-        let _ = write!(out, "<th class=n>{}</th>", esc(m));
+        match Measure::from_name(m) {
+            Some(known) => out.push_str(&head(known)),
+            None => {
+                let _ = write!(out, "<th class=n>{}</th>", esc(m));
+            }
+        }
     }
-    out.push_str("<th class=n>memory</th><th>passes</th><th>gates</th><th></th></tr>");
+    let _ = write!(
+        out,
+        "{}<th>passes</th><th>gates</th><th></th></tr>",
+        head(Measure::AllocatedBytes)
+    );
     for v in &s.results {
         let series_link = d
             .series
             .iter()
             .find(|l| {
-                l.scenario == s.scenario && l.variant == v.variant && l.measure == "gpu_ms.median"
+                l.scenario == s.scenario
+                    && l.variant == v.variant
+                    && l.measure == Measure::GpuMs.store_key()
             })
             .map(|l| format!("<a href=\"/series/{}\">history</a>", l.series_id))
             .unwrap_or_default();
@@ -175,7 +198,8 @@ fn scenario_section(d: &RunDetail, prev: Option<&Previous>, s: &ScenarioResult, 
             }
             Status::Failed { error } => format!("<span class=failed>failed</span>: {}", esc(error)),
         };
-        let sp = speedup(v, native).map_or("–".into(), |x| format!("{x:.2}×"));
+        let sp = measure::speedup(&s.results, v, DEFAULT_BASELINE)
+            .map_or("–".into(), |x| format!("{x:.2}×"));
         let ok = v.status == Status::Ok;
         // Skipped and failed variants measured nothing: no times, no memory.
         let _ = write!(

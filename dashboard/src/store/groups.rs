@@ -13,6 +13,7 @@
 use std::collections::{BTreeMap, BTreeSet};
 
 use serde::Serialize;
+use tessera_results::measure::Measure;
 
 use super::read::SeriesKey;
 use super::StoreError;
@@ -344,13 +345,18 @@ fn alert(r: &Row, suites: &BTreeMap<String, String>) -> Result<Alert, StoreError
 
 /// The short name of a measure in a title: `gpu_ms`, a pass name, a metric.
 pub fn measure_label(measure: &str) -> &str {
-    if let Some(pass) = measure
-        .strip_prefix("pass.")
-        .and_then(|p| p.strip_suffix(".gpu_ms.median"))
-    {
-        return pass;
+    // The parts of the key are the measure table's (`tessera_results::measure::Key`): a pass's GPU
+    // time is named by its pass, a median by its measure.
+    match tessera_results::measure::Key::parse(measure) {
+        Some(k)
+            if k.measure == Measure::GpuMs && k.pass.is_some() && k.statistic == Some("median") =>
+        {
+            let pass = k.pass.as_deref().unwrap_or_default();
+            &measure["pass.".len().."pass.".len() + pass.len()]
+        }
+        Some(k) if k.pass.is_none() && k.statistic == Some("median") => k.measure.name(),
+        _ => measure,
     }
-    measure.strip_suffix(".median").unwrap_or(measure)
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -642,5 +648,10 @@ mod tests {
             "reconstruct"
         );
         assert_eq!(measure_label("flip"), "flip");
+        assert_eq!(measure_label("pass.a.b.gpu_ms.median"), "a.b");
+        assert_eq!(
+            measure_label("not-a-measure.median"),
+            "not-a-measure.median"
+        );
     }
 }

@@ -13,10 +13,10 @@ use std::collections::BTreeMap;
 use sha2::{Digest, Sha256};
 use tessera_results::{RunInfo, Status};
 
-use super::measures::{measures, native_gpu_ms};
 use super::StoreError;
 use crate::bundle::RunBundle;
 use crate::db::{transaction, Connection, DbError, Value};
+use tessera_results::measure::{points, speedup, DEFAULT_BASELINE};
 
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Ingested {
@@ -178,7 +178,7 @@ fn ingest_once(conn: &mut dyn Connection, bundle: &RunBundle) -> Result<Ingested
         )?;
     }
 
-    let mut points: BTreeMap<(String, String, String), (f64, bool)> = BTreeMap::new();
+    let mut series_points: BTreeMap<(String, String, String), (f64, bool)> = BTreeMap::new();
     let mut results = 0;
     for s in &bundle.scenarios {
         let record = serde_json::to_string(s).expect("records serialise");
@@ -194,7 +194,6 @@ fn ingest_once(conn: &mut dyn Connection, bundle: &RunBundle) -> Result<Ingested
                 record.into(),
             ],
         )?;
-        let native = native_gpu_ms(s);
         for v in &s.results {
             results += 1;
             let reason = match &v.status {
@@ -215,7 +214,7 @@ fn ingest_once(conn: &mut dyn Connection, bundle: &RunBundle) -> Result<Ingested
                     reason.into(),
                     v.gpu_frame_ms.map(|g| g.median).into(),
                     Value::from(v.cpu_frame_ms.median),
-                    super::measures::speedup(v, native).into(),
+                    speedup(&s.results, v, DEFAULT_BASELINE).into(),
                     Value::Int(v.allocated_bytes.min(i64::MAX as u64) as i64),
                 ],
             )?;
@@ -235,9 +234,9 @@ fn ingest_once(conn: &mut dyn Connection, bundle: &RunBundle) -> Result<Ingested
                     )?;
                 }
             }
-            for m in measures(v, native) {
-                points.insert(
-                    (s.scenario.clone(), v.variant.clone(), m.name),
+            for m in points(&s.results, v) {
+                series_points.insert(
+                    (s.scenario.clone(), v.variant.clone(), m.key),
                     (m.value, m.higher_is_better),
                 );
             }
@@ -245,8 +244,8 @@ fn ingest_once(conn: &mut dyn Connection, bundle: &RunBundle) -> Result<Ingested
     }
 
     let ord = order_key(run);
-    let mut series = Vec::with_capacity(points.len());
-    for ((scenario, variant, measure), (value, hib)) in points {
+    let mut series = Vec::with_capacity(series_points.len());
+    for ((scenario, variant, measure), (value, hib)) in series_points {
         let key = [
             scenario.into(),
             variant.into(),

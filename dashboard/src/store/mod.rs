@@ -8,7 +8,6 @@ pub mod delete;
 pub mod extras;
 pub mod groups;
 pub mod ingest;
-pub mod measures;
 pub mod outbox;
 pub mod read;
 pub mod tokens;

@@ -206,11 +206,14 @@ fn compare_time(
     }
 }
 
+/// The metric's value and whether higher is better: the measure table's direction, or for a
+/// metric it does not know, the record's.
 fn metric_value(r: &VariantResult, name: &str) -> Option<(f64, bool)> {
-    r.metrics
-        .iter()
-        .find(|m| m.name == name)
-        .map(|m| (m.value, m.higher_is_better))
+    let known = tessera_results::measure::Measure::from_name(name);
+    r.metrics.iter().find(|m| m.name == name).map(|m| {
+        let higher = known.map_or(m.higher_is_better, |k| k.direction().higher_is_better());
+        (m.value, higher)
+    })
 }
 
 /// Beyond `tol` in the direction that is worse. Infinite PSNR (identical frames) compares as

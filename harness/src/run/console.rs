@@ -5,6 +5,7 @@
 use std::fmt::Write as _;
 
 use tessera_results::conditions::{SamplingMode, StopReason};
+use tessera_results::measure::Measure;
 use tessera_results::{GateLevel, ScenarioResult, Status, VariantResult};
 
 use super::gates;
@@ -15,7 +16,7 @@ fn ms(v: Option<f64>) -> String {
 }
 
 fn psnr(r: &VariantResult) -> String {
-    match r.metrics.iter().find(|m| m.name == "psnr") {
+    match r.metrics.iter().find(|m| m.name == Measure::Psnr.name()) {
         Some(m) if m.value.is_infinite() => "inf".to_string(),
         Some(m) => format!("{:.2}", m.value),
         None => "-".to_string(),
@@ -51,8 +52,14 @@ fn gate_messages(r: &VariantResult, level: GateLevel) -> String {
 
 /// The table of one scenario.
 pub fn scenario_table(s: &ScenarioResult) -> String {
+    // The measures' labels (`tessera_results::measure`), as the dashboard shows them.
     let header = [
-        "variant", "GPU ms", "CPU ms", "speedup", "PSNR dB", "status",
+        "variant",
+        Measure::GpuMs.label(),
+        Measure::CpuMs.label(),
+        Measure::Speedup.label(),
+        Measure::Psnr.label(),
+        "status",
     ];
     let rows: Vec<[String; 6]> = s
         .results

@@ -9,6 +9,7 @@
 use tessera_metrics::{
     CvvdpSettings, DistortionMap, Frames, HdrImage, MetricsError, Rgb8Image, DEFAULT_HDR_WHITE,
 };
+use tessera_results::measure::Measure;
 use tessera_results::MetricRecord;
 
 use crate::scenario::{Scenario, CVVDP_MEASURES};
@@ -77,28 +78,25 @@ pub fn records(
         )?
     };
     let frames: Vec<u32> = (0..n as u32).collect();
-    let record =
-        |name: &str, per_frame: Vec<f64>, value: f64, higher_is_better: bool| MetricRecord {
-            name: name.to_string(),
-            series: super::metrics::series(&per_frame),
-            frames: frames[..per_frame.len()].to_vec(),
-            per_frame,
-            value,
-            higher_is_better,
-        };
-    let mut out = vec![record("cvvdp", r.frame_jod.clone(), r.jod, true)];
+    let record = |m: Measure, per_frame: Vec<f64>, value: f64| MetricRecord {
+        name: m.name().to_string(),
+        frame_stats: super::metrics::frame_stats(&per_frame),
+        frames: frames[..per_frame.len()].to_vec(),
+        per_frame,
+        value,
+        higher_is_better: m.direction().higher_is_better(),
+    };
+    let mut out = vec![record(Measure::Cvvdp, r.frame_jod.clone(), r.jod)];
     if let (Some(flicker), Some(share)) = (r.flicker_jod, r.transient_share) {
         out.push(record(
             CVVDP_MEASURES[0],
             r.frame_flicker_jod.clone(),
             flicker,
-            true,
         ));
         out.push(record(
             CVVDP_MEASURES[1],
             r.frame_transient_share.clone(),
             share,
-            false,
         ));
     }
     Ok((out, r.maps))

@@ -1,51 +1,38 @@
 //! Gates: thresholds a scenario declares on metrics and timings, evaluated per variant at two
 //! levels (warn, fail). Pure functions over finished results; the exit code is decided in `main`.
 
+use tessera_results::measure::{self, Measure, DEFAULT_BASELINE};
 use tessera_results::{GateLevel, GateOutcome, Status, VariantResult};
 
 use crate::scenario::{Gate, Reference, Scenario};
 
 /// Median GPU frame time; `None` on adapters without timestamps.
 pub fn frame_ms(r: &VariantResult) -> Option<f64> {
-    r.gpu_frame_ms.map(|s| s.median)
+    measure::gpu_ms(r)
 }
 
 /// Speed-up of `r` against the `native` variant of the same scenario on the same adapter.
 pub fn speedup(results: &[VariantResult], r: &VariantResult) -> Option<f64> {
-    speedup_over(results, r, crate::techniques::native::NAME)
+    measure::speedup(results, r, DEFAULT_BASELINE)
 }
 
 /// Speed-up of `r` against the first ok variant of technique `baseline` (e.g. `native-deferred`,
 /// the baseline of `adaptive-shading`) of the same scenario on the same adapter: found by
-/// technique, as the dashboard finds it, so a `label` on the baseline changes nothing.
+/// technique ([`measure::baseline_of`]), as the dashboard finds it, so a `label` on the baseline
+/// changes nothing.
 pub fn speedup_over(results: &[VariantResult], r: &VariantResult, baseline: &str) -> Option<f64> {
-    let native = results
-        .iter()
-        .find(|v| v.technique == baseline && v.status == Status::Ok)?;
-    if r.status != Status::Ok {
-        return None;
-    }
-    let (n, v) = (frame_ms(native)?, frame_ms(r)?);
-    (v > 0.0).then(|| n / v)
+    measure::speedup(results, r, baseline)
 }
 
 /// Energy per measured frame in millijoules; `None` where the adapter's sensors are not available.
 pub fn energy_mj(r: &VariantResult) -> Option<f64> {
-    let c = r.conditions.as_ref()?.recorded()?;
-    c.energy.map(|e| e.mj_per_frame)
+    measure::energy_mj(r)
 }
 
 /// Energy saved against the `native` variant of the same scenario: native's energy per frame over
 /// this variant's (2 = half the energy per frame), the energy counterpart of [`speedup`].
 pub fn energy_saving(results: &[VariantResult], r: &VariantResult) -> Option<f64> {
-    let native = results
-        .iter()
-        .find(|v| v.variant == "native" && v.status == Status::Ok)?;
-    if r.status != Status::Ok {
-        return None;
-    }
-    let (n, v) = (energy_mj(native)?, energy_mj(r)?);
-    (v > 0.0).then(|| n / v)
+    measure::energy_saving(results, r, DEFAULT_BASELINE)
 }
 
 /// Whether the result was throttled during its measured frames; `None` without sensors.
@@ -85,29 +72,23 @@ fn applies(gate: &Gate, scenario: &Scenario, r: &VariantResult) -> bool {
     }
 }
 
+/// The gated value: the measure's (its median where summarised, [`measure::value`]); a gate on
+/// `<name>.median` reads the same. Validation allows only measures of the table.
 fn measure(results: &[VariantResult], r: &VariantResult, name: &str) -> Option<f64> {
-    match name {
-        "gpu_ms" => frame_ms(r),
-        "cpu_ms" => (r.cpu_frame_ms.count > 0).then_some(r.cpu_frame_ms.median),
-        "speedup" => speedup(results, r),
-        "non-finite" => Some(r.non_finite_values as f64),
-        "spread-non-finite" => r.stability.as_ref()?.spread_pixels.map(|v| v as f64),
-        "nondeterministic" => r
-            .stability
-            .as_ref()?
-            .deterministic
-            .map(|d| if d { 0.0 } else { 1.0 }),
-        "energy_mj" => energy_mj(r),
-        "energy_saving" => energy_saving(results, r),
-        "throttled" => throttled(r).map(|t| if t { 1.0 } else { 0.0 }),
-        "pacing.p95_over_p50" => r.pacing.map(|p| p.p95_over_p50),
-        "pacing.mean_abs_delta_ms" => r.pacing.map(|p| p.mean_abs_delta_ms),
-        "unrecovered-cuts" => r
-            .stability
-            .as_ref()
-            .map(|s| super::stability::unrecovered_cuts(s) as f64),
-        metric => r.metrics.iter().find(|m| m.name == metric).map(|m| m.value),
+    let key = measure::Key::parse(name)?;
+    if key.pass.is_some()
+        || key.baseline.is_some()
+        || !matches!(key.statistic, None | Some("median"))
+    {
+        return None;
     }
+    measure::value(results, r, key.measure)
+}
+
+/// The measure name a gate outcome is written with: the canonical one (`non-finite` is written
+/// `non_finite_values`).
+fn canonical(name: &str) -> String {
+    Measure::from_name(name).map_or_else(|| name.to_string(), |m| m.name().to_string())
 }
 
 /// Evaluates one gate on one value.
@@ -132,7 +113,7 @@ pub fn evaluate(gate: &Gate, value: f64) -> (GateLevel, String) {
                     level,
                     format!(
                         "{} = {} is {rel} {b}: {verb}",
-                        gate.measure,
+                        canonical(&gate.measure),
                         fmt_value(value)
                     ),
                 );
@@ -141,7 +122,7 @@ pub fn evaluate(gate: &Gate, value: f64) -> (GateLevel, String) {
     }
     (
         GateLevel::Pass,
-        format!("{} = {} passes", gate.measure, fmt_value(value)),
+        format!("{} = {} passes", canonical(&gate.measure), fmt_value(value)),
     )
 }
 
@@ -164,28 +145,29 @@ pub fn apply(scenario: &Scenario, results: &mut [VariantResult]) {
             .filter(|g| applies(g, scenario, r))
             .collect();
         for gate in gates {
+            let name = canonical(&gate.measure);
             let outcome = match (&r.status, measure(&snapshot, r, &gate.measure)) {
                 (Status::Skipped { .. }, _) => continue,
                 (Status::Failed { .. }, _) => GateOutcome {
-                    measure: gate.measure.clone(),
+                    measure: name.clone(),
                     value: f64::NAN,
                     level: GateLevel::Fail,
-                    message: format!("{}: the variant failed", gate.measure),
+                    message: format!("{name}: the variant failed"),
                 },
                 (_, Some(v)) => {
                     let (level, message) = evaluate(gate, v);
                     GateOutcome {
-                        measure: gate.measure.clone(),
+                        measure: name.clone(),
                         value: v,
                         level,
                         message,
                     }
                 }
                 (_, None) => GateOutcome {
-                    measure: gate.measure.clone(),
+                    measure: name.clone(),
                     value: f64::NAN,
                     level: GateLevel::Warn,
-                    message: format!("{}: not measured on this adapter", gate.measure),
+                    message: format!("{name}: not measured on this adapter"),
                 },
             };
             r.gates.push(outcome);

@@ -104,7 +104,7 @@ pub fn compute(
         };
         out.push(MetricRecord {
             name: kind.name().to_string(),
-            series: series(&per_frame),
+            frame_stats: frame_stats(&per_frame),
             per_frame,
             frames: frames.clone(),
             value,
@@ -114,8 +114,8 @@ pub fn compute(
     Ok(out)
 }
 
-pub(super) fn series(per_frame: &[f64]) -> Option<tessera_results::SeriesSummary> {
-    tessera_metrics::series_stats(per_frame).map(|s| tessera_results::SeriesSummary {
+pub(super) fn frame_stats(per_frame: &[f64]) -> Option<tessera_results::FrameStats> {
+    tessera_metrics::series_stats(per_frame).map(|s| tessera_results::FrameStats {
         mean: s.mean,
         p95: s.p95,
         max: s.max,
@@ -151,11 +151,11 @@ fn tde(
     let value = per_frame.iter().sum::<f64>() / per_frame.len().max(1) as f64;
     Ok(MetricRecord {
         name: MetricKind::Tde.name().to_string(),
-        series: series(&per_frame),
+        frame_stats: frame_stats(&per_frame),
         frames,
         per_frame,
         value,
-        higher_is_better: false,
+        higher_is_better: MetricKind::Tde.higher_is_better(),
     })
 }
 
@@ -179,11 +179,11 @@ fn flicker(frames: &[Rgb8Image]) -> MetricRecord {
     let value = per_frame.iter().sum::<f64>() / per_frame.len().max(1) as f64;
     MetricRecord {
         name: MetricKind::Flicker.name().to_string(),
-        series: series(&per_frame),
+        frame_stats: frame_stats(&per_frame),
         frames: (1..frames.len() as u32).collect(),
         per_frame,
         value,
-        higher_is_better: false,
+        higher_is_better: MetricKind::Flicker.higher_is_better(),
     }
 }
 
@@ -211,11 +211,13 @@ pub fn extra_values(extras: &[FrameExtras]) -> Vec<MetricRecord> {
         let value = per_frame.iter().sum::<f64>() / per_frame.len().max(1) as f64;
         out.push(MetricRecord {
             name: name.to_string(),
-            series: series(&per_frame),
+            frame_stats: frame_stats(&per_frame),
             per_frame,
             frames,
             value,
-            higher_is_better: false,
+            // A technique's own values are lower-is-better unless the measure table says.
+            higher_is_better: tessera_results::measure::Measure::from_name(name)
+                .is_some_and(|m| m.direction().higher_is_better()),
         });
     }
     out

@@ -7,9 +7,10 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use tessera_results::{GateLevel, RunInfo, ScenarioResult, Status, CSV_COLUMNS};
+use tessera_results::measure::{self, Key, Measure, DEFAULT_BASELINE};
+use tessera_results::{GateLevel, RunInfo, ScenarioResult, Status, VariantResult, CSV_COLUMNS};
 
-use super::gates;
+use Measure::*;
 
 #[derive(Debug, thiserror::Error)]
 #[error("cannot write {path}: {source}")]
@@ -67,7 +68,9 @@ pub fn results_csv(run: &RunInfo, scenarios: &[ScenarioResult]) -> Vec<u8> {
     out.push('\n');
     for s in scenarios {
         for r in &s.results {
-            let mut row = |measure: &str, value: String, unit: &str| {
+            let mut rows: Vec<(String, String, &str)> = Vec::new();
+            csv_rows(&s.results, r, &mut rows);
+            for (measure, value, unit) in rows {
                 let fields = [
                     run.run_id.as_str(),
                     s.scenario.as_str(),
@@ -76,111 +79,114 @@ pub fn results_csv(run: &RunInfo, scenarios: &[ScenarioResult]) -> Vec<u8> {
                     run.adapter.name.as_str(),
                     run.adapter.backend.as_str(),
                     r.status.label(),
-                    measure,
+                    measure.as_str(),
                     value.as_str(),
                     unit,
                 ];
                 let line: Vec<String> = fields.iter().map(|f| csv_field(f)).collect();
                 out.push_str(&line.join(","));
                 out.push('\n');
-            };
-            if r.status != Status::Ok {
-                row("status", String::new(), "");
-                continue;
-            }
-            if let Some(t) = r.gpu_frame_ms {
-                row("gpu_ms.median", num(t.median), "ms");
-                row("gpu_ms.p5", num(t.p5), "ms");
-                row("gpu_ms.p95", num(t.p95), "ms");
-                row("gpu_ms.min", num(t.min), "ms");
-            }
-            row("cpu_ms.median", num(r.cpu_frame_ms.median), "ms");
-            if let Some(sp) = gates::speedup(&s.results, r) {
-                row("speedup", num(sp), "x");
-            }
-            // A technique's own baseline (the registry's), beside native.
-            let baseline = crate::techniques::by_name(&r.technique).and_then(|t| t.baseline());
-            if let Some(b) = baseline {
-                if let Some(sp) = gates::speedup_over(&s.results, r, b) {
-                    row(&format!("speedup.{b}"), num(sp), "x");
-                }
-            }
-            if let Some([lo, hi]) = r.gpu_frame_ms.and_then(|t| t.median_ci95) {
-                row("gpu_ms.median_ci95.low", num(lo), "ms");
-                row("gpu_ms.median_ci95.high", num(hi), "ms");
-            }
-            if let Some(sm) = &r.sampling {
-                row("measured_frames", sm.frames.to_string(), "count");
-                if let Some(p) = sm.precision {
-                    row("gpu_ms.precision", num(p), "ratio");
-                }
-            }
-            if let Some(p) = &r.pacing {
-                row("pacing.p95_over_p50", num(p.p95_over_p50), "x");
-                row("pacing.mean_abs_delta_ms", num(p.mean_abs_delta_ms), "ms");
-                if let Some(par) = &p.parity {
-                    row("pacing.even_ms.median", num(par.even_median_ms), "ms");
-                    row("pacing.odd_ms.median", num(par.odd_median_ms), "ms");
-                    row("pacing.even_over_odd", num(par.even_over_odd), "x");
-                }
-            }
-            if let Some(c) = r.conditions.as_ref().and_then(|c| c.recorded()) {
-                let spreads = [
-                    ("graphics_clock_mhz", "MHz", c.graphics_clock_mhz),
-                    ("memory_clock_mhz", "MHz", c.memory_clock_mhz),
-                    ("temperature_c", "C", c.temperature_c),
-                    ("power_w", "W", c.power_w),
-                ];
-                for (name, unit, spread) in spreads {
-                    if let Some(v) = spread {
-                        row(&format!("{name}.min"), num(v.min), unit);
-                        row(&format!("{name}.median"), num(v.median), unit);
-                        row(&format!("{name}.max"), num(v.max), unit);
-                    }
-                }
-                if let Some(e) = gates::energy_mj(r) {
-                    row("energy_mj", num(e), "mJ");
-                }
-                if let Some(x) = gates::energy_saving(&s.results, r) {
-                    row("energy_saving", num(x), "x");
-                }
-                row("throttled", u8::from(c.throttled).to_string(), "bool");
-            }
-            for p in &r.passes {
-                if let Some(t) = p.gpu_ms {
-                    row(
-                        &format!("pass.{}.gpu_ms.median", p.name),
-                        num(t.median),
-                        "ms",
-                    );
-                }
-                if let Some(f) = p.fragment_invocations {
-                    row(
-                        &format!("pass.{}.fragment_invocations", p.name),
-                        f.to_string(),
-                        "count",
-                    );
-                }
-            }
-            row("allocated_bytes", r.allocated_bytes.to_string(), "bytes");
-            row(
-                "non_finite_values",
-                r.non_finite_values.to_string(),
-                "count",
-            );
-            for m in &r.metrics {
-                let unit = if m.name.starts_with("psnr") {
-                    "dB"
-                } else if m.name == "cvvdp" || m.name == "cvvdp-flicker" {
-                    "JOD"
-                } else {
-                    ""
-                };
-                row(&m.name, num(m.value), unit);
             }
         }
     }
     out.into_bytes()
+}
+
+/// The (measure, value, unit) rows of one result, in `results.csv` order: names and units from
+/// the measure table (`tessera_results::measure`).
+fn csv_rows(
+    results: &[VariantResult],
+    r: &VariantResult,
+    rows: &mut Vec<(String, String, &'static str)>,
+) {
+    let row = |key: Key, value: String| (key.render(), value, key.measure.unit());
+    if r.status != Status::Ok {
+        // The only row of a skipped or failed variant.
+        rows.push(("status".to_string(), String::new(), ""));
+        return;
+    }
+    let stat = |m: Measure, st: &'static str| Key::of(m).statistic(st);
+    if let Some(t) = r.gpu_frame_ms {
+        rows.push(row(stat(GpuMs, "median"), num(t.median)));
+        rows.push(row(stat(GpuMs, "p5"), num(t.p5)));
+        rows.push(row(stat(GpuMs, "p95"), num(t.p95)));
+        rows.push(row(stat(GpuMs, "min"), num(t.min)));
+    }
+    rows.push(row(stat(CpuMs, "median"), num(r.cpu_frame_ms.median)));
+    if let Some(sp) = measure::speedup(results, r, DEFAULT_BASELINE) {
+        rows.push(row(Key::of(Speedup), num(sp)));
+    }
+    // A technique's own baseline (the registry's), beside native.
+    let baseline = crate::techniques::by_name(&r.technique).and_then(|t| t.baseline());
+    if let Some(b) = baseline {
+        if let Some(sp) = measure::speedup(results, r, b) {
+            rows.push(row(Key::speedup_over(b), num(sp)));
+        }
+    }
+    if let Some([lo, hi]) = r.gpu_frame_ms.and_then(|t| t.median_ci95) {
+        rows.push(row(stat(GpuMs, "median_ci95.low"), num(lo)));
+        rows.push(row(stat(GpuMs, "median_ci95.high"), num(hi)));
+    }
+    if let Some(sm) = &r.sampling {
+        rows.push(row(Key::of(MeasuredFrames), sm.frames.to_string()));
+        if let Some(p) = sm.precision {
+            rows.push(row(Key::of(GpuMsPrecision), num(p)));
+        }
+    }
+    if let Some(p) = &r.pacing {
+        rows.push(row(Key::of(PacingP95OverP50), num(p.p95_over_p50)));
+        rows.push(row(Key::of(PacingMeanAbsDeltaMs), num(p.mean_abs_delta_ms)));
+        if let Some(par) = &p.parity {
+            rows.push(row(stat(PacingEvenMs, "median"), num(par.even_median_ms)));
+            rows.push(row(stat(PacingOddMs, "median"), num(par.odd_median_ms)));
+            rows.push(row(Key::of(PacingEvenOverOdd), num(par.even_over_odd)));
+        }
+    }
+    if let Some(c) = r.conditions.as_ref().and_then(|c| c.recorded()) {
+        let spreads = [
+            (GraphicsClockMhz, c.graphics_clock_mhz),
+            (MemoryClockMhz, c.memory_clock_mhz),
+            (TemperatureC, c.temperature_c),
+            (PowerW, c.power_w),
+        ];
+        for (m, spread) in spreads {
+            if let Some(v) = spread {
+                rows.push(row(stat(m, "min"), num(v.min)));
+                rows.push(row(stat(m, "median"), num(v.median)));
+                rows.push(row(stat(m, "max"), num(v.max)));
+            }
+        }
+        if let Some(e) = measure::energy_mj(r) {
+            rows.push(row(Key::of(EnergyMj), num(e)));
+        }
+        if let Some(x) = measure::energy_saving(results, r, DEFAULT_BASELINE) {
+            rows.push(row(Key::of(EnergySaving), num(x)));
+        }
+        rows.push(row(Key::of(Throttled), u8::from(c.throttled).to_string()));
+    }
+    for p in &r.passes {
+        if let Some(t) = p.gpu_ms {
+            rows.push(row(stat(GpuMs, "median").pass(&p.name), num(t.median)));
+        }
+        if let Some(f) = p.fragment_invocations {
+            rows.push(row(
+                Key::of(FragmentInvocations).pass(&p.name),
+                f.to_string(),
+            ));
+        }
+    }
+    rows.push(row(Key::of(AllocatedBytes), r.allocated_bytes.to_string()));
+    rows.push(row(
+        Key::of(NonFiniteValues),
+        r.non_finite_values.to_string(),
+    ));
+    for m in &r.metrics {
+        match Measure::from_name(&m.name) {
+            Some(known) => rows.push(row(Key::of(known), num(m.value))),
+            // A metric the table does not know: its own name, no unit.
+            None => rows.push((m.name.clone(), num(m.value), "")),
+        }
+    }
 }
 
 fn xml(s: &str) -> String {

@@ -135,10 +135,9 @@ pub fn spread_pixels(mask: Option<&[u64]>, reference: Option<&[u64]>) -> u64 {
     }
 }
 
-/// Cuts whose error had not come back to the steady level 2 frames later.
-pub fn unrecovered_cuts(s: &Stability) -> usize {
-    s.cuts.iter().filter(|c| c.recovered == Some(false)).count()
-}
+/// Cuts whose error had not come back to the steady level 2 frames later (the `unrecovered_cuts`
+/// measure, defined with the others in `tessera_results::measure`).
+pub use tessera_results::measure::unrecovered_cuts;
 
 #[cfg(test)]
 mod tests {

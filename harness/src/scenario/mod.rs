@@ -13,6 +13,7 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 
 use glam::{DMat4, DVec3, Vec3};
+use tessera_results::measure::Measure;
 
 use crate::params::Variant;
 pub use span::KeyPath;
@@ -107,7 +108,7 @@ impl Reference {
 
 /// The measures `cvvdp` records besides `cvvdp` (JOD): the transient channel's own JOD (higher is
 /// better) and its share of the visible difference (lower is better).
-pub const CVVDP_MEASURES: [&str; 2] = ["cvvdp-flicker", "cvvdp-transient-share"];
+pub const CVVDP_MEASURES: [Measure; 2] = [Measure::CvvdpFlicker, Measure::CvvdpTransientShare];
 
 /// Image metrics a scenario can ask for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -147,30 +148,29 @@ impl MetricKind {
         MetricKind::MaxAbsError,
     ];
 
-    pub fn name(self) -> &'static str {
+    /// The measure this metric records (its name, unit and direction are defined there).
+    pub fn measure(self) -> Measure {
         match self {
-            MetricKind::Psnr => "psnr",
-            MetricKind::PsnrLuma => "psnr-luma",
-            MetricKind::MaxAbsError => "max-abs-error",
-            MetricKind::Ssim => "ssim",
-            MetricKind::SsimLuma => "ssim-luma",
-            MetricKind::Flip => "flip",
-            MetricKind::Flicker => "flicker",
-            MetricKind::FlipHdr => "flip-hdr",
-            MetricKind::Tde => "tde",
-            MetricKind::Cvvdp => "cvvdp",
+            MetricKind::Psnr => Measure::Psnr,
+            MetricKind::PsnrLuma => Measure::PsnrLuma,
+            MetricKind::MaxAbsError => Measure::MaxAbsError,
+            MetricKind::Ssim => Measure::Ssim,
+            MetricKind::SsimLuma => Measure::SsimLuma,
+            MetricKind::Flip => Measure::Flip,
+            MetricKind::Flicker => Measure::Flicker,
+            MetricKind::FlipHdr => Measure::FlipHdr,
+            MetricKind::Tde => Measure::Tde,
+            MetricKind::Cvvdp => Measure::Cvvdp,
         }
     }
 
+    /// The name in `metrics = [...]`, gates, the CSV and the store: the measure's.
+    pub fn name(self) -> &'static str {
+        self.measure().name()
+    }
+
     pub fn higher_is_better(self) -> bool {
-        matches!(
-            self,
-            MetricKind::Psnr
-                | MetricKind::PsnrLuma
-                | MetricKind::Ssim
-                | MetricKind::SsimLuma
-                | MetricKind::Cvvdp
-        )
+        self.measure().direction().higher_is_better()
     }
 }
 
@@ -459,29 +459,16 @@ pub struct Gate {
     pub fail_above: Option<f64>,
 }
 
-/// Measures a gate can name besides metrics.
-pub const TIMING_MEASURES: [&str; 3] = ["gpu_ms", "cpu_ms", "speedup"];
-
-/// Gate measures of the conditions and pacing (`conditions/`, `timing/pacing.rs`): energy per
-/// frame in millijoules, native's energy per frame over the variant's, 1 when the result was
-/// throttled, and the pacing figures.
-pub const CONDITION_MEASURES: [&str; 5] = [
-    "energy_mj",
-    "energy_saving",
-    "throttled",
-    "pacing.p95_over_p50",
-    "pacing.mean_abs_delta_ms",
-];
-
-/// Gate measures of the stability checks (`run/stability.rs`): non-finite output values, pixels
-/// made non-finite beyond the reference's, 1 when the sequence did not render the same twice,
-/// camera cuts not recovered within 2 frames.
-pub const STABILITY_MEASURES: [&str; 4] = [
-    "non-finite",
-    "spread-non-finite",
-    "nondeterministic",
-    "unrecovered-cuts",
-];
+/// Measures a gate can name besides the metrics the scenario computes: every gateable measure of
+/// `tessera_results::measure` that is not a metric (`gpu_ms`, `cpu_ms`, `speedup`, the conditions,
+/// pacing and stability measures), by canonical name. Older spellings (`non-finite`) are still
+/// accepted by validation and written with the canonical name.
+pub fn record_gate_measures() -> Vec<&'static str> {
+    Measure::gateable()
+        .filter(|m| !m.is_metric())
+        .map(Measure::name)
+        .collect()
+}
 
 /// A problem in a scenario file, at a place in it.
 #[derive(Clone, Debug, PartialEq, Eq)]

@@ -1052,19 +1052,31 @@ fn measured(ctx: &mut Ctx, path: &KeyPath, raw: &Option<RawMeasured>) -> (u32, O
     )
 }
 
+/// The canonical name of a gate's measure: itself, an older spelling's (`non-finite` is
+/// `non_finite_values`), or a summarised measure's for `<name>.median`; `None` when it names no
+/// single value of the measure table.
+fn gate_measure_name(name: &str) -> Option<&'static str> {
+    let key = tessera_results::measure::Key::parse(name)?;
+    let single = key.pass.is_none()
+        && key.baseline.is_none()
+        && matches!(key.statistic, None | Some("median"));
+    single.then(|| key.measure.name())
+}
+
 fn gates(ctx: &mut Ctx, path: &KeyPath, raw: &[RawGate], metrics: &[MetricKind]) -> Vec<Gate> {
     let mut out = Vec::new();
     for (i, g) in raw.iter().enumerate() {
         let p = path.index(i);
         let mut allowed: Vec<&str> = metrics.iter().map(|m| m.name()).collect();
-        allowed.extend(TIMING_MEASURES);
-        allowed.extend(STABILITY_MEASURES);
-        allowed.extend(CONDITION_MEASURES);
+        allowed.extend(record_gate_measures());
         if metrics.contains(&MetricKind::Cvvdp) {
-            allowed.extend(CVVDP_MEASURES);
+            allowed.extend(CVVDP_MEASURES.map(Measure::name));
         }
-        if !allowed.contains(&g.measure.as_str()) {
-            let known_metric = MetricKind::ALL.iter().any(|m| m.name() == g.measure);
+        // An older spelling (`non-finite`) or `<name>.median` names the same measure.
+        let canonical = gate_measure_name(&g.measure);
+        let measure = canonical.unwrap_or(g.measure.as_str());
+        if !allowed.contains(&measure) {
+            let known_metric = MetricKind::ALL.iter().any(|m| m.name() == measure);
             if known_metric {
                 ctx.err(
                     &p.key("measure"),
@@ -1105,7 +1117,7 @@ fn gates(ctx: &mut Ctx, path: &KeyPath, raw: &[RawGate], metrics: &[MetricKind])
             }
         }
         out.push(Gate {
-            measure: g.measure.clone(),
+            measure: measure.to_string(),
             variants: g.variants.clone(),
             warn_below: g.warn_below,
             fail_below: g.fail_below,
