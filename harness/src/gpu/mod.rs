@@ -4,6 +4,7 @@
 //! adapter can do beyond its limits and features is probed in `probe.rs`.
 
 mod probe;
+pub mod vrs;
 
 pub use probe::{PROBE_WGSL, STANDARD_2X};
 
@@ -40,6 +41,9 @@ pub struct Gpu {
     pub info: AdapterInfo,
     /// 2x MSAA sample positions, probed on first use by `checkerboard` with `sampling = "msaa2x"`.
     pub msaa2x_positions: std::sync::OnceLock<Result<[[f32; 2]; 2], String>>,
+    /// Hardware variable-rate shading (VK_KHR_fragment_shading_rate, turned on at device
+    /// creation where offered): what the adapter offers, or why the hardware variants are skipped.
+    pub vrs: Result<vrs::VrsCaps, String>,
 }
 
 impl Gpu {
@@ -210,12 +214,31 @@ pub fn open(adapter: wgpu::Adapter) -> Result<Gpu, GpuError> {
         memory_hints: wgpu::MemoryHints::Performance,
         trace: wgpu::Trace::Off,
     };
-    let (device, queue) = pollster::block_on(adapter.request_device(&desc)).map_err(|source| {
-        GpuError::RequestDevice {
-            adapter: info.name.clone(),
-            source,
-        }
-    })?;
+    // With hardware VRS where the adapter offers it (through wgpu-hal, `vrs.rs`); a device that
+    // cannot be opened that way is opened as usual, and the VRS variants are skipped.
+    let mut vrs = vrs::probe(&adapter);
+    let opened = match &vrs {
+        Ok(_) => match vrs::open(&adapter, &desc) {
+            Ok(dq) => Some(dq),
+            Err(e) => {
+                vrs = Err(format!(
+                    "{} (device creation with it failed: {e})",
+                    vrs::NEEDS
+                ));
+                None
+            }
+        },
+        Err(_) => None,
+    };
+    let (device, queue) = match opened {
+        Some(dq) => dq,
+        None => pollster::block_on(adapter.request_device(&desc)).map_err(|source| {
+            GpuError::RequestDevice {
+                adapter: info.name.clone(),
+                source,
+            }
+        })?,
+    };
     if features.contains(wgpu::Features::TIMESTAMP_QUERY) {
         info.features.timestamp_period_ns = Some(queue.get_timestamp_period());
     }
@@ -225,5 +248,6 @@ pub fn open(adapter: wgpu::Adapter) -> Result<Gpu, GpuError> {
         queue,
         info,
         msaa2x_positions: std::sync::OnceLock::new(),
+        vrs,
     })
 }

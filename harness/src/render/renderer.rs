@@ -34,6 +34,19 @@ pub trait Renderer {
         encoder: &mut wgpu::CommandEncoder,
         frame: FrameInfo,
     );
+    /// Render passes recorded outside wgpu (hardware variable-rate shading's raw Vulkan pass),
+    /// which count their own fragment-shader invocations ([`Renderer::raw_invocations`]) instead
+    /// of through [`Timers`]' queries. None by default.
+    fn raw_passes(&self) -> &'static [&'static str] {
+        &[]
+    }
+
+    /// Fragment-shader invocations of the [`Renderer::raw_passes`] of the last frame, asked for
+    /// after each captured frame has completed. Empty by default.
+    fn raw_invocations(&mut self, _gpu: &Gpu) -> std::collections::BTreeMap<String, u64> {
+        std::collections::BTreeMap::new()
+    }
+
     /// Per-frame values and images beyond the output, asked for after each captured frame has
     /// been submitted and waited for (never between timed frames): e.g. adaptive shading's
     /// average shading rate and shading-rate image. `frame` is the frame's output as read back;

@@ -103,6 +103,21 @@ struct Draw {
     base_vertex: i32,
 }
 
+/// The scene's buffers and draws, for a pass recorded outside wgpu ([`SceneGpu::raw_draw`]):
+/// vertices (position, normal: two `Float32x3`), `u32` indices, group 0 of `scene.wgsl` (binding 0
+/// the frame uniforms at `frame_offset`, binding 1 the objects), and per object (its instance
+/// index) the first index, index count and base vertex.
+pub struct RawDraw<'a> {
+    pub vertex: &'a wgpu::Buffer,
+    pub index: &'a wgpu::Buffer,
+    pub frame: &'a wgpu::Buffer,
+    pub frame_offset: u64,
+    pub frame_size: u64,
+    pub objects: &'a wgpu::Buffer,
+    pub vertex_stride: u32,
+    pub draws: Vec<(u32, u32, i32)>,
+}
+
 pub struct SceneGpu {
     scenario: Scenario,
     vertex_buffer: wgpu::Buffer,
@@ -487,6 +502,25 @@ impl SceneGpu {
             g: b.y as f64,
             b: b.z as f64,
             a: 1.0,
+        }
+    }
+
+    /// What a pass recorded outside wgpu needs to draw the scene itself (hardware variable-rate
+    /// shading, `gpu/vrs.rs`): the buffers, view `slot`'s frame uniforms and one draw per object.
+    pub fn raw_draw(&self, slot: u32) -> RawDraw<'_> {
+        RawDraw {
+            vertex: &self.vertex_buffer,
+            index: &self.index_buffer,
+            frame: &self.frame_buffer,
+            frame_offset: slot as u64 * SLOT_STRIDE,
+            frame_size: std::mem::size_of::<GpuFrame>() as u64,
+            objects: &self.object_buffer,
+            vertex_stride: std::mem::size_of::<Vertex>() as u32,
+            draws: self
+                .draws
+                .iter()
+                .map(|d| (d.first_index, d.index_count, d.base_vertex))
+                .collect(),
         }
     }
 

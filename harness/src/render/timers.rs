@@ -21,6 +21,8 @@ pub struct Timers {
     profiler: GpuProfiler,
     timestamps: bool,
     stats: Option<Stats>,
+    /// The device counts pipeline statistics.
+    pipeline_statistics: bool,
     /// Pipeline statistics are counted only while enabled (the capture phase, one frame at a time).
     stats_enabled: bool,
 }
@@ -87,12 +89,21 @@ impl Timers {
             profiler,
             timestamps,
             stats,
+            pipeline_statistics: device
+                .features()
+                .contains(wgpu::Features::PIPELINE_STATISTICS_QUERY),
             stats_enabled: false,
         })
     }
 
     pub fn has_timestamps(&self) -> bool {
         self.timestamps
+    }
+
+    /// Whether fragment-shader invocations are being counted (the adapter has pipeline
+    /// statistics and [`Timers::enable_stats`] turned them on).
+    pub fn stats_enabled(&self) -> bool {
+        self.stats_enabled && self.pipeline_statistics
     }
 
     /// Counts fragment-shader invocations from now on (frames must then be collected one by one

@@ -217,11 +217,12 @@ pub fn render_sampled(
     sampler: Option<&Sampler>,
     on_frame: &mut dyn FnMut(),
 ) -> Result<Rendered, RenderError> {
+    let raw_passes = technique.raw_passes();
     let render_passes: Vec<&'static str> = technique
         .plan()
         .passes
         .iter()
-        .filter(|p| p.kind == PassKind::Render)
+        .filter(|p| p.kind == PassKind::Render && !raw_passes.contains(&p.name))
         .map(|p| p.name)
         .collect();
     let mut timers = Timers::new(&gpu.device, &render_passes)?;
@@ -375,7 +376,10 @@ pub fn render_sampled(
             timeout: None,
         });
         let _ = timers.try_collect(&gpu.queue);
-        let stats = timers.read_stats(&gpu.device);
+        let mut stats = timers.read_stats(&gpu.device);
+        if timers.stats_enabled() {
+            stats.extend(technique.raw_invocations(gpu));
+        }
         if index >= scenario.warmup_frames {
             if let Some(m) = rendered
                 .measurements

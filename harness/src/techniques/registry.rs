@@ -2,7 +2,7 @@
 //! messages, plan and build, the shader test, the speedup baselines, the parameter table of
 //! `scenarios/README.md`) reads it.
 
-use super::adaptive_shading::{AdaptiveShading, NativeDeferred};
+use super::adaptive_shading::{AdaptiveShading, NativeDeferred, NativeVrs};
 use super::checkerboard::Checkerboard;
 use super::checkerboard_2x2::Checkerboard2x2;
 use super::definition::Technique;
@@ -18,6 +18,7 @@ pub static ALL: &[&dyn Technique] = &[
     &Checkerboard2x2,
     &AdaptiveShading,
     &NativeDeferred,
+    &NativeVrs,
     &Interlace,
 ];
 

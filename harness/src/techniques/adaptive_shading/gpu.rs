@@ -37,13 +37,13 @@ const GBUF_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 /// Motion in pixels and the previous reversed-Z depth: f16 keeps sub-pixel motion to 1024 px and
 /// depth near the far plane (near 0) finely enough for the 5% rejection, at half the bandwidth of
 /// the rate pass's largest input.
-const MOTION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
-const RATE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
-const STATE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
+pub(super) const MOTION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+pub(super) const RATE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
+pub(super) const STATE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
 const GBUFFER: [&str; 3] = ["gbuf_position", "gbuf_normal", "gbuf_detail"];
-const COLORS: [&str; 2] = ["color0", "color1"];
-const DEPTHS: [&str; 2] = ["depth0", "depth1"];
-const STATES: [&str; 2] = ["rate_state0", "rate_state1"];
+pub(super) const COLORS: [&str; 2] = ["color0", "color1"];
+pub(super) const DEPTHS: [&str; 2] = ["depth0", "depth1"];
+pub(super) const STATES: [&str; 2] = ["rate_state0", "rate_state1"];
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -118,12 +118,132 @@ pub fn graph(rates: Option<&RateParams>, width: u32, height: u32) -> Plan {
 }
 
 /// The rate pass and its filter, with bind groups per frame parity.
-struct RatePass {
+pub(super) struct RatePass {
     params: RateParams,
     uniforms: wgpu::Buffer,
     pipeline: wgpu::ComputePipeline,
     bind_groups: [wgpu::BindGroup; 2],
     filter: Option<(wgpu::ComputePipeline, wgpu::BindGroup)>,
+}
+
+impl RatePass {
+    /// The rate pass (and filter) reading the resources `view` names: `color0`/`color1`,
+    /// `depth0`/`depth1` (the previous frame's by parity), `motion`, `rate_state0`/`1`, and
+    /// writing `rates` (through `rates_raw` with the filter).
+    pub(super) fn new(
+        device: &wgpu::Device,
+        params: RateParams,
+        view: &dyn Fn(&str) -> wgpu::TextureView,
+    ) -> RatePass {
+        let pipeline = compute_pipeline(device, "rates", RATE_WGSL, "main");
+        let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("rate params"),
+            size: std::mem::size_of::<RateUniforms>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let raw = if params.neighbour_filter {
+            "rates_raw"
+        } else {
+            "rates"
+        };
+        let layout = pipeline.get_bind_group_layout(0);
+        let bind_group = |cur: usize| {
+            let prev = 1 - cur;
+            let views = [
+                (1, view(COLORS[prev])),
+                (2, view("motion")),
+                (3, view(DEPTHS[prev])),
+                (4, view(STATES[prev])),
+                (5, view(STATES[cur])),
+                (6, view(raw)),
+            ];
+            let views: Vec<(u32, &wgpu::TextureView)> =
+                views.iter().map(|(b, v)| (*b, v)).collect();
+            bind_group(device, "rates", &layout, &[(0, &uniforms)], &views)
+        };
+        let bind_groups = [bind_group(0), bind_group(1)];
+        let filter = params.neighbour_filter.then(|| {
+            let pipeline = compute_pipeline(device, "rate_filter", RATE_WGSL, "filter_rates");
+            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("rate_filter"),
+                layout: &pipeline.get_bind_group_layout(0),
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: uniforms.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 7,
+                        resource: wgpu::BindingResource::TextureView(&view("rates_raw")),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 8,
+                        resource: wgpu::BindingResource::TextureView(&view("rates")),
+                    },
+                ],
+            });
+            (pipeline, bind_group)
+        });
+        RatePass {
+            params,
+            uniforms,
+            pipeline,
+            bind_groups,
+            filter,
+        }
+    }
+
+    /// Records the rate pass (and filter) of a frame of `parity` at `width` x `height`.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn record(
+        &self,
+        gpu: &Gpu,
+        scene: &SceneGpu,
+        timers: &Timers,
+        encoder: &mut wgpu::CommandEncoder,
+        parity: usize,
+        history: bool,
+        width: u32,
+        height: u32,
+    ) -> LastFrame {
+        let (tw, th) = model::tiles(width, height);
+        let (near, far) = scene.near_far();
+        let p = self.params;
+        let u = RateUniforms {
+            size: [width, height, tw, th],
+            mode: [p.mode.code(), u32::from(history), u32::from(p.allow_4x4), 0],
+            t: [p.threshold, p.env_luma, p.k, p.max_error],
+            more: [p.hysteresis, p.disocclusion_tolerance, near, far],
+        };
+        gpu.queue
+            .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&u));
+        dispatch(
+            encoder,
+            timers,
+            "rates",
+            &self.pipeline,
+            &[&self.bind_groups[parity]],
+            [tw, th],
+        );
+        if let Some((pipeline, group)) = &self.filter {
+            dispatch(
+                encoder,
+                timers,
+                "rate_filter",
+                pipeline,
+                &[group],
+                [tw.div_ceil(8), th.div_ceil(8)],
+            );
+        }
+        LastFrame {
+            parity,
+            history,
+            params: p,
+            near,
+            far,
+        }
+    }
 }
 
 /// What the last recorded rate pass was given (for the CPU model in tests).
@@ -235,65 +355,7 @@ impl AdaptiveGpu {
             })
             .collect();
 
-        let rate = params.map(|params| {
-            let pipeline = compute_pipeline(device, "rates", RATE_WGSL, "main");
-            let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("rate params"),
-                size: std::mem::size_of::<RateUniforms>() as u64,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
-            let raw = if params.neighbour_filter {
-                "rates_raw"
-            } else {
-                "rates"
-            };
-            let layout = pipeline.get_bind_group_layout(0);
-            let bind_group = |cur: usize| {
-                let prev = 1 - cur;
-                let views = [
-                    (1, view(COLORS[prev])),
-                    (2, view("motion")),
-                    (3, view(DEPTHS[prev])),
-                    (4, view(STATES[prev])),
-                    (5, view(STATES[cur])),
-                    (6, view(raw)),
-                ];
-                let views: Vec<(u32, &wgpu::TextureView)> =
-                    views.iter().map(|(b, v)| (*b, v)).collect();
-                bind_group(device, "rates", &layout, &[(0, &uniforms)], &views)
-            };
-            let bind_groups = [bind_group(0), bind_group(1)];
-            let filter = params.neighbour_filter.then(|| {
-                let pipeline = compute_pipeline(device, "rate_filter", RATE_WGSL, "filter_rates");
-                let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("rate_filter"),
-                    layout: &pipeline.get_bind_group_layout(0),
-                    entries: &[
-                        wgpu::BindGroupEntry {
-                            binding: 0,
-                            resource: uniforms.as_entire_binding(),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 7,
-                            resource: wgpu::BindingResource::TextureView(&view("rates_raw")),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 8,
-                            resource: wgpu::BindingResource::TextureView(&view("rates")),
-                        },
-                    ],
-                });
-                (pipeline, bind_group)
-            });
-            RatePass {
-                params,
-                uniforms,
-                pipeline,
-                bind_groups,
-                filter,
-            }
-        });
+        let rate = params.map(|params| RatePass::new(device, params, &view));
 
         let mut gbuffer_views: Vec<wgpu::TextureView> = GBUFFER.iter().map(|n| view(n)).collect();
         if history {
@@ -401,7 +463,7 @@ impl AdaptiveGpu {
 }
 
 /// One compute pass, timed.
-fn dispatch(
+pub(super) fn dispatch(
     encoder: &mut wgpu::CommandEncoder,
     timers: &Timers,
     name: &'static str,
@@ -485,46 +547,16 @@ impl Renderer for AdaptiveGpu {
         self.gbuffer_pass(encoder, scene, timers);
         let (tw, th) = model::tiles(self.width, self.height);
         if let Some(r) = &self.rate {
-            let (near, far) = scene.near_far();
-            let p = r.params;
-            let u = RateUniforms {
-                size: [self.width, self.height, tw, th],
-                mode: [
-                    p.mode.code(),
-                    u32::from(frame.history_valid),
-                    u32::from(p.allow_4x4),
-                    0,
-                ],
-                t: [p.threshold, p.env_luma, p.k, p.max_error],
-                more: [p.hysteresis, p.disocclusion_tolerance, near, far],
-            };
-            gpu.queue
-                .write_buffer(&r.uniforms, 0, bytemuck::bytes_of(&u));
-            dispatch(
-                encoder,
+            self.last = Some(r.record(
+                gpu,
+                scene,
                 timers,
-                "rates",
-                &r.pipeline,
-                &[&r.bind_groups[self.parity]],
-                [tw, th],
-            );
-            if let Some((pipeline, group)) = &r.filter {
-                dispatch(
-                    encoder,
-                    timers,
-                    "rate_filter",
-                    pipeline,
-                    &[group],
-                    [tw.div_ceil(8), th.div_ceil(8)],
-                );
-            }
-            self.last = Some(LastFrame {
-                parity: self.parity,
-                history: frame.history_valid,
-                params: p,
-                near,
-                far,
-            });
+                encoder,
+                self.parity,
+                frame.history_valid,
+                self.width,
+                self.height,
+            ));
         }
         encoder.clear_buffer(&self.counters, 0, None);
         let (_, scene_group) = self.scene_objects.as_ref().expect("made above");

@@ -9,7 +9,9 @@
 //! paper gives no value for the hysteresis epsilon nor for the depth-rejection tolerance (section
 //! 5.1 cites Nehab et al.): those defaults are ours.
 
+pub mod attachment;
 pub mod gpu;
+pub mod hardware;
 pub mod model;
 
 use super::definition::{Shader, Target, Technique};
@@ -19,6 +21,7 @@ use crate::render::graph::Plan;
 use crate::render::renderer::Renderer;
 
 pub use gpu::{graph, rate_image, AdaptiveGpu, LastFrame};
+pub use hardware::{HardwareGpu, Rates};
 pub use model::{CoarseSample, Mode, RateParams};
 
 pub static THRESHOLD: Param<f64> = Param::float(
@@ -77,7 +80,48 @@ pub static DISOCCLUSION_TOLERANCE: Param<f64> = Param::float(
     0.05,
     "depth-based rejection (section 5.1): a covered pixel whose reprojected position is off screen, or whose previous-frame view depth differs from its surface's by more than this fraction, is disoccluded, and its tile shaded at 1x1",
 );
-static PARAMS: [&ParamSpec; 10] = [
+crate::choice! {
+    /// Where `adaptive-shading` shades at its rates (parameter `vrs`).
+    pub enum Vrs {
+        /// A G-buffer, then a compute pass per coarse pixel (`gpu.rs`): runs on every adapter.
+        Software = "software",
+        /// The forward pass with a fragment-shading-rate attachment (`hardware.rs`).
+        Hardware = "hardware",
+    }
+}
+
+crate::choice! {
+    /// The rate of every tile of `native-vrs` (parameter `rate`).
+    pub enum FixedRate {
+        R1x1 = "1x1",
+        R2x2 = "2x2",
+        R4x4 = "4x4",
+    }
+}
+
+impl FixedRate {
+    pub fn size(self) -> (u32, u32) {
+        match self {
+            FixedRate::R1x1 => (1, 1),
+            FixedRate::R2x2 => (2, 2),
+            FixedRate::R4x4 => (4, 4),
+        }
+    }
+}
+
+pub static VRS: Param<Vrs> = Vrs::param(
+    "vrs",
+    Vrs::Software,
+    "`software`: a G-buffer pass, then a compute pass shading once per coarse pixel and object (runs everywhere; never faster than `native`); `hardware`: the forward pass drawn with a fragment-shading-rate attachment filled from the rates (VK_KHR_fragment_shading_rate through raw Vulkan beside wgpu; the rates of frame N + 1 from frame N's output and motion, section 5); skipped on adapters without the extension and its attachment feature. Compare with `native-vrs`, the same pipeline at 1x1",
+);
+pub static RATE: Param<FixedRate> = FixedRate::param(
+    "rate",
+    FixedRate::R1x1,
+    "every tile's fragment size: `1x1` is the full-rate baseline of `adaptive-shading` with `vrs = \"hardware\"` (the same pipeline without rates), `2x2` and `4x4` the fixed-rate extremes",
+);
+
+static PARAMS: [&ParamSpec; 11] = [
+    &VRS.spec,
     &THRESHOLD.spec,
     &ENV_LUMA.spec,
     &K.spec,
@@ -123,6 +167,42 @@ fn shaders() -> Vec<Shader> {
     ]
 }
 
+fn hardware_shaders() -> Vec<Shader> {
+    vec![
+        Shader::file("adaptive_shading/rate.wgsl", gpu::RATE_WGSL),
+        Shader::file(
+            "adaptive_shading/attachment.wgsl",
+            hardware::ATTACHMENT_WGSL,
+        ),
+        Shader {
+            name: "adaptive vrs".into(),
+            source: hardware::vrs_source(),
+            files: vec!["scene.wgsl", "adaptive_shading/vrs.wgsl"],
+        },
+    ]
+}
+
+/// The hardware path on `gpu`, or why this adapter cannot run it.
+fn build_hardware(
+    gpu: &Gpu,
+    rates: Rates,
+    target: Target,
+) -> Result<Box<dyn Renderer>, Unsupported> {
+    match &gpu.vrs {
+        Ok(caps) => Ok(Box::new(HardwareGpu::new(
+            gpu,
+            caps,
+            rates,
+            target.width,
+            target.height,
+        ))),
+        Err(reason) => Err(Unsupported(reason.clone())),
+    }
+}
+
+/// The attachment texel size a plan assumes without a GPU (the H200's, and the paper's tile).
+const PLAN_TEXEL: [u32; 2] = [model::TILE, model::TILE];
+
 pub struct AdaptiveShading;
 
 impl Technique for AdaptiveShading {
@@ -138,8 +218,22 @@ impl Technique for AdaptiveShading {
         &PARAMS
     }
 
+    fn check(&self, variant: &Variant) -> Result<(), String> {
+        if variant.get(&VRS) == Vrs::Hardware && variant.get(&COARSE_SAMPLE) == CoarseSample::Pixel
+        {
+            return Err("`coarse_sample = \"pixel\"` needs `vrs = \"software\"`: hardware variable-rate shading shades each coarse pixel at its centre".into());
+        }
+        Ok(())
+    }
+
     fn plan(&self, variant: &Variant, target: Target) -> Plan {
-        graph(Some(&rate_params(variant)), target.width, target.height)
+        let p = rate_params(variant);
+        match variant.get(&VRS) {
+            Vrs::Software => graph(Some(&p), target.width, target.height),
+            Vrs::Hardware => {
+                hardware::graph(&Rates::Adaptive(p), target.width, target.height, PLAN_TEXEL)
+            }
+        }
     }
 
     fn build(
@@ -148,6 +242,9 @@ impl Technique for AdaptiveShading {
         variant: &Variant,
         target: Target,
     ) -> Result<Box<dyn Renderer>, Unsupported> {
+        if variant.get(&VRS) == Vrs::Hardware {
+            return build_hardware(gpu, Rates::Adaptive(rate_params(variant)), target);
+        }
         let rates = Some(rate_params(variant));
         Ok(Box::new(AdaptiveGpu::new(
             gpu,
@@ -158,11 +255,54 @@ impl Technique for AdaptiveShading {
     }
 
     fn shaders(&self) -> Vec<Shader> {
-        shaders()
+        let mut all = shaders();
+        all.extend(hardware_shaders());
+        all
     }
 
     fn baseline(&self) -> Option<&'static str> {
         Some(NativeDeferred.name())
+    }
+}
+
+pub struct NativeVrs;
+
+impl Technique for NativeVrs {
+    fn name(&self) -> &'static str {
+        "native-vrs"
+    }
+
+    fn summary(&self) -> &'static str {
+        "the hardware path of `adaptive-shading` (`vrs = \"hardware\"`) with every tile at one fixed rate: at `1x1` the same pipeline without rates (its full-rate baseline), at `2x2` and `4x4` the fixed-rate extremes; needs VK_KHR_fragment_shading_rate"
+    }
+
+    fn params(&self) -> &'static [&'static ParamSpec] {
+        static P: [&ParamSpec; 1] = [&RATE.spec];
+        &P
+    }
+
+    fn plan(&self, variant: &Variant, target: Target) -> Plan {
+        let (rx, ry) = variant.get(&RATE).size();
+        hardware::graph(
+            &Rates::Fixed(rx, ry),
+            target.width,
+            target.height,
+            PLAN_TEXEL,
+        )
+    }
+
+    fn build(
+        &self,
+        gpu: &Gpu,
+        variant: &Variant,
+        target: Target,
+    ) -> Result<Box<dyn Renderer>, Unsupported> {
+        let (rx, ry) = variant.get(&RATE).size();
+        build_hardware(gpu, Rates::Fixed(rx, ry), target)
+    }
+
+    fn shaders(&self) -> Vec<Shader> {
+        hardware_shaders()
     }
 }
 

@@ -1,0 +1,530 @@
+//! The hardware path of `adaptive-shading` (`vrs = "hardware"`) and `native-vrs`: NVIDIA's rates
+//! driving VK_KHR_fragment_shading_rate, as in the paper (Yang et al. 2019, section 5), beside the
+//! software path of `gpu.rs`.
+//!
+//! Each frame N + 1 of `adaptive-shading`: the `rates` pass (and `rate_filter`, section 5.4) reads
+//! frame N's output, depth and motion, written by frame N's forward pass (the same rate shader as
+//! the software path, `rate.wgsl`; the motion is frame N's, taken as the estimate of N + 1's,
+//! section 5.1's reprojection with last frame's vectors); `rate_attachment` turns the per-tile
+//! codes into attachment texels (`attachment.wgsl`, CPU model in `attachment.rs`); `clear` clears
+//! this frame's colour, motion and depth in wgpu; `scene_vrs` is the forward pass, `fs_main`'s
+//! shading, drawn by raw Vulkan with the attachment (`gpu/vrs.rs`), writing colour and motion.
+//! `native-vrs` is the same `clear` and `scene_vrs` with a constant attachment (every tile 1x1,
+//! 2x2 or 4x4): one pipeline with and without rates.
+//!
+//! Timing: `scene_vrs` is timed by wgpu-profiler timestamps written at the end of the encoder
+//! before it and at the start of one submitted right after it, in the same submission; its
+//! fragment-shader invocations come from the raw pass's own pipeline-statistics query
+//! ([`Renderer::raw_invocations`]).
+
+use std::collections::{BTreeMap, HashMap};
+
+use tessera_metrics::HdrImage;
+
+use super::attachment::{self as att, Attachment};
+use super::gpu::{
+    dispatch, LastFrame, RatePass, COLORS, DEPTHS, MOTION_FORMAT, RATE_FORMAT, STATES, STATE_FORMAT,
+};
+use super::model::{self, RateParams};
+use crate::gpu::vrs::{RawVrsPass, Shaders, Targets, VrsCaps};
+use crate::gpu::Gpu;
+use crate::render::graph::{Graph, PassKind, Plan, TextureDesc};
+use crate::render::kit::{allocate, bind_group, compute_pipeline};
+use crate::render::readback::read_texture_raw;
+use crate::render::renderer::{FrameExtras, FrameInfo, Renderer};
+use crate::render::scene::{SceneGpu, COLOR_FORMAT, DEPTH_FORMAT};
+use crate::render::timers::Timers;
+
+pub static VRS_WGSL: &str = include_str!("../../../../shaders/adaptive_shading/vrs.wgsl");
+pub static ATTACHMENT_WGSL: &str =
+    include_str!("../../../../shaders/adaptive_shading/attachment.wgsl");
+
+/// `scene.wgsl` with the hardware path's forward entry points appended.
+pub fn vrs_source() -> String {
+    format!("{}\n{VRS_WGSL}", crate::render::scene::SCENE_WGSL)
+}
+
+/// The pass drawn with variable-rate shading (timed and counted like every pass).
+pub const SCENE_PASS: &str = "scene_vrs";
+
+/// What decides the rates of the hardware path.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Rates {
+    /// NVIDIA's rate selection from the previous frame (`adaptive-shading`).
+    Adaptive(RateParams),
+    /// Every tile at `rx` x `ry` (`native-vrs`; 1x1 is the full-rate baseline).
+    Fixed(u32, u32),
+}
+
+/// The attachment's texel size on an adapter (16x16 where offered).
+pub fn texel_of(caps: &VrsCaps) -> [u32; 2] {
+    att::texel_size(caps.texel_min, caps.texel_max)
+}
+
+/// The pass graph at `width` x `height` with attachment texels of `texel` pixels (no GPU needed).
+pub fn graph(rates: &Rates, width: u32, height: u32, texel: [u32; 2]) -> Plan {
+    let tex = |format, width, height| TextureDesc {
+        format,
+        width,
+        height,
+        samples: 1,
+        layers: 1,
+    };
+    let (tw, th) = model::tiles(width, height);
+    let (aw, ah) = att::attachment_size(width, height, texel);
+    let mut g = Graph::default();
+    // The attachment: an R8_UINT image made by gpu/vrs.rs (wgpu cannot give it the usage).
+    g.resource("attachment", tex(wgpu::TextureFormat::R8Uint, aw, ah))
+        .resource("motion", tex(MOTION_FORMAT, width, height));
+    match rates {
+        Rates::Adaptive(p) => {
+            for i in 0..2 {
+                g.resource(COLORS[i], tex(COLOR_FORMAT, width, height))
+                    .resource(DEPTHS[i], tex(DEPTH_FORMAT, width, height))
+                    .resource(STATES[i], tex(STATE_FORMAT, tw, th));
+            }
+            g.resource("rates", tex(RATE_FORMAT, tw, th));
+            let reads = [
+                COLORS[0], COLORS[1], "motion", DEPTHS[0], DEPTHS[1], STATES[0], STATES[1],
+            ];
+            if p.neighbour_filter {
+                g.resource("rates_raw", tex(RATE_FORMAT, tw, th))
+                    .pass(
+                        "rates",
+                        PassKind::Compute,
+                        &reads,
+                        &["rates_raw", STATES[0], STATES[1]],
+                    )
+                    .pass("rate_filter", PassKind::Compute, &["rates_raw"], &["rates"]);
+            } else {
+                g.pass(
+                    "rates",
+                    PassKind::Compute,
+                    &reads,
+                    &["rates", STATES[0], STATES[1]],
+                );
+            }
+            g.pass(
+                "rate_attachment",
+                PassKind::Compute,
+                &["rates"],
+                &["attachment"],
+            );
+            let targets = [COLORS[0], COLORS[1], "motion", DEPTHS[0], DEPTHS[1]];
+            g.pass("clear", PassKind::Render, &[], &targets).pass(
+                SCENE_PASS,
+                PassKind::Render,
+                &["attachment"],
+                &targets,
+            );
+            g.output(COLORS[0]).output(COLORS[1]);
+        }
+        Rates::Fixed(..) => {
+            g.resource(COLORS[0], tex(COLOR_FORMAT, width, height))
+                .resource(DEPTHS[0], tex(DEPTH_FORMAT, width, height));
+            let targets = [COLORS[0], "motion", DEPTHS[0]];
+            g.pass("clear", PassKind::Render, &[], &targets).pass(
+                SCENE_PASS,
+                PassKind::Render,
+                &["attachment"],
+                &targets,
+            );
+            g.output(COLORS[0]);
+        }
+    }
+    g.plan().expect("built-in graphs are well formed")
+}
+
+/// The rate-to-attachment compute pass.
+struct AttachmentPass {
+    pipeline: wgpu::ComputePipeline,
+    group: wgpu::BindGroup,
+    words: u32,
+}
+
+pub struct HardwareGpu {
+    plan: Plan,
+    textures: HashMap<&'static str, wgpu::Texture>,
+    width: u32,
+    height: u32,
+    rates: Rates,
+    texel: [u32; 2],
+    table: [u8; 16],
+    attachment_size: [u32; 2],
+    rate: Option<RatePass>,
+    attachment_pass: Option<AttachmentPass>,
+    /// The attachment's bytes, tightly packed, copied into the raw image each frame.
+    staging: wgpu::Buffer,
+    staging_readback: wgpu::Buffer,
+    /// Made on the first frame, when the scene is known.
+    raw: Option<RawVrsPass>,
+    /// Building `raw` failed (reported once on stderr).
+    raw_failed: bool,
+    parities: usize,
+    parity: usize,
+    last: Option<LastFrame>,
+}
+
+impl HardwareGpu {
+    pub fn new(gpu: &Gpu, caps: &VrsCaps, rates: Rates, width: u32, height: u32) -> HardwareGpu {
+        let device = &gpu.device;
+        let texel = texel_of(caps);
+        let table = att::code_table(&caps.fragment_sizes);
+        let plan = graph(&rates, width, height, texel);
+        let mut wgpu_plan = plan.clone();
+        wgpu_plan.resources.retain(|r| r.name != "attachment");
+        let textures = allocate(device, &wgpu_plan);
+        let (aw, ah) = att::attachment_size(width, height, texel);
+        let words = (aw * ah).div_ceil(4);
+        let staging = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("rate attachment bytes"),
+            size: words as u64 * 4,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let staging_readback = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("rate attachment readback"),
+            size: words as u64 * 4,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let view = |name: &str| textures[name].create_view(&Default::default());
+        let (rate, attachment_pass, parities) = match rates {
+            Rates::Adaptive(p) => {
+                let rate = RatePass::new(device, p, &view);
+                let pipeline = compute_pipeline(device, "rate_attachment", ATTACHMENT_WGSL, "main");
+                use wgpu::util::DeviceExt;
+                let (tw, th) = model::tiles(width, height);
+                let mut u: Vec<u32> = vec![tw, th, aw, ah, texel[0], texel[1], 0, 0];
+                u.extend(table.iter().map(|&t| t as u32));
+                let uniforms = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("rate attachment params"),
+                    contents: bytemuck::cast_slice(&u),
+                    usage: wgpu::BufferUsages::UNIFORM,
+                });
+                let group = bind_group(
+                    device,
+                    "rate_attachment",
+                    &pipeline.get_bind_group_layout(0),
+                    &[(0, &uniforms), (2, &staging)],
+                    &[(1, &view("rates"))],
+                );
+                (
+                    Some(rate),
+                    Some(AttachmentPass {
+                        pipeline,
+                        group,
+                        words,
+                    }),
+                    2,
+                )
+            }
+            Rates::Fixed(rx, ry) => {
+                let a = att::uniform(width, height, texel, rx, ry, &table);
+                gpu.queue.write_buffer(&staging, 0, &padded(&a.data));
+                (None, None, 1)
+            }
+        };
+        HardwareGpu {
+            plan,
+            textures,
+            width,
+            height,
+            rates,
+            texel,
+            table,
+            attachment_size: [aw, ah],
+            rate,
+            attachment_pass,
+            staging,
+            staging_readback,
+            raw: None,
+            raw_failed: false,
+            parities,
+            parity: 0,
+            last: None,
+        }
+    }
+
+    pub fn last_frame(&self) -> Option<LastFrame> {
+        self.last
+    }
+
+    /// A texture of the plan by resource name (`motion`, `rates`, `color0`, ...).
+    pub fn texture(&self, name: &str) -> Option<&wgpu::Texture> {
+        self.textures.get(name)
+    }
+
+    /// The rate codes of the last frame's tiles (after the filter); `None` for fixed rates.
+    pub fn rates(&self, gpu: &Gpu) -> Option<Vec<u32>> {
+        let t = self.textures.get("rates")?;
+        Some(bytemuck::cast_slice(&read_texture_raw(gpu, t)).to_vec())
+    }
+
+    /// The attachment the last frame was drawn with, as the GPU filled it.
+    pub fn attachment(&self, gpu: &Gpu) -> Attachment {
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(
+            &self.staging,
+            0,
+            &self.staging_readback,
+            0,
+            self.staging.size(),
+        );
+        gpu.queue.submit([encoder.finish()]);
+        let slice = self.staging_readback.slice(..);
+        slice.map_async(wgpu::MapMode::Read, |_| {});
+        let _ = gpu.device.poll(wgpu::PollType::Wait {
+            submission_index: None,
+            timeout: None,
+        });
+        let [aw, ah] = self.attachment_size;
+        let data = match slice.get_mapped_range() {
+            Ok(d) => d[..(aw * ah) as usize].to_vec(),
+            Err(_) => vec![0; (aw * ah) as usize],
+        };
+        self.staging_readback.unmap();
+        Attachment {
+            width: aw,
+            height: ah,
+            texel: self.texel,
+            data,
+        }
+    }
+
+    /// What the CPU model makes of rate codes: the attachment (per-tile codes through the
+    /// adapter's mapping).
+    pub fn model_attachment(&self, codes: &[u32]) -> Attachment {
+        let (tw, th) = model::tiles(self.width, self.height);
+        match self.rates {
+            Rates::Adaptive(_) => att::attachment(
+                codes,
+                tw,
+                th,
+                self.width,
+                self.height,
+                self.texel,
+                &self.table,
+            ),
+            Rates::Fixed(rx, ry) => {
+                att::uniform(self.width, self.height, self.texel, rx, ry, &self.table)
+            }
+        }
+    }
+
+    /// Covered pixels of the last frame (motion's w is 1 where something was drawn).
+    pub fn coverage(&self, gpu: &Gpu) -> Vec<bool> {
+        let raw = read_texture_raw(gpu, &self.textures["motion"]);
+        let halves: &[half::f16] = bytemuck::cast_slice(&raw);
+        halves.chunks(4).map(|p| p[3].to_f32() > 0.5).collect()
+    }
+
+    /// Fragment-shader invocations of the last frame's `scene_vrs` pass (frame completed).
+    pub fn invocations(&self) -> Option<u64> {
+        self.raw.as_ref().and_then(|r| r.invocations())
+    }
+
+    fn make_raw(&mut self, gpu: &Gpu, scene: &SceneGpu) -> Result<RawVrsPass, String> {
+        let source = vrs_source();
+        let targets: Vec<Targets> = (0..self.parities)
+            .map(|p| Targets {
+                color: &self.textures[COLORS[p]],
+                motion: &self.textures["motion"],
+                depth: &self.textures[DEPTHS[p]],
+            })
+            .collect();
+        RawVrsPass::new(
+            &gpu.device,
+            &gpu.adapter,
+            &Shaders {
+                wgsl: &source,
+                vertex: "vs_vrs",
+                fragment: "fs_vrs",
+            },
+            &targets,
+            [self.width, self.height],
+            self.texel,
+            self.attachment_size,
+            &self.staging,
+            &scene.raw_draw(0),
+        )
+    }
+
+    fn clear_pass(&self, encoder: &mut wgpu::CommandEncoder, scene: &SceneGpu, timers: &Timers) {
+        let color = self.textures[COLORS[self.parity]].create_view(&Default::default());
+        let motion = self.textures["motion"].create_view(&Default::default());
+        let depth = self.textures[DEPTHS[self.parity]].create_view(&Default::default());
+        let target = |view, clear| {
+            Some(wgpu::RenderPassColorAttachment {
+                view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(clear),
+                    store: wgpu::StoreOp::Store,
+                },
+            })
+        };
+        let q = timers.begin("clear", encoder);
+        {
+            let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("clear"),
+                color_attachments: &[
+                    target(&color, scene.clear_color()),
+                    target(&motion, wgpu::Color::TRANSPARENT),
+                ],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &depth,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(0.0),
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: q.render_pass_timestamp_writes(),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            timers.begin_stats(&mut rp, "clear");
+            timers.end_stats(&mut rp, "clear");
+        }
+        timers.end(encoder, q);
+    }
+}
+
+/// `bytes` padded with zeros to a multiple of 4 (buffer writes).
+fn padded(bytes: &[u8]) -> Vec<u8> {
+    let mut v = bytes.to_vec();
+    v.resize(bytes.len().div_ceil(4) * 4, 0);
+    v
+}
+
+impl Renderer for HardwareGpu {
+    fn plan(&self) -> &Plan {
+        &self.plan
+    }
+
+    fn output(&self) -> &wgpu::Texture {
+        &self.textures[COLORS[self.parity]]
+    }
+
+    fn record(
+        &mut self,
+        gpu: &Gpu,
+        scene: &mut SceneGpu,
+        timers: &Timers,
+        encoder: &mut wgpu::CommandEncoder,
+        frame: FrameInfo,
+    ) {
+        if self.raw.is_none() {
+            if self.raw_failed {
+                return;
+            }
+            match self.make_raw(gpu, scene) {
+                Ok(r) => self.raw = Some(r),
+                Err(e) => {
+                    // Construction failed on an adapter that offers the extension: a bug or a
+                    // driver problem, not user input. Say so once and draw nothing.
+                    eprintln!("tessera: the hardware VRS pass could not be built: {e}");
+                    self.raw_failed = true;
+                    return;
+                }
+            }
+        }
+        self.parity = (frame.index as usize) % self.parities;
+        scene.write_view(
+            &gpu.queue,
+            0,
+            &crate::render::scene::View::whole(frame.time, frame.prev_time),
+        );
+        if let (Some(r), Some(a)) = (&self.rate, &self.attachment_pass) {
+            self.last = Some(r.record(
+                gpu,
+                scene,
+                timers,
+                encoder,
+                self.parity,
+                frame.history_valid,
+                self.width,
+                self.height,
+            ));
+            dispatch(
+                encoder,
+                timers,
+                "rate_attachment",
+                &a.pipeline,
+                &[&a.group],
+                [a.words.div_ceil(64), 1],
+            );
+        }
+        self.clear_pass(encoder, scene, timers);
+        let q = timers.begin_encoder(SCENE_PASS, encoder);
+        // wgpu forbids raw and wgpu commands in one encoder: what was recorded so far, the raw
+        // pass and the closing timestamp go out in one submission, in order; the caller's
+        // encoder is replaced by a fresh one for what follows (query resolution).
+        let device = &gpu.device;
+        let before = std::mem::replace(encoder, device.create_command_encoder(&Default::default()));
+        let mut raw = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some(SCENE_PASS),
+        });
+        if let Some(r) = self.raw.as_mut() {
+            r.record(&mut raw, self.parity);
+        }
+        let mut after = device.create_command_encoder(&Default::default());
+        timers.end(&mut after, q);
+        gpu.queue
+            .submit([before.finish(), raw.finish(), after.finish()]);
+    }
+
+    fn raw_passes(&self) -> &'static [&'static str] {
+        &[SCENE_PASS]
+    }
+
+    fn raw_invocations(&mut self, _gpu: &Gpu) -> BTreeMap<String, u64> {
+        self.invocations()
+            .map(|n| BTreeMap::from([(SCENE_PASS.to_string(), n)]))
+            .unwrap_or_default()
+    }
+
+    fn frame_extras(&mut self, gpu: &Gpu, frame: &HdrImage, image: bool) -> FrameExtras {
+        let mut extras = FrameExtras::default();
+        let coverage = self.coverage(gpu);
+        let covered = coverage.iter().filter(|&&c| c).count() as u64;
+        let codes = self.rates(gpu);
+        let model = self.model_attachment(codes.as_deref().unwrap_or(&[]));
+        let (w, h) = (self.width, self.height);
+        let shades = att::shades(&model, w, h, &|x, y| coverage[(y * w + x) as usize]);
+        // The CPU model's shades over covered pixels, as the software path reports its rate.
+        extras
+            .values
+            .push(("shading-rate", att::rate(shades, covered)));
+        extras.values.push(("model-shades", shades as f64));
+        if let Some(n) = self.invocations() {
+            extras.values.push(("fragment-invocations", n as f64));
+            extras
+                .values
+                .push(("invocations-over-model", n as f64 / shades.max(1) as f64));
+        }
+        // The attachment the GPU used against the model's from the same rate codes.
+        let gpu_attachment = self.attachment(gpu);
+        let differ = gpu_attachment
+            .data
+            .iter()
+            .zip(&model.data)
+            .filter(|(a, b)| a != b)
+            .count();
+        extras
+            .values
+            .push(("attachment-texels-differing", differ as f64));
+        if image {
+            if let Some(codes) = codes {
+                extras
+                    .images
+                    .push(("rate", super::gpu::rate_image(frame, &codes)));
+            }
+        }
+        extras
+    }
+}
