@@ -205,6 +205,17 @@ measures! {
     CvvdpTransientShare => metric("cvvdp-transient-share", "", Lower, "ColorVideoVDP transient share"),
     ShadingRate => Info { source: Source::TechniqueMetric,
         ..metric("shading-rate", "", Lower, "shading rate") },
+    // Hardware variable-rate shading's own checks (adaptive_shading/hardware.rs): the coarse-pixel
+    // shades the CPU model gives for the rate image, the GPU's fragment-shader invocations of the
+    // VRS pass, their ratio, and attachment texels that differ from the CPU mapping.
+    ModelShades => Info { source: Source::TechniqueMetric, gate: false, stored: false,
+        ..metric("model-shades", "count", Lower, "coarse-pixel shades (CPU model)") },
+    VrsInvocations => Info { source: Source::TechniqueMetric, gate: false,
+        ..metric("fragment-invocations", "count", Lower, "VRS pass fragment invocations") },
+    InvocationsOverModel => Info { source: Source::TechniqueMetric, stored: false,
+        ..metric("invocations-over-model", "x", Neither, "invocations / model shades") },
+    AttachmentTexelsDiffering => Info { source: Source::TechniqueMetric, stored: false,
+        ..metric("attachment-texels-differing", "count", Lower, "attachment texels off the CPU mapping") },
 }
 
 impl Measure {

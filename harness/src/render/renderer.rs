@@ -34,6 +34,13 @@ pub trait Renderer {
         encoder: &mut wgpu::CommandEncoder,
         frame: FrameInfo,
     );
+    /// Why the frames just rendered are not the technique's (a pass it could not build on this
+    /// device): the run loop then records the variant as failed with this reason instead of
+    /// measuring empty frames. None by default.
+    fn failure(&self) -> Option<String> {
+        None
+    }
+
     /// Render passes recorded outside wgpu (hardware variable-rate shading's raw Vulkan pass),
     /// which count their own fragment-shader invocations ([`Renderer::raw_invocations`]) instead
     /// of through [`Timers`]' queries. None by default.

@@ -79,6 +79,9 @@ pub enum RenderError {
     Timers(#[from] crate::render::timers::TimerError),
     #[error("reading the frame back failed (device lost?)")]
     Readback,
+    /// The technique could not render on this device ([`Renderer::failure`]).
+    #[error("{0}")]
+    Technique(String),
 }
 
 /// Whether frame `index` continues the previous frame's shot: false on the first frame and at a
@@ -410,6 +413,9 @@ pub fn render_sampled(
             }
         }
         on_frame();
+    }
+    if let Some(why) = technique.failure() {
+        return Err(RenderError::Technique(why));
     }
     Ok(rendered)
 }

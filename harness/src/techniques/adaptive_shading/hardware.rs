@@ -158,8 +158,8 @@ pub struct HardwareGpu {
     staging_readback: wgpu::Buffer,
     /// Made on the first frame, when the scene is known.
     raw: Option<RawVrsPass>,
-    /// Building `raw` failed (reported once on stderr).
-    raw_failed: bool,
+    /// Building `raw` failed: why ([`Renderer::failure`] fails the result with it).
+    raw_failed: Option<String>,
     parities: usize,
     parity: usize,
     last: Option<LastFrame>,
@@ -241,7 +241,7 @@ impl HardwareGpu {
             staging,
             staging_readback,
             raw: None,
-            raw_failed: false,
+            raw_failed: None,
             parities,
             parity: 0,
             last: None,
@@ -402,6 +402,10 @@ fn padded(bytes: &[u8]) -> Vec<u8> {
 }
 
 impl Renderer for HardwareGpu {
+    fn failure(&self) -> Option<String> {
+        self.raw_failed.clone()
+    }
+
     fn plan(&self) -> &Plan {
         &self.plan
     }
@@ -419,16 +423,17 @@ impl Renderer for HardwareGpu {
         frame: FrameInfo,
     ) {
         if self.raw.is_none() {
-            if self.raw_failed {
+            if self.raw_failed.is_some() {
                 return;
             }
             match self.make_raw(gpu, scene) {
                 Ok(r) => self.raw = Some(r),
                 Err(e) => {
                     // Construction failed on an adapter that offers the extension: a bug or a
-                    // driver problem, not user input. Say so once and draw nothing.
-                    eprintln!("tessera: the hardware VRS pass could not be built: {e}");
-                    self.raw_failed = true;
+                    // driver problem, not user input. Draw nothing; the run loop asks
+                    // `failure()` after the frames and records the variant as failed with this.
+                    self.raw_failed =
+                        Some(format!("the hardware VRS pass could not be built: {e}"));
                     return;
                 }
             }
