@@ -156,10 +156,9 @@ pub struct HardwareGpu {
     /// The attachment's bytes, tightly packed, copied into the raw image each frame.
     staging: wgpu::Buffer,
     staging_readback: wgpu::Buffer,
-    /// Made on the first frame, when the scene is known.
-    raw: Option<RawVrsPass>,
-    /// Building `raw` failed: why ([`Renderer::failure`] fails the result with it).
-    raw_failed: Option<String>,
+    /// Made on the first frame, when the scene is known; `Err`: why it could not be built
+    /// ([`Renderer::failure`] fails the result with it).
+    raw: Option<Result<RawVrsPass, String>>,
     parities: usize,
     parity: usize,
     last: Option<LastFrame>,
@@ -241,7 +240,6 @@ impl HardwareGpu {
             staging,
             staging_readback,
             raw: None,
-            raw_failed: None,
             parities,
             parity: 0,
             last: None,
@@ -323,7 +321,7 @@ impl HardwareGpu {
 
     /// Fragment-shader invocations of the last frame's `scene_vrs` pass (frame completed).
     pub fn invocations(&self) -> Option<u64> {
-        self.raw.as_ref().and_then(|r| r.invocations())
+        self.raw.as_ref()?.as_ref().ok()?.invocations()
     }
 
     fn make_raw(&mut self, gpu: &Gpu, scene: &SceneGpu) -> Result<RawVrsPass, String> {
@@ -403,7 +401,7 @@ fn padded(bytes: &[u8]) -> Vec<u8> {
 
 impl Renderer for HardwareGpu {
     fn failure(&self) -> Option<String> {
-        self.raw_failed.clone()
+        self.raw.as_ref()?.as_ref().err().cloned()
     }
 
     fn plan(&self) -> &Plan {
@@ -423,20 +421,15 @@ impl Renderer for HardwareGpu {
         frame: FrameInfo,
     ) {
         if self.raw.is_none() {
-            if self.raw_failed.is_some() {
-                return;
-            }
-            match self.make_raw(gpu, scene) {
-                Ok(r) => self.raw = Some(r),
-                Err(e) => {
-                    // Construction failed on an adapter that offers the extension: a bug or a
-                    // driver problem, not user input. Draw nothing; the run loop asks
-                    // `failure()` after the frames and records the variant as failed with this.
-                    self.raw_failed =
-                        Some(format!("the hardware VRS pass could not be built: {e}"));
-                    return;
-                }
-            }
+            // Construction failing on an adapter that offers the extension is a bug or a driver
+            // problem, not user input: nothing is drawn and `failure()` reports it.
+            self.raw = Some(
+                self.make_raw(gpu, scene)
+                    .map_err(|e| format!("the hardware VRS pass could not be built: {e}")),
+            );
+        }
+        if matches!(self.raw, Some(Err(_))) {
+            return;
         }
         self.parity = (frame.index as usize) % self.parities;
         scene.write_view(
@@ -474,7 +467,7 @@ impl Renderer for HardwareGpu {
         let mut raw = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some(SCENE_PASS),
         });
-        if let Some(r) = self.raw.as_mut() {
+        if let Some(Ok(r)) = self.raw.as_mut() {
             r.record(&mut raw, self.parity);
         }
         let mut after = device.create_command_encoder(&Default::default());
