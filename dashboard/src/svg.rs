@@ -192,7 +192,11 @@ pub fn stacked_bars(bars: &[Bar], unit: &str) -> String {
         .map(|b| b.label.chars().count())
         .max()
         .unwrap_or(0);
-    let left = (longest as f64 * 6.6 + 14.0).max(80.0);
+    // The axis title sits in the same column, right-aligned 14 px before the bars (about 6 px a
+    // character at 10 px).
+    let left = (longest as f64 * 6.6 + 14.0)
+        .max(unit.chars().count() as f64 * 6.0 + 20.0)
+        .max(80.0);
     let (w, bar_h) = (left + 720.0, 18.0);
     let item_w = |n: &str| 24.0 + 7.0 * n.chars().count() as f64;
     let mut legend_rows = 1;
@@ -387,6 +391,32 @@ pub fn pareto_front(points: &[(f64, f64)], higher_is_better: bool) -> Vec<usize>
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn stacked_bars_leave_room_for_a_long_axis_title() {
+        let bars = [Bar {
+            label: "native".into(),
+            parts: vec![("scene".into(), 0.5)],
+        }];
+        let title = "GPU ms (median per pass)";
+        let svg = stacked_bars(&bars, title);
+        // The title is right-aligned at x = left - 14: it must start inside the picture.
+        let at = svg.find(&format!(">{title}<")).unwrap();
+        let tag = &svg[svg[..at].rfind("<text").unwrap()..at];
+        let x: f64 = tag
+            .split("x='")
+            .nth(1)
+            .unwrap()
+            .split('\'')
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap();
+        assert!(
+            x - 6.0 * title.len() as f64 >= 0.0,
+            "title at x = {x}: {svg}"
+        );
+    }
 
     #[test]
     fn ticks_are_round() {
