@@ -10,9 +10,11 @@ pub mod checkerboard;
 pub mod checkerboard_2x2;
 pub mod definition;
 pub mod docs;
+pub mod fsr1;
 pub mod interlace;
 pub mod native;
 pub mod registry;
+pub mod taau;
 pub mod upscale;
 
 pub use definition::{Shader, Target, Technique};
