@@ -140,7 +140,10 @@ fn render_view(
 fn render_pixels_sample_at_the_claimed_jitter_positions() {
     // Point-sampled ground: a sample's colour depends on its position only.
     let s = scenario(&[
-        &SCENE.replace("checker_size = 0.25", "checker_size = 0.25\nfilter = \"none\""),
+        &SCENE.replace(
+            "checker_size = 0.25",
+            "checker_size = 0.25\nfilter = \"none\"",
+        ),
         STILL,
     ]);
     let gpu = common::gpu();
@@ -150,7 +153,7 @@ fn render_pixels_sample_at_the_claimed_jitter_positions() {
     let hi = render_view(&gpu, &mut scene, (4 * w, 4 * h), View::whole(0.0, 0.0));
     // (0.375, 0.125): render pixel q samples at q + (0.875, 0.625) = ((4q + 3) + 0.5, (4q + 2)
     // + 0.5) / 4, the centre of hi-res pixel (4q + 3, 4q + 2).
-    let matches = |j: Vec2| {
+    let mut matches = |j: Vec2| {
         let lo = render_view(
             &gpu,
             &mut scene,
@@ -199,6 +202,7 @@ fn a_still_camera_accumulates_the_mean_of_the_claimed_samples() {
     // The same 32 renders, one per claimed sample position, averaged on the CPU.
     let n = (s.width * s.height) as usize;
     let mut mean = vec![Vec4::ZERO; n];
+    let mut max = vec![0.0f32; n];
     for index in 0..32 {
         let frame = render_view(
             &gpu,
@@ -210,20 +214,23 @@ fn a_still_camera_accumulates_the_mean_of_the_claimed_samples() {
                 ..View::whole(0.0, 0.0)
             },
         );
-        for (m, f) in mean.iter_mut().zip(&frame) {
+        for ((m, x), f) in mean.iter_mut().zip(&mut max).zip(&frame) {
             *m += *f / 32.0;
+            *x = x.max(f.truncate().max_element());
         }
     }
     for (i, (o, m)) in out.iter().zip(&mean).enumerate() {
         // Every pixel kept its history through all 32 phases (no disocclusion reset at
         // silhouettes, where the samples alternate between surfaces).
         assert_eq!(o.w, 32.0, "pixel {i}: weight {}", o.w);
-        // A running mean in f16: 32 roundings.
+        // The running mean is stored in f16 after every frame: each conversion (at most one ulp
+        // of the running value, which never exceeds the pixel's largest sample: stores may
+        // round towards zero, as lavapipe's do, every error then of one sign) persists with
+        // weight k/32 after frame k, at most 16.5 ulps in all.
+        let ulp = (2.0f32).powi(max[i].max(2.0f32.powi(-14)).log2().floor() as i32 - 10);
+        let bound = 16.5 * ulp + 1e-4;
         let d = (o.truncate() - m.truncate()).abs().max_element();
-        assert!(
-            d <= 4e-3 * m.truncate().max_element().max(0.25),
-            "pixel {i}: taau {o} mean {m}"
-        );
+        assert!(d <= bound, "pixel {i}: taau {o} mean {m} (bound {bound})");
     }
 }
 
@@ -236,9 +243,8 @@ fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) -> Vec<Vec<Source>
     let dynamic = s.scene.has_dynamic_objects();
     let mut t = TaauGpu::new(&gpu, options, s.width, s.height, dynamic);
     let mut timers = Timers::new(&gpu.device, &[]).unwrap();
-    let read = |t: &TaauGpu, name: &str| {
-        read_texture(&gpu.device, &gpu.queue, t.texture(name).unwrap())
-    };
+    let read =
+        |t: &TaauGpu, name: &str| read_texture(&gpu.device, &gpu.queue, t.texture(name).unwrap());
     let read_r32 = |t: &TaauGpu, name: &str| {
         bytemuck::pod_collect_to_vec::<u8, f32>(&read_texture_raw(&gpu, t.texture(name).unwrap()))
     };
@@ -278,18 +284,29 @@ fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) -> Vec<Vec<Source>
         let model = model::resolve_all(&inputs);
         let resolved = vec4s(read(&t, "resolved"));
         let depth = read_r32(&t, "depth");
+        let mut bad = Vec::new();
         for (i, (m, g)) in model.iter().zip(&resolved).enumerate() {
             let want = f16(m.color);
             let d = (want - *g).abs().max_element();
-            assert!(
-                d <= 3e-3 * want.abs().max_element().max(1.0),
-                "{} frame {index} pixel {i}: model {want} ({:?}, lands {}) gpu {g}",
-                v.name,
-                m.source,
-                m.lands
-            );
+            if d > 3e-3 * want.abs().max_element().max(1.0) {
+                bad.push(format!(
+                    "pixel ({}, {}): model {want} ({:?}, lands {}, history at {} depth {}) gpu {g}",
+                    i as u32 % s.width,
+                    i as u32 / s.width,
+                    m.source,
+                    m.lands,
+                    m.prev_pos,
+                    m.prev_depth
+                ));
+            }
             assert_eq!(m.depth, depth[i], "frame {index} pixel {i}");
         }
+        assert!(
+            bad.is_empty(),
+            "{options:?} frame {index}: {} pixels differ: {}",
+            bad.len(),
+            bad[..bad.len().min(6)].join("; ")
+        );
         if let Some(stops) = options.sharpness {
             let img = fsr1_model::Image {
                 width: s.width,
@@ -322,6 +339,7 @@ fn moving_camera_animated_object_and_cut_match_the_model() {
     for params in [
         vec![],
         vec![("scale", ParamValue::Float(0.5))],
+        vec![("scale", ParamValue::Float(0.7071))],
         vec![
             ("scale", ParamValue::Float(0.7071)),
             ("rcas", ParamValue::Bool(true)),

@@ -13,9 +13,13 @@
 //    static object is exactly still (no rounding noise).
 // 3. History: Catmull-Rom (4x4 taps) of the previous output at the previous position (survey
 //    4.2; Bevy uses 5 bilinear taps for the same filter), its accumulated weight at the nearest
-//    texel. No history on a cut, off screen, or where the sample's previous depth matches none of
-//    the 3x3 previous depths around it (disocclusion, survey 5.1 "geometry-based"; relative
-//    reversed-Z difference above `depth_tolerance`).
+//    texel. No history on a cut, off screen, or where every one of the 3x3 previous depths around
+//    it is nearer than the sample's previous depth by more than `depth_tolerance` (relative, in
+//    reversed-Z): what covered this surface last frame has gone (disocclusion, survey 5.1
+//    "geometry-based"). A nearer surface appearing is not a disocclusion: on a still camera it is
+//    a sub-pixel feature that this jitter phase hits and others miss, and is kept. Where one of
+//    those nearer previous depths was a dynamic object (the depth history marks them, +2), the
+//    pixel counts as moving: an animated object left it, and its colour must be clipped away.
 // 4. Rectification where anything moved: variance clipping in YCoCg (Salvi 2016, survey 5.2.2)
 //    of the history towards the centre of mean +- gamma * sigma of the 3x3 render neighbourhood;
 //    the weight is capped to `moving_weight` (a faster response, Bevy's reset on motion). Where
@@ -120,10 +124,14 @@ fn history_catmull_rom(pos: vec2<f32>) -> vec3<f32> {
     return max(sum, vec3<f32>(0.0));
 }
 
-// Variance clipping towards the box centre (Bevy's clip_towards_aabb_center).
+// Variance clipping towards the box centre (Bevy's clip_towards_aabb_center). Bevy's extent floor
+// is an absolute 1e-8; here it is 1e-3 of the box centre's luma (plus 1e-6): on grey content the
+// chroma box is flat and the history's chroma is rounding noise (about 1e-7 of the luma, and not
+// the same noise on every GPU), which an absolute floor turns into a clip of the whole colour
+// onto the box centre.
 fn clip_towards_centre(h: vec3<f32>, lo: vec3<f32>, hi: vec3<f32>) -> vec3<f32> {
     let centre = 0.5 * (hi + lo);
-    let extent = 0.5 * (hi - lo) + 1e-8;
+    let extent = 0.5 * (hi - lo) + (1e-3 * abs(centre.x) + 1e-6);
     let v = h - centre;
     let m = max(abs(v.x / extent.x), max(abs(v.y / extent.y), abs(v.z / extent.z)));
     if m > 1.0 {
@@ -155,10 +163,12 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     var prev_depth = depth;
     var moving = false;
     var v = vec4<f32>(0.0);
+    var dynamic_here = false;
     if params.mode.y != 0u {
         v = textureLoad(velocity, vec2<i32>(id.xy), 0);
     }
     if v.z > 0.5 {
+        dynamic_here = true;
         prev_pos = centre - v.xy;
         prev_depth = v.w;
         moving = any(v.xy != vec2<f32>(0.0));
@@ -179,15 +189,22 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     if params.mode.x != 0u && on_screen {
         let pp = vec2<i32>(floor(prev_pos));
         var matched = false;
+        var left = false;
         for (var dy = -1; dy <= 1; dy++) {
             for (var dx = -1; dx <= 1; dx++) {
-                let d = depth_history_at(pp + vec2<i32>(dx, dy));
-                if abs(d - prev_depth) <= params.jitter.w * max(d, prev_depth) {
-                    matched = true;
-                }
+                let packed = depth_history_at(pp + vec2<i32>(dx, dy));
+                let dynamic_there = packed >= 2.0;
+                let d = select(packed, packed - 2.0, dynamic_there);
+                let nearer = d - prev_depth > params.jitter.w * max(d, prev_depth);
+                matched = matched || !nearer;
+                left = left || (nearer && dynamic_there);
             }
         }
-        if matched {
+        moving = moving || left;
+        // On a still camera static content is disoccluded only by an animated object leaving:
+        // elsewhere "every neighbour was nearer" is a silhouette the jitter crossed.
+        let can_disocclude = params.mode.z == 0u || dynamic_here || left;
+        if matched || !can_disocclude {
             weight = history_at(pp).a;
             hist = history_catmull_rom(prev_pos);
         }
@@ -225,5 +242,5 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         out = mix(hist, current, w / total);
     }
     textureStore(out_color, id.xy, vec4<f32>(out, min(total, params.weights.x)));
-    textureStore(out_depth, id.xy, vec4<f32>(depth, 0.0, 0.0, 0.0));
+    textureStore(out_depth, id.xy, vec4<f32>(select(depth, depth + 2.0, dynamic_here), 0.0, 0.0, 0.0));
 }

@@ -116,7 +116,12 @@ pub fn rcas_pass(
 ) -> FsrPass {
     let params = Params {
         size: [width, height, width, height],
-        rcas: [(-sharpness).exp2(), 1.0, f32::from(u8::from(linear_input)), 0.0],
+        rcas: [
+            (-sharpness).exp2(),
+            1.0,
+            f32::from(u8::from(linear_input)),
+            0.0,
+        ],
     };
     FsrPass::new(gpu, "rcas", (src, dst), params)
 }

@@ -14,7 +14,10 @@ fn max3(c: Vec3) -> f32 {
 
 /// Linear radiance to EASU's input space: finite and non-negative, SRTM, gamma 2.0.
 pub fn encode(c: Vec3) -> Vec3 {
-    let f = Vec3::from_array(c.to_array().map(|x| if x >= 0.0 { x.min(F16_MAX) } else { 0.0 }));
+    let f = Vec3::from_array(
+        c.to_array()
+            .map(|x| if x >= 0.0 { x.min(F16_MAX) } else { 0.0 }),
+    );
     let t = f / (max3(f) + 1.0);
     Vec3::new(t.x.sqrt(), t.y.sqrt(), t.z.sqrt())
 }
@@ -49,7 +52,11 @@ impl Image<'_> {
 pub fn axis_length(a: f32, c: f32, e: f32) -> f32 {
     let m = (e - c).abs().max((c - a).abs());
     let d = (e - a).abs();
-    let l = if m > 0.0 { (d / m).clamp(0.0, 1.0) } else { 0.0 };
+    let l = if m > 0.0 {
+        (d / m).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
     l * l
 }
 
@@ -106,7 +113,8 @@ pub fn weight(off: Vec2, k: &Kernel) -> f32 {
 
 /// EASU at output pixel `(x, y)` of an `out` sized output from the linear render `src`.
 pub fn easu(src: &Image, out: (u32, u32), x: u32, y: u32) -> Easu {
-    let scale = Vec2::new(src.width as f32, src.height as f32) / Vec2::new(out.0 as f32, out.1 as f32);
+    let scale =
+        Vec2::new(src.width as f32, src.height as f32) / Vec2::new(out.0 as f32, out.1 as f32);
     let pp = Vec2::new(x as f32, y as f32) * scale + (0.5 * scale - 0.5);
     let fp = pp.floor();
     let pp = pp - fp;
@@ -212,7 +220,10 @@ mod tests {
             let p = encode(c);
             assert!(p.max_element() < 1.0 && p.min_element() >= 0.0, "{p}");
             let back = decode(p);
-            assert!((back - c).abs().max_element() <= 1e-3 * c.max_element().max(1.0), "{c} {back}");
+            assert!(
+                (back - c).abs().max_element() <= 1e-3 * c.max_element().max(1.0),
+                "{c} {back}"
+            );
         }
         // Not finite or negative: 0, and +Inf at most the f16 maximum.
         assert_eq!(encode(Vec3::new(f32::NAN, -1.0, 0.0)), Vec3::ZERO);
@@ -239,7 +250,13 @@ mod tests {
     fn easu_follows_a_vertical_edge() {
         // Left half dark, right half bright: the gradient is along x, the edge vertical.
         let texels: Vec<Vec4> = (0..64)
-            .map(|i| if i % 8 < 4 { Vec4::splat(0.05) } else { Vec4::splat(0.8) })
+            .map(|i| {
+                if i % 8 < 4 {
+                    Vec4::splat(0.05)
+                } else {
+                    Vec4::splat(0.8)
+                }
+            })
             .collect();
         let src = Image {
             width: 8,

@@ -76,8 +76,12 @@ pub fn graph(options: &Options, width: u32, height: u32, dynamic_scene: bool) ->
         &[resolved[0], DEPTHS[0]],
     );
     if options.sharpness.is_some() {
-        g.resource("color", tex(COLOR_FORMAT, width, height))
-            .pass("rcas", PassKind::Compute, &[resolved[0]], &["color"]);
+        g.resource("color", tex(COLOR_FORMAT, width, height)).pass(
+            "rcas",
+            PassKind::Compute,
+            &[resolved[0]],
+            &["color"],
+        );
     }
     g.output("color");
     (

@@ -96,9 +96,15 @@ mod tests {
         let j = Vec2::new(0.375, -0.125);
         let off = ndc_offset(j, w, h);
         let q = Vec2::new(7.0, 11.0);
-        let centre_ndc = Vec2::new((q.x + 0.5) / w as f32 * 2.0 - 1.0, 1.0 - (q.y + 0.5) / h as f32 * 2.0);
+        let centre_ndc = Vec2::new(
+            (q.x + 0.5) / w as f32 * 2.0 - 1.0,
+            1.0 - (q.y + 0.5) / h as f32 * 2.0,
+        );
         let unjittered = centre_ndc - off;
-        let px = Vec2::new((unjittered.x + 1.0) * 0.5 * w as f32, (1.0 - unjittered.y) * 0.5 * h as f32);
+        let px = Vec2::new(
+            (unjittered.x + 1.0) * 0.5 * w as f32,
+            (1.0 - unjittered.y) * 0.5 * h as f32,
+        );
         assert!((px - (q + 0.5 + j)).abs().max_element() < 1e-4, "{px}");
     }
 }

@@ -8,6 +8,7 @@ use glam::{IVec2, Mat4, Vec2, Vec3, Vec4};
 const F16_MAX: f32 = 65504.0;
 
 /// Everything one resolve reads.
+#[derive(Clone, Copy)]
 pub struct Inputs<'a> {
     pub low: (u32, u32),
     pub out: (u32, u32),
@@ -40,18 +41,43 @@ pub enum Source {
     Clipped,
 }
 
-/// One output pixel: its colour and weight (alpha), its sample's depth, whether the sample
-/// landed, and what happened to the history.
+/// One output pixel: its colour and weight (alpha), its sample's depth as the depth history
+/// keeps it ([`pack_depth`]), whether the sample landed, what happened to the history, and
+/// where the history was read.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Resolved {
     pub color: Vec4,
     pub depth: f32,
     pub lands: bool,
     pub source: Source,
+    pub prev_pos: Vec2,
+    pub prev_depth: f32,
+}
+
+/// The depth history's encoding: reversed-Z depth (0 to 1), plus 2 where the pixel showed a
+/// dynamic (animated) object.
+pub fn pack_depth(depth: f32, dynamic: bool) -> f32 {
+    if dynamic {
+        depth + 2.0
+    } else {
+        depth
+    }
+}
+
+/// The inverse of [`pack_depth`].
+pub fn unpack_depth(packed: f32) -> (f32, bool) {
+    if packed >= 2.0 {
+        (packed - 2.0, true)
+    } else {
+        (packed, false)
+    }
 }
 
 pub fn sanitize(c: Vec3) -> Vec3 {
-    Vec3::from_array(c.to_array().map(|x| if x >= 0.0 { x.min(F16_MAX) } else { 0.0 }))
+    Vec3::from_array(
+        c.to_array()
+            .map(|x| if x >= 0.0 { x.min(F16_MAX) } else { 0.0 }),
+    )
 }
 
 pub fn to_ycocg(c: Vec3) -> Vec3 {
@@ -76,10 +102,11 @@ pub fn catmull_rom(f: f32) -> [f32; 4] {
     ]
 }
 
-/// Clips `h` towards the centre of the box `lo`..`hi` (Bevy's `clip_towards_aabb_center`).
+/// Clips `h` (YCoCg) towards the centre of the box `lo`..`hi` (Bevy's `clip_towards_aabb_center`,
+/// with the extent floored at 1e-3 of the centre's luma: the shader says why).
 pub fn clip_towards_centre(h: Vec3, lo: Vec3, hi: Vec3) -> Vec3 {
     let centre = 0.5 * (hi + lo);
-    let extent = 0.5 * (hi - lo) + 1e-8;
+    let extent = 0.5 * (hi - lo) + (1e-3 * centre.x.abs() + 1e-6);
     let v = h - centre;
     let m = (v / extent).abs().max_element();
     if m > 1.0 {
@@ -91,12 +118,18 @@ pub fn clip_towards_centre(h: Vec3, lo: Vec3, hi: Vec3) -> Vec3 {
 
 impl Inputs<'_> {
     fn low_at(&self, q: IVec2) -> Vec3 {
-        let c = q.clamp(IVec2::ZERO, IVec2::new(self.low.0 as i32 - 1, self.low.1 as i32 - 1));
+        let c = q.clamp(
+            IVec2::ZERO,
+            IVec2::new(self.low.0 as i32 - 1, self.low.1 as i32 - 1),
+        );
         sanitize(self.color_low[(c.y as u32 * self.low.0 + c.x as u32) as usize].truncate())
     }
 
     fn out_index(&self, p: IVec2) -> usize {
-        let c = p.clamp(IVec2::ZERO, IVec2::new(self.out.0 as i32 - 1, self.out.1 as i32 - 1));
+        let c = p.clamp(
+            IVec2::ZERO,
+            IVec2::new(self.out.0 as i32 - 1, self.out.1 as i32 - 1),
+        );
         (c.y as u32 * self.out.0 + c.x as u32) as usize
     }
 
@@ -127,14 +160,15 @@ pub fn resolve(inp: &Inputs, x: u32, y: u32) -> Resolved {
     let j = inp.jitter;
     let centre = Vec2::new(x as f32, y as f32) + 0.5;
     // 1. The nearest current sample and whether it lands here.
-    let q = (centre * scale - j)
-        .floor()
-        .as_ivec2()
-        .clamp(IVec2::ZERO, IVec2::new(inp.low.0 as i32 - 1, inp.low.1 as i32 - 1));
+    let q = (centre * scale - j).floor().as_ivec2().clamp(
+        IVec2::ZERO,
+        IVec2::new(inp.low.0 as i32 - 1, inp.low.1 as i32 - 1),
+    );
     let sample_pos = (q.as_vec2() + 0.5 + j) / scale;
     let lands = sample_pos.floor() == Vec2::new(x as f32, y as f32);
     let current = inp.low_at(q);
     let depth = inp.depth_low[(q.y as u32 * inp.low.0 + q.x as u32) as usize];
+    let mut dynamic_here = false;
 
     // 2. Motion.
     let mut prev_pos = centre;
@@ -144,6 +178,7 @@ pub fn resolve(inp: &Inputs, x: u32, y: u32) -> Resolved {
         .velocity
         .map_or(Vec4::ZERO, |v| v[(y * inp.out.0 + x) as usize]);
     if v.z > 0.5 {
+        dynamic_here = true;
         prev_pos = centre - Vec2::new(v.x, v.y);
         prev_depth = v.w;
         moving = v.x != 0.0 || v.y != 0.0;
@@ -167,16 +202,25 @@ pub fn resolve(inp: &Inputs, x: u32, y: u32) -> Resolved {
     // 3. History.
     let mut weight = 0.0f32;
     let mut hist = Vec3::ZERO;
-    let on_screen = prev_pos.x >= 0.0 && prev_pos.y >= 0.0 && prev_pos.x < size.x && prev_pos.y < size.y;
+    let on_screen =
+        prev_pos.x >= 0.0 && prev_pos.y >= 0.0 && prev_pos.x < size.x && prev_pos.y < size.y;
     if inp.history_valid && on_screen {
         let pp = prev_pos.floor().as_ivec2();
-        let matched = (-1..=1).any(|dy| {
-            (-1..=1).any(|dx| {
-                let d = inp.depth_history[inp.out_index(pp + IVec2::new(dx, dy))];
-                (d - prev_depth).abs() <= inp.depth_tolerance * d.max(prev_depth)
-            })
-        });
-        if matched {
+        let mut matched = false;
+        let mut left = false;
+        for dy in -1..=1 {
+            for dx in -1..=1 {
+                let (d, dynamic) =
+                    unpack_depth(inp.depth_history[inp.out_index(pp + IVec2::new(dx, dy))]);
+                let nearer = d - prev_depth > inp.depth_tolerance * d.max(prev_depth);
+                matched |= !nearer;
+                left |= nearer && dynamic;
+            }
+        }
+        moving |= left;
+        // On a still camera static content is disoccluded only by an animated object leaving.
+        let can_disocclude = !inp.camera_still || dynamic_here || left;
+        if matched || !can_disocclude {
             weight = inp.history[inp.out_index(pp)].w;
             hist = inp.history_catmull_rom(prev_pos);
         }
@@ -228,9 +272,11 @@ pub fn resolve(inp: &Inputs, x: u32, y: u32) -> Resolved {
     };
     Resolved {
         color: out.extend(total.min(inp.max_weight)),
-        depth,
+        depth: pack_depth(depth, dynamic_here),
         lands,
         source,
+        prev_pos,
+        prev_depth,
     }
 }
 
@@ -263,12 +309,24 @@ mod tests {
     }
 
     #[test]
+    fn grey_rounding_noise_in_chroma_does_not_clip() {
+        // A grey box (flat chroma) and a grey history whose chroma is rounding noise.
+        let lo = Vec3::new(0.5, 0.0, 0.0);
+        let hi = Vec3::new(1.5, 0.0, 0.0);
+        let h = Vec3::new(0.7, 1e-7, -1e-7);
+        assert_eq!(clip_towards_centre(h, lo, hi), h);
+    }
+
+    #[test]
     fn clipping_moves_outside_points_onto_the_box_only() {
         let (lo, hi) = (Vec3::ZERO, Vec3::ONE);
         let inside = Vec3::splat(0.3);
         assert_eq!(clip_towards_centre(inside, lo, hi), inside);
         let c = clip_towards_centre(Vec3::new(3.0, 0.5, 0.5), lo, hi);
-        assert!((c - Vec3::new(1.0, 0.5, 0.5)).abs().max_element() < 1e-6, "{c}");
+        assert!(
+            (c - Vec3::new(1.0, 0.5, 0.5)).abs().max_element() < 1e-6,
+            "{c}"
+        );
     }
 
     fn flat_inputs<'a>(
@@ -308,9 +366,14 @@ mod tests {
         assert!(r.lands);
         assert_eq!(r.source, Source::History);
         // 3 samples of 0, one of 1.
-        assert!((r.color - Vec4::new(0.25, 0.25, 0.25, 4.0)).abs().max_element() < 1e-6);
-        // The surface behind was at another depth everywhere around: reset to the sample.
-        let other = vec![0.2; 16];
+        assert!(
+            (r.color - Vec4::new(0.25, 0.25, 0.25, 4.0))
+                .abs()
+                .max_element()
+                < 1e-6
+        );
+        // Last frame a nearer surface covered everything around: disoccluded, reset.
+        let other = vec![0.9; 16];
         let r = resolve(&flat_inputs(&color, &depth, &history, &other), 1, 2);
         assert_eq!(r.source, Source::Reset);
         assert_eq!(r.color, Vec4::new(1.0, 1.0, 1.0, 1.0));
