@@ -232,6 +232,15 @@ fn a_still_camera_accumulates_the_mean_of_the_claimed_samples() {
         let d = (o.truncate() - m.truncate()).abs().max_element();
         assert!(d <= bound, "pixel {i}: taau {o} mean {m} (bound {bound})");
     }
+    // Converged and still: held, frame after frame (`hold`), as still as native.
+    for index in 32..36 {
+        tessera::run::frames::submit_frame(&gpu, &mut scene, &s, &mut t, &mut timers, index);
+        let _ = timers.try_collect(&gpu.queue);
+    }
+    assert_eq!(
+        vec4s(read_texture(&gpu.device, &gpu.queue, t.output())),
+        out
+    );
 }
 
 /// Renders `frames` frames of `v`, comparing every resolve (and RCAS) with the model; returns
@@ -280,6 +289,7 @@ fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) -> Vec<Vec<Source>
             max_weight: options.max_weight,
             moving_weight: options.moving_weight,
             fill_weight: tessera::techniques::taau::gpu::FILL_WEIGHT,
+            hold: options.hold,
         };
         let model = model::resolve_all(&inputs);
         let resolved = vec4s(read(&t, "resolved"));

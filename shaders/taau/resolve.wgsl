@@ -28,7 +28,11 @@
 // 5. Blend as a running mean: out = mix(history, sample, w / (W + w)), W the accumulated weight
 //    (capped at `max_weight`), w = 1 where the sample lands, else 0; with no history and no
 //    landing sample the nearest sample is taken with a weight of 1/256, replaced by the first
-//    sample that lands.
+//    sample that lands. With `hold`, a still pixel whose history holds `max_weight` samples
+//    keeps it (progressive accumulation that stops, as a path tracer's does: with as many
+//    phases as `max_weight`, the mean of one whole cycle of the jitter); without, the mean goes
+//    on as an exponential one and a still image keeps changing by 1/(1 + max_weight) of each
+//    sample's difference.
 //
 // Deliberate differences from Bevy: linear colour throughout (no reversible tonemap: the
 // running mean then equals the reference's mean of linear samples), no closest-depth motion
@@ -45,7 +49,7 @@ struct Params {
     size: vec4<u32>,
     // xy: this frame's jitter in render pixels; z: clip gamma; w: depth tolerance.
     jitter: vec4<f32>,
-    // x: max weight; y: moving weight; z: 1/256 fill weight.
+    // x: max weight; y: moving weight; z: 1/256 fill weight; w: 1 to hold converged still pixels.
     weights: vec4<f32>,
     // x: history valid; y: velocity bound; z: camera still; w: clip still pixels too.
     mode: vec4<u32>,
@@ -235,6 +239,10 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     var w = select(0.0, 1.0, lands);
     if weight == 0.0 && !lands {
         w = params.weights.z;
+    }
+    // A still pixel that holds `max_weight` samples keeps them (`hold`).
+    if params.weights.w > 0.5 && !moving && weight >= params.weights.x {
+        w = 0.0;
     }
     let total = weight + w;
     var out = hist;

@@ -59,6 +59,9 @@ pub fn render(
         Reference::GroundTruth { supersample } => {
             native::ground_truth(gpu, scenario.width, scenario.height, supersample)
         }
+        Reference::Converged { samples } => {
+            native::converged::converged(gpu, scenario.width, scenario.height, samples)
+        }
         _ => techniques::build(
             gpu,
             &Variant::with_defaults(&native::Native),

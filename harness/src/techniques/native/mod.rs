@@ -2,6 +2,7 @@
 //! of every speedup. Its forward path ([`gpu::Forward`]) also serves `upscale` and the
 //! ground-truth reference.
 
+pub mod converged;
 pub mod gpu;
 
 use super::definition::{Shader, Target, Technique};
@@ -48,6 +49,7 @@ impl Technique for Native {
         vec![
             Shader::file("scene.wgsl", crate::render::scene::SCENE_WGSL),
             Shader::file("native/downsample.wgsl", gpu::DOWNSAMPLE_WGSL),
+            Shader::file("native/accumulate.wgsl", converged::ACCUMULATE_WGSL),
         ]
     }
 }

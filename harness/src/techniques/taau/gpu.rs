@@ -316,7 +316,12 @@ impl Renderer for TaauGpu {
             prev_from_cur: prev_from_cur.as_mat4().to_cols_array_2d(),
             size: [self.low.0, self.low.1, self.width, self.height],
             jitter: [j.x, j.y, o.clip_gamma, o.depth_tolerance],
-            weights: [o.max_weight, o.moving_weight, FILL_WEIGHT, 0.0],
+            weights: [
+                o.max_weight,
+                o.moving_weight,
+                FILL_WEIGHT,
+                f32::from(u8::from(o.hold)),
+            ],
             mode: [
                 u32::from(frame.history_valid),
                 u32::from(use_velocity),

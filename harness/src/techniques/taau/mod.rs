@@ -64,6 +64,11 @@ pub static MOVING_WEIGHT: Param<f64> = Param::float(
     8.0,
     "cap of the history's weight where anything moved (Bevy resets to a blend of about 0.1 on motion)",
 );
+pub static HOLD: Param<bool> = Param::flag(
+    "hold",
+    true,
+    "a still pixel (nothing moved, nothing disoccluded) whose history holds `max_weight` samples keeps it: accumulation stops there, as a path tracer's does, and with as many `phases` as `max_weight` the image is the mean of one whole jitter cycle, still as native's; off: the mean goes on as an exponential one and a still image keeps changing a little every frame",
+);
 pub static MIP_BIAS: Param<f64> = Param::float(
     "mip_bias",
     (-4.0, true, 1.0),
@@ -86,7 +91,7 @@ pub static SHARPNESS: Param<f64> = Param::float(
     0.2,
     "RCAS sharpness in stops below the maximum, when `rcas` is on",
 );
-static PARAMS: [&ParamSpec; 11] = [
+static PARAMS: [&ParamSpec; 12] = [
     &SCALE.spec,
     &PHASES.spec,
     &CLIP_GAMMA.spec,
@@ -94,6 +99,7 @@ static PARAMS: [&ParamSpec; 11] = [
     &DEPTH_TOLERANCE.spec,
     &MAX_WEIGHT.spec,
     &MOVING_WEIGHT.spec,
+    &HOLD.spec,
     &MIP_BIAS.spec,
     &VELOCITY.spec,
     &RCAS.spec,
@@ -110,6 +116,7 @@ pub struct Options {
     pub depth_tolerance: f32,
     pub max_weight: f32,
     pub moving_weight: f32,
+    pub hold: bool,
     /// Multiplier of the render's screen-space derivatives.
     pub gradient_scale: f32,
     pub velocity: bool,
@@ -132,6 +139,7 @@ impl Options {
             depth_tolerance: v.get(&DEPTH_TOLERANCE) as f32,
             max_weight: v.get(&MAX_WEIGHT) as f32,
             moving_weight: v.get(&MOVING_WEIGHT) as f32,
+            hold: v.get(&HOLD),
             gradient_scale: (scale * v.get(&MIP_BIAS).exp2()) as f32,
             velocity: v.get(&VELOCITY),
             sharpness: v.get(&RCAS).then(|| v.get(&SHARPNESS) as f32),

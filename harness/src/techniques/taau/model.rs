@@ -28,6 +28,8 @@ pub struct Inputs<'a> {
     pub max_weight: f32,
     pub moving_weight: f32,
     pub fill_weight: f32,
+    /// Still pixels at `max_weight` keep their history.
+    pub hold: bool,
 }
 
 /// What the resolve did at one pixel.
@@ -264,6 +266,9 @@ pub fn resolve(inp: &Inputs, x: u32, y: u32) -> Resolved {
     if weight == 0.0 && !lands {
         w = inp.fill_weight;
     }
+    if inp.hold && !moving && weight >= inp.max_weight {
+        w = 0.0;
+    }
     let total = weight + w;
     let out = if w > 0.0 {
         hist.lerp(current, w / total)
@@ -353,6 +358,7 @@ mod tests {
             max_weight: 32.0,
             moving_weight: 8.0,
             fill_weight: 1.0 / 256.0,
+            hold: true,
         }
     }
 
