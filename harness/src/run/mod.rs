@@ -4,8 +4,10 @@
 //! the end; each scenario's JSON and the whole `results.csv` are rewritten atomically after every
 //! scenario, so an interrupted run keeps what it completed.
 
+pub mod captured;
 pub mod console;
 pub mod cvvdp;
+pub mod evaluate;
 pub mod frames;
 pub mod gates;
 pub mod images;
@@ -16,6 +18,7 @@ pub mod record;
 pub mod reference;
 pub mod scenario;
 pub mod stability;
+pub mod summary;
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};

@@ -116,9 +116,8 @@ fn csv_rows(
     if let Some(sp) = measure::speedup(results, r, DEFAULT_BASELINE) {
         rows.push(row(Key::of(Speedup), num(sp)));
     }
-    // A technique's own baseline (the registry's), beside native.
-    let baseline = crate::techniques::by_name(&r.technique).and_then(|t| t.baseline());
-    if let Some(b) = baseline {
+    // The variant's own baseline (its technique's, per variant), beside native.
+    if let Some(b) = r.baseline.as_deref() {
         if let Some(sp) = measure::speedup(results, r, b) {
             rows.push(row(Key::speedup_over(b), num(sp)));
         }
@@ -296,4 +295,14 @@ pub fn junit(run: &RunInfo, scenarios: &[ScenarioResult]) -> Vec<u8> {
 
 fn failed(r: &tessera_results::VariantResult) -> bool {
     matches!(r.status, Status::Failed { .. }) || r.gates.iter().any(|g| g.level == GateLevel::Fail)
+}
+
+/// The first lines of a GPU error, joined: enough to tell what failed.
+pub fn first_line(s: &str) -> String {
+    s.lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty())
+        .take(3)
+        .collect::<Vec<_>>()
+        .join(" ")
 }
