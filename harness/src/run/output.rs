@@ -116,8 +116,14 @@ fn csv_rows(
     if let Some(sp) = measure::speedup(results, r, DEFAULT_BASELINE) {
         rows.push(row(Key::of(Speedup), num(sp)));
     }
-    // The variant's own baseline (its technique's, per variant), beside native.
-    if let Some(b) = r.baseline.as_deref() {
+    // The variant's own baseline (its technique's, per variant), beside native; a file written
+    // before results recorded it gets its technique's default variant's (what was read then).
+    let recorded = r.baseline.as_deref();
+    let fallback = || {
+        let t = crate::techniques::by_name(&r.technique)?;
+        t.baseline(&crate::techniques::Variant::with_defaults(t))
+    };
+    if let Some(b) = recorded.or_else(fallback) {
         if let Some(sp) = measure::speedup(results, r, b) {
             rows.push(row(Key::speedup_over(b), num(sp)));
         }

@@ -15,7 +15,7 @@
 //! Timing: `scene_vrs` is timed by wgpu-profiler timestamps written at the end of the encoder
 //! before it and at the start of one submitted right after it, in the same submission; its
 //! fragment-shader invocations come from the raw pass's own pipeline-statistics query
-//! ([`Renderer::raw_invocations`]).
+//! (a `self_counted` pass of the plan, reported by [`Renderer::own_statistics`]).
 
 use std::collections::{BTreeMap, HashMap};
 
@@ -150,8 +150,8 @@ pub struct HardwareGpu {
     /// The attachment's bytes, tightly packed, copied into the raw image each frame.
     staging: wgpu::Buffer,
     staging_readback: wgpu::Buffer,
-    /// Made on the first frame, when the scene is known; `Err`: why it could not be built
-    /// ([`Renderer::failure`] fails the result with it).
+    /// Built with the renderer, from the scene in the build context (a failure is the build's
+    /// error, before any frame is rendered); `None` only while [`HardwareGpu::new`] runs.
     raw: Option<RawVrsPass>,
     parities: usize,
     parity: usize,

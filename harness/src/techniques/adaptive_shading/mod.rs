@@ -356,7 +356,7 @@ impl Definition for NativeDeferred {
     fn options(&self, _variant: &Variant) {}
 
     fn summary(&self) -> &'static str {
-        "the deferred path of `adaptive-shading` with every tile at 1x1: a full-resolution G-buffer pass, then a compute pass shading every pixel with the forward path's shading function (bitwise the same image as `native` on lavapipe); the baseline `adaptive-shading` is compared with"
+        "the deferred path of `adaptive-shading` with every tile at 1x1: a full-resolution G-buffer pass, then a compute pass shading every pixel with the forward path's shading function (bitwise the same image as `native` on lavapipe); the baseline of `adaptive-shading` in software (`speedup.native-deferred`; in hardware it is `native-vrs`)"
     }
 
     fn plan(&self, _options: &(), target: Target) -> Plan {
