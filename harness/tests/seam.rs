@@ -2,7 +2,6 @@
 //! baseline and frame pattern are read from a variant alone, and the per-variant answers are the
 //! ones the issue asks for.
 
-#[allow(dead_code)]
 mod common;
 
 use tessera::params::ParamValue;
