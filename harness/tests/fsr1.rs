@@ -5,7 +5,8 @@
 mod common;
 
 use glam::{Vec3, Vec4};
-use tessera::params::{ParamValue, Variant};
+use tessera::params::ParamValue;
+use tessera::techniques::Variant;
 use tessera::render::readback::read_texture;
 use tessera::render::scene::SceneGpu;
 use tessera::render::timers::Timers;

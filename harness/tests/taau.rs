@@ -7,7 +7,8 @@
 mod common;
 
 use glam::{Vec2, Vec4};
-use tessera::params::{ParamValue, Variant};
+use tessera::params::ParamValue;
+use tessera::techniques::Variant;
 use tessera::render::kit::record_scene_pass;
 use tessera::render::readback::{read_texture, read_texture_raw};
 use tessera::render::renderer::Renderer;

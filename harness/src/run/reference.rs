@@ -3,41 +3,14 @@
 //!
 //! Not here: metrics (`metrics.rs`), which variant is the reference (`scenario.rs`).
 
-use tessera_metrics::{ExposureRange, HdrImage, Rgb8Image};
-
+pub use super::captured::ReferenceFrames;
 use super::frames;
+use super::output::first_line;
 use crate::gpu::Gpu;
-use crate::params::Variant;
 use crate::render::renderer::{Renderer, Unsupported};
 use crate::render::scene::SceneGpu;
 use crate::scenario::{MetricKind, Reference, Scenario};
-use crate::techniques::{self, native, Target};
-
-/// Frames a reference render produced, in measured-frame order.
-pub struct ReferenceFrames {
-    pub frames: Vec<Rgb8Image>,
-    /// Linear frames and their HDR-FLIP exposure ranges, when `flip-hdr` is asked for: the range
-    /// of each reference frame is held fixed for every variant diffed against it.
-    pub hdr: Vec<HdrImage>,
-    pub exposures: Vec<ExposureRange>,
-    /// Non-finite pixels per frame (what the scene injected, as the reference renders it).
-    pub masks: Vec<Option<Vec<u64>>>,
-}
-
-impl ReferenceFrames {
-    pub fn new(frames: Vec<Rgb8Image>, hdr: Vec<HdrImage>, masks: Vec<Option<Vec<u64>>>) -> Self {
-        let exposures = hdr
-            .iter()
-            .map(tessera_metrics::hdr_exposure_range)
-            .collect();
-        ReferenceFrames {
-            frames,
-            hdr,
-            exposures,
-            masks,
-        }
-    }
-}
+use crate::techniques::{self, BuildContext, Target};
 
 /// Linear frames are kept only for HDR-FLIP.
 /// Linear frames are kept only for HDR-FLIP, and for `cvvdp` on an HDR display.
@@ -55,22 +28,15 @@ pub fn render(
     on_frame: &mut dyn FnMut(),
 ) -> Result<ReferenceFrames, String> {
     let validation = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let supersample = match scenario.reference {
+        Reference::GroundTruth { supersample } => Some(supersample),
+        _ => None,
+    };
+    let target = Target::new(scenario.width, scenario.height, false);
+    let cx = BuildContext::new(gpu, scene, target);
     let built: Result<Box<dyn Renderer>, Unsupported> = match scenario.reference {
-        Reference::GroundTruth { supersample } => {
-            native::ground_truth(gpu, scenario.width, scenario.height, supersample)
-        }
-        Reference::Converged { samples } => {
-            native::converged::converged(gpu, scenario.width, scenario.height, samples)
-        }
-        _ => techniques::build(
-            gpu,
-            &Variant::with_defaults(&native::Native),
-            Target {
-                width: scenario.width,
-                height: scenario.height,
-                dynamic_scene: false,
-            },
-        ),
+        Reference::Converged { samples } => techniques::converged_reference(samples, &cx),
+        _ => techniques::reference(supersample, &cx),
     };
     let result = match built {
         Err(Unsupported(reason)) => Err(format!("no reference: {reason}")),
@@ -92,7 +58,7 @@ pub fn render(
     if let Some(e) = pollster::block_on(validation.pop()) {
         return Err(format!(
             "reference render failed: GPU error: {}",
-            super::scenario::first_line(&e.to_string())
+            first_line(&e.to_string())
         ));
     }
     result

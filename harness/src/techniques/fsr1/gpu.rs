@@ -1,6 +1,6 @@
 //! The GPU part of `fsr1`: a `scene` render pass at the render size (the ground's derivatives
 //! scaled by the mip bias), an `easu` compute pass to the output size and, when RCAS is on, an
-//! `rcas` compute pass (`shaders/fsr1/fsr1.wgsl`; CPU model in `model.rs`). With RCAS, EASU writes
+//! `rcas` compute pass (`fsr1.wgsl`; CPU model in `model.rs`). With RCAS, EASU writes
 //! perceptual values into `easu` and RCAS the linear output; without, EASU writes the output.
 
 use std::collections::HashMap;
@@ -13,7 +13,7 @@ use crate::render::renderer::{FrameInfo, Renderer};
 use crate::render::scene::{SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::render::timers::Timers;
 
-pub static FSR1_WGSL: &str = include_str!("../../../../shaders/fsr1/fsr1.wgsl");
+pub static FSR1_WGSL: &str = include_str!("fsr1.wgsl");
 
 /// The pass graph at output `width` x `height`.
 pub fn graph(options: &Options, width: u32, height: u32) -> Plan {

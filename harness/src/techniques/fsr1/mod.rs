@@ -2,7 +2,7 @@
 //! rendered at a fraction of the output resolution, upscaled by EASU (edge-adaptive spatial
 //! upsampling) and sharpened by RCAS (robust contrast-adaptive sharpening), both compute passes.
 //! Parameters here, the GPU part in `gpu.rs`, the CPU model in `model.rs`, the shader in
-//! `shaders/fsr1/fsr1.wgsl` (its header states the input contract and every deviation).
+//! `fsr1.wgsl` (its header states the input contract and every deviation).
 //!
 //! Input contract, as AMD states it and as kept here: EASU wants anti-aliased, perceptually
 //! encoded colour in [0, 1]; RCAS is undefined for negative input. The scene pass here has **no
@@ -20,11 +20,12 @@
 pub mod gpu;
 pub mod model;
 
-use super::definition::{Shader, Target, Technique};
-use crate::gpu::{Gpu, Unsupported};
-use crate::params::{Param, ParamSpec, Variant};
+use super::definition::{BuildContext, Definition, Shader, Target};
+use crate::gpu::Unsupported;
+use crate::params::{Param, ParamSpec};
 use crate::render::graph::Plan;
 use crate::render::renderer::Renderer;
+use crate::techniques::Variant;
 
 pub use gpu::{Fsr1Gpu, FSR1_WGSL};
 
@@ -91,6 +92,10 @@ static PARAMS: [&ParamSpec; 5] = [
 /// A variant's options, typed.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Options {
+    /// The quality mode (`custom`: `scale` as given).
+    pub mode: Mode,
+    /// Whether `scale` was left at its default (a mode sets it).
+    pub scale_is_default: bool,
     /// Render scale per axis.
     pub scale: f64,
     /// RCAS sharpness in stops, when RCAS runs.
@@ -106,6 +111,8 @@ impl Options {
             .preset()
             .unwrap_or_else(|| (v.get(&SCALE), v.get(&SCALE).log2()));
         Options {
+            mode: v.get(&MODE),
+            scale_is_default: SCALE.spec.default.value().as_f64() == Some(v.get(&SCALE)),
             scale,
             sharpness: v.get(&RCAS).then(|| v.get(&SHARPNESS) as f32),
             gradient_scale: if v.get(&MIP_BIAS) {
@@ -125,7 +132,9 @@ impl Options {
 
 pub struct Fsr1;
 
-impl Technique for Fsr1 {
+impl Definition for Fsr1 {
+    type Options = Options;
+
     fn name(&self) -> &'static str {
         "fsr1"
     }
@@ -138,10 +147,13 @@ impl Technique for Fsr1 {
         &PARAMS
     }
 
-    fn check(&self, variant: &Variant) -> Result<(), String> {
-        let mode = variant.get(&MODE);
-        let default = SCALE.spec.default.value().as_f64();
-        if mode != Mode::Custom && Some(variant.get(&SCALE)) != default {
+    fn options(&self, variant: &Variant) -> Options {
+        Options::from_variant(variant)
+    }
+
+    fn check(&self, options: &Options) -> Result<(), String> {
+        let mode = options.mode;
+        if mode != Mode::Custom && !options.scale_is_default {
             return Err(format!(
                 "`mode = \"{}\"` sets the render scale; leave `scale` out or use `mode = \"custom\"`",
                 mode.name()
@@ -150,22 +162,20 @@ impl Technique for Fsr1 {
         Ok(())
     }
 
-    fn plan(&self, variant: &Variant, target: Target) -> Plan {
-        let options = Options::from_variant(variant);
-        gpu::graph(&options, target.width, target.height)
+    fn plan(&self, options: &Options, target: Target) -> Plan {
+        gpu::graph(options, target.width, target.height)
     }
 
     fn build(
         &self,
-        gpu: &Gpu,
-        variant: &Variant,
-        target: Target,
+        options: &Options,
+        cx: &BuildContext<'_>,
     ) -> Result<Box<dyn Renderer>, Unsupported> {
         Ok(Box::new(Fsr1Gpu::new(
-            gpu,
-            Options::from_variant(variant),
-            target.width,
-            target.height,
+            cx.gpu,
+            *options,
+            cx.target.width,
+            cx.target.height,
         )))
     }
 

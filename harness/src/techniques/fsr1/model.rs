@@ -1,4 +1,4 @@
-//! CPU model of `fsr1`, step for step with `shaders/fsr1/fsr1.wgsl`: the input encoding, EASU's
+//! CPU model of `fsr1`, step for step with `fsr1.wgsl`: the input encoding, EASU's
 //! edge direction, length and tap weights, its deringing, and RCAS's lobe; tests compare it with
 //! the GPU passes on real frames. In f32 like the shader; not for speed.
 

@@ -1,6 +1,6 @@
 //! The converged ground-truth reference: `N` renders of the scene per frame at the output
 //! resolution, the projection offset each time by one point of Roberts' R2 low-discrepancy
-//! sequence inside the pixel, averaged in f32 (`shaders/native/accumulate.wgsl`). What a temporal
+//! sequence inside the pixel, averaged in f32 (`accumulate.wgsl`). What a temporal
 //! technique converges to on a still camera, told from native's aliasing; unlike the NxN
 //! supersampled ground truth it needs no texture N times the output's size (32 samples at 4K
 //! would be a 6x6 grid of 23040 x 12960 texels, beyond most adapters' limit).
@@ -20,7 +20,7 @@ use crate::render::renderer::{FrameInfo, Renderer, Unsupported};
 use crate::render::scene::{SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::render::timers::Timers;
 
-pub static ACCUMULATE_WGSL: &str = include_str!("../../../../shaders/native/accumulate.wgsl");
+pub static ACCUMULATE_WGSL: &str = include_str!("accumulate.wgsl");
 
 /// The plastic number, R2's generator: the real root of x^3 = x + 1.
 const PLASTIC: f64 = 1.324_717_957_244_746;

@@ -1,6 +1,6 @@
 //! The GPU part of `taau`: per frame a `scene` render pass at the render size, jittered by the
 //! frame's Halton phase (`jitter.rs`); an output-resolution `velocity` pass when the scene has
-//! animated objects; the `resolve` compute pass (`shaders/taau/resolve.wgsl`, CPU model in
+//! animated objects; the `resolve` compute pass (`resolve.wgsl`, CPU model in
 //! `model.rs`) writing the output with its accumulated weight in alpha and the depth of each
 //! output pixel's sample; and, with `rcas`, FSR 1's RCAS from the resolved colour to `color`.
 //! Colour and depth histories are ping-pong pairs: frame parity k writes pair member k and reads
@@ -22,7 +22,7 @@ use crate::render::scene::{SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FO
 use crate::render::timers::Timers;
 use crate::techniques::fsr1::gpu::{rcas_pass, FsrPass};
 
-pub static RESOLVE_WGSL: &str = include_str!("../../../../shaders/taau/resolve.wgsl");
+pub static RESOLVE_WGSL: &str = include_str!("resolve.wgsl");
 
 /// Format of the per-pixel sample depth kept for the disocclusion test.
 pub const HISTORY_DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;

@@ -5,7 +5,7 @@
 //! rectified by YCoCg variance clipping where anything moved, rejected on disocclusion and cuts,
 //! accumulated as a running mean; optionally sharpened by FSR 1's RCAS. `scale = 1` is native
 //! TAA (what shipped engines call "native + TAA"), `scale < 1` upsamples. Parameters here, the
-//! GPU part in `gpu.rs`, the CPU model in `model.rs`, the shader in `shaders/taau/`.
+//! GPU part in `gpu.rs`, the CPU model in `model.rs`, the shader in `resolve.wgsl`.
 //!
 //! Requirements (as Bevy states them for its TAA): the scene pass jittered (`View::ndc_offset`),
 //! depth, and motion vectors: the camera's from depth, dynamic objects' from the velocity pass,
@@ -15,11 +15,12 @@ pub mod gpu;
 pub mod jitter;
 pub mod model;
 
-use super::definition::{Shader, Target, Technique};
-use crate::gpu::{Gpu, Unsupported};
-use crate::params::{Param, ParamSpec, Variant};
+use super::definition::{BuildContext, Definition, Shader, Target};
+use crate::gpu::Unsupported;
+use crate::params::{Param, ParamSpec};
 use crate::render::graph::Plan;
 use crate::render::renderer::Renderer;
+use crate::techniques::Variant;
 
 pub use gpu::{LastFrame, TaauGpu, RESOLVE_WGSL};
 
@@ -110,6 +111,8 @@ static PARAMS: [&ParamSpec; 12] = [
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Options {
     pub scale: f64,
+    /// `phases` as given (0: automatic), kept for the whole-number check.
+    pub phases_param: f64,
     pub phases: u32,
     pub clip_gamma: f32,
     pub clip_still: bool,
@@ -133,6 +136,7 @@ impl Options {
         };
         Options {
             scale,
+            phases_param: v.get(&PHASES),
             phases,
             clip_gamma: v.get(&CLIP_GAMMA) as f32,
             clip_still: v.get(&CLIP_STILL),
@@ -155,7 +159,9 @@ impl Options {
 
 pub struct Taau;
 
-impl Technique for Taau {
+impl Definition for Taau {
+    type Options = Options;
+
     fn name(&self) -> &'static str {
         "taau"
     }
@@ -168,34 +174,37 @@ impl Technique for Taau {
         &PARAMS
     }
 
-    fn check(&self, variant: &Variant) -> Result<(), String> {
-        let phases = variant.get(&PHASES);
+    fn options(&self, variant: &Variant) -> Options {
+        Options::from_variant(variant)
+    }
+
+    fn check(&self, options: &Options) -> Result<(), String> {
+        let phases = options.phases_param;
         if phases.fract() != 0.0 {
             return Err(format!("`phases` must be a whole number, not {phases}"));
         }
-        if variant.get(&MOVING_WEIGHT) > variant.get(&MAX_WEIGHT) {
+        if options.moving_weight > options.max_weight {
             return Err("`moving_weight` must not exceed `max_weight`".to_string());
         }
         Ok(())
     }
 
-    fn plan(&self, variant: &Variant, target: Target) -> Plan {
-        let options = Options::from_variant(variant);
-        gpu::graph(&options, target.width, target.height, target.dynamic_scene).0
+    fn plan(&self, options: &Options, target: Target) -> Plan {
+        gpu::graph(options, target.width, target.height, target.dynamic_scene).0
     }
 
     fn build(
         &self,
-        gpu: &Gpu,
-        variant: &Variant,
-        target: Target,
+        options: &Options,
+        cx: &BuildContext<'_>,
     ) -> Result<Box<dyn Renderer>, Unsupported> {
+        let t = cx.target;
         Ok(Box::new(TaauGpu::new(
-            gpu,
-            Options::from_variant(variant),
-            target.width,
-            target.height,
-            target.dynamic_scene,
+            cx.gpu,
+            *options,
+            t.width,
+            t.height,
+            t.dynamic_scene,
         )))
     }
 

@@ -1,4 +1,4 @@
-//! CPU model of `taau`'s resolve, step for step with `shaders/taau/resolve.wgsl`: which render
+//! CPU model of `taau`'s resolve, step for step with `resolve.wgsl`: which render
 //! sample an output pixel takes and whether it lands, the reprojection, the disocclusion test,
 //! the Catmull-Rom history fetch, YCoCg variance clipping and the running-mean blend. Tests
 //! compare it with the GPU output on real frames. In f32 like the shader; not for speed.
