@@ -6,13 +6,13 @@ mod common;
 
 use glam::{Vec3, Vec4};
 use tessera::params::ParamValue;
-use tessera::techniques::Variant;
 use tessera::render::readback::read_texture;
 use tessera::render::scene::SceneGpu;
 use tessera::render::timers::Timers;
 use tessera::scenario::Scenario;
 use tessera::techniques::fsr1::model::{self, Image};
 use tessera::techniques::fsr1::{Fsr1Gpu, Options};
+use tessera::techniques::Variant;
 
 fn vec4s(v: Vec<f32>) -> Vec<Vec4> {
     v.chunks_exact(4).map(Vec4::from_slice).collect()

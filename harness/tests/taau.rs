@@ -8,7 +8,6 @@ mod common;
 
 use glam::{Vec2, Vec4};
 use tessera::params::ParamValue;
-use tessera::techniques::Variant;
 use tessera::render::kit::record_scene_pass;
 use tessera::render::readback::{read_texture, read_texture_raw};
 use tessera::render::renderer::Renderer;
@@ -19,6 +18,7 @@ use tessera::techniques::fsr1::model as fsr1_model;
 use tessera::techniques::taau::jitter::{jitter, ndc_offset};
 use tessera::techniques::taau::model::{self, Inputs, Source};
 use tessera::techniques::taau::{Options, TaauGpu};
+use tessera::techniques::Variant;
 
 fn vec4s(v: Vec<f32>) -> Vec<Vec4> {
     v.chunks_exact(4).map(Vec4::from_slice).collect()
