@@ -200,7 +200,7 @@ pub fn rcas(src: &Image, sharpness: f32, linear_input: bool, x: u32, y: u32) -> 
         rcas_lobe(mn4.y, mx4.y),
         rcas_lobe(mn4.z, mx4.z),
     );
-    let lobe = max3(lobes).min(0.0).max(-RCAS_LIMIT) * sharpness;
+    let lobe = max3(lobes).clamp(-RCAS_LIMIT, 0.0) * sharpness;
     let pix = (lobe * (b + d + h + f) + e) / (4.0 * lobe + 1.0);
     (lobe, decode(pix))
 }
@@ -282,7 +282,7 @@ mod tests {
             texels: &texels,
         };
         let (lobe, _) = rcas(&src, 1.0, false, 1, 1);
-        assert!(lobe < 0.0 && lobe >= -RCAS_LIMIT, "{lobe}");
+        assert!((-RCAS_LIMIT..0.0).contains(&lobe), "{lobe}");
         // Sharpness 0 linear (infinitely many stops): identity.
         let (lobe0, c0) = rcas(&src, 0.0, false, 1, 1);
         assert_eq!(lobe0, 0.0);
