@@ -163,7 +163,7 @@ fn easu_and_rcas_match_the_model_on_real_frames() {
         vec![mode("quality")],
         vec![mode("balanced")],
         vec![mode("performance")],
-        vec![("scale", ParamValue::Float(0.7071))],
+        vec![("scale", ParamValue::Float(std::f64::consts::FRAC_1_SQRT_2))],
         vec![
             ("rcas", ParamValue::Bool(false)),
             ("scale", ParamValue::Float(0.6)),

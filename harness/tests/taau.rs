@@ -350,9 +350,9 @@ fn moving_camera_animated_object_and_cut_match_the_model() {
     for params in [
         vec![],
         vec![("scale", ParamValue::Float(0.5))],
-        vec![("scale", ParamValue::Float(0.7071))],
+        vec![("scale", ParamValue::Float(std::f64::consts::FRAC_1_SQRT_2))],
         vec![
-            ("scale", ParamValue::Float(0.7071)),
+            ("scale", ParamValue::Float(std::f64::consts::FRAC_1_SQRT_2)),
             ("rcas", ParamValue::Bool(true)),
         ],
         vec![("clip_still", ParamValue::Bool(true))],
