@@ -104,7 +104,9 @@ fn references_are_rendered_only_when_a_metric_reads_them() {
             );
             let separate = s.needs_separate_reference();
             match s.reference {
-                Reference::GroundTruth { .. } => assert_eq!(separate, s.needs_reference()),
+                Reference::GroundTruth { .. } | Reference::Converged { .. } => {
+                    assert_eq!(separate, s.needs_reference())
+                }
                 Reference::Native => assert_eq!(separate, s.needs_reference() && !lists_native),
                 Reference::None => assert!(!separate),
             }

@@ -33,8 +33,11 @@ pub fn render(
         _ => None,
     };
     let target = Target::new(scenario.width, scenario.height, false);
-    let built: Result<Box<dyn Renderer>, Unsupported> =
-        techniques::reference(supersample, &BuildContext::new(gpu, scene, target));
+    let cx = BuildContext::new(gpu, scene, target);
+    let built: Result<Box<dyn Renderer>, Unsupported> = match scenario.reference {
+        Reference::Converged { samples } => techniques::converged_reference(samples, &cx),
+        _ => techniques::reference(supersample, &cx),
+    };
     let result = match built {
         Err(Unsupported(reason)) => Err(format!("no reference: {reason}")),
         Ok(mut t) => frames::render(

@@ -106,6 +106,10 @@ pub enum Reference {
     Native,
     /// NxN supersampled native render, box-downsampled.
     GroundTruth { supersample: u32 },
+    /// The converged reference: `samples` renders per frame at the output resolution, each
+    /// jittered by a point of a low-discrepancy sequence in the pixel, averaged
+    /// (`techniques/native/converged.rs`); also `kind = "ground-truth"`.
+    Converged { samples: u32 },
 }
 
 impl Reference {
@@ -113,7 +117,7 @@ impl Reference {
         match self {
             Reference::None => "none",
             Reference::Native => "native",
-            Reference::GroundTruth { .. } => "ground-truth",
+            Reference::GroundTruth { .. } | Reference::Converged { .. } => "ground-truth",
         }
     }
 }

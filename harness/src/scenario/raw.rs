@@ -104,8 +104,11 @@ impl<'de> Deserialize<'de> for RawMeasured {
 pub struct RawReference {
     /// `native` (default), `ground-truth` or `none`.
     pub kind: Option<String>,
-    /// Ground truth: samples per axis per pixel (NxN, box-downsampled). Default 4.
+    /// Ground truth: samples per axis per pixel (NxN, box-downsampled).
     pub supersample: Option<i64>,
+    /// Ground truth: jittered samples per pixel at the output resolution (the converged
+    /// reference). Default 32 when `supersample` is not given.
+    pub samples: Option<i64>,
 }
 
 #[derive(Debug, Default, Deserialize)]

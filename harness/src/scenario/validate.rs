@@ -366,16 +366,32 @@ fn reference(ctx: &mut Ctx, path: &KeyPath, raw: &RawReference) -> Reference {
         &["native", "ground-truth", "none"],
     );
     match kind {
-        Some("ground-truth") => {
-            let n = ctx.count(&path.key("supersample"), raw.supersample.unwrap_or(4), 2, 8);
-            Reference::GroundTruth { supersample: n }
-        }
-        other => {
-            if raw.supersample.is_some() {
+        Some("ground-truth") => match (raw.supersample, raw.samples) {
+            (Some(_), Some(_)) => {
                 ctx.err(
-                    &path.key("supersample"),
-                    "`supersample` applies only to kind = \"ground-truth\"",
+                    &path.key("samples"),
+                    "give `supersample` (an NxN supersampled render) or `samples` (jittered samples at the output resolution), not both",
                 );
+                Reference::Converged { samples: 32 }
+            }
+            (Some(n), None) => Reference::GroundTruth {
+                supersample: ctx.count(&path.key("supersample"), n, 2, 8),
+            },
+            (None, n) => Reference::Converged {
+                samples: ctx.count(&path.key("samples"), n.unwrap_or(32), 1, 1024),
+            },
+        },
+        other => {
+            for (key, given) in [
+                ("supersample", raw.supersample.is_some()),
+                ("samples", raw.samples.is_some()),
+            ] {
+                if given {
+                    ctx.err(
+                        &path.key(key),
+                        format!("`{key}` applies only to kind = \"ground-truth\""),
+                    );
+                }
             }
             if other == Some("none") {
                 Reference::None

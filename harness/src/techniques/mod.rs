@@ -12,9 +12,11 @@ pub mod checkerboard;
 pub mod checkerboard_2x2;
 pub mod definition;
 pub mod docs;
+pub mod fsr1;
 pub mod interlace;
 pub mod native;
 pub mod registry;
+pub mod taau;
 pub mod upscale;
 
 pub use definition::{
@@ -75,6 +77,15 @@ pub fn reference(
         Some(n) => native::ground_truth(cx.gpu, cx.target.width, cx.target.height, n),
         None => build(&Variant::with_defaults(&native::Native), cx),
     }
+}
+
+/// The converged reference: `samples` jittered renders per frame at the target's size, averaged
+/// (`native/converged.rs`).
+pub fn converged_reference(
+    samples: u32,
+    cx: &BuildContext<'_>,
+) -> Result<Box<dyn Renderer>, Unsupported> {
+    native::converged::converged(cx.gpu, cx.target.width, cx.target.height, samples)
 }
 
 /// The scene's exact motion: the velocity pass alone at output resolution (what the `tde`

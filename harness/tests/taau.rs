@@ -1,0 +1,383 @@
+//! TAAU on the default adapter: the jitter puts each render pixel's sample where the sequence
+//! says (against a 4x supersampled render); a still camera's accumulated output is exactly the
+//! mean of the renders at the claimed sample positions; the GPU resolve (and its RCAS) equals
+//! the CPU model on real frames with a moving camera, an animated object and a cut, where the
+//! history resets.
+
+mod common;
+
+use glam::{Vec2, Vec4};
+use tessera::params::ParamValue;
+use tessera::render::kit::record_scene_pass;
+use tessera::render::readback::{read_texture, read_texture_raw};
+use tessera::render::renderer::Renderer;
+use tessera::render::scene::{SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FORMAT};
+use tessera::render::timers::Timers;
+use tessera::scenario::Scenario;
+use tessera::techniques::fsr1::model as fsr1_model;
+use tessera::techniques::taau::jitter::{jitter, ndc_offset};
+use tessera::techniques::taau::model::{self, Inputs, Source};
+use tessera::techniques::taau::{Options, TaauGpu};
+use tessera::techniques::Variant;
+
+fn vec4s(v: Vec<f32>) -> Vec<Vec4> {
+    v.chunks_exact(4).map(Vec4::from_slice).collect()
+}
+
+fn f16(v: Vec4) -> Vec4 {
+    Vec4::from_array(v.to_array().map(|x| half::f16::from_f32(x).to_f32()))
+}
+
+const SCENE: &str = r#"
+resolution = [40, 30]
+[frames]
+warmup = 0
+measured = 1
+[scene]
+shading_cost = 2
+[scene.ground]
+checker_size = 0.25
+[[scene.lights]]
+type = "directional"
+intensity = 3.0
+[[scene.objects]]
+shape = "box"
+position = [0, 0.5, 0]
+color = [0.8, 0.3, 0.2]
+[[scene.objects]]
+shape = "pole"
+position = [-1.0, 0, 0.5]
+radius = 0.02
+[[scene.objects]]
+shape = "fence"
+position = [-2, 0, -1]
+end = [2, 0, -1]
+[[scene.objects]]
+shape = "sphere"
+position = [1.2, 0.5, -0.5]
+radius = 0.5
+"#;
+
+const MOVING: &str = r#"
+[scene.objects.animation]
+kind = "translate"
+velocity = [-3, 0, 0]
+[camera]
+[[camera.keyframes]]
+time = 0
+position = [0, 1.5, 4]
+target = [0, 0.4, 0]
+[[camera.keyframes]]
+time = 0.05
+position = [0.4, 1.5, 4]
+target = [0, 0.4, 0]
+[[camera.keyframes]]
+time = 0.06
+position = [-1, 2, 3]
+target = [0, 0.4, 0]
+cut = true
+"#;
+
+const STILL: &str = r#"
+[camera]
+[[camera.keyframes]]
+time = 0
+position = [0, 1.5, 4]
+target = [0, 0.4, 0]
+"#;
+
+fn scenario(parts: &[&str]) -> Scenario {
+    common::scenario(&format!(
+        "{}\n[[techniques]]\ntechnique = \"native\"\n",
+        parts.concat()
+    ))
+}
+
+/// One render of the scene at `width` x `height` with `view`, read back.
+fn render_view(
+    gpu: &tessera::gpu::Gpu,
+    scene: &mut SceneGpu,
+    (width, height): (u32, u32),
+    view: View,
+) -> Vec<Vec4> {
+    let tex = |format, usage| {
+        gpu.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("test"),
+            size: wgpu::Extent3d {
+                width,
+                height,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | usage,
+            view_formats: &[],
+        })
+    };
+    let color = tex(COLOR_FORMAT, wgpu::TextureUsages::COPY_SRC);
+    let depth = tex(DEPTH_FORMAT, wgpu::TextureUsages::empty());
+    let timers = Timers::new(&gpu.device, &[]).unwrap();
+    scene.write_objects(&gpu.queue, view.time, view.prev_time);
+    scene.write_view(&gpu.queue, 0, &view);
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    record_scene_pass(
+        gpu,
+        scene,
+        &timers,
+        &mut encoder,
+        "scene",
+        &color.create_view(&Default::default()),
+        &depth.create_view(&Default::default()),
+        0,
+        ScenePipeline::Forward { samples: 1 },
+    );
+    gpu.queue.submit([encoder.finish()]);
+    vec4s(read_texture(&gpu.device, &gpu.queue, &color))
+}
+
+#[test]
+fn render_pixels_sample_at_the_claimed_jitter_positions() {
+    // Point-sampled ground: a sample's colour depends on its position only.
+    let s = scenario(&[
+        &SCENE.replace(
+            "checker_size = 0.25",
+            "checker_size = 0.25\nfilter = \"none\"",
+        ),
+        STILL,
+    ]);
+    let gpu = common::gpu();
+    let mut scene = SceneGpu::new(&gpu.device, &s).unwrap();
+    let (w, h) = (s.width, s.height);
+    // 4x per axis, unjittered: hi-res pixel k's centre is at (k + 0.5) / 4 render pixels.
+    let hi = render_view(&gpu, &mut scene, (4 * w, 4 * h), View::whole(0.0, 0.0));
+    // (0.375, 0.125): render pixel q samples at q + (0.875, 0.625) = ((4q + 3) + 0.5, (4q + 2)
+    // + 0.5) / 4, the centre of hi-res pixel (4q + 3, 4q + 2).
+    let mut matches = |j: Vec2| {
+        let lo = render_view(
+            &gpu,
+            &mut scene,
+            (w, h),
+            View {
+                ndc_offset: ndc_offset(j, w, h),
+                ..View::whole(0.0, 0.0)
+            },
+        );
+        let mut same = 0;
+        for y in 0..h {
+            for x in 0..w {
+                let a = lo[(y * w + x) as usize];
+                let b = hi[((4 * y + 2) * 4 * w + 4 * x + 3) as usize];
+                if (a - b).abs().max_element() <= 2e-3 * b.abs().max_element().max(1.0) {
+                    same += 1;
+                }
+            }
+        }
+        same as f64 / (w * h) as f64
+    };
+    let claimed = matches(Vec2::new(0.375, 0.125));
+    // Rasterisers snap vertices to a sub-pixel grid per resolution: a sample within about
+    // 1/256 px of an edge may fall on the other side.
+    assert!(claimed >= 0.98, "{claimed}");
+    // The mirrored jitter does not sample there.
+    let mirrored = matches(Vec2::new(-0.375, -0.125));
+    assert!(mirrored < claimed - 0.05, "{mirrored} vs {claimed}");
+}
+
+#[test]
+fn a_still_camera_accumulates_the_mean_of_the_claimed_samples() {
+    let s = scenario(&[SCENE, STILL]);
+    let gpu = common::gpu();
+    let mut scene = SceneGpu::new(&gpu.device, &s).unwrap();
+    let v = common::variant("taau", &[]);
+    let options = Options::from_variant(&v);
+    assert_eq!(options.phases, 32);
+    let mut t = TaauGpu::new(&gpu, options, s.width, s.height, false);
+    let mut timers = Timers::new(&gpu.device, &[]).unwrap();
+    for index in 0..32 {
+        tessera::run::frames::submit_frame(&gpu, &mut scene, &s, &mut t, &mut timers, index);
+        let _ = timers.try_collect(&gpu.queue);
+    }
+    let out = vec4s(read_texture(&gpu.device, &gpu.queue, t.output()));
+    // The same 32 renders, one per claimed sample position, averaged on the CPU.
+    let n = (s.width * s.height) as usize;
+    let mut mean = vec![Vec4::ZERO; n];
+    let mut max = vec![0.0f32; n];
+    for index in 0..32 {
+        let frame = render_view(
+            &gpu,
+            &mut scene,
+            (s.width, s.height),
+            View {
+                ndc_offset: ndc_offset(jitter(index, 32), s.width, s.height),
+                gradient_scale: options.gradient_scale,
+                ..View::whole(0.0, 0.0)
+            },
+        );
+        for ((m, x), f) in mean.iter_mut().zip(&mut max).zip(&frame) {
+            *m += *f / 32.0;
+            *x = x.max(f.truncate().max_element());
+        }
+    }
+    for (i, (o, m)) in out.iter().zip(&mean).enumerate() {
+        // Every pixel kept its history through all 32 phases (no disocclusion reset at
+        // silhouettes, where the samples alternate between surfaces).
+        assert_eq!(o.w, 32.0, "pixel {i}: weight {}", o.w);
+        // The running mean is stored in f16 after every frame: each conversion (at most one ulp
+        // of the running value, which never exceeds the pixel's largest sample: stores may
+        // round towards zero, as lavapipe's do, every error then of one sign) persists with
+        // weight k/32 after frame k, at most 16.5 ulps in all.
+        let ulp = (2.0f32).powi(max[i].max(2.0f32.powi(-14)).log2().floor() as i32 - 10);
+        let bound = 16.5 * ulp + 1e-4;
+        let d = (o.truncate() - m.truncate()).abs().max_element();
+        assert!(d <= bound, "pixel {i}: taau {o} mean {m} (bound {bound})");
+    }
+    // Converged and still: held, frame after frame (`hold`), as still as native.
+    for index in 32..36 {
+        tessera::run::frames::submit_frame(&gpu, &mut scene, &s, &mut t, &mut timers, index);
+        let _ = timers.try_collect(&gpu.queue);
+    }
+    assert_eq!(
+        vec4s(read_texture(&gpu.device, &gpu.queue, t.output())),
+        out
+    );
+}
+
+/// Renders `frames` frames of `v`, comparing every resolve (and RCAS) with the model; returns
+/// each frame's sources.
+fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) -> Vec<Vec<Source>> {
+    let gpu = common::gpu();
+    let mut scene = SceneGpu::new(&gpu.device, s).unwrap();
+    let options = Options::from_variant(v);
+    let dynamic = s.scene.has_dynamic_objects();
+    let mut t = TaauGpu::new(&gpu, options, s.width, s.height, dynamic);
+    let mut timers = Timers::new(&gpu.device, &[]).unwrap();
+    let read =
+        |t: &TaauGpu, name: &str| read_texture(&gpu.device, &gpu.queue, t.texture(name).unwrap());
+    let read_r32 = |t: &TaauGpu, name: &str| {
+        bytemuck::pod_collect_to_vec::<u8, f32>(&read_texture_raw(&gpu, t.texture(name).unwrap()))
+    };
+    let mut all = Vec::new();
+    for index in 0..frames {
+        tessera::run::frames::submit_frame(&gpu, &mut scene, s, &mut t, &mut timers, index);
+        let _ = gpu.device.poll(wgpu::PollType::Wait {
+            submission_index: None,
+            timeout: None,
+        });
+        let _ = timers.try_collect(&gpu.queue);
+        let last = t.last_frame().unwrap();
+        let color_low = vec4s(read(&t, "color_low"));
+        let depth_low = read(&t, "depth_low");
+        let history = vec4s(read(&t, "history"));
+        let depth_history = read_r32(&t, "depth_history");
+        let velocity = last.velocity.then(|| vec4s(read(&t, "velocity")));
+        let inputs = Inputs {
+            low: t.render_size(),
+            out: (s.width, s.height),
+            jitter: last.jitter,
+            color_low: &color_low,
+            depth_low: &depth_low,
+            history: &history,
+            depth_history: &depth_history,
+            velocity: velocity.as_deref(),
+            prev_from_cur: last.prev_from_cur,
+            history_valid: last.history_valid,
+            camera_still: last.camera_still,
+            clip_still: options.clip_still,
+            clip_gamma: options.clip_gamma,
+            depth_tolerance: options.depth_tolerance,
+            max_weight: options.max_weight,
+            moving_weight: options.moving_weight,
+            fill_weight: tessera::techniques::taau::gpu::FILL_WEIGHT,
+            hold: options.hold,
+        };
+        let model = model::resolve_all(&inputs);
+        let resolved = vec4s(read(&t, "resolved"));
+        let depth = read_r32(&t, "depth");
+        let mut bad = Vec::new();
+        for (i, (m, g)) in model.iter().zip(&resolved).enumerate() {
+            let want = f16(m.color);
+            let d = (want - *g).abs().max_element();
+            if d > 3e-3 * want.abs().max_element().max(1.0) {
+                bad.push(format!(
+                    "pixel ({}, {}): model {want} ({:?}, lands {}, history at {} depth {}) gpu {g}",
+                    i as u32 % s.width,
+                    i as u32 / s.width,
+                    m.source,
+                    m.lands,
+                    m.prev_pos,
+                    m.prev_depth
+                ));
+            }
+            assert_eq!(m.depth, depth[i], "frame {index} pixel {i}");
+        }
+        assert!(
+            bad.is_empty(),
+            "{options:?} frame {index}: {} pixels differ: {}",
+            bad.len(),
+            bad[..bad.len().min(6)].join("; ")
+        );
+        if let Some(stops) = options.sharpness {
+            let img = fsr1_model::Image {
+                width: s.width,
+                height: s.height,
+                texels: &resolved,
+            };
+            let out = vec4s(read_texture(&gpu.device, &gpu.queue, t.output()));
+            for y in 0..s.height {
+                for x in 0..s.width {
+                    let (_, c) = fsr1_model::rcas(&img, (-stops).exp2(), true, x, y);
+                    let want = f16(c.extend(1.0)).truncate();
+                    let got = out[(y * s.width + x) as usize].truncate();
+                    let d = (want - got).abs().max_element();
+                    assert!(
+                        d <= 3e-3 * want.abs().max_element().max(1.0),
+                        "frame {index} rcas ({x}, {y}): model {want} gpu {got}"
+                    );
+                }
+            }
+        }
+        all.push(model.iter().map(|r| r.source).collect());
+    }
+    all
+}
+
+#[test]
+fn moving_camera_animated_object_and_cut_match_the_model() {
+    let s = scenario(&[SCENE, MOVING]);
+    assert!(s.scene.has_dynamic_objects());
+    for params in [
+        vec![],
+        vec![("scale", ParamValue::Float(0.5))],
+        vec![("scale", ParamValue::Float(std::f64::consts::FRAC_1_SQRT_2))],
+        vec![
+            ("scale", ParamValue::Float(std::f64::consts::FRAC_1_SQRT_2)),
+            ("rcas", ParamValue::Bool(true)),
+        ],
+        vec![("clip_still", ParamValue::Bool(true))],
+    ] {
+        let v = common::variant("taau", &params);
+        let frames = compare_with_model(&s, &v, 6);
+        // Frame 0 has no history.
+        assert!(frames[0].iter().all(|s| *s == Source::Reset), "{}", v.name);
+        // Moving content is clipped; something keeps history.
+        assert!(frames[2].contains(&Source::Clipped), "{}", v.name);
+        // The cut (0.06 s: frame 4 at 60 Hz) drops every pixel's history.
+        assert!(frames[4].iter().all(|s| *s == Source::Reset), "{}", v.name);
+        assert!(frames[5].contains(&Source::Clipped), "{}", v.name);
+    }
+}
+
+#[test]
+fn a_still_scene_keeps_history_unclipped_and_a_cut_resets_it() {
+    let s = scenario(&[SCENE, STILL]);
+    let v = common::variant("taau", &[("scale", ParamValue::Float(0.5))]);
+    let frames = compare_with_model(&s, &v, 4);
+    assert!(frames[0].iter().all(|s| *s == Source::Reset));
+    // Nothing moves: no clipping, and from frame 1 on every pixel has history (upsampled pixels
+    // whose first sample has not landed carry the fill).
+    for f in &frames[1..] {
+        assert!(f.iter().all(|s| *s == Source::History), "{f:?}");
+    }
+}
