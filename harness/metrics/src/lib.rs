@@ -17,6 +17,7 @@ mod image;
 mod io;
 mod luma;
 mod pixel;
+pub mod port;
 mod report;
 mod sequence;
 mod series;
