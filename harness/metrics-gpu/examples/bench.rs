@@ -292,9 +292,9 @@ fn main() {
             for i in 0..=args.iterations {
                 let start = Instant::now();
                 let ok = if which == "flicker" {
-                    gpu.flicker(&r, &t).is_ok()
+                    gpu.flicker_frames(&r, &t).is_ok()
                 } else {
-                    gpu.tde(&r, &t, &r, &t, &motion, &valid).is_ok()
+                    gpu.tde_frames(&r, &t, &r, &t, &motion, &valid).is_ok()
                 };
                 let ms = start.elapsed().as_secs_f64() * 1e3;
                 if ok && i > 0 {

@@ -256,7 +256,7 @@ impl MetricsBackend for GpuMetrics {
         tessera_metrics::port::check_pair(previous, current)?;
         let a = self.upload(previous, None)?;
         let b = self.upload(current, None)?;
-        GpuMetrics::flicker(self, &a, &b)
+        self.flicker_frames(&a, &b)
     }
 
     fn tde(
@@ -270,7 +270,7 @@ impl MetricsBackend for GpuMetrics {
     ) -> Result<Option<f64>, GpuMetricsError> {
         let up = |i: &Rgb8Image| self.upload(i, None);
         let (tp, t, rp, r) = (up(test_prev)?, up(test)?, up(reference_prev)?, up(reference)?);
-        GpuMetrics::tde(self, &tp, &t, &rp, &r, motion, valid)
+        self.tde_frames(&tp, &t, &rp, &r, motion, valid)
     }
 
     /// Uploads every frame once; flicker reuses the previous test frame on the device.
@@ -301,7 +301,7 @@ impl MetricsBackend for GpuMetrics {
             }
             if flicker {
                 if let Some(prev) = &previous {
-                    flickers.push(GpuMetrics::flicker(self, prev, &t)?);
+                    flickers.push(self.flicker_frames(prev, &t)?);
                 }
             }
             previous = Some(t);

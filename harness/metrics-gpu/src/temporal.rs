@@ -26,7 +26,7 @@ fn same_size(a: &GpuFrame, b: &GpuFrame) -> Result<(), GpuMetricsError> {
 impl GpuMetrics {
     /// Flicker of one frame: the mean absolute difference from the previous frame over pixels
     /// and RGB channels, in 8-bit units (exact: integer sums).
-    pub fn flicker(
+    pub fn flicker_frames(
         &mut self,
         previous: &GpuFrame,
         current: &GpuFrame,
@@ -66,7 +66,7 @@ impl GpuMetrics {
 
     /// TDE of one frame, in 8-bit units: `motion[p]` moves pixel `p` from the previous frame
     /// (pixels, x right, y down), `valid[p]` is the mask; `None` when no pixel is valid.
-    pub fn tde(
+    pub fn tde_frames(
         &mut self,
         test_prev: &GpuFrame,
         test: &GpuFrame,
