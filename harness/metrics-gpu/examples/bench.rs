@@ -15,7 +15,7 @@ use std::time::Instant;
 
 use tessera_metrics::{hdr_exposure_range, HdrImage, Rgb8Image, DEFAULT_PIXELS_PER_DEGREE};
 use tessera_metrics_gpu::{
-    CpuMetrics, FlipHdrRequest, FlipRequest, GpuFrame, GpuMetrics, MetricsBackend, Pair,
+    CpuMetrics, FlipHdrRequest, FlipPooling, FlipRequest, GpuFrame, GpuMetrics, MetricsBackend, Pair,
     PairRequest,
 };
 
@@ -190,6 +190,7 @@ fn main() {
         let flip = Some(FlipRequest {
             pixels_per_degree: ppd,
             heatmap: false,
+            pooling: FlipPooling::Exact,
         });
         let requests: Vec<(&str, PairRequest)> = vec![
             (
@@ -217,6 +218,16 @@ fn main() {
                 },
             ),
             (
+                "flip (ldr, flip-evaluator pooling: map read back)",
+                PairRequest {
+                    flip: Some(FlipRequest {
+                        pooling: FlipPooling::FlipEvaluator,
+                        ..flip.clone().unwrap()
+                    }),
+                    ..Default::default()
+                },
+            ),
+            (
                 "psnr + ssim + flip",
                 PairRequest {
                     mse_rgb: true,
@@ -233,6 +244,7 @@ fn main() {
                         range,
                         pixels_per_degree: ppd,
                         heatmap: false,
+                        pooling: FlipPooling::Exact,
                     }),
                     ..Default::default()
                 },
@@ -317,7 +329,7 @@ fn main() {
                 reference_hdr: Some(&rh),
                 test_hdr: Some(&th),
             };
-            for (name, req) in &requests[..5] {
+            for (name, req) in &requests[..6] {
                 let start = Instant::now();
                 let ok = CpuMetrics.pair(pair, req).is_ok();
                 let ms = start.elapsed().as_secs_f64() * 1e3;

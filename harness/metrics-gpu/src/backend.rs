@@ -8,7 +8,7 @@
 use serde::{Deserialize, Serialize};
 use tessera_metrics::{HdrImage, Rgb8Image};
 
-use crate::pair::{FlipValues, PairRequest, PairValues};
+use crate::pair::{FlipPooling, FlipValues, PairRequest, PairValues};
 use crate::{GpuFrame, GpuMetrics, GpuMetricsError};
 
 /// Where a metric was computed: recorded with every result (`metrics_device` in a scenario).
@@ -165,6 +165,8 @@ impl MetricsBackend for CpuMetrics {
             let res = m::flip_ldr(r, t, f.pixels_per_degree)?;
             v.flip = Some(FlipValues {
                 mean: res.mean,
+                exact_mean: res.exact_mean,
+                pooling: FlipPooling::FlipEvaluator,
                 max: res.max,
                 heatmap: f.heatmap.then(|| m::flip_heatmap(&res)),
             });
@@ -176,6 +178,8 @@ impl MetricsBackend for CpuMetrics {
             let res = m::flip_hdr(rh, th, &f.range, f.pixels_per_degree)?;
             v.flip_hdr = Some(FlipValues {
                 mean: res.mean,
+                exact_mean: res.exact_mean,
+                pooling: FlipPooling::FlipEvaluator,
                 max: res.max,
                 heatmap: f.heatmap.then(|| m::flip_heatmap(&res)),
             });

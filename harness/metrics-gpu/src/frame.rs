@@ -89,7 +89,7 @@ impl GpuMetrics {
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("metrics frame"),
                 contents: bytemuck::cast_slice(&pack(ldr)),
-                usage: wgpu::BufferUsages::STORAGE,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
             });
         let hdr_buffer = match hdr {
             Some(h) => {
@@ -139,7 +139,7 @@ impl GpuMetrics {
             self.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
                 size,
-                usage: wgpu::BufferUsages::STORAGE,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
                 mapped_at_creation: false,
             })
         };

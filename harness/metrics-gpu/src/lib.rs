@@ -22,4 +22,4 @@ pub use context::GpuMetrics;
 pub use device::{open, select_adapter, MetricsDevice};
 pub use error::GpuMetricsError;
 pub use frame::GpuFrame;
-pub use pair::{FlipHdrRequest, FlipRequest, FlipValues, PairRequest, PairValues};
+pub use pair::{FlipHdrRequest, FlipPooling, FlipRequest, FlipValues, PairRequest, PairValues};

@@ -40,6 +40,7 @@ impl PairRequest {
             flip: Some(FlipRequest {
                 pixels_per_degree: ppd,
                 heatmap: false,
+                pooling: FlipPooling::Exact,
             }),
             flip_hdr: None,
         }
@@ -51,6 +52,22 @@ impl PairRequest {
 pub struct FlipRequest {
     pub pixels_per_degree: f64,
     pub heatmap: bool,
+    pub pooling: FlipPooling,
+}
+
+/// How the GPU pools FLIP's error map into its mean.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum FlipPooling {
+    /// The exact mean, on the device (f32 partials per workgroup, summed in f64): only two
+    /// floats per workgroup come back.
+    #[default]
+    Exact,
+    /// The error map comes back and is pooled as flip-evaluator and the CPU back end pool it:
+    /// an f32 running sum in row-major order (`FlipResult::mean`). Costs a readback of 4 bytes
+    /// per pixel and a sequential pass on the CPU (about 2 ms at 1080p), and keeps the value
+    /// continuous with CPU results where FLIP's f32 drift is large (up to ~3e-3 at 1080p).
+    FlipEvaluator,
 }
 
 /// HDR-FLIP over an exposure range (from the reference: `tessera_metrics::hdr_exposure_range`).
@@ -59,15 +76,19 @@ pub struct FlipHdrRequest {
     pub range: ExposureRange,
     pub pixels_per_degree: f64,
     pub heatmap: bool,
+    pub pooling: FlipPooling,
 }
 
 /// FLIP's pooled values (and heat map) of one pair.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct FlipValues {
-    /// The mean error. GPU: the exact mean (f32 per-pixel errors summed in f64); CPU: the f32
-    /// running mean flip-evaluator prints (`FlipResult::mean`). They differ by less than 1e-6
-    /// on typical maps, by up to ~3e-3 on a 1080p map of large errors (the f32 drift).
+    /// The mean error, pooled as `pooling` says. The CPU back end always pools as
+    /// flip-evaluator (`FlipResult::mean`). Exact and running means differ by less than 1e-6 on
+    /// typical maps, by up to ~3e-3 on a 1080p map of large errors (the f32 drift).
     pub mean: f64,
+    /// The exact mean (f64 sum of the per-pixel errors).
+    pub exact_mean: f64,
+    pub pooling: FlipPooling,
     pub max: f64,
     #[serde(skip)]
     pub heatmap: Option<Rgb8Image>,
@@ -207,6 +228,8 @@ struct FlipPlan {
     reduce: u64,
     partials: Region,
     heatmap: Option<Region>,
+    /// The error map's copy, for `FlipPooling::FlipEvaluator`.
+    map: Option<Region>,
     ppd_key: u32,
     multipliers: Vec<f32>,
 }
@@ -284,7 +307,10 @@ impl GpuMetrics {
         let mut flips: Vec<(bool, FlipPlan)> = Vec::new();
         if let Some(f) = &request.flip {
             let ppd = tessera_metrics::port::flip_check_ppd(f.pixels_per_degree)?;
-            flips.push((false, self.plan_flip(&mut layout, w, h, ppd, vec![1.0], f.heatmap)?));
+            flips.push((
+                false,
+                self.plan_flip(&mut layout, w, h, ppd, vec![1.0], f.heatmap, f.pooling)?,
+            ));
         }
         if let Some(f) = &request.flip_hdr {
             let (Some(_), Some(_)) = (&reference.hdr, &test.hdr) else {
@@ -297,7 +323,10 @@ impl GpuMetrics {
             let ppd = tessera_metrics::port::flip_check_ppd(f.pixels_per_degree)?;
             let m = tessera_metrics::port::flip_exposure_multipliers(&f.range);
             check_range(&f.range)?;
-            flips.push((true, self.plan_flip(&mut layout, w, h, ppd, m, f.heatmap)?));
+            flips.push((
+                true,
+                self.plan_flip(&mut layout, w, h, ppd, m, f.heatmap, f.pooling)?,
+            ));
         }
 
         self.fit(&layout);
@@ -380,11 +409,22 @@ impl GpuMetrics {
             values.ssim_rgb = Some(rgb / 3.0);
         }
         for (hdr, plan) in &flips {
-            let (mean, max) = pooled(floats(&bytes, plan.partials), n as usize);
-            let heatmap = plan
-                .heatmap
-                .map(|r| unpack(words(&bytes, r), w, h));
-            let v = FlipValues { mean, max, heatmap };
+            let (exact_mean, max) = pooled(floats(&bytes, plan.partials), n as usize);
+            let heatmap = plan.heatmap.map(|r| unpack(words(&bytes, r), w, h));
+            let (mean, pooling) = match plan.map {
+                Some(r) => (
+                    tessera_metrics::port::flip_running_mean(&floats(&bytes, r)[..n as usize]),
+                    FlipPooling::FlipEvaluator,
+                ),
+                None => (exact_mean, FlipPooling::Exact),
+            };
+            let v = FlipValues {
+                mean,
+                exact_mean,
+                pooling,
+                max,
+                heatmap,
+            };
             if *hdr {
                 values.flip_hdr = Some(v);
             } else {
@@ -402,6 +442,7 @@ impl GpuMetrics {
         ppd: f32,
         multipliers: Vec<f32>,
         heatmap: bool,
+        pooling: FlipPooling,
     ) -> Result<FlipPlan, GpuMetricsError> {
         let n = w * h;
         self.ensure_flip(w, h)?;
@@ -449,7 +490,9 @@ impl GpuMetrics {
         });
         let partials = layout.output(8 * grid.groups() as u64);
         let heatmap = heatmap.then(|| layout.output(4 * n as u64));
+        let map = (pooling == FlipPooling::FlipEvaluator).then(|| layout.output(4 * n as u64));
         Ok(FlipPlan {
+            map,
             planes,
             vertical,
             horizontal,
@@ -506,7 +549,7 @@ impl GpuMetrics {
             self.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
                 size: 4 * n,
-                usage: wgpu::BufferUsages::STORAGE,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
                 mapped_at_creation: false,
             })
         };
@@ -521,7 +564,6 @@ impl GpuMetrics {
         Ok(())
     }
 
-    #[allow(clippy::too_many_arguments)]
     fn record_flip(
         &self,
         encoder: &mut wgpu::CommandEncoder,
@@ -626,6 +668,10 @@ impl GpuMetrics {
             pass.set_pipeline(&p.heatmap);
             pass.set_bind_group(0, &bind, &[]);
             pass.dispatch_workgroups(grid.x, grid.y, 1);
+        }
+        drop(pass);
+        if let Some(r) = plan.map {
+            encoder.copy_buffer_to_buffer(error, 0, &self.outputs, r.offset, 4 * n as u64);
         }
     }
 }

@@ -7,7 +7,7 @@ use std::sync::{Mutex, MutexGuard, OnceLock};
 
 use tessera_metrics::{hdr_exposure_range, HdrImage, Rgb8Image, DEFAULT_PIXELS_PER_DEGREE};
 use tessera_metrics_gpu::{
-    Backend, CpuMetrics, FlipHdrRequest, FlipRequest, GpuMetrics, GpuMetricsError,
+    Backend, CpuMetrics, FlipHdrRequest, FlipPooling, FlipRequest, GpuMetrics, GpuMetricsError,
     MetricsBackend, Pair, PairRequest, Sequence,
 };
 
@@ -189,6 +189,7 @@ fn ldr_flip_and_heatmap_agree() {
                 flip: Some(FlipRequest {
                     pixels_per_degree: ppd,
                     heatmap: true,
+                    pooling: FlipPooling::FlipEvaluator,
                 }),
                 ..Default::default()
             };
@@ -200,10 +201,25 @@ fn ldr_flip_and_heatmap_agree() {
             };
             let g = gpu.pair(pair, &req).unwrap().flip.unwrap();
             let c = tessera_metrics::flip_ldr(&r, &t, ppd).unwrap();
+            // Pooled as flip-evaluator (the error map read back) vs the CPU's `mean`, and the
+            // exact means of both.
             let d = (g.mean - c.mean).abs();
             assert!(d <= FLIP_MEAN_ABS, "{name} @ {ppd}: FLIP mean {} vs {} ({d:e})", g.mean, c.mean);
             mean_dev = mean_dev.max(d);
-            exact_dev = exact_dev.max((g.mean - c.exact_mean).abs());
+            let d = (g.exact_mean - c.exact_mean).abs();
+            assert!(d <= FLIP_MEAN_ABS, "{name} @ {ppd}: exact mean {} vs {} ({d:e})", g.exact_mean, c.exact_mean);
+            exact_dev = exact_dev.max(d);
+            // The exact pooling gives the same exact mean without the map.
+            let exact = PairRequest {
+                flip: Some(FlipRequest {
+                    pixels_per_degree: ppd,
+                    heatmap: false,
+                    pooling: FlipPooling::Exact,
+                }),
+                ..Default::default()
+            };
+            let e = gpu.pair(pair, &exact).unwrap().flip.unwrap();
+            assert_eq!((e.mean, e.exact_mean, e.pooling), (g.exact_mean, g.exact_mean, FlipPooling::Exact));
             max_dev = max_dev.max((g.max - c.max).abs());
             let gi = magma_index(g.heatmap.as_ref().unwrap());
             let ci = magma_index(&tessera_metrics::flip_heatmap(&c));
@@ -213,8 +229,8 @@ fn ldr_flip_and_heatmap_agree() {
         }
     }
     eprintln!(
-        "max deviation: flip mean {mean_dev:e} (vs exact_mean {exact_dev:e}), flip max \
-         {max_dev:e}, heat map {heat_dev} step(s) of 255"
+        "max deviation: flip mean (flip-evaluator pooling) {mean_dev:e}, exact mean \
+         {exact_dev:e}, flip max {max_dev:e}, heat map {heat_dev} step(s) of 255"
     );
 }
 
@@ -237,7 +253,7 @@ fn hdr_image(w: u32, h: u32, seed: u64, f: impl Fn(u32, u32, &mut Rng) -> [f32; 
 fn hdr_flip_agrees() {
     let mut gpu = gpu();
     let mut cpu = CpuMetrics;
-    let (mut mean_dev, mut heat_dev) = (0.0f64, 0);
+    let (mut mean_dev, mut exact_dev, mut heat_dev) = (0.0f64, 0.0f64, 0);
     let cases = [
         (
             "hdr noise 37x23",
@@ -268,6 +284,7 @@ fn hdr_flip_agrees() {
                 range,
                 pixels_per_degree: DEFAULT_PIXELS_PER_DEGREE,
                 heatmap: true,
+                pooling: FlipPooling::FlipEvaluator,
             }),
             ..Default::default()
         };
@@ -282,13 +299,19 @@ fn hdr_flip_agrees() {
         let d = (g.mean - c.mean).abs();
         assert!(d <= FLIP_MEAN_ABS, "{name}: HDR-FLIP mean {} vs {} ({d:e}), {} exposures", g.mean, c.mean, range.count);
         mean_dev = mean_dev.max(d);
+        let d = (g.exact_mean - c.exact_mean).abs();
+        assert!(d <= FLIP_MEAN_ABS, "{name}: HDR-FLIP exact mean ({d:e})");
+        exact_dev = exact_dev.max(d);
         let gi = magma_index(g.heatmap.as_ref().unwrap());
         let ci = magma_index(c.heatmap.as_ref().unwrap());
         let worst = gi.iter().zip(&ci).map(|(a, b)| (a - b).abs()).max().unwrap();
         assert!(worst <= 1, "{name}: heat map index differs by {worst}");
         heat_dev = heat_dev.max(worst);
     }
-    eprintln!("max deviation: flip_hdr mean {mean_dev:e}, heat map {heat_dev} step(s) of 255");
+    eprintln!(
+        "max deviation: flip_hdr mean {mean_dev:e}, exact mean {exact_dev:e}, heat map \
+         {heat_dev} step(s) of 255"
+    );
 }
 
 /// A moving sequence: content slides by a sub-pixel amount per frame; the test adds noise that
@@ -419,6 +442,7 @@ fn bad_input_gives_the_cpu_errors() {
         flip: Some(FlipRequest {
             pixels_per_degree: -1.0,
             heatmap: false,
+            pooling: FlipPooling::Exact,
         }),
         ..Default::default()
     };
@@ -434,6 +458,7 @@ fn bad_input_gives_the_cpu_errors() {
             range: hdr_exposure_range(&hdr),
             pixels_per_degree: 67.0,
             heatmap: false,
+            pooling: FlipPooling::Exact,
         }),
         ..Default::default()
     };

@@ -46,6 +46,15 @@ pub fn flip_check_ppd(ppd: f64) -> Result<f32, MetricsError> {
     crate::flip::check_ppd(ppd)
 }
 
+/// `FlipResult::mean` of an error map: the f32 running sum in row-major order over the count,
+/// in f32, as flip-evaluator pools.
+pub fn flip_running_mean(error_map: &[f32]) -> f64 {
+    if error_map.is_empty() {
+        return 0.0;
+    }
+    (crate::flip::pool::running_sum(error_map) / error_map.len() as f32) as f64
+}
+
 /// ACES (FLIP's default tone mapper, 0.6 pre-exposure cancellation):
 /// `(c^2 t0 + c t1 + t2) / (c^2 t3 + c t4 + t5)`.
 pub fn flip_aces() -> [f32; 6] {

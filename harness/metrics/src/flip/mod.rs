@@ -13,7 +13,7 @@ pub(crate) mod filters;
 pub(crate) mod hdr;
 mod ldr;
 pub(crate) mod magma;
-mod pool;
+pub(crate) mod pool;
 
 pub use hdr::{hdr_exposure_range, ExposureRange, MAX_EXPOSURES};
 
