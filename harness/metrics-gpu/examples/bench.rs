@@ -15,8 +15,8 @@ use std::time::Instant;
 
 use tessera_metrics::{hdr_exposure_range, HdrImage, Rgb8Image, DEFAULT_PIXELS_PER_DEGREE};
 use tessera_metrics_gpu::{
-    CpuMetrics, FlipHdrRequest, FlipPooling, FlipRequest, GpuFrame, GpuMetrics, MetricsBackend, Pair,
-    PairRequest,
+    CpuMetrics, FlipHdrRequest, FlipPooling, FlipRequest, GpuFrame, GpuMetrics, MetricsBackend,
+    Pair, PairRequest,
 };
 
 struct Args {
@@ -44,7 +44,9 @@ fn parse_args() -> Result<Args, String> {
                     .split_once('x')
                     .and_then(|(w, h)| Some((w.parse().ok()?, h.parse().ok()?)))
                     .filter(|&(w, h): &(u32, u32)| w >= 11 && h >= 11)
-                    .ok_or(format!("--size {v}: expected WxH, both at least 11, e.g. 1920x1080"))?;
+                    .ok_or(format!(
+                        "--size {v}: expected WxH, both at least 11, e.g. 1920x1080"
+                    ))?;
                 a.sizes.push((w, h));
             }
             "--iterations" => {
@@ -166,10 +168,17 @@ fn main() {
     if let Some(c) = clocks() {
         println!("nvidia-smi (name, driver, clocks.gr, clocks.mem, clocks.max.gr): {c}");
     }
-    let timestamps = device.device.features().contains(wgpu::Features::TIMESTAMP_QUERY);
+    let timestamps = device
+        .device
+        .features()
+        .contains(wgpu::Features::TIMESTAMP_QUERY);
     println!(
         "timestamps: {}; iterations: {} (median, after 1 warm-up); frames already on the device",
-        if timestamps { "yes" } else { "no (GPU ms not available)" },
+        if timestamps {
+            "yes"
+        } else {
+            "no (GPU ms not available)"
+        },
         args.iterations
     );
     println!();
@@ -288,10 +297,18 @@ fn main() {
                 .map(|(g, v)| format!("{g} {v:.3}"))
                 .collect::<Vec<_>>()
                 .join(", ");
-            let total_text = if per.is_empty() { "-".into() } else { format!("{total:.3}") };
+            let total_text = if per.is_empty() {
+                "-".into()
+            } else {
+                format!("{total:.3}")
+            };
             println!(
                 "| {w}x{h} | {name} | {} | {total_text} | {:.3} |",
-                if per_text.is_empty() { "-".into() } else { per_text },
+                if per_text.is_empty() {
+                    "-".into()
+                } else {
+                    per_text
+                },
                 median(wall)
             );
         }
@@ -318,9 +335,20 @@ fn main() {
                 println!("| {w}x{h} | {which} | failed | | |");
                 continue;
             }
-            let g = if gpu_ms.is_empty() { "-".into() } else { format!("{:.3}", median(gpu_ms)) };
-            let note = if which == "tde" { " (includes motion upload)" } else { "" };
-            println!("| {w}x{h} | {which}{note} | {which} {g} | {g} | {:.3} |", median(wall));
+            let g = if gpu_ms.is_empty() {
+                "-".into()
+            } else {
+                format!("{:.3}", median(gpu_ms))
+            };
+            let note = if which == "tde" {
+                " (includes motion upload)"
+            } else {
+                ""
+            };
+            println!(
+                "| {w}x{h} | {which}{note} | {which} {g} | {g} | {:.3} |",
+                median(wall)
+            );
         }
         if args.cpu {
             let pair = Pair {
@@ -335,7 +363,11 @@ fn main() {
                 let ms = start.elapsed().as_secs_f64() * 1e3;
                 println!(
                     "| {w}x{h} | cpu: {name} | - | - | {} |",
-                    if ok { format!("{ms:.1}") } else { "failed".into() }
+                    if ok {
+                        format!("{ms:.1}")
+                    } else {
+                        "failed".into()
+                    }
                 );
             }
         }

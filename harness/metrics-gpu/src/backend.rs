@@ -78,10 +78,18 @@ pub trait MetricsBackend {
     fn backend(&self) -> Backend;
 
     /// The requested metrics of one pair.
-    fn pair(&mut self, pair: Pair<'_>, request: &PairRequest) -> Result<PairValues, GpuMetricsError>;
+    fn pair(
+        &mut self,
+        pair: Pair<'_>,
+        request: &PairRequest,
+    ) -> Result<PairValues, GpuMetricsError>;
 
     /// Flicker between two consecutive frames (mean absolute difference, 8-bit units).
-    fn flicker(&mut self, previous: &Rgb8Image, current: &Rgb8Image) -> Result<f64, GpuMetricsError>;
+    fn flicker(
+        &mut self,
+        previous: &Rgb8Image,
+        current: &Rgb8Image,
+    ) -> Result<f64, GpuMetricsError>;
 
     /// TDE of one frame (see `tessera_metrics::temporal_difference_error`).
     #[allow(clippy::too_many_arguments)]
@@ -142,7 +150,11 @@ impl MetricsBackend for CpuMetrics {
         Backend::Cpu
     }
 
-    fn pair(&mut self, pair: Pair<'_>, request: &PairRequest) -> Result<PairValues, GpuMetricsError> {
+    fn pair(
+        &mut self,
+        pair: Pair<'_>,
+        request: &PairRequest,
+    ) -> Result<PairValues, GpuMetricsError> {
         use tessera_metrics as m;
         let (r, t) = (pair.reference, pair.test);
         let mut v = PairValues::empty(Backend::Cpu);
@@ -187,7 +199,11 @@ impl MetricsBackend for CpuMetrics {
         Ok(v)
     }
 
-    fn flicker(&mut self, previous: &Rgb8Image, current: &Rgb8Image) -> Result<f64, GpuMetricsError> {
+    fn flicker(
+        &mut self,
+        previous: &Rgb8Image,
+        current: &Rgb8Image,
+    ) -> Result<f64, GpuMetricsError> {
         tessera_metrics::port::check_pair(previous, current)?;
         let sum: u64 = previous
             .data
@@ -220,8 +236,16 @@ impl MetricsBackend for CpuMetrics {
 
 fn hdr_missing(pair: Pair<'_>) -> GpuMetricsError {
     tessera_metrics::MetricsError::KindMismatch {
-        reference: if pair.reference_hdr.is_some() { "HDR" } else { "LDR" },
-        test: if pair.test_hdr.is_some() { "HDR" } else { "LDR" },
+        reference: if pair.reference_hdr.is_some() {
+            "HDR"
+        } else {
+            "LDR"
+        },
+        test: if pair.test_hdr.is_some() {
+            "HDR"
+        } else {
+            "LDR"
+        },
     }
     .into()
 }
@@ -242,7 +266,11 @@ impl MetricsBackend for GpuMetrics {
         Backend::Gpu
     }
 
-    fn pair(&mut self, pair: Pair<'_>, request: &PairRequest) -> Result<PairValues, GpuMetricsError> {
+    fn pair(
+        &mut self,
+        pair: Pair<'_>,
+        request: &PairRequest,
+    ) -> Result<PairValues, GpuMetricsError> {
         tessera_metrics::port::check_pair(pair.reference, pair.test)?;
         if let Some(f) = &request.flip_hdr {
             let (Some(rh), Some(th)) = (pair.reference_hdr, pair.test_hdr) else {
@@ -256,7 +284,11 @@ impl MetricsBackend for GpuMetrics {
         self.evaluate(&r, &t, request)
     }
 
-    fn flicker(&mut self, previous: &Rgb8Image, current: &Rgb8Image) -> Result<f64, GpuMetricsError> {
+    fn flicker(
+        &mut self,
+        previous: &Rgb8Image,
+        current: &Rgb8Image,
+    ) -> Result<f64, GpuMetricsError> {
         tessera_metrics::port::check_pair(previous, current)?;
         let a = self.upload(previous, None)?;
         let b = self.upload(current, None)?;
@@ -273,7 +305,12 @@ impl MetricsBackend for GpuMetrics {
         valid: &[bool],
     ) -> Result<Option<f64>, GpuMetricsError> {
         let up = |i: &Rgb8Image| self.upload(i, None);
-        let (tp, t, rp, r) = (up(test_prev)?, up(test)?, up(reference_prev)?, up(reference)?);
+        let (tp, t, rp, r) = (
+            up(test_prev)?,
+            up(test)?,
+            up(reference_prev)?,
+            up(reference)?,
+        );
         self.tde_frames(&tp, &t, &rp, &r, motion, valid)
     }
 
@@ -289,7 +326,11 @@ impl MetricsBackend for GpuMetrics {
         let mut flickers = Vec::new();
         let mut previous: Option<GpuFrame> = None;
         for i in 0..seq.test.len() {
-            let req = if i < n { request(i) } else { PairRequest::default() };
+            let req = if i < n {
+                request(i)
+            } else {
+                PairRequest::default()
+            };
             let pair = (i < n).then(|| pair_of(&seq, i));
             if let (Some(p), Some(f)) = (pair, &req.flip_hdr) {
                 let (Some(rh), Some(th)) = (p.reference_hdr, p.test_hdr) else {

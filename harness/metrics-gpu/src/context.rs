@@ -105,7 +105,8 @@ impl Layout {
     pub fn param<T: bytemuck::Pod>(&mut self, value: &T) -> u64 {
         let offset = self.params.len() as u64;
         self.params.extend_from_slice(bytemuck::bytes_of(value));
-        self.params.resize(offset as usize + align(size_of::<T>() as u64) as usize, 0);
+        self.params
+            .resize(offset as usize + align(size_of::<T>() as u64) as usize, 0);
         offset
     }
     /// Reserves an output region of `bytes`; returns its offset.
@@ -317,7 +318,12 @@ impl GpuMetrics {
         }
         self.queue.write_buffer(&self.params, 0, &layout.params);
         self.queue.submit([encoder.finish()]);
-        let read = used + if self.timer.is_some() { 16 * n_timed as u64 } else { 0 };
+        let read = used
+            + if self.timer.is_some() {
+                16 * n_timed as u64
+            } else {
+                0
+            };
         let bytes = read_buffer(&self.device, &self.staging, read.max(4))?;
         self.last_gpu_ms.clear();
         if let (Some(t), true) = (&self.timer, n_timed > 0) {

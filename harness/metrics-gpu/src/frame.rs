@@ -117,13 +117,16 @@ impl GpuMetrics {
     /// `TEXTURE_BINDING` usage), encoded on the device: its 8-bit form exactly as
     /// `encode_srgb8` would encode the read-back floats, and the floats themselves. Submits and
     /// does not wait (later requests on the same queue run after it).
-    pub fn frame_from_texture(&mut self, texture: &wgpu::Texture) -> Result<GpuFrame, GpuMetricsError> {
+    pub fn frame_from_texture(
+        &mut self,
+        texture: &wgpu::Texture,
+    ) -> Result<GpuFrame, GpuMetricsError> {
         let format = texture.format();
         let sample = match format {
             wgpu::TextureFormat::Rgba16Float => wgpu::TextureSampleType::Float { filterable: true },
-            wgpu::TextureFormat::Rgba32Float => wgpu::TextureSampleType::Float {
-                filterable: false,
-            },
+            wgpu::TextureFormat::Rgba32Float => {
+                wgpu::TextureSampleType::Float { filterable: false }
+            }
             other => return Err(GpuMetricsError::TextureFormat(other)),
         };
         let (width, height) = (texture.width(), texture.height());
@@ -216,13 +219,20 @@ impl GpuMetrics {
         encoder.copy_buffer_to_buffer(&frame.ldr, 0, &staging, 0, bytes);
         self.queue.submit([encoder.finish()]);
         let data = crate::context::read_buffer(&self.device, &staging, bytes)?;
-        Ok(unpack(bytemuck::cast_slice(&data), frame.width, frame.height))
+        Ok(unpack(
+            bytemuck::cast_slice(&data),
+            frame.width,
+            frame.height,
+        ))
     }
 }
 
 /// The encode pipeline for a texture sample type (explicit layout: the auto layout would ask
 /// for a filterable float texture, which Rgba32Float is not without a feature).
-fn encode_pipeline(device: &wgpu::Device, sample: wgpu::TextureSampleType) -> wgpu::ComputePipeline {
+fn encode_pipeline(
+    device: &wgpu::Device,
+    sample: wgpu::TextureSampleType,
+) -> wgpu::ComputePipeline {
     let storage = |binding, read_only| wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::COMPUTE,

@@ -192,8 +192,7 @@ pub(crate) fn pixel_sums(words: &[u32]) -> PixelSums {
     };
     for p in words.chunks_exact(6) {
         s.sq_rgb += p[0] as u64;
-        s.sq_luma_millis +=
-            ((p[1] as u128) << 18) + ((p[2] as u128) << 10) + p[3] as u128;
+        s.sq_luma_millis += ((p[1] as u128) << 18) + ((p[2] as u128) << 10) + p[3] as u128;
         s.max_abs = s.max_abs.max(p[4]);
         s.sum_abs += p[5] as u64;
     }
@@ -270,7 +269,10 @@ impl GpuMetrics {
         });
 
         // SSIM: channels 0..2 for RGB, 3 for luma.
-        let ssim_grid = (w.saturating_sub(10).div_ceil(16), h.saturating_sub(10).div_ceil(16));
+        let ssim_grid = (
+            w.saturating_sub(10).div_ceil(16),
+            h.saturating_sub(10).div_ceil(16),
+        );
         let mut ssim = Vec::new();
         let channels: Vec<u32> = [
             (request.ssim_rgb, vec![0, 1, 2]),
@@ -309,13 +311,17 @@ impl GpuMetrics {
             let ppd = tessera_metrics::port::flip_check_ppd(f.pixels_per_degree)?;
             flips.push((
                 false,
-                self.plan_flip(&mut layout, w, h, ppd, vec![1.0], f.heatmap, f.pooling)?,
+                self.plan_flip(&mut layout, (w, h), ppd, vec![1.0], f.heatmap, f.pooling)?,
             ));
         }
         if let Some(f) = &request.flip_hdr {
             let (Some(_), Some(_)) = (&reference.hdr, &test.hdr) else {
                 return Err(tessera_metrics::MetricsError::KindMismatch {
-                    reference: if reference.hdr.is_some() { "HDR" } else { "LDR" },
+                    reference: if reference.hdr.is_some() {
+                        "HDR"
+                    } else {
+                        "LDR"
+                    },
                     test: if test.hdr.is_some() { "HDR" } else { "LDR" },
                 }
                 .into());
@@ -325,7 +331,7 @@ impl GpuMetrics {
             check_range(&f.range)?;
             flips.push((
                 true,
-                self.plan_flip(&mut layout, w, h, ppd, m, f.heatmap, f.pooling)?,
+                self.plan_flip(&mut layout, (w, h), ppd, m, f.heatmap, f.pooling)?,
             ));
         }
 
@@ -375,7 +381,14 @@ impl GpuMetrics {
             timed.push("ssim");
         }
         for (hdr, plan) in &flips {
-            self.record_flip(&mut encoder, timed.len() as u32, reference, test, *hdr, plan);
+            self.record_flip(
+                &mut encoder,
+                timed.len() as u32,
+                reference,
+                test,
+                *hdr,
+                plan,
+            );
             timed.push(if *hdr { "flip-hdr" } else { "flip" });
         }
 
@@ -437,8 +450,7 @@ impl GpuMetrics {
     fn plan_flip(
         &mut self,
         layout: &mut Layout,
-        w: u32,
-        h: u32,
+        (w, h): (u32, u32),
         ppd: f32,
         multipliers: Vec<f32>,
         heatmap: bool,
@@ -458,7 +470,9 @@ impl GpuMetrics {
                         groups_x: grid.x,
                         multiplier: m,
                         _p: 0,
-                        t: [aces[0], aces[1], aces[2], 0.0, aces[3], aces[4], aces[5], 0.0],
+                        t: [
+                            aces[0], aces[1], aces[2], 0.0, aces[3], aces[4], aces[5], 0.0,
+                        ],
                     })
                 })
             })

@@ -147,7 +147,8 @@ mod tests {
             ENCODE.to_string(),
         ];
         for s in sources {
-            let m = naga::front::wgsl::parse_str(&s).unwrap_or_else(|e| panic!("{}", e.emit_to_string(&s)));
+            let m = naga::front::wgsl::parse_str(&s)
+                .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&s)));
             naga::valid::Validator::new(
                 naga::valid::ValidationFlags::all(),
                 naga::valid::Capabilities::empty(),
@@ -159,7 +160,7 @@ mod tests {
 
     #[test]
     fn literals_round_trip() {
-        for v in [0.41238656f32, 1.0 / 3.0, -1.537398934, 1e-7, 0.0] {
+        for v in [0.41238656f32, 1.0 / 3.0, -1.537_399, 1e-7, 0.0] {
             let s = lit(v);
             assert_eq!(s[..s.len() - 1].parse::<f32>().unwrap(), v);
         }

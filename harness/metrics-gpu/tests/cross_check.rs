@@ -36,7 +36,10 @@ fn gpu() -> MutexGuard<'static, GpuMetrics> {
 struct Rng(u64);
 impl Rng {
     fn next(&mut self) -> u32 {
-        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         (self.0 >> 33) as u32
     }
     fn unit(&mut self) -> f32 {
@@ -73,9 +76,19 @@ fn pairs() -> Vec<(String, Rgb8Image, Rgb8Image)> {
     let mut out = Vec::new();
     for (w, h) in [(37, 23), (8, 8), (64, 48), (11, 11), (160, 90)] {
         let mut rng = Rng(w as u64 * 31 + h as u64);
-        let noise = image(w, h, |_, _| [rng.next() as u8, rng.next() as u8, rng.next() as u8]);
-        out.push((format!("noise {w}x{h} +-3"), noise.clone(), perturb(&noise, 3, 1)));
-        out.push((format!("noise {w}x{h} vs noise"), noise.clone(), perturb(&noise, 120, 2)));
+        let noise = image(w, h, |_, _| {
+            [rng.next() as u8, rng.next() as u8, rng.next() as u8]
+        });
+        out.push((
+            format!("noise {w}x{h} +-3"),
+            noise.clone(),
+            perturb(&noise, 3, 1),
+        ));
+        out.push((
+            format!("noise {w}x{h} vs noise"),
+            noise.clone(),
+            perturb(&noise, 120, 2),
+        ));
         let edges = image(w, h, |x, y| {
             let v = if (x / 4 + y / 3) % 2 == 0 { 230 } else { 20 };
             [v, 255 - v, if x > w / 2 { 128 } else { 0 }]
@@ -93,10 +106,22 @@ fn pairs() -> Vec<(String, Rgb8Image, Rgb8Image)> {
                 ((x + y) * 127 / (w + h)) as u8,
             ]
         });
-        out.push((format!("gradient {w}x{h} +-1"), grad.clone(), perturb(&grad, 1, 3)));
-        out.push((format!("gradient {w}x{h} identical"), grad.clone(), grad.clone()));
+        out.push((
+            format!("gradient {w}x{h} +-1"),
+            grad.clone(),
+            perturb(&grad, 1, 3),
+        ));
+        out.push((
+            format!("gradient {w}x{h} identical"),
+            grad.clone(),
+            grad.clone(),
+        ));
         let flat = Rgb8Image::filled(w, h, [250, 250, 250]);
-        out.push((format!("flat {w}x{h} bright"), flat.clone(), perturb(&flat, 2, 4)));
+        out.push((
+            format!("flat {w}x{h} bright"),
+            flat.clone(),
+            perturb(&flat, 2, 4),
+        ));
     }
     out.push((
         "black vs white 16x16".into(),
@@ -122,7 +147,8 @@ fn psnr(mse: f64) -> f64 {
 fn pixel_metrics_and_ssim_agree() {
     let mut gpu = gpu();
     let mut cpu = CpuMetrics;
-    let (mut psnr_dev, mut psnr_luma_dev, mut ssim_dev, mut ssim_luma_dev) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    let (mut psnr_dev, mut psnr_luma_dev, mut ssim_dev, mut ssim_luma_dev) =
+        (0.0f64, 0.0f64, 0.0f64, 0.0f64);
     for (name, r, t) in pairs() {
         let ssim = r.width >= 11 && r.height >= 11;
         let req = PairRequest {
@@ -149,7 +175,11 @@ fn pixel_metrics_and_ssim_agree() {
         let (pc, pg) = (psnr(c.mse_rgb.unwrap()), psnr(g.mse_rgb.unwrap()));
         psnr_dev = psnr_dev.max(rel(pg, pc));
         let (lc, lg) = (psnr(c.mse_luma.unwrap()), psnr(g.mse_luma.unwrap()));
-        assert_eq!(lc.is_infinite(), lg.is_infinite(), "{name}: luma PSNR {lc} vs {lg}");
+        assert_eq!(
+            lc.is_infinite(),
+            lg.is_infinite(),
+            "{name}: luma PSNR {lc} vs {lg}"
+        );
         if lc.is_finite() {
             let d = rel(lg, lc);
             assert!(d <= PSNR_REL, "{name}: PSNR luma {lg} vs {lc} (rel {d:e})");
@@ -157,10 +187,20 @@ fn pixel_metrics_and_ssim_agree() {
         }
         if ssim {
             let d = (g.ssim_rgb.unwrap() - c.ssim_rgb.unwrap()).abs();
-            assert!(d <= SSIM_ABS, "{name}: SSIM {:?} vs {:?} ({d:e})", g.ssim_rgb, c.ssim_rgb);
+            assert!(
+                d <= SSIM_ABS,
+                "{name}: SSIM {:?} vs {:?} ({d:e})",
+                g.ssim_rgb,
+                c.ssim_rgb
+            );
             ssim_dev = ssim_dev.max(d);
             let d = (g.ssim_luma.unwrap() - c.ssim_luma.unwrap()).abs();
-            assert!(d <= SSIM_ABS, "{name}: SSIM luma {:?} vs {:?} ({d:e})", g.ssim_luma, c.ssim_luma);
+            assert!(
+                d <= SSIM_ABS,
+                "{name}: SSIM luma {:?} vs {:?} ({d:e})",
+                g.ssim_luma,
+                c.ssim_luma
+            );
             ssim_luma_dev = ssim_luma_dev.max(d);
         }
     }
@@ -204,10 +244,20 @@ fn ldr_flip_and_heatmap_agree() {
             // Pooled as flip-evaluator (the error map read back) vs the CPU's `mean`, and the
             // exact means of both.
             let d = (g.mean - c.mean).abs();
-            assert!(d <= FLIP_MEAN_ABS, "{name} @ {ppd}: FLIP mean {} vs {} ({d:e})", g.mean, c.mean);
+            assert!(
+                d <= FLIP_MEAN_ABS,
+                "{name} @ {ppd}: FLIP mean {} vs {} ({d:e})",
+                g.mean,
+                c.mean
+            );
             mean_dev = mean_dev.max(d);
             let d = (g.exact_mean - c.exact_mean).abs();
-            assert!(d <= FLIP_MEAN_ABS, "{name} @ {ppd}: exact mean {} vs {} ({d:e})", g.exact_mean, c.exact_mean);
+            assert!(
+                d <= FLIP_MEAN_ABS,
+                "{name} @ {ppd}: exact mean {} vs {} ({d:e})",
+                g.exact_mean,
+                c.exact_mean
+            );
             exact_dev = exact_dev.max(d);
             // The exact pooling gives the same exact mean without the map.
             let exact = PairRequest {
@@ -219,12 +269,23 @@ fn ldr_flip_and_heatmap_agree() {
                 ..Default::default()
             };
             let e = gpu.pair(pair, &exact).unwrap().flip.unwrap();
-            assert_eq!((e.mean, e.exact_mean, e.pooling), (g.exact_mean, g.exact_mean, FlipPooling::Exact));
+            assert_eq!(
+                (e.mean, e.exact_mean, e.pooling),
+                (g.exact_mean, g.exact_mean, FlipPooling::Exact)
+            );
             max_dev = max_dev.max((g.max - c.max).abs());
             let gi = magma_index(g.heatmap.as_ref().unwrap());
             let ci = magma_index(&tessera_metrics::flip_heatmap(&c));
-            let worst = gi.iter().zip(&ci).map(|(a, b)| (a - b).abs()).max().unwrap();
-            assert!(worst <= 1, "{name} @ {ppd}: heat map index differs by {worst}");
+            let worst = gi
+                .iter()
+                .zip(&ci)
+                .map(|(a, b)| (a - b).abs())
+                .max()
+                .unwrap();
+            assert!(
+                worst <= 1,
+                "{name} @ {ppd}: heat map index differs by {worst}"
+            );
             heat_dev = heat_dev.max(worst);
         }
     }
@@ -269,16 +330,26 @@ fn hdr_flip_agrees() {
                 [v, v * 0.5, y as f32 / 40.0]
             }),
         ),
-        ("hdr tiny 8x8", hdr_image(8, 8, 7, |x, y, _| [x as f32, y as f32, 0.25])),
+        (
+            "hdr tiny 8x8",
+            hdr_image(8, 8, 7, |x, y, _| [x as f32, y as f32, 0.25]),
+        ),
     ];
     for (name, r) in cases {
         let mut rng = Rng(9);
         let t = HdrImage {
-            data: r.data.iter().map(|v| v * (0.9 + 0.2 * rng.unit())).collect(),
+            data: r
+                .data
+                .iter()
+                .map(|v| v * (0.9 + 0.2 * rng.unit()))
+                .collect(),
             ..r.clone()
         };
         let range = hdr_exposure_range(&r);
-        let (rl, tl) = (tessera_metrics::encode_srgb8(&r), tessera_metrics::encode_srgb8(&t));
+        let (rl, tl) = (
+            tessera_metrics::encode_srgb8(&r),
+            tessera_metrics::encode_srgb8(&t),
+        );
         let req = PairRequest {
             flip_hdr: Some(FlipHdrRequest {
                 range,
@@ -297,14 +368,25 @@ fn hdr_flip_agrees() {
         let c = cpu.pair(pair, &req).unwrap().flip_hdr.unwrap();
         let g = gpu.pair(pair, &req).unwrap().flip_hdr.unwrap();
         let d = (g.mean - c.mean).abs();
-        assert!(d <= FLIP_MEAN_ABS, "{name}: HDR-FLIP mean {} vs {} ({d:e}), {} exposures", g.mean, c.mean, range.count);
+        assert!(
+            d <= FLIP_MEAN_ABS,
+            "{name}: HDR-FLIP mean {} vs {} ({d:e}), {} exposures",
+            g.mean,
+            c.mean,
+            range.count
+        );
         mean_dev = mean_dev.max(d);
         let d = (g.exact_mean - c.exact_mean).abs();
         assert!(d <= FLIP_MEAN_ABS, "{name}: HDR-FLIP exact mean ({d:e})");
         exact_dev = exact_dev.max(d);
         let gi = magma_index(g.heatmap.as_ref().unwrap());
         let ci = magma_index(c.heatmap.as_ref().unwrap());
-        let worst = gi.iter().zip(&ci).map(|(a, b)| (a - b).abs()).max().unwrap();
+        let worst = gi
+            .iter()
+            .zip(&ci)
+            .map(|(a, b)| (a - b).abs())
+            .max()
+            .unwrap();
         assert!(worst <= 1, "{name}: heat map index differs by {worst}");
         heat_dev = heat_dev.max(worst);
     }
@@ -373,19 +455,36 @@ fn flicker_and_tde_agree() {
             .collect();
         for f in 1..4 {
             let args = (&test[f - 1], &test[f], &reference[f - 1], &reference[f]);
-            let c = cpu.tde(args.0, args.1, args.2, args.3, &motion, &valid).unwrap();
-            let g = gpu.tde(args.0, args.1, args.2, args.3, &motion, &valid).unwrap();
+            let c = cpu
+                .tde(args.0, args.1, args.2, args.3, &motion, &valid)
+                .unwrap();
+            let g = gpu
+                .tde(args.0, args.1, args.2, args.3, &motion, &valid)
+                .unwrap();
             let d = (g.unwrap() - c.unwrap()).abs();
-            assert!(d <= TEMPORAL_ABS, "{w}x{h} frame {f}: tde {g:?} vs {c:?} ({d:e})");
+            assert!(
+                d <= TEMPORAL_ABS,
+                "{w}x{h} frame {f}: tde {g:?} vs {c:?} ({d:e})"
+            );
             tde_dev = tde_dev.max(d);
             // A test that changes exactly as the reference gives exactly zero on both.
-            let same = (&reference[f - 1], &reference[f], &reference[f - 1], &reference[f]);
+            let same = (
+                &reference[f - 1],
+                &reference[f],
+                &reference[f - 1],
+                &reference[f],
+            );
             assert_eq!(
-                gpu.tde(same.0, same.1, same.2, same.3, &motion, &valid).unwrap(),
+                gpu.tde(same.0, same.1, same.2, same.3, &motion, &valid)
+                    .unwrap(),
                 Some(0.0)
             );
             let none = vec![false; valid.len()];
-            assert_eq!(gpu.tde(args.0, args.1, args.2, args.3, &motion, &none).unwrap(), None);
+            assert_eq!(
+                gpu.tde(args.0, args.1, args.2, args.3, &motion, &none)
+                    .unwrap(),
+                None
+            );
         }
     }
     eprintln!("max deviation: flicker {flicker_dev:e} (exact), tde {tde_dev:e}");
@@ -406,7 +505,10 @@ fn results_are_bitwise_repeatable() {
     let b = gpu.pair(pair, &req).unwrap();
     assert_eq!(a, b);
     assert_eq!(a.ssim_rgb.unwrap().to_bits(), b.ssim_rgb.unwrap().to_bits());
-    assert_eq!(a.flip.unwrap().mean.to_bits(), b.flip.unwrap().mean.to_bits());
+    assert_eq!(
+        a.flip.unwrap().mean.to_bits(),
+        b.flip.unwrap().mean.to_bits()
+    );
 }
 
 #[test]
@@ -422,7 +524,13 @@ fn bad_input_gives_the_cpu_errors() {
     };
     let all = PairRequest::all_ldr(DEFAULT_PIXELS_PER_DEGREE);
     let e = gpu.pair(pair(&a, &b), &all).unwrap_err();
-    assert!(matches!(e, GpuMetricsError::Metrics(tessera_metrics::MetricsError::SizeMismatch { .. })), "{e}");
+    assert!(
+        matches!(
+            e,
+            GpuMetricsError::Metrics(tessera_metrics::MetricsError::SizeMismatch { .. })
+        ),
+        "{e}"
+    );
     // SSIM on 8x8: too small on both back ends, with the same message.
     let e = gpu.pair(pair(&a, &a), &all).unwrap_err();
     let c = CpuMetrics.pair(pair(&a, &a), &all).unwrap_err();
@@ -446,7 +554,11 @@ fn bad_input_gives_the_cpu_errors() {
         }),
         ..Default::default()
     };
-    assert!(gpu.pair(pair(&a, &a), &bad).unwrap_err().to_string().contains("pixels_per_degree"));
+    assert!(gpu
+        .pair(pair(&a, &a), &bad)
+        .unwrap_err()
+        .to_string()
+        .contains("pixels_per_degree"));
     // HDR-FLIP without floats, or with NaN.
     let hdr = HdrImage {
         width: 8,
