@@ -181,6 +181,7 @@ impl MetricsBackend for CpuMetrics {
                 pooling: FlipPooling::FlipEvaluator,
                 max: res.max,
                 heatmap: f.heatmap.then(|| m::flip_heatmap(&res)),
+                error_map: None,
             });
         }
         if let Some(f) = &request.flip_hdr {
@@ -194,6 +195,7 @@ impl MetricsBackend for CpuMetrics {
                 pooling: FlipPooling::FlipEvaluator,
                 max: res.max,
                 heatmap: f.heatmap.then(|| m::flip_heatmap(&res)),
+                error_map: None,
             });
         }
         Ok(v)

@@ -11,6 +11,7 @@
 mod backend;
 mod context;
 mod device;
+mod diff;
 mod error;
 mod frame;
 mod pair;
@@ -20,6 +21,7 @@ mod temporal;
 pub use backend::{Backend, CpuMetrics, MetricsBackend, Pair, Sequence, SequenceValues};
 pub use context::GpuMetrics;
 pub use device::{open, select_adapter, MetricsDevice};
+pub use diff::diff_images;
 pub use error::GpuMetricsError;
 pub use frame::GpuFrame;
 pub use pair::{FlipHdrRequest, FlipPooling, FlipRequest, FlipValues, PairRequest, PairValues};

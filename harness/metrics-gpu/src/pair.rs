@@ -92,6 +92,9 @@ pub struct FlipValues {
     pub max: f64,
     #[serde(skip)]
     pub heatmap: Option<Rgb8Image>,
+    /// The per-pixel errors, when they came back (GPU with `FlipPooling::FlipEvaluator`).
+    #[serde(skip)]
+    pub error_map: Option<Vec<f32>>,
 }
 
 /// The values of a [`PairRequest`]; `None` for what was not requested.
@@ -424,14 +427,16 @@ impl GpuMetrics {
         for (hdr, plan) in &flips {
             let (exact_mean, max) = pooled(floats(&bytes, plan.partials), n as usize);
             let heatmap = plan.heatmap.map(|r| unpack(words(&bytes, r), w, h));
-            let (mean, pooling) = match plan.map {
-                Some(r) => (
-                    tessera_metrics::port::flip_running_mean(&floats(&bytes, r)[..n as usize]),
+            let error_map = plan.map.map(|r| floats(&bytes, r)[..n as usize].to_vec());
+            let (mean, pooling) = match &error_map {
+                Some(m) => (
+                    tessera_metrics::port::flip_running_mean(m),
                     FlipPooling::FlipEvaluator,
                 ),
                 None => (exact_mean, FlipPooling::Exact),
             };
             let v = FlipValues {
+                error_map,
                 mean,
                 exact_mean,
                 pooling,

@@ -586,3 +586,53 @@ fn bad_input_gives_the_cpu_errors() {
     let e = gpu.pair(p, &req).unwrap_err();
     assert!(e.to_string().contains("non-finite"), "{e}");
 }
+
+#[test]
+fn diff_reports_agree() {
+    use tessera_metrics::LoadedImage;
+    let mut gpu = gpu();
+    let mut worst_percentile = 0.0f64;
+    for (name, r, t) in pairs()
+        .into_iter()
+        .filter(|(n, _, _)| n.contains("37x23") || n.contains("8x8"))
+    {
+        let (r, t) = (LoadedImage::Ldr(r), LoadedImage::Ldr(t));
+        let c = tessera_metrics::diff_images(&r, &t).unwrap();
+        let g = tessera_metrics_gpu::diff_images(&mut gpu, &r, &t).unwrap();
+        assert_eq!(
+            (g.mse_rgb, g.max_abs_error, g.bit_depth),
+            (c.mse_rgb, c.max_abs_error, 8),
+            "{name}"
+        );
+        assert_eq!(g.ssim_rgb.is_some(), c.ssim_rgb.is_some(), "{name}");
+        if let (Some(a), Some(b)) = (g.ssim_rgb, c.ssim_rgb) {
+            assert!((a - b).abs() <= SSIM_ABS, "{name}");
+        }
+        assert!((g.flip.mean - c.flip.mean).abs() <= FLIP_MEAN_ABS, "{name}");
+        for (a, b) in [
+            (g.flip.p50, c.flip.p50),
+            (g.flip.p95, c.flip.p95),
+            (g.flip.p99, c.flip.p99),
+        ] {
+            worst_percentile = worst_percentile.max((a - b).abs());
+        }
+    }
+    // HDR files: HDR-FLIP with the reference's exposure range, as the CPU report.
+    let r = hdr_image(24, 16, 3, |x, y, _| [x as f32 * 0.3, y as f32 * 0.2, 2.0]);
+    let t = HdrImage {
+        data: r.data.iter().map(|v| v * 1.1).collect(),
+        ..r.clone()
+    };
+    let (r, t) = (LoadedImage::Hdr(r), LoadedImage::Hdr(t));
+    let c = tessera_metrics::diff_images(&r, &t).unwrap();
+    let g = tessera_metrics_gpu::diff_images(&mut gpu, &r, &t).unwrap();
+    assert_eq!(g.exposure_range, c.exposure_range);
+    let (gh, ch) = (g.flip_hdr.unwrap(), c.flip_hdr.unwrap());
+    assert!(
+        (gh.mean - ch.mean).abs() <= FLIP_MEAN_ABS,
+        "{} vs {}",
+        gh.mean,
+        ch.mean
+    );
+    eprintln!("max deviation: diff report flip percentiles {worst_percentile:e}");
+}

@@ -55,6 +55,12 @@ pub fn flip_running_mean(error_map: &[f32]) -> f64 {
     (crate::flip::pool::running_sum(error_map) / error_map.len() as f32) as f64
 }
 
+/// A [`crate::FlipResult`] from an error map computed elsewhere, pooled exactly as `flip_ldr`
+/// pools its own (f32 running mean, weighted percentiles, max).
+pub fn flip_result_from_map(error_map: Vec<f32>, width: u32, height: u32) -> crate::FlipResult {
+    crate::FlipResult::from_map(error_map, width, height)
+}
+
 /// ACES (FLIP's default tone mapper, 0.6 pre-exposure cancellation):
 /// `(c^2 t0 + c t1 + t2) / (c^2 t3 + c t4 + t5)`.
 pub fn flip_aces() -> [f32; 6] {

@@ -67,7 +67,7 @@ pub struct FlipResult {
 }
 
 impl FlipResult {
-    fn from_map(error_map: Vec<f32>, width: u32, height: u32) -> Self {
+    pub(crate) fn from_map(error_map: Vec<f32>, width: u32, height: u32) -> Self {
         let pooled = pool::pool(&error_map, &[0.5, 0.95, 0.99]);
         FlipResult {
             mean: pooled.mean,
