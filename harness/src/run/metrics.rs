@@ -105,6 +105,7 @@ pub fn compute(
         out.push(MetricRecord {
             name: kind.name().to_string(),
             frame_stats: frame_stats(&per_frame),
+            metrics_device: Some("cpu".into()),
             per_frame,
             frames: frames.clone(),
             value,
@@ -152,6 +153,7 @@ fn tde(
     Ok(MetricRecord {
         name: MetricKind::Tde.name().to_string(),
         frame_stats: frame_stats(&per_frame),
+        metrics_device: Some("cpu".into()),
         frames,
         per_frame,
         value,
@@ -180,6 +182,7 @@ fn flicker(frames: &[Rgb8Image]) -> MetricRecord {
     MetricRecord {
         name: MetricKind::Flicker.name().to_string(),
         frame_stats: frame_stats(&per_frame),
+        metrics_device: Some("cpu".into()),
         frames: (1..frames.len() as u32).collect(),
         per_frame,
         value,
@@ -212,6 +215,7 @@ pub fn extra_values(extras: &[FrameExtras]) -> Vec<MetricRecord> {
         out.push(MetricRecord {
             name: name.to_string(),
             frame_stats: frame_stats(&per_frame),
+            metrics_device: None,
             per_frame,
             frames,
             value,
