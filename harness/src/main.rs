@@ -52,6 +52,11 @@ enum Command {
         /// Branch recorded with the run (default: the checkout's git branch).
         #[arg(long)]
         branch: Option<String>,
+        /// Where the metrics are computed, for every scenario: `gpu` (the device that rendered
+        /// the frames) or `cpu` (the reference implementations). Default: each scenario's
+        /// `metrics_device`, else the GPU unless the adapter is a CPU (lavapipe).
+        #[arg(long, value_name = "gpu|cpu", value_parser = tessera::metrics_device::Backend::parse)]
+        metrics_device: Option<tessera::metrics_device::Backend>,
     },
     /// Check scenarios without a GPU.
     Validate {
@@ -126,7 +131,17 @@ fn main() -> ExitCode {
             quiet,
             upload,
             branch,
-        } => run_command(&paths, adapter, out, junit, quiet, upload, branch),
+            metrics_device,
+        } => run_command(
+            &paths,
+            adapter,
+            out,
+            junit,
+            quiet,
+            upload,
+            branch,
+            metrics_device,
+        ),
         Command::Validate { paths } => validate_command(&paths),
         Command::Adapters { json } => adapters_command(json),
         Command::Compare {
@@ -213,12 +228,21 @@ fn validate_command(paths: &[PathBuf]) -> u8 {
         Some(s) => {
             let variants: usize = s.iter().map(|s| s.variants.len()).sum();
             println!("{} scenarios valid ({variants} variants)", s.len());
+            // What needs more than every adapter has, said before any device is opened.
+            for scenario in &s {
+                for v in &scenario.variants {
+                    for reason in tessera::techniques::skip_reasons(v) {
+                        println!("{}: {}: {reason}", scenario.file.display(), v.name);
+                    }
+                }
+            }
             0
         }
         None => EXIT_INPUT,
     }
 }
 
+#[allow(clippy::too_many_arguments)]
 fn run_command(
     paths: &[PathBuf],
     adapter: Option<String>,
@@ -227,10 +251,16 @@ fn run_command(
     quiet: bool,
     upload: Option<String>,
     branch: Option<String>,
+    metrics_device: Option<tessera::metrics_device::Backend>,
 ) -> u8 {
-    let Some(scenarios) = load_all(paths) else {
+    let Some(mut scenarios) = load_all(paths) else {
         return EXIT_INPUT;
     };
+    if let Some(device) = metrics_device {
+        for s in &mut scenarios {
+            s.metrics_device = Some(device);
+        }
+    }
     // Refuse a bad URL or a missing token before the run, not after it.
     if let Some(url) = &upload {
         if let Err(e) = tessera::upload::endpoint(url).and(tessera::upload::token_from_env()) {

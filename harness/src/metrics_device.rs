@@ -19,6 +19,27 @@ pub fn default_backend(info: &wgpu::AdapterInfo) -> Backend {
     }
 }
 
+/// The back end a scenario's metrics run on, on `gpu`: its `metrics_device`, else
+/// [`default_backend`].
+pub fn chosen(scenario: &crate::scenario::Scenario, gpu: &crate::gpu::Gpu) -> Backend {
+    scenario
+        .metrics_device
+        .unwrap_or_else(|| default_backend(&gpu.adapter.get_info()))
+}
+
+impl crate::gpu::Gpu {
+    /// The GPU metrics on this device: pipelines compiled on first use, then shared by every
+    /// scenario of the run.
+    pub fn metrics(&self) -> std::sync::MutexGuard<'_, GpuMetrics> {
+        self.metrics
+            .get_or_init(|| {
+                std::sync::Mutex::new(GpuMetrics::new(&self.device, &self.queue, &self.info.name))
+            })
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+    }
+}
+
 /// The GPU back end on the first adapter by the same rules as `tessera run` (`--adapter`
 /// filter, else the best-ranked), for commands that render nothing (`tessera diff --gpu`).
 pub fn open_gpu(adapter: Option<&str>) -> Result<GpuMetrics, String> {

@@ -1,12 +1,15 @@
 //! Adapters and devices: listing, choosing, and opening one with its real limits.
 //!
 //! Only this module talks to `wgpu::Instance`. It does not render; `render/` does. What an
-//! adapter can do beyond its limits and features is probed in `probe.rs`.
+//! adapter can do beyond its limits and features is probed in `probe.rs`; what a variant needs of
+//! it is declared as `requirements.rs`' data.
 
 mod probe;
+pub mod requirements;
 pub mod vrs;
 
 pub use probe::{PROBE_WGSL, STANDARD_2X};
+pub use requirements::{Extension, Requirements};
 
 use std::collections::BTreeMap;
 
@@ -44,6 +47,8 @@ pub struct Gpu {
     /// Hardware variable-rate shading (VK_KHR_fragment_shading_rate, turned on at device
     /// creation where offered): what the adapter offers, or why the hardware variants are skipped.
     pub vrs: Result<vrs::VrsCaps, String>,
+    /// The GPU metrics back end on this device, made on first use (`crate::metrics_device`).
+    pub metrics: std::sync::OnceLock<std::sync::Mutex<tessera_metrics_gpu::GpuMetrics>>,
 }
 
 impl Gpu {
@@ -249,5 +254,6 @@ pub fn open(adapter: wgpu::Adapter) -> Result<Gpu, GpuError> {
         info,
         msaa2x_positions: std::sync::OnceLock::new(),
         vrs,
+        metrics: std::sync::OnceLock::new(),
     })
 }

@@ -6,7 +6,7 @@ use std::path::Path;
 use tessera_metrics::Rgb8Image;
 use tessera_results::{ImageRecord, VariantResult};
 
-use super::metrics::MetricInputs;
+use super::captured::MetricInputs;
 use crate::render::renderer::FrameExtras;
 
 /// Saves the frames at `save_frames` (measured-frame indices) as `<variant>-fNNN.png` (or
@@ -75,6 +75,26 @@ pub fn save_error_maps(
                 save_image(result, &img, &path, run_dir, f, "heatmap-hdr");
             }
         }
+    }
+}
+
+/// FLIP heat maps a metrics back end already made (the GPU's), named and recorded as
+/// [`save_error_maps`] names and records its own.
+pub fn save_heatmaps(
+    result: &mut VariantResult,
+    maps: &[super::evaluate::ErrorMap],
+    dir: &Path,
+    run_dir: &Path,
+) {
+    if maps.is_empty() {
+        return;
+    }
+    let _ = std::fs::create_dir_all(dir);
+    let stem = sanitize(&result.variant);
+    for m in maps {
+        let infix = if m.kind == "heatmap-hdr" { "flip-hdr" } else { "flip" };
+        let path = dir.join(format!("{stem}-{infix}-f{:03}.png", m.frame));
+        save_image(result, &m.image, &path, run_dir, m.frame, m.kind);
     }
 }
 

@@ -2,23 +2,18 @@
 //! frame of the same index, aggregated over frames (PSNR from the mean MSE, max-abs-error as the
 //! maximum, the others as the mean); `tde` and `flicker`; and the technique's own per-frame values.
 //!
-//! Pure: frames in, records out. Rendering is `frames.rs`, the reference `reference.rs`.
+//! Pure: frames in, records out. Rendering is `frames.rs`, the reference `reference.rs`; what they capture for this module,
+//! `captured.rs`.
 
-use tessera_metrics::{HdrImage, Rgb8Image};
+use tessera_metrics::Rgb8Image;
 use tessera_results::MetricRecord;
 
+pub use super::captured::MetricInputs;
 use super::motion;
-use super::reference::ReferenceFrames;
-use crate::render::renderer::FrameExtras;
+use super::summary::frame_stats;
+use crate::render::renderer::{FrameExtras, FrameValue};
+use crate::metrics_device::Backend;
 use crate::scenario::MetricKind;
-
-/// What a variant's metrics are computed from.
-pub struct MetricInputs<'a> {
-    pub reference: &'a ReferenceFrames,
-    pub test: &'a [Rgb8Image],
-    pub test_hdr: &'a [HdrImage],
-    pub motion: &'a Result<Vec<Option<motion::MotionField>>, String>,
-}
 
 #[derive(Debug, thiserror::Error)]
 pub enum MetricError {
@@ -83,45 +78,48 @@ pub fn compute(
             };
             per_frame.push(v);
         }
-        // PSNR is aggregated from the mean MSE (the PSNR of the sequence), per frame from each MSE.
-        let (per_frame, value) = match kind {
-            MetricKind::Psnr | MetricKind::PsnrLuma => {
-                let mean_mse = per_frame.iter().sum::<f64>() / per_frame.len().max(1) as f64;
-                let psnr: Vec<f64> = per_frame
-                    .iter()
-                    .map(|m| tessera_metrics::psnr_from_mse(*m, 255.0))
-                    .collect();
-                (psnr, tessera_metrics::psnr_from_mse(mean_mse, 255.0))
-            }
-            MetricKind::MaxAbsError => {
-                let max = per_frame.iter().copied().fold(0.0, f64::max);
-                (per_frame, max)
-            }
-            _ => {
-                let mean = per_frame.iter().sum::<f64>() / per_frame.len().max(1) as f64;
-                (per_frame, mean)
-            }
-        };
-        out.push(MetricRecord {
-            name: kind.name().to_string(),
-            frame_stats: frame_stats(&per_frame),
-            metrics_device: Some("cpu".into()),
-            per_frame,
-            frames: frames.clone(),
-            value,
-            higher_is_better: kind.higher_is_better(),
-        });
+        out.push(record(kind, frames.clone(), per_frame, Backend::Cpu));
     }
     Ok(out)
 }
 
-pub(super) fn frame_stats(per_frame: &[f64]) -> Option<tessera_results::FrameStats> {
-    tessera_metrics::series_stats(per_frame).map(|s| tessera_results::FrameStats {
-        mean: s.mean,
-        p95: s.p95,
-        max: s.max,
-        std_dev: s.std_dev,
-    })
+/// The record of metric `kind` from its per-frame values (for PSNR: the MSEs), aggregated over
+/// frames: PSNR from the mean MSE (the PSNR of the sequence; per frame from each MSE),
+/// max-abs-error as the maximum, the others as the mean. `device` is the back end that computed
+/// the values.
+pub(super) fn record(
+    kind: MetricKind,
+    frames: Vec<u32>,
+    per_frame: Vec<f64>,
+    device: Backend,
+) -> MetricRecord {
+    let (per_frame, value) = match kind {
+        MetricKind::Psnr | MetricKind::PsnrLuma => {
+            let mean_mse = per_frame.iter().sum::<f64>() / per_frame.len().max(1) as f64;
+            let psnr: Vec<f64> = per_frame
+                .iter()
+                .map(|m| tessera_metrics::psnr_from_mse(*m, 255.0))
+                .collect();
+            (psnr, tessera_metrics::psnr_from_mse(mean_mse, 255.0))
+        }
+        MetricKind::MaxAbsError => {
+            let max = per_frame.iter().copied().fold(0.0, f64::max);
+            (per_frame, max)
+        }
+        _ => {
+            let mean = per_frame.iter().sum::<f64>() / per_frame.len().max(1) as f64;
+            (per_frame, mean)
+        }
+    };
+    MetricRecord {
+        name: kind.name().to_string(),
+        frame_stats: frame_stats(&per_frame),
+        metrics_device: Some(device.name().to_string()),
+        per_frame,
+        frames,
+        value,
+        higher_is_better: kind.higher_is_better(),
+    }
 }
 
 /// Temporal difference error (notes/metrics.md 3.3, item 1) per measured frame that has motion
@@ -149,16 +147,7 @@ fn tde(
             per_frame.push(v);
         }
     }
-    let value = per_frame.iter().sum::<f64>() / per_frame.len().max(1) as f64;
-    Ok(MetricRecord {
-        name: MetricKind::Tde.name().to_string(),
-        frame_stats: frame_stats(&per_frame),
-        metrics_device: Some("cpu".into()),
-        frames,
-        per_frame,
-        value,
-        higher_is_better: MetricKind::Tde.higher_is_better(),
-    })
+    Ok(record(MetricKind::Tde, frames, per_frame, Backend::Cpu))
 }
 
 /// Static-scene flicker (notes/metrics.md section 3.3, SSF): per measured frame after the first,
@@ -178,36 +167,29 @@ fn flicker(frames: &[Rgb8Image]) -> MetricRecord {
             sum as f64 / w[1].data.len().max(1) as f64
         })
         .collect();
-    let value = per_frame.iter().sum::<f64>() / per_frame.len().max(1) as f64;
-    MetricRecord {
-        name: MetricKind::Flicker.name().to_string(),
-        frame_stats: frame_stats(&per_frame),
-        metrics_device: Some("cpu".into()),
-        frames: (1..frames.len() as u32).collect(),
-        per_frame,
-        value,
-        higher_is_better: MetricKind::Flicker.higher_is_better(),
-    }
+    let indices = (1..frames.len() as u32).collect();
+    record(MetricKind::Flicker, indices, per_frame, Backend::Cpu)
 }
 
 /// A technique's per-frame extra values (e.g. `shading-rate`) as metrics of the variant's own
 /// frames, the value their mean.
 pub fn extra_values(extras: &[FrameExtras]) -> Vec<MetricRecord> {
     let mut out = Vec::new();
-    let mut names: Vec<&'static str> = Vec::new();
+    let mut first: Vec<FrameValue> = Vec::new();
     for e in extras {
-        for (name, _) in &e.values {
-            if !names.contains(name) {
-                names.push(name);
+        for v in &e.values {
+            if !first.iter().any(|f| f.name == v.name) {
+                first.push(*v);
             }
         }
     }
-    for name in names {
+    for kind in first {
+        let name = kind.name;
         let (frames, per_frame): (Vec<u32>, Vec<f64>) = extras
             .iter()
             .enumerate()
             .filter_map(|(f, e)| {
-                let v = e.values.iter().find(|(n, _)| *n == name)?.1;
+                let v = e.values.iter().find(|v| v.name == name)?.value;
                 Some((f as u32, v))
             })
             .unzip();
@@ -219,9 +201,8 @@ pub fn extra_values(extras: &[FrameExtras]) -> Vec<MetricRecord> {
             per_frame,
             frames,
             value,
-            // A technique's own values are lower-is-better unless the measure table says.
-            higher_is_better: tessera_results::measure::Measure::from_name(name)
-                .is_some_and(|m| m.direction().higher_is_better()),
+            // A technique's own values carry their direction (and unit) themselves.
+            higher_is_better: kind.direction.higher_is_better(),
         });
     }
     out
