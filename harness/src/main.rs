@@ -416,7 +416,10 @@ fn diff_sequence_command(
     fps: f64,
     gpu: bool,
 ) -> u8 {
-    let mut metrics = match gpu.then(|| tessera::metrics_device::open_gpu(None)).transpose() {
+    let mut metrics = match gpu
+        .then(|| tessera::metrics_device::open_gpu(None))
+        .transpose()
+    {
         Ok(m) => m,
         Err(e) => {
             eprintln!("error: --gpu: {e}");
@@ -432,7 +435,9 @@ fn diff_sequence_command(
                 ..Default::default()
             };
             match metrics.as_mut() {
-                Some(m) => tessera::metrics_device::diff_sequence_paths(m, reference, test, &settings),
+                Some(m) => {
+                    tessera::metrics_device::diff_sequence_paths(m, reference, test, &settings)
+                }
                 None => tessera_metrics::diff_sequence_paths(reference, test, &settings)
                     .map_err(|e| e.to_string()),
             }
@@ -466,7 +471,10 @@ fn diff_command(
             return EXIT_INPUT;
         }
     };
-    let mut metrics = match gpu.then(|| tessera::metrics_device::open_gpu(None)).transpose() {
+    let mut metrics = match gpu
+        .then(|| tessera::metrics_device::open_gpu(None))
+        .transpose()
+    {
         Ok(m) => m,
         Err(e) => {
             eprintln!("error: --gpu: {e}");
@@ -503,7 +511,10 @@ fn diff_command(
 
 /// A diff report's JSON; with `--gpu` it records the back end (`"metrics_device": "gpu"` and
 /// the adapter). Without it the CPU computed everything, and the JSON is as before.
-fn with_device(report: &impl serde::Serialize, gpu: Option<&tessera::metrics_device::GpuMetrics>) -> String {
+fn with_device(
+    report: &impl serde::Serialize,
+    gpu: Option<&tessera::metrics_device::GpuMetrics>,
+) -> String {
     let mut v = serde_json::to_value(report).unwrap_or_default();
     if let (Some(g), Some(obj)) = (gpu, v.as_object_mut()) {
         obj.insert("metrics_device".into(), "gpu".into());

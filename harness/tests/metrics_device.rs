@@ -53,7 +53,14 @@ technique = "checkerboard"
 fn run(file: &Path, device: &str) -> (ScenarioResult, std::path::PathBuf, tempfile::TempDir) {
     let out = tempfile::tempdir().unwrap();
     let o = std::process::Command::new(env!("CARGO_BIN_EXE_tessera"))
-        .args(["run", file.to_str().unwrap(), "--quiet", "--metrics-device", device, "--out"])
+        .args([
+            "run",
+            file.to_str().unwrap(),
+            "--quiet",
+            "--metrics-device",
+            device,
+            "--out",
+        ])
         .arg(out.path())
         .output()
         .unwrap();
@@ -99,15 +106,29 @@ fn gpu_and_cpu_records_agree_on_rendered_frames() {
     assert_eq!(gpu.variants.len(), cpu.variants.len());
     for (g, c) in gpu.variants.iter().zip(&cpu.variants) {
         assert_eq!(g.variant, c.variant);
-        let quality: Vec<_> = c.metrics.iter().filter(|m| m.metrics_device.is_some()).collect();
+        let quality: Vec<_> = c
+            .metrics
+            .iter()
+            .filter(|m| m.metrics_device.is_some())
+            .collect();
         assert_eq!(quality.len(), 9, "{}: {:?}", c.variant, c.metrics);
         for cm in quality {
             let gm = g.metrics.iter().find(|m| m.name == cm.name).unwrap();
             assert_eq!(cm.metrics_device.as_deref(), Some("cpu"));
             assert_eq!(gm.metrics_device.as_deref(), Some("gpu"), "{}", gm.name);
             assert_eq!(gm.frames, cm.frames, "{} {}", g.variant, gm.name);
-            for (a, b) in gm.per_frame.iter().zip(&cm.per_frame).chain([(&gm.value, &cm.value)]) {
-                assert!(close(&gm.name, *a, *b), "{} {}: gpu {a} cpu {b}", g.variant, gm.name);
+            for (a, b) in gm
+                .per_frame
+                .iter()
+                .zip(&cm.per_frame)
+                .chain([(&gm.value, &cm.value)])
+            {
+                assert!(
+                    close(&gm.name, *a, *b),
+                    "{} {}: gpu {a} cpu {b}",
+                    g.variant,
+                    gm.name
+                );
                 let d = if a == b { 0.0 } else { (a - b).abs() };
                 match worst.iter_mut().find(|(n, _)| *n == gm.name) {
                     Some((_, w)) => *w = w.max(d),
@@ -128,7 +149,10 @@ fn gpu_and_cpu_records_agree_on_rendered_frames() {
         };
         assert_eq!(kinds(g), kinds(c), "{}", g.variant);
         for (_, path) in kinds(g) {
-            assert!(gpu_dir.join(&path).is_file() && cpu_dir.join(&path).is_file(), "{path}");
+            assert!(
+                gpu_dir.join(&path).is_file() && cpu_dir.join(&path).is_file(),
+                "{path}"
+            );
         }
     }
     eprintln!("max |gpu - cpu| per metric on rendered frames: {worst:?}");
@@ -136,10 +160,7 @@ fn gpu_and_cpu_records_agree_on_rendered_frames() {
 
 #[test]
 fn a_bad_metrics_device_is_a_located_error() {
-    let src = SCENARIO.replace(
-        "description = ",
-        "metrics_device = \"tpu\"\ndescription = ",
-    );
+    let src = SCENARIO.replace("description = ", "metrics_device = \"tpu\"\ndescription = ");
     let e = tessera::scenario::parse(Path::new("bad.toml"), &src).unwrap_err();
     let text = e.to_string();
     assert!(text.contains("bad.toml:2"), "{text}");

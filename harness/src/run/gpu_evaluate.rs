@@ -79,9 +79,8 @@ impl GpuEvaluator<'_> {
         let r = inputs.reference;
         let n = inputs.test.len().min(r.frames.len());
         let want = |k: MetricKind| scenario.metrics.contains(&k);
-        let hdr_maps = reference::keep_hdr(scenario)
-            && r.hdr.len() >= n
-            && inputs.test_hdr.len() >= n;
+        let hdr_maps =
+            reference::keep_hdr(scenario) && r.hdr.len() >= n && inputs.test_hdr.len() >= n;
         let saved = |i: usize| scenario.save_frames.contains(&(i as u32));
         let request = |i: usize| PairRequest {
             mse_rgb: want(MetricKind::Psnr),
@@ -119,7 +118,11 @@ impl GpuEvaluator<'_> {
         let mut records = Vec::new();
         for &kind in &scenario.metrics {
             let per_frame = |f: &dyn Fn(&tessera_metrics_gpu::PairValues) -> Option<f64>| {
-                values.frames.iter().map(|v| f(v).unwrap_or(f64::NAN)).collect()
+                values
+                    .frames
+                    .iter()
+                    .map(|v| f(v).unwrap_or(f64::NAN))
+                    .collect()
             };
             let per_frame: Vec<f64> = match kind {
                 MetricKind::Cvvdp => continue,
@@ -164,7 +167,12 @@ impl GpuEvaluator<'_> {
                 MetricKind::Flip => per_frame(&|v| v.flip.as_ref().map(|f| f.mean)),
                 MetricKind::FlipHdr => per_frame(&|v| v.flip_hdr.as_ref().map(|f| f.mean)),
             };
-            records.push(metrics::record(kind, frames.clone(), per_frame, Backend::Gpu));
+            records.push(metrics::record(
+                kind,
+                frames.clone(),
+                per_frame,
+                Backend::Gpu,
+            ));
         }
         let mut maps = Vec::new();
         for (i, v) in values.frames.into_iter().enumerate() {

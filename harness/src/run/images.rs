@@ -92,7 +92,11 @@ pub fn save_heatmaps(
     let _ = std::fs::create_dir_all(dir);
     let stem = sanitize(&result.variant);
     for m in maps {
-        let infix = if m.kind == "heatmap-hdr" { "flip-hdr" } else { "flip" };
+        let infix = if m.kind == "heatmap-hdr" {
+            "flip-hdr"
+        } else {
+            "flip"
+        };
         let path = dir.join(format!("{stem}-{infix}-f{:03}.png", m.frame));
         save_image(result, &m.image, &path, run_dir, m.frame, m.kind);
     }

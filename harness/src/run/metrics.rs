@@ -11,8 +11,8 @@ use tessera_results::MetricRecord;
 pub use super::captured::MetricInputs;
 use super::motion;
 use super::summary::frame_stats;
-use crate::render::renderer::{FrameExtras, FrameValue};
 use crate::metrics_device::Backend;
+use crate::render::renderer::{FrameExtras, FrameValue};
 use crate::scenario::MetricKind;
 
 #[derive(Debug, thiserror::Error)]

@@ -12,15 +12,15 @@ use std::time::Instant;
 use tessera_results::{ScenarioResult, Status, VariantResult};
 
 use super::evaluate::{CpuMetrics, Evaluator};
-use super::gpu_evaluate::GpuEvaluator;
-use crate::metrics_device::Backend;
 use super::frames::{self, Rendered};
+use super::gpu_evaluate::GpuEvaluator;
 use super::output::first_line;
 use super::record::{empty_result, fill_conditions, fill_timings, finish, plan_record, PlanRecord};
 use super::reference::{self, ReferenceFrames};
 use super::{gates, images, metrics, motion, stability};
 use crate::conditions::Sensors;
 use crate::gpu::Gpu;
+use crate::metrics_device::Backend;
 use crate::render::renderer::Unsupported;
 use crate::render::scene::SceneGpu;
 use crate::scenario::{MetricKind, Reference, Scenario};
