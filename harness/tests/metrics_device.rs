@@ -103,8 +103,8 @@ fn gpu_and_cpu_records_agree_on_rendered_frames() {
     let (gpu, gpu_dir, _g) = run(&file, "gpu");
     let (cpu, cpu_dir, _c) = run(&file, "cpu");
     let mut worst: Vec<(String, f64)> = Vec::new();
-    assert_eq!(gpu.variants.len(), cpu.variants.len());
-    for (g, c) in gpu.variants.iter().zip(&cpu.variants) {
+    assert_eq!(gpu.results.len(), cpu.results.len());
+    for (g, c) in gpu.results.iter().zip(&cpu.results) {
         assert_eq!(g.variant, c.variant);
         let quality: Vec<_> = c
             .metrics
