@@ -6,6 +6,7 @@
 pub mod compare;
 pub mod conditions;
 pub mod gpu;
+pub mod metrics_device;
 pub mod params;
 pub mod render;
 pub mod run;

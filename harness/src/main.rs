@@ -52,6 +52,11 @@ enum Command {
         /// Branch recorded with the run (default: the checkout's git branch).
         #[arg(long)]
         branch: Option<String>,
+        /// Where the metrics are computed, for every scenario: `gpu` (the device that rendered
+        /// the frames) or `cpu` (the reference implementations). Default: each scenario's
+        /// `metrics_device`, else the GPU unless the adapter is a CPU (lavapipe).
+        #[arg(long, value_name = "gpu|cpu", value_parser = tessera::metrics_device::Backend::parse)]
+        metrics_device: Option<tessera::metrics_device::Backend>,
     },
     /// Check scenarios without a GPU.
     Validate {
@@ -100,6 +105,10 @@ enum Command {
         /// Sequences: frames per second.
         #[arg(long, default_value_t = 60.0)]
         fps: f64,
+        /// Compute PSNR, SSIM and FLIP on the GPU (first adapter by the same rules as `run`;
+        /// `WGPU_BACKEND` applies); ColorVideoVDP and 16-bit PNG metrics stay on the CPU.
+        #[arg(long)]
+        gpu: bool,
     },
 }
 
@@ -122,7 +131,17 @@ fn main() -> ExitCode {
             quiet,
             upload,
             branch,
-        } => run_command(&paths, adapter, out, junit, quiet, upload, branch),
+            metrics_device,
+        } => run_command(
+            &paths,
+            adapter,
+            out,
+            junit,
+            quiet,
+            upload,
+            branch,
+            metrics_device,
+        ),
         Command::Validate { paths } => validate_command(&paths),
         Command::Adapters { json } => adapters_command(json),
         Command::Compare {
@@ -138,16 +157,18 @@ fn main() -> ExitCode {
             heatmap,
             display,
             fps,
+            gpu,
         } if heatmap.is_none() && !(reference.is_file() && test.is_file()) => {
-            diff_sequence_command(&reference, &test, json, &display, fps)
+            diff_sequence_command(&reference, &test, json, &display, fps, gpu)
         }
         Command::Diff {
             reference,
             test,
             json,
             heatmap,
+            gpu,
             ..
-        } => diff_command(&reference, &test, json, heatmap),
+        } => diff_command(&reference, &test, json, heatmap, gpu),
     })
 }
 
@@ -221,6 +242,7 @@ fn validate_command(paths: &[PathBuf]) -> u8 {
     }
 }
 
+#[allow(clippy::too_many_arguments)]
 fn run_command(
     paths: &[PathBuf],
     adapter: Option<String>,
@@ -229,10 +251,16 @@ fn run_command(
     quiet: bool,
     upload: Option<String>,
     branch: Option<String>,
+    metrics_device: Option<tessera::metrics_device::Backend>,
 ) -> u8 {
-    let Some(scenarios) = load_all(paths) else {
+    let Some(mut scenarios) = load_all(paths) else {
         return EXIT_INPUT;
     };
+    if let Some(device) = metrics_device {
+        for s in &mut scenarios {
+            s.metrics_device = Some(device);
+        }
+    }
     // Refuse a bad URL or a missing token before the run, not after it.
     if let Some(url) = &upload {
         if let Err(e) = tessera::upload::endpoint(url).and(tessera::upload::token_from_env()) {
@@ -386,18 +414,40 @@ fn diff_sequence_command(
     json: bool,
     display: &str,
     fps: f64,
+    gpu: bool,
 ) -> u8 {
-    let report = tessera_metrics::DisplaySpec::parse(display).and_then(|display| {
-        let settings = tessera_metrics::CvvdpSettings {
-            display,
-            fps,
-            ..Default::default()
-        };
-        tessera_metrics::diff_sequence_paths(reference, test, &settings)
-    });
+    let mut metrics = match gpu
+        .then(|| tessera::metrics_device::open_gpu(None))
+        .transpose()
+    {
+        Ok(m) => m,
+        Err(e) => {
+            eprintln!("error: --gpu: {e}");
+            return EXIT_INPUT;
+        }
+    };
+    let report = tessera_metrics::DisplaySpec::parse(display)
+        .map_err(|e| e.to_string())
+        .and_then(|display| {
+            let settings = tessera_metrics::CvvdpSettings {
+                display,
+                fps,
+                ..Default::default()
+            };
+            match metrics.as_mut() {
+                Some(m) => {
+                    tessera::metrics_device::diff_sequence_paths(m, reference, test, &settings)
+                }
+                None => tessera_metrics::diff_sequence_paths(reference, test, &settings)
+                    .map_err(|e| e.to_string()),
+            }
+        });
     match report {
-        Ok(r) if json => println!("{}", serde_json::to_string_pretty(&r).unwrap_or_default()),
-        Ok(r) => print!("{}", r.to_text()),
+        Ok(r) if json => println!("{}", with_device(&r, metrics.as_ref())),
+        Ok(r) => {
+            print_device(metrics.as_ref());
+            print!("{}", r.to_text())
+        }
         Err(e) => {
             eprintln!("error: {e}");
             return EXIT_INPUT;
@@ -411,6 +461,7 @@ fn diff_command(
     test: &std::path::Path,
     json: bool,
     heatmap: Option<PathBuf>,
+    gpu: bool,
 ) -> u8 {
     let load = tessera_metrics::load_image;
     let (r, t) = match (load(reference), load(test)) {
@@ -420,7 +471,21 @@ fn diff_command(
             return EXIT_INPUT;
         }
     };
-    let report = match tessera_metrics::diff_images(&r, &t) {
+    let mut metrics = match gpu
+        .then(|| tessera::metrics_device::open_gpu(None))
+        .transpose()
+    {
+        Ok(m) => m,
+        Err(e) => {
+            eprintln!("error: --gpu: {e}");
+            return EXIT_INPUT;
+        }
+    };
+    let report = match metrics.as_mut() {
+        Some(m) => tessera::metrics_device::diff_images(m, &r, &t),
+        None => tessera_metrics::diff_images(&r, &t).map_err(|e| e.to_string()),
+    };
+    let report = match report {
         Ok(rep) => rep,
         Err(e) => {
             eprintln!("error: {e}");
@@ -436,12 +501,30 @@ fn diff_command(
         }
     }
     if json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&report).unwrap_or_default()
-        );
+        println!("{}", with_device(&report, metrics.as_ref()));
     } else {
+        print_device(metrics.as_ref());
         print!("{}", report.to_text());
     }
     0
+}
+
+/// A diff report's JSON; with `--gpu` it records the back end (`"metrics_device": "gpu"` and
+/// the adapter). Without it the CPU computed everything, and the JSON is as before.
+fn with_device(
+    report: &impl serde::Serialize,
+    gpu: Option<&tessera::metrics_device::GpuMetrics>,
+) -> String {
+    let mut v = serde_json::to_value(report).unwrap_or_default();
+    if let (Some(g), Some(obj)) = (gpu, v.as_object_mut()) {
+        obj.insert("metrics_device".into(), "gpu".into());
+        obj.insert("metrics_adapter".into(), g.adapter_name().into());
+    }
+    serde_json::to_string_pretty(&v).unwrap_or_default()
+}
+
+fn print_device(gpu: Option<&tessera::metrics_device::GpuMetrics>) {
+    if let Some(g) = gpu {
+        println!("metrics device: gpu ({})", g.adapter_name());
+    }
 }

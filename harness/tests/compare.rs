@@ -70,6 +70,7 @@ fn metric(name: &str, value: f64, higher_is_better: bool) -> MetricRecord {
         value,
         higher_is_better,
         frame_stats: None,
+        metrics_device: None,
     }
 }
 

@@ -361,6 +361,10 @@ pub struct MetricRecord {
     /// key is still read.
     #[serde(default, alias = "series", skip_serializing_if = "Option::is_none")]
     pub frame_stats: Option<FrameStats>,
+    /// Where it was computed: `"gpu"` (WGSL passes on the rendering device) or `"cpu"` (the
+    /// reference implementations); absent in results written before the GPU back end (CPU).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub metrics_device: Option<String>,
 }
 
 /// Statistics of a metric's per-frame values.
@@ -474,6 +478,7 @@ mod tests {
             value: f64::INFINITY,
             higher_is_better: true,
             frame_stats: None,
+            metrics_device: None,
         };
         let json = serde_json::to_string(&m).unwrap();
         assert!(json.contains("\"per_frame\":[null,42.0]"), "{json}");

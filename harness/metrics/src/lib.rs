@@ -17,6 +17,7 @@ mod image;
 mod io;
 mod luma;
 mod pixel;
+pub mod port;
 mod report;
 mod sequence;
 mod series;
@@ -43,7 +44,8 @@ pub use pixel::{
 };
 pub use report::{diff, diff_at, diff_images, DiffReport};
 pub use sequence::{
-    diff_sequence_paths, diff_sequences, load_sequence, load_sequence_images, SequenceReport,
+    diff_sequence_paths, diff_sequences, diff_sequences_with, load_sequence, load_sequence_images,
+    SequenceReport,
 };
 pub use series::{series_stats, SeriesStats};
 pub use srgb::{encode_srgb8, linear_to_srgb, srgb_to_linear};

@@ -5,8 +5,8 @@
 //! Not for: decoding one image (see `io`) or computing a metric (each has its module).
 
 use crate::{
-    cvvdp, diff_images, load_image, psnr_from_mse, CvvdpResult, CvvdpSettings, Frames, HdrImage,
-    LoadedImage, MetricsError, Rgb8Image, DATA_RANGE_8BIT, DEFAULT_HDR_WHITE,
+    cvvdp, diff_images, load_image, psnr_from_mse, CvvdpResult, CvvdpSettings, DiffReport, Frames,
+    HdrImage, LoadedImage, MetricsError, Rgb8Image, DATA_RANGE_8BIT, DEFAULT_HDR_WHITE,
 };
 use serde::Serialize;
 use std::fmt::Write;
@@ -130,16 +130,28 @@ pub fn diff_sequences(
     test: &[LoadedImage],
     settings: &CvvdpSettings,
 ) -> Result<SequenceReport, MetricsError> {
+    diff_sequences_with(reference, test, settings, diff_images)
+}
+
+/// [`diff_sequences`] with the per-frame report computed by `pair` (another back end's
+/// `diff_images`, e.g. the GPU's); ColorVideoVDP and the averaging stay here.
+pub fn diff_sequences_with<E: From<MetricsError>>(
+    reference: &[LoadedImage],
+    test: &[LoadedImage],
+    settings: &CvvdpSettings,
+    mut pair: impl FnMut(&LoadedImage, &LoadedImage) -> Result<DiffReport, E>,
+) -> Result<SequenceReport, E> {
     if reference.is_empty() || reference.len() != test.len() {
         return Err(MetricsError::SequenceLength {
             reference: reference.len(),
             test: test.len(),
-        });
+        }
+        .into());
     }
     let reports = reference
         .iter()
         .zip(test)
-        .map(|(r, t)| diff_images(r, t))
+        .map(|(r, t)| pair(r, t))
         .collect::<Result<Vec<_>, _>>()?;
     let n = reports.len() as f64;
     let hdr = |s: &[LoadedImage]| -> Option<Vec<HdrImage>> {

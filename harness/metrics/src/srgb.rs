@@ -32,16 +32,20 @@ pub fn encode_srgb8(hdr: &HdrImage) -> Rgb8Image {
         .data
         .par_iter()
         .with_min_len(4096)
-        .map(|&v| {
-            let c = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
-            (linear_to_srgb(c) * 255.0 + 0.5).floor().clamp(0.0, 255.0) as u8
-        })
+        .map(|&v| encode_srgb8_value(v))
         .collect();
     Rgb8Image {
         width: hdr.width,
         height: hdr.height,
         data,
     }
+}
+
+/// One value of [`encode_srgb8`].
+#[inline]
+pub(crate) fn encode_srgb8_value(v: f32) -> u8 {
+    let c = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
+    (linear_to_srgb(c) * 255.0 + 0.5).floor().clamp(0.0, 255.0) as u8
 }
 
 /// Linear value of every 8-bit sRGB code, computed in f32 exactly as FLIP does (`v / 255`, then

@@ -18,11 +18,11 @@ use crate::{MetricsError, Rgb8Image};
 use rayon::prelude::*;
 
 /// Gaussian window radius: 11 taps.
-const RADIUS: usize = 5;
-const TAPS: usize = 2 * RADIUS + 1;
+pub(crate) const RADIUS: usize = 5;
+pub(crate) const TAPS: usize = 2 * RADIUS + 1;
 const SIGMA: f64 = 1.5;
-const K1: f64 = 0.01;
-const K2: f64 = 0.03;
+pub(crate) const K1: f64 = 0.01;
+pub(crate) const K2: f64 = 0.03;
 const DATA_RANGE: f64 = 255.0;
 
 /// The smallest width and height SSIM accepts (one full window).
@@ -85,7 +85,7 @@ fn channel_plane(image: &Rgb8Image, channel: usize) -> Vec<f32> {
 }
 
 /// scipy's `_gaussian_kernel1d(sigma, 0, radius)`.
-fn gaussian_window() -> [f64; TAPS] {
+pub(crate) fn gaussian_window() -> [f64; TAPS] {
     let mut w = [0.0; TAPS];
     let s2 = SIGMA * SIGMA;
     for (i, v) in w.iter_mut().enumerate() {

@@ -47,6 +47,8 @@ pub struct Gpu {
     /// Hardware variable-rate shading (VK_KHR_fragment_shading_rate, turned on at device
     /// creation where offered): what the adapter offers, or why the hardware variants are skipped.
     pub vrs: Result<vrs::VrsCaps, String>,
+    /// The GPU metrics back end on this device, made on first use (`crate::metrics_device`).
+    pub metrics: std::sync::OnceLock<std::sync::Mutex<tessera_metrics_gpu::GpuMetrics>>,
 }
 
 impl Gpu {
@@ -252,5 +254,6 @@ pub fn open(adapter: wgpu::Adapter) -> Result<Gpu, GpuError> {
         info,
         msaa2x_positions: std::sync::OnceLock::new(),
         vrs,
+        metrics: std::sync::OnceLock::new(),
     })
 }

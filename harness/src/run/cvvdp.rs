@@ -85,6 +85,7 @@ pub fn records(
         per_frame,
         value,
         higher_is_better: m.direction().higher_is_better(),
+        metrics_device: Some("cpu".into()),
     };
     let mut out = vec![record(Measure::Cvvdp, r.frame_jod.clone(), r.jod)];
     if let (Some(flicker), Some(share)) = (r.flicker_jod, r.transient_share) {

@@ -1,7 +1,8 @@
 //! Evaluation, the second stage of a variant's run (render, evaluate, save, report): captured
 //! frames in ([`MetricInputs`]), metric records and metric images out. [`Evaluator`] is the seam
-//! a metrics back end plugs into; [`CpuMetrics`] (`tessera-metrics` on the CPU: `metrics.rs`,
-//! `cvvdp.rs`) is the one the run uses today.
+//! a metrics back end plugs into: [`CpuMetrics`] (`tessera-metrics` on the CPU: `metrics.rs`,
+//! `cvvdp.rs`) or the GPU's (`gpu_evaluate.rs`), as `metrics_device` picks
+//! (`crate::metrics_device::evaluator_for`).
 //!
 //! Not here: rendering (`frames.rs`, `reference.rs`), saving images (`images.rs`), records
 //! (`record.rs`).
@@ -21,9 +22,19 @@ pub struct Evaluation {
     pub metrics: Vec<MetricRecord>,
     /// ColorVideoVDP distortion maps per measured frame, when the scenario measures `cvvdp`.
     pub maps: Vec<DistortionMap>,
+    /// The saved frames' FLIP heat maps when the back end made them (the GPU's); `None` lets
+    /// `images::save_error_maps` compute them on the CPU.
+    pub error_maps: Option<Vec<ErrorMap>>,
     /// Why evaluation failed (the result is then `failed`); the metrics that were computed are
     /// kept.
     pub error: Option<String>,
+}
+
+/// A FLIP heat map of one measured frame: `kind` `heatmap` (LDR-FLIP) or `heatmap-hdr`.
+pub struct ErrorMap {
+    pub frame: u32,
+    pub kind: &'static str,
+    pub image: tessera_metrics::Rgb8Image,
 }
 
 /// A metrics back end: the scenario's metrics of captured frames against the reference's.

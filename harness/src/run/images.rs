@@ -78,6 +78,30 @@ pub fn save_error_maps(
     }
 }
 
+/// FLIP heat maps a metrics back end already made (the GPU's), named and recorded as
+/// [`save_error_maps`] names and records its own.
+pub fn save_heatmaps(
+    result: &mut VariantResult,
+    maps: &[super::evaluate::ErrorMap],
+    dir: &Path,
+    run_dir: &Path,
+) {
+    if maps.is_empty() {
+        return;
+    }
+    let _ = std::fs::create_dir_all(dir);
+    let stem = sanitize(&result.variant);
+    for m in maps {
+        let infix = if m.kind == "heatmap-hdr" {
+            "flip-hdr"
+        } else {
+            "flip"
+        };
+        let path = dir.join(format!("{stem}-{infix}-f{:03}.png", m.frame));
+        save_image(result, &m.image, &path, run_dir, m.frame, m.kind);
+    }
+}
+
 /// The `cvvdp` distortion maps of saved frames, as `<variant>-cvvdp-fNNN.png` (kind `cvvdp`).
 pub fn save_cvvdp_maps(
     result: &mut VariantResult,

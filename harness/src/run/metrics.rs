@@ -11,6 +11,7 @@ use tessera_results::MetricRecord;
 pub use super::captured::MetricInputs;
 use super::motion;
 use super::summary::frame_stats;
+use crate::metrics_device::Backend;
 use crate::render::renderer::{FrameExtras, FrameValue};
 use crate::scenario::MetricKind;
 
@@ -77,35 +78,48 @@ pub fn compute(
             };
             per_frame.push(v);
         }
-        // PSNR is aggregated from the mean MSE (the PSNR of the sequence), per frame from each MSE.
-        let (per_frame, value) = match kind {
-            MetricKind::Psnr | MetricKind::PsnrLuma => {
-                let mean_mse = per_frame.iter().sum::<f64>() / per_frame.len().max(1) as f64;
-                let psnr: Vec<f64> = per_frame
-                    .iter()
-                    .map(|m| tessera_metrics::psnr_from_mse(*m, 255.0))
-                    .collect();
-                (psnr, tessera_metrics::psnr_from_mse(mean_mse, 255.0))
-            }
-            MetricKind::MaxAbsError => {
-                let max = per_frame.iter().copied().fold(0.0, f64::max);
-                (per_frame, max)
-            }
-            _ => {
-                let mean = per_frame.iter().sum::<f64>() / per_frame.len().max(1) as f64;
-                (per_frame, mean)
-            }
-        };
-        out.push(MetricRecord {
-            name: kind.name().to_string(),
-            frame_stats: frame_stats(&per_frame),
-            per_frame,
-            frames: frames.clone(),
-            value,
-            higher_is_better: kind.higher_is_better(),
-        });
+        out.push(record(kind, frames.clone(), per_frame, Backend::Cpu));
     }
     Ok(out)
+}
+
+/// The record of metric `kind` from its per-frame values (for PSNR: the MSEs), aggregated over
+/// frames: PSNR from the mean MSE (the PSNR of the sequence; per frame from each MSE),
+/// max-abs-error as the maximum, the others as the mean. `device` is the back end that computed
+/// the values.
+pub(super) fn record(
+    kind: MetricKind,
+    frames: Vec<u32>,
+    per_frame: Vec<f64>,
+    device: Backend,
+) -> MetricRecord {
+    let (per_frame, value) = match kind {
+        MetricKind::Psnr | MetricKind::PsnrLuma => {
+            let mean_mse = per_frame.iter().sum::<f64>() / per_frame.len().max(1) as f64;
+            let psnr: Vec<f64> = per_frame
+                .iter()
+                .map(|m| tessera_metrics::psnr_from_mse(*m, 255.0))
+                .collect();
+            (psnr, tessera_metrics::psnr_from_mse(mean_mse, 255.0))
+        }
+        MetricKind::MaxAbsError => {
+            let max = per_frame.iter().copied().fold(0.0, f64::max);
+            (per_frame, max)
+        }
+        _ => {
+            let mean = per_frame.iter().sum::<f64>() / per_frame.len().max(1) as f64;
+            (per_frame, mean)
+        }
+    };
+    MetricRecord {
+        name: kind.name().to_string(),
+        frame_stats: frame_stats(&per_frame),
+        metrics_device: Some(device.name().to_string()),
+        per_frame,
+        frames,
+        value,
+        higher_is_better: kind.higher_is_better(),
+    }
 }
 
 /// Temporal difference error (notes/metrics.md 3.3, item 1) per measured frame that has motion
@@ -133,15 +147,7 @@ fn tde(
             per_frame.push(v);
         }
     }
-    let value = per_frame.iter().sum::<f64>() / per_frame.len().max(1) as f64;
-    Ok(MetricRecord {
-        name: MetricKind::Tde.name().to_string(),
-        frame_stats: frame_stats(&per_frame),
-        frames,
-        per_frame,
-        value,
-        higher_is_better: MetricKind::Tde.higher_is_better(),
-    })
+    Ok(record(MetricKind::Tde, frames, per_frame, Backend::Cpu))
 }
 
 /// Static-scene flicker (notes/metrics.md section 3.3, SSF): per measured frame after the first,
@@ -161,15 +167,8 @@ fn flicker(frames: &[Rgb8Image]) -> MetricRecord {
             sum as f64 / w[1].data.len().max(1) as f64
         })
         .collect();
-    let value = per_frame.iter().sum::<f64>() / per_frame.len().max(1) as f64;
-    MetricRecord {
-        name: MetricKind::Flicker.name().to_string(),
-        frame_stats: frame_stats(&per_frame),
-        frames: (1..frames.len() as u32).collect(),
-        per_frame,
-        value,
-        higher_is_better: MetricKind::Flicker.higher_is_better(),
-    }
+    let indices = (1..frames.len() as u32).collect();
+    record(MetricKind::Flicker, indices, per_frame, Backend::Cpu)
 }
 
 /// A technique's per-frame extra values (e.g. `shading-rate`) as metrics of the variant's own
@@ -198,6 +197,7 @@ pub fn extra_values(extras: &[FrameExtras]) -> Vec<MetricRecord> {
         out.push(MetricRecord {
             name: name.to_string(),
             frame_stats: frame_stats(&per_frame),
+            metrics_device: None,
             per_frame,
             frames,
             value,

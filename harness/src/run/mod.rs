@@ -10,6 +10,7 @@ pub mod cvvdp;
 pub mod evaluate;
 pub mod frames;
 pub mod gates;
+pub mod gpu_evaluate;
 pub mod images;
 pub mod metrics;
 pub mod motion;

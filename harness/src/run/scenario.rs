@@ -13,12 +13,14 @@ use tessera_results::{ScenarioResult, Status, VariantResult};
 
 use super::evaluate::{CpuMetrics, Evaluator};
 use super::frames::{self, Rendered};
+use super::gpu_evaluate::GpuEvaluator;
 use super::output::first_line;
 use super::record::{empty_result, fill_conditions, fill_timings, finish, plan_record, PlanRecord};
 use super::reference::{self, ReferenceFrames};
 use super::{gates, images, metrics, motion, stability};
 use crate::conditions::Sensors;
 use crate::gpu::Gpu;
+use crate::metrics_device::Backend;
 use crate::render::renderer::Unsupported;
 use crate::render::scene::SceneGpu;
 use crate::scenario::{MetricKind, Reference, Scenario};
@@ -75,7 +77,12 @@ pub fn run(
     order.extend(scenario.variants.iter().filter(|v| !native_is_reference(v)));
 
     let image_dir = run_dir.join("images").join(&scenario.name);
-    let evaluator: &dyn Evaluator = &CpuMetrics;
+    // Where the metrics run: `metrics_device` (the scenario's, `--metrics-device`), else by adapter.
+    let gpu_evaluator = GpuEvaluator { gpu };
+    let evaluator: &dyn Evaluator = match crate::metrics_device::chosen(scenario, gpu) {
+        Backend::Gpu => &gpu_evaluator,
+        Backend::Cpu => &CpuMetrics,
+    };
     for variant in order {
         let is_reference = needs_reference && native_is_reference(variant) && reference.is_none();
         let keep = needs_reference || !scenario.save_frames.is_empty();
@@ -147,7 +154,9 @@ pub fn run(
                         result.status = Status::Failed { error };
                     }
                     // The reference against itself has no error to show.
-                    if frames.is_some() {
+                    if let (true, Some(maps)) = (frames.is_some(), &evaluation.error_maps) {
+                        images::save_heatmaps(&mut result, maps, &image_dir, run_dir);
+                    } else if frames.is_some() {
                         images::save_error_maps(
                             &mut result,
                             &inputs,

@@ -50,6 +50,9 @@ pub struct Scenario {
     pub metrics: Vec<MetricKind>,
     /// The display ColorVideoVDP (`cvvdp`) sees the frames on.
     pub display: tessera_metrics::DisplaySpec,
+    /// `metrics_device`: where the metrics run; `None` picks by adapter
+    /// (`metrics_device::default_backend`).
+    pub metrics_device: Option<tessera_metrics_gpu::Backend>,
     pub scene: Scene,
     pub camera: CameraTrack,
     pub variants: Vec<Variant>,

@@ -25,6 +25,9 @@ pub struct RawScenario {
     /// (`base`, `diagonal_inches`, `distance_m`, `pixels_per_degree`, `resolution`,
     /// `peak_luminance`, `contrast`, `ambient_lux`).
     pub display: Option<toml::Value>,
+    /// Where the metrics are computed: `"gpu"` (the device that rendered the frames) or `"cpu"`
+    /// (the reference implementations). Default: GPU unless the adapter is a CPU (lavapipe).
+    pub metrics_device: Option<String>,
     #[serde(default)]
     pub frames: RawFrames,
     #[serde(default)]

@@ -293,6 +293,11 @@ fn build(ctx: &mut Ctx, path: &Path, raw: RawScenario) -> Scenario {
         }
     }
     let display = display(ctx, &root.key("display"), raw.display.as_ref(), &metrics);
+    let metrics_device = raw.metrics_device.as_deref().and_then(|d| {
+        tessera_metrics_gpu::Backend::parse(d)
+            .map_err(|e| ctx.err(&root.key("metrics_device"), e))
+            .ok()
+    });
     let scene = scene(ctx, &root.key("scene"), path, &raw.scene);
     let camera = camera(ctx, &root.key("camera"), &raw.camera);
     let variants = variants(ctx, &root.key("techniques"), &raw.techniques);
@@ -313,6 +318,7 @@ fn build(ctx: &mut Ctx, path: &Path, raw: RawScenario) -> Scenario {
         reference,
         metrics,
         display,
+        metrics_device,
         scene,
         camera,
         variants,

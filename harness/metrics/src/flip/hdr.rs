@@ -40,7 +40,7 @@ pub struct ExposureRange {
 
 /// ACES (Narkowicz fit) with FLIP's 0.6 pre-exposure cancellation: numerator and denominator
 /// coefficients of `(c^2 t0 + c t1 + t2) / (c^2 t3 + c t4 + t5)`.
-fn aces() -> [f32; 6] {
+pub(crate) fn aces() -> [f32; 6] {
     [
         0.6f32 * 0.6f32 * 2.51f32,
         0.6f32 * 0.03f32,
@@ -101,7 +101,7 @@ pub fn hdr_exposure_range(reference: &HdrImage) -> ExposureRange {
     }
 }
 
-fn check_range(range: &ExposureRange) -> Result<(), MetricsError> {
+pub(crate) fn check_range(range: &ExposureRange) -> Result<(), MetricsError> {
     if !range.start.is_finite() || !range.stop.is_finite() || range.start > range.stop {
         return Err(MetricsError::InvalidParameter {
             name: "exposure range",
@@ -119,7 +119,7 @@ fn check_range(range: &ExposureRange) -> Result<(), MetricsError> {
     Ok(())
 }
 
-fn check_finite(image: &HdrImage, which: &'static str) -> Result<(), MetricsError> {
+pub(crate) fn check_finite(image: &HdrImage, which: &'static str) -> Result<(), MetricsError> {
     let count = image.data.par_iter().filter(|v| !v.is_finite()).count();
     if count > 0 {
         return Err(MetricsError::NonFinite {
@@ -128,6 +128,21 @@ fn check_finite(image: &HdrImage, which: &'static str) -> Result<(), MetricsErro
         });
     }
     Ok(())
+}
+
+/// The factor `2^exposure` each image is multiplied by before tone mapping, one per exposure of
+/// `range` (in f32, as `FLIP.h`): `start + i * (stop - start) / (count - 1)`.
+pub(crate) fn exposure_multipliers(range: &ExposureRange) -> Vec<f32> {
+    let start = range.start as f32;
+    let stop = range.stop as f32;
+    let step = if range.count > 1 {
+        (stop - start) / (range.count - 1) as f32
+    } else {
+        0.0
+    };
+    (0..range.count)
+        .map(|i| 2.0f32.powf(start + i as f32 * step))
+        .collect()
 }
 
 /// The HDR-FLIP error map (per-pixel maximum over exposures).
@@ -142,13 +157,6 @@ pub(crate) fn hdr_flip_map(
     check_finite(reference, "reference")?;
     check_finite(test, "test")?;
     let (w, h) = (reference.width as usize, reference.height as usize);
-    let start = range.start as f32;
-    let stop = range.stop as f32;
-    let step = if range.count > 1 {
-        (stop - start) / (range.count - 1) as f32
-    } else {
-        0.0
-    };
     let tc = aces();
     let tone_map = |img: &HdrImage, m: f32| -> Vec<f32> {
         img.data
@@ -162,9 +170,7 @@ pub(crate) fn hdr_flip_map(
             .collect()
     };
     let mut error = vec![0.0f32; w * h];
-    for i in 0..range.count {
-        let exposure = start + i as f32 * step;
-        let m = 2.0f32.powf(exposure);
+    for m in exposure_multipliers(range) {
         let (r, t) = rayon::join(|| tone_map(reference, m), || tone_map(test, m));
         let map = ldr_flip_map(Source::Linear(&r), Source::Linear(&t), w, h, ppd);
         error

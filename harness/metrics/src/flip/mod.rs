@@ -7,13 +7,13 @@
 //! range, tone mapping, maximum over exposures), `pool` (mean and weighted percentiles),
 //! `magma` (the heatmap LUT).
 
-mod color;
+pub(crate) mod color;
 mod fastmath;
-mod filters;
-mod hdr;
+pub(crate) mod filters;
+pub(crate) mod hdr;
 mod ldr;
-mod magma;
-mod pool;
+pub(crate) mod magma;
+pub(crate) mod pool;
 
 pub use hdr::{hdr_exposure_range, ExposureRange, MAX_EXPOSURES};
 
@@ -67,7 +67,7 @@ pub struct FlipResult {
 }
 
 impl FlipResult {
-    fn from_map(error_map: Vec<f32>, width: u32, height: u32) -> Self {
+    pub(crate) fn from_map(error_map: Vec<f32>, width: u32, height: u32) -> Self {
         let pooled = pool::pool(&error_map, &[0.5, 0.95, 0.99]);
         FlipResult {
             mean: pooled.mean,
@@ -88,7 +88,7 @@ impl FlipResult {
     }
 }
 
-fn check_ppd(ppd: f64) -> Result<f32, MetricsError> {
+pub(crate) fn check_ppd(ppd: f64) -> Result<f32, MetricsError> {
     // The upper bound keeps the kernels (radius ~0.14 * ppd) a sane size.
     if !(ppd.is_finite() && ppd > 0.0 && ppd <= 10_000.0) {
         return Err(MetricsError::InvalidParameter {

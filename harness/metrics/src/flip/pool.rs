@@ -41,7 +41,7 @@ pub(crate) fn pool(values: &[f32], ps: &[f64]) -> Pooled {
     }
     let clean = |v: f32| if v > 0.0 { v } else { 0.0 };
     let (sum32, (exact, max)) = rayon::join(
-        || values.iter().fold(0.0f32, |s, &v| s + clean(v)),
+        || running_sum(values),
         || {
             let parts: Vec<(f64, f32)> = values
                 .par_chunks(1 << 16)
@@ -78,6 +78,13 @@ pub(crate) fn pool(values: &[f32], ps: &[f64]) -> Pooled {
         max: max as f64,
         percentiles,
     }
+}
+
+/// The f32 running sum of the values in order (NaN and negative values as 0), as FLIP sums.
+pub(crate) fn running_sum(values: &[f32]) -> f32 {
+    values
+        .iter()
+        .fold(0.0f32, |s, &v| s + if v > 0.0 { v } else { 0.0 })
 }
 
 /// The cleaned values sorted ascending: an LSD radix sort on the bit patterns, which order like

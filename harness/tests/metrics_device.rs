@@ -1,0 +1,169 @@
+//! `metrics_device`: the same scenario with its metrics on the GPU and on the CPU (on lavapipe in
+//! CI) gives the same records within issue 25's tolerances, each saying where it was computed,
+//! and the same heat-map images; a bad `metrics_device` is a located error.
+
+use std::path::Path;
+
+use tessera_results::ScenarioResult;
+
+/// Every metric the GPU computes, on real rendered frames: HDR highlights, motion, a cut-free pan.
+const SCENARIO: &str = r#"
+description = "metrics_device cross-check"
+resolution = [64, 48]
+metrics = ["psnr", "psnr-luma", "max-abs-error", "ssim", "ssim-luma", "flip", "flip-hdr", "flicker", "tde"]
+[frames]
+warmup = 1
+measured = 4
+save = [-1]
+[scene]
+shading_cost = 2
+[scene.ground]
+checker_size = 0.5
+[[scene.lights]]
+type = "directional"
+direction = [-0.4, -1.0, -0.3]
+intensity = 1.5
+[[scene.objects]]
+shape = "box"
+position = [0.0, 0.5, 0.0]
+color = [0.3, 0.3, 0.35]
+[[scene.objects]]
+shape = "sphere"
+position = [1.2, 0.4, 0.6]
+radius = 0.08
+emissive = [50.0, 42.0, 30.0]
+[camera]
+[[camera.keyframes]]
+time = 0.0
+position = [0.0, 1.6, 5.0]
+target = [0.0, 0.4, 0.0]
+[[camera.keyframes]]
+time = 1.0
+position = [0.6, 1.6, 5.0]
+target = [0.4, 0.4, 0.0]
+[[techniques]]
+technique = "native"
+[[techniques]]
+technique = "upscale"
+scale = 0.5
+[[techniques]]
+technique = "checkerboard"
+"#;
+
+fn run(file: &Path, device: &str) -> (ScenarioResult, std::path::PathBuf, tempfile::TempDir) {
+    let out = tempfile::tempdir().unwrap();
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_tessera"))
+        .args([
+            "run",
+            file.to_str().unwrap(),
+            "--quiet",
+            "--metrics-device",
+            device,
+            "--out",
+        ])
+        .arg(out.path())
+        .output()
+        .unwrap();
+    assert!(
+        o.status.success(),
+        "{}\n{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let run_dir = std::fs::read_dir(out.path())
+        .unwrap()
+        .next()
+        .unwrap()
+        .unwrap()
+        .path();
+    let files = tessera_results::layout::scenario_files(&run_dir).unwrap();
+    let text = std::fs::read_to_string(&files[0]).unwrap();
+    (serde_json::from_str(&text).unwrap(), run_dir, out)
+}
+
+/// Tolerance of one metric's values (issue 25's Acceptance).
+fn close(name: &str, gpu: f64, cpu: f64) -> bool {
+    if gpu == cpu || (gpu.is_nan() && cpu.is_nan()) {
+        return true;
+    }
+    match name {
+        "psnr" | "psnr-luma" => (gpu - cpu).abs() <= 1e-6 * cpu.abs(),
+        "ssim" | "ssim-luma" => (gpu - cpu).abs() <= 1e-6,
+        "flip" | "flip-hdr" | "tde" | "flicker" => (gpu - cpu).abs() <= 1e-5,
+        // Integer-valued: exact.
+        _ => false,
+    }
+}
+
+#[test]
+fn gpu_and_cpu_records_agree_on_rendered_frames() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("metrics-device.toml");
+    std::fs::write(&file, SCENARIO).unwrap();
+    let (gpu, gpu_dir, _g) = run(&file, "gpu");
+    let (cpu, cpu_dir, _c) = run(&file, "cpu");
+    let mut worst: Vec<(String, f64)> = Vec::new();
+    assert_eq!(gpu.results.len(), cpu.results.len());
+    for (g, c) in gpu.results.iter().zip(&cpu.results) {
+        assert_eq!(g.variant, c.variant);
+        let quality: Vec<_> = c
+            .metrics
+            .iter()
+            .filter(|m| m.metrics_device.is_some())
+            .collect();
+        assert_eq!(quality.len(), 9, "{}: {:?}", c.variant, c.metrics);
+        for cm in quality {
+            let gm = g.metrics.iter().find(|m| m.name == cm.name).unwrap();
+            assert_eq!(cm.metrics_device.as_deref(), Some("cpu"));
+            assert_eq!(gm.metrics_device.as_deref(), Some("gpu"), "{}", gm.name);
+            assert_eq!(gm.frames, cm.frames, "{} {}", g.variant, gm.name);
+            for (a, b) in gm
+                .per_frame
+                .iter()
+                .zip(&cm.per_frame)
+                .chain([(&gm.value, &cm.value)])
+            {
+                assert!(
+                    close(&gm.name, *a, *b),
+                    "{} {}: gpu {a} cpu {b}",
+                    g.variant,
+                    gm.name
+                );
+                let d = if a == b { 0.0 } else { (a - b).abs() };
+                match worst.iter_mut().find(|(n, _)| *n == gm.name) {
+                    Some((_, w)) => *w = w.max(d),
+                    None => worst.push((gm.name.clone(), d)),
+                }
+            }
+        }
+        // The same heat maps are saved (names and kinds), for every variant but the reference.
+        let kinds = |v: &tessera_results::VariantResult| {
+            let mut k: Vec<(String, String)> = v
+                .images
+                .iter()
+                .filter(|i| i.kind.starts_with("heatmap"))
+                .map(|i| (i.kind.clone(), i.path.clone()))
+                .collect();
+            k.sort();
+            k
+        };
+        assert_eq!(kinds(g), kinds(c), "{}", g.variant);
+        for (_, path) in kinds(g) {
+            assert!(
+                gpu_dir.join(&path).is_file() && cpu_dir.join(&path).is_file(),
+                "{path}"
+            );
+        }
+    }
+    eprintln!("max |gpu - cpu| per metric on rendered frames: {worst:?}");
+}
+
+#[test]
+fn a_bad_metrics_device_is_a_located_error() {
+    let src = SCENARIO.replace("description = ", "metrics_device = \"tpu\"\ndescription = ");
+    let e = tessera::scenario::parse(Path::new("bad.toml"), &src).unwrap_err();
+    let text = e.to_string();
+    assert!(text.contains("bad.toml:2"), "{text}");
+    assert!(text.contains("metrics_device"), "{text}");
+    assert!(text.contains("allowed: \"gpu\", \"cpu\""), "{text}");
+}
