@@ -34,7 +34,7 @@ pub fn run(
 ) -> ScenarioResult {
     let start = Instant::now();
     let mut results: Vec<VariantResult> = Vec::new();
-    let scene = SceneGpu::new(&gpu.device, scenario);
+    let scene = SceneGpu::new(&gpu.device, &gpu.queue, scenario);
     let mut scene = match scene {
         Ok(s) => s,
         Err(e) => {
@@ -268,15 +268,21 @@ fn render_variant(
 ) -> VariantOutcome {
     let validation = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
     let oom = gpu.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
-    let built = techniques::build(
-        gpu,
-        variant,
-        Target {
-            width: scenario.width,
-            height: scenario.height,
-            dynamic_scene: scenario.scene.has_dynamic_objects(),
-        },
-    );
+    let built = match variant.technique.materials_unsupported() {
+        Some(reason) if scene.has_materials() => Err(Unsupported(format!(
+            "{} cannot draw textured materials: {reason}",
+            variant.technique.name()
+        ))),
+        _ => techniques::build(
+            gpu,
+            variant,
+            Target {
+                width: scenario.width,
+                height: scenario.height,
+                dynamic_scene: scenario.scene.has_dynamic_objects(),
+            },
+        ),
+    };
     let result = match built {
         Err(u) => Ok(Err(u)),
         Ok(mut t) => {

@@ -79,6 +79,13 @@ pub trait Technique: Sync + 'static {
     fn alternates_frames(&self) -> bool {
         false
     }
+
+    /// Why it cannot draw textured materials (glTF `materials = "file"`, the city), when it
+    /// shades through passes of its own instead of the scene's forward pipelines: such variants
+    /// are skipped on textured scenes with this reason. `None` (it can) by default.
+    fn materials_unsupported(&self) -> Option<&'static str> {
+        None
+    }
 }
 
 /// One WGSL module as the GPU sees it, and the files under `shaders/` it is made of.

@@ -206,6 +206,10 @@ const PLAN_TEXEL: [u32; 2] = [model::TILE, model::TILE];
 pub struct AdaptiveShading;
 
 impl Technique for AdaptiveShading {
+    fn materials_unsupported(&self) -> Option<&'static str> {
+        Some("its G-buffer (software path) and raw Vulkan pass (hardware path) carry no texture coordinates or materials yet")
+    }
+
     fn name(&self) -> &'static str {
         "adaptive-shading"
     }
@@ -268,6 +272,10 @@ impl Technique for AdaptiveShading {
 pub struct NativeVrs;
 
 impl Technique for NativeVrs {
+    fn materials_unsupported(&self) -> Option<&'static str> {
+        Some("its raw Vulkan pass binds no material textures yet")
+    }
+
     fn name(&self) -> &'static str {
         "native-vrs"
     }
@@ -309,6 +317,10 @@ impl Technique for NativeVrs {
 pub struct NativeDeferred;
 
 impl Technique for NativeDeferred {
+    fn materials_unsupported(&self) -> Option<&'static str> {
+        Some("its G-buffer carries no texture coordinates or materials yet")
+    }
+
     fn name(&self) -> &'static str {
         "native-deferred"
     }
