@@ -64,7 +64,7 @@ pub struct Generated {
 struct Rng(u64);
 
 impl Rng {
-    fn next(&mut self) -> u64 {
+    fn next_u64(&mut self) -> u64 {
         self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
         let mut z = self.0;
         z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
@@ -73,11 +73,11 @@ impl Rng {
     }
 
     fn unit(&mut self) -> f32 {
-        (self.next() >> 40) as f32 / (1u64 << 24) as f32
+        (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32
     }
 
     fn below(&mut self, n: u32) -> u32 {
-        (self.next() % n.max(1) as u64) as u32
+        (self.next_u64() % n.max(1) as u64) as u32
     }
 }
 
@@ -161,8 +161,18 @@ pub fn generate(c: &City, first_object: u32) -> Generated {
 
     for k in 0..CAR_COLOURS {
         let mut body = Builder::default();
-        body.box_uv(Vec3::new(0.0, 0.55, 0.0), Vec3::new(4.2, 0.8, 1.8), 1.0, true);
-        body.box_uv(Vec3::new(-0.3, 1.25, 0.0), Vec3::new(2.2, 0.6, 1.6), 1.0, true);
+        body.box_uv(
+            Vec3::new(0.0, 0.55, 0.0),
+            Vec3::new(4.2, 0.8, 1.8),
+            1.0,
+            true,
+        );
+        body.box_uv(
+            Vec3::new(-0.3, 1.25, 0.0),
+            Vec3::new(2.2, 0.6, 1.6),
+            1.0,
+            true,
+        );
         let body = body.finish(&mut model, MAT_CAR + k);
         model.parts.push(vec![body]);
     }
@@ -187,7 +197,10 @@ pub fn generate(c: &City, first_object: u32) -> Generated {
                 let (a, b) = (inset, bs - inset);
                 let l = b - a;
                 match side {
-                    0 => (DVec3::new(x0 + a + f * l, 0.0, z0 + a), std::f64::consts::PI),
+                    0 => (
+                        DVec3::new(x0 + a + f * l, 0.0, z0 + a),
+                        std::f64::consts::PI,
+                    ),
                     1 => (
                         DVec3::new(x0 + b, 0.0, z0 + a + f * l),
                         std::f64::consts::FRAC_PI_2,
@@ -199,9 +212,8 @@ pub fn generate(c: &City, first_object: u32) -> Generated {
                     ),
                 }
             };
-            let place = |p: DVec3, yaw: f64| {
-                DMat4::from_translation(p) * DMat4::from_rotation_y(yaw)
-            };
+            let place =
+                |p: DVec3, yaw: f64| DMat4::from_translation(p) * DMat4::from_rotation_y(yaw);
             for i in 0..c.buildings {
                 let t = 4.0 * (i as f64 + 0.5) / c.buildings as f64;
                 let v = rng.below(BUILDING_VARIANTS as u32) as usize;
@@ -362,7 +374,12 @@ impl Builder {
                 Vec3::new(half, 0.0, -half),
                 Vec3::new(-half, 0.0, -half),
             ],
-            [Vec2::ZERO, Vec2::new(r, 0.0), Vec2::new(r, r), Vec2::new(0.0, r)],
+            [
+                Vec2::ZERO,
+                Vec2::new(r, 0.0),
+                Vec2::new(r, r),
+                Vec2::new(0.0, r),
+            ],
             Vec3::Y,
         );
     }
@@ -587,7 +604,13 @@ fn materials() -> Vec<Material> {
         ..Material::gltf_default()
     };
     let mut facade = plain("facade", Vec3::ONE, 1.0, 1.0);
-    facade.textures = [tex(IMG_FACADE), tex(IMG_FACADE_MR), tex(IMG_FACADE_NORMAL), None, None];
+    facade.textures = [
+        tex(IMG_FACADE),
+        tex(IMG_FACADE_MR),
+        tex(IMG_FACADE_NORMAL),
+        None,
+        None,
+    ];
     let mut roof = plain("roof", Vec3::splat(0.8), 1.0, 1.0);
     roof.textures = [tex(IMG_ROAD), tex(IMG_ROAD_MR), None, None, None];
     let mut road = plain("road", Vec3::ONE, 1.0, 1.0);
@@ -677,7 +700,8 @@ mod tests {
         // A row of wall (no windows at v in the first 0.25 of a window cycle).
         let j = 0;
         for i in 0..28 {
-            if !window((i as f32 + 0.5) / 32.0, 0.5 / 32.0) && !window((i as f32 + 4.5) / 32.0, 0.5 / 32.0)
+            if !window((i as f32 + 0.5) / 32.0, 0.5 / 32.0)
+                && !window((i as f32 + 4.5) / 32.0, 0.5 / 32.0)
             {
                 assert_eq!(rough(i, j), rough(i + 4, j), "texel {i}");
             }

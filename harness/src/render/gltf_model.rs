@@ -21,7 +21,8 @@ use super::mesh::MeshError;
 use super::texture::{Encoding, Image, SamplerDesc, Wrap};
 
 /// Required extensions the loader implements (anything else in `extensionsRequired` is refused).
-pub const SUPPORTED_EXTENSIONS: [&str; 2] = ["KHR_texture_transform", "KHR_materials_emissive_strength"];
+pub const SUPPORTED_EXTENSIONS: [&str; 2] =
+    ["KHR_texture_transform", "KHR_materials_emissive_strength"];
 
 /// Loads `path` as one model of one part (every primitive), scaled by `scale`.
 pub fn load(path: &Path, scale: f32) -> Result<Model, MeshError> {
@@ -29,7 +30,10 @@ pub fn load(path: &Path, scale: f32) -> Result<Model, MeshError> {
         path: path.display().to_string(),
         message,
     };
-    let gltf::Gltf { document: doc, blob } = gltf::Gltf::open(path).map_err(|e| err(e.to_string()))?;
+    let gltf::Gltf {
+        document: doc,
+        blob,
+    } = gltf::Gltf::open(path).map_err(|e| err(e.to_string()))?;
     for ext in doc.extensions_required() {
         if !SUPPORTED_EXTENSIONS.contains(&ext) {
             return Err(err(format!(

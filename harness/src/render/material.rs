@@ -381,9 +381,7 @@ impl MaterialGpu {
                         anisotropy: anisotropy.max(1),
                         ..desc
                     };
-                    samplers
-                        .entry(desc)
-                        .or_insert_with(|| desc.create(device));
+                    samplers.entry(desc).or_insert_with(|| desc.create(device));
                 }
                 let sampler_of = |i: usize| {
                     let desc = m.textures[i].map_or(SamplerDesc::DEFAULT, |t| t.sampler);

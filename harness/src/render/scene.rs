@@ -612,7 +612,12 @@ impl SceneGpu {
         let pipeline = &self.pipelines[&kind];
         self.draw(pass, pipeline, slot);
         if let Some(m) = &self.materials {
-            m.draw(pass, kind, &self.bind_group, (slot as u64 * SLOT_STRIDE) as u32);
+            m.draw(
+                pass,
+                kind,
+                &self.bind_group,
+                (slot as u64 * SLOT_STRIDE) as u32,
+            );
         }
     }
 

@@ -516,7 +516,12 @@ fn city(ctx: &mut Ctx, path: &KeyPath, c: &RawCity) -> City {
             format!("{detail} is above 1 (the finest detail is a fraction of the texture's Nyquist frequency, in (0, 1])"),
         );
     }
-    let texture_size = ctx.count(&path.key("texture_size"), c.texture_size.unwrap_or(256), 16, 4096);
+    let texture_size = ctx.count(
+        &path.key("texture_size"),
+        c.texture_size.unwrap_or(256),
+        16,
+        4096,
+    );
     if !texture_size.is_power_of_two() {
         ctx.err(
             &path.key("texture_size"),
@@ -693,7 +698,12 @@ fn object(ctx: &mut Ctx, path: &KeyPath, file: &Path, o: &RawObject) -> Object {
             }
         }
         Some("mesh") => {
-            ctx.unused(path, "shape \"mesh\"", &set, &["path", "scale", "materials"]);
+            ctx.unused(
+                path,
+                "shape \"mesh\"",
+                &set,
+                &["path", "scale", "materials"],
+            );
             let textured = ctx.choice(
                 &path.key("materials"),
                 "materials",
