@@ -22,7 +22,7 @@ use super::material::{
     TextureRef, UvTransform,
 };
 use super::texture::{Encoding, Image, SamplerDesc};
-use crate::scenario::City;
+use crate::scenario::scene::City;
 
 /// Street width between blocks, metres.
 pub const STREET: f32 = 12.0;
