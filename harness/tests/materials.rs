@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 use tessera::render::gltf_model;
 use tessera::render::scene::SceneGpu;
 use tessera::run::frames;
-use tessera::techniques::{self, Target};
+use tessera::techniques::{self, BuildContext, Target};
 use tessera_metrics::HdrImage;
 
 const ASSIMP: &str = "/usr/share/assimp/models/glTF2";
@@ -132,12 +132,8 @@ fn render(s: &tessera::scenario::Scenario, technique: &str) -> HdrImage {
     let gpu = common::gpu();
     let mut scene = SceneGpu::new(&gpu.device, &gpu.queue, s).unwrap();
     let v = common::variant(technique, &[]);
-    let mut t = techniques::build(
-        &gpu,
-        &v,
-        Target::new(s.width, s.height, s.scene.has_dynamic_objects()),
-    )
-    .unwrap();
+    let target = Target::new(s.width, s.height, s.scene.has_dynamic_objects());
+    let mut t = techniques::build(&v, &BuildContext::new(&gpu, &scene, target)).unwrap();
     let r = frames::render(&gpu, &mut scene, s, t.as_mut(), true, true, &mut || {}).unwrap();
     r.hdr_frames.into_iter().last().unwrap()
 }
@@ -465,4 +461,47 @@ intensity = 2.0"#;
         .filter(|&(x, y)| pixel(&out, x, y) != [0.0, 1.0, 0.0])
         .count();
     assert!(covered > 50, "only {covered} of 576 pixels show the helmet");
+}
+
+#[test]
+fn techniques_without_the_forward_pipelines_skip_textured_scenes_with_the_reason() {
+    let dir = tempfile::tempdir().unwrap();
+    let material = format!(r#"{{ "pbrMetallicRoughness": {{ {MATTE} }} }}"#);
+    let path = write_quad(
+        dir.path(),
+        "plain",
+        1.0,
+        &[solid(1, 1, [255; 4])],
+        &material,
+        TRILINEAR,
+    );
+    let s = quad_scenario(dir.path(), &path, 16, 2.0, 1.0, "");
+    let gpu = common::gpu();
+    let scene = SceneGpu::new(&gpu.device, &gpu.queue, &s).unwrap();
+    assert!(scene.has_materials());
+    let target = Target::new(s.width, s.height, false);
+    for name in ["adaptive-shading", "native-deferred"] {
+        let v = common::variant(name, &[]);
+        match techniques::build(&v, &BuildContext::new(&gpu, &scene, target)) {
+            Err(u) => assert!(
+                u.0.contains("cannot draw textured materials"),
+                "{name}: {}",
+                u.0
+            ),
+            Ok(_) => panic!("{name} built on a textured scene"),
+        }
+    }
+    for name in [
+        "native",
+        "checkerboard",
+        "checkerboard-2x2",
+        "interlace",
+        "upscale",
+    ] {
+        let v = common::variant(name, &[]);
+        assert!(
+            techniques::build(&v, &BuildContext::new(&gpu, &scene, target)).is_ok(),
+            "{name} draws textured materials"
+        );
+    }
 }
