@@ -63,6 +63,15 @@ enum Command {
         #[arg(required = true)]
         paths: Vec<PathBuf>,
     },
+    /// Load the scenes of scenarios on one adapter and time it: meshes, glTF materials, the city,
+    /// textures and their mip chains, waited for on the GPU (what a run does before its first frame).
+    Load {
+        #[arg(required = true)]
+        paths: Vec<PathBuf>,
+        /// Adapter whose name, driver or backend contains this text (case-insensitive).
+        #[arg(long)]
+        adapter: Option<String>,
+    },
     /// List every adapter with the features that matter to Tessera.
     Adapters {
         /// Print JSON instead of text.
@@ -143,6 +152,7 @@ fn main() -> ExitCode {
             metrics_device,
         ),
         Command::Validate { paths } => validate_command(&paths),
+        Command::Load { paths, adapter } => load_command(&paths, adapter),
         Command::Adapters { json } => adapters_command(json),
         Command::Compare {
             run_a,
@@ -239,6 +249,48 @@ fn validate_command(paths: &[PathBuf]) -> u8 {
             0
         }
         None => EXIT_INPUT,
+    }
+}
+
+fn load_command(paths: &[PathBuf], adapter: Option<String>) -> u8 {
+    let Some(scenarios) = load_all(paths) else {
+        return EXIT_INPUT;
+    };
+    let gpu = match tessera::gpu::select(adapter.as_deref()).and_then(tessera::gpu::open) {
+        Ok(g) => g,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return EXIT_DEVICE;
+        }
+    };
+    let mut failed = false;
+    for s in &scenarios {
+        let start = std::time::Instant::now();
+        match tessera::render::scene::SceneGpu::new(&gpu.device, &gpu.queue, s) {
+            Ok(scene) => {
+                let _ = gpu.device.poll(wgpu::PollType::Wait {
+                    submission_index: None,
+                    timeout: None,
+                });
+                let ms = start.elapsed().as_secs_f64() * 1e3;
+                println!(
+                    "{:<40} {:>9.1} ms  {:>10} triangles  {:>8.1} MiB",
+                    s.name,
+                    ms,
+                    scene.triangles,
+                    scene.buffer_bytes as f64 / (1u64 << 20) as f64
+                );
+            }
+            Err(e) => {
+                eprintln!("error: {}: {e}", s.file.display());
+                failed = true;
+            }
+        }
+    }
+    if failed {
+        EXIT_INPUT
+    } else {
+        0
     }
 }
 

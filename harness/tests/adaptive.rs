@@ -188,7 +188,7 @@ fn adaptive(params: &[(&str, ParamValue)]) -> Variant {
 }
 
 fn render(gpu: &tessera::gpu::Gpu, s: &Scenario, v: &Variant) -> frames::Rendered {
-    let mut scene = SceneGpu::new(&gpu.device, s).unwrap();
+    let mut scene = SceneGpu::new(&gpu.device, &gpu.queue, s).unwrap();
     let mut t = techniques::build(
         v,
         &BuildContext::new(
@@ -230,7 +230,7 @@ fn f32s(bytes: Vec<u8>) -> Vec<f32> {
 /// inputs. Returns the number of tiles at each region size over all frames with history.
 fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) -> [usize; 5] {
     let gpu = common::gpu();
-    let mut scene = SceneGpu::new(&gpu.device, s).unwrap();
+    let mut scene = SceneGpu::new(&gpu.device, &gpu.queue, s).unwrap();
     let mut t = Adaptive::new(&gpu, rates_of(v), s.width, s.height);
     let mut timers = Timers::new(&gpu.device, &[]).unwrap();
     let mut histogram = [0usize; 5];
@@ -378,7 +378,7 @@ fn one_shade_per_coarse_pixel_and_object() {
             ("allow_4x4", ParamValue::Bool(true)),
             ("coarse_sample", ParamValue::Str(sample.into())),
         ]);
-        let mut scene = SceneGpu::new(&gpu.device, &s).unwrap();
+        let mut scene = SceneGpu::new(&gpu.device, &gpu.queue, &s).unwrap();
         let mut t = Adaptive::new(&gpu, rates_of(&v), s.width, s.height);
         let mut timers = Timers::new(&gpu.device, &[]).unwrap();
         let (w, h) = (s.width as usize, s.height as usize);

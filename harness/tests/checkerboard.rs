@@ -47,7 +47,7 @@ fn samples(gpu: &tessera::gpu::Gpu, cb: &Checkerboard, parity: u32) -> Samples {
 /// CPU model fed the same samples. Returns the model's sources of the last frame.
 fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) -> Vec<Source> {
     let gpu = common::gpu();
-    let mut scene = SceneGpu::new(&gpu.device, s).unwrap();
+    let mut scene = SceneGpu::new(&gpu.device, &gpu.queue, s).unwrap();
     let mut cb = Checkerboard::new(
         &gpu,
         Options::from_variant(v),
@@ -215,7 +215,7 @@ fn static_scene_reconstructs_native_within_one_level() {
     ));
     let gpu = common::gpu();
     let render = |v: &Variant| {
-        let mut scene = SceneGpu::new(&gpu.device, &s).unwrap();
+        let mut scene = SceneGpu::new(&gpu.device, &gpu.queue, &s).unwrap();
         let mut t = techniques::build(
             v,
             &BuildContext::new(&gpu, &scene, Target::new(s.width, s.height, false)),

@@ -453,7 +453,7 @@ fn scenario(extra: &str) -> Scenario {
 /// textures the reconstitution read. Returns the model's sources per frame.
 fn compare_rendered(s: &Scenario, v: &Variant, frames: u32) -> Vec<Vec<Source>> {
     let gpu = common::gpu();
-    let mut scene = SceneGpu::new(&gpu.device, s).unwrap();
+    let mut scene = SceneGpu::new(&gpu.device, &gpu.queue, s).unwrap();
     let mut t = Checkerboard2x2Gpu::new(&gpu, v, s.width, s.height);
     let mut timers = Timers::new(&gpu.device, &[]).unwrap();
     let mut all = Vec::new();
@@ -540,7 +540,7 @@ fn a_camera_cut_resets_history() {
 }
 
 fn render(gpu: &Gpu, s: &Scenario, v: &Variant) -> tessera::run::frames::Rendered {
-    let mut scene = SceneGpu::new(&gpu.device, s).unwrap();
+    let mut scene = SceneGpu::new(&gpu.device, &gpu.queue, s).unwrap();
     let mut t = techniques::build(
         v,
         &BuildContext::new(
@@ -594,7 +594,7 @@ fn a_static_scene_converges_to_native_unless_clamped_uniformly() {
 fn the_scene_pass_shades_only_the_free_blocks() {
     let gpu = common::gpu();
     let s = common::scenario(common::TINY);
-    let mut scene = SceneGpu::new(&gpu.device, &s).unwrap();
+    let mut scene = SceneGpu::new(&gpu.device, &gpu.queue, &s).unwrap();
     let mut t = Checkerboard2x2Gpu::new(&gpu, &variant(&[]), s.width, s.height);
     let mut timers = Timers::new(&gpu.device, &[]).unwrap();
     let bg = s
@@ -639,7 +639,7 @@ fn the_scene_pass_shades_only_the_free_blocks() {
 fn the_depth_test_rejects_half_the_samples_native_shades() {
     let gpu = common::gpu();
     let s = common::scenario(&common::TINY.replace("[48, 32]", "[64, 48]"));
-    let mut scene = SceneGpu::new(&gpu.device, &s).unwrap();
+    let mut scene = SceneGpu::new(&gpu.device, &gpu.queue, &s).unwrap();
     let t = Checkerboard2x2Gpu::new(&gpu, &variant(&[]), s.width, s.height);
     let native = techniques::build(
         &common::variant("native", &[]),
@@ -885,7 +885,7 @@ fn motion_of_static_geometry_is_the_cameras() {
             ""
         )
     ));
-    let mut scene = SceneGpu::new(&gpu.device, &s).unwrap();
+    let mut scene = SceneGpu::new(&gpu.device, &gpu.queue, &s).unwrap();
     let mut t = Checkerboard2x2Gpu::new(&gpu, &variant(&[]), s.width, s.height);
     let mut timers = Timers::new(&gpu.device, &[]).unwrap();
     for index in 0..2 {

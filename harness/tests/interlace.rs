@@ -28,7 +28,7 @@ fn vec4s(v: Vec<f32>) -> Vec<Vec4> {
 /// frame's sources.
 fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) -> Vec<Vec<Source>> {
     let gpu = common::gpu();
-    let mut scene = SceneGpu::new(&gpu.device, s).unwrap();
+    let mut scene = SceneGpu::new(&gpu.device, &gpu.queue, s).unwrap();
     let mut t = InterlaceGpu::new(
         &gpu,
         Options::from_variant(v),
@@ -169,7 +169,7 @@ fn static_point_sampled_scene_rebuilds_native_within_one_level() {
     ));
     let gpu = common::gpu();
     let render = |v: &Variant| {
-        let mut scene = SceneGpu::new(&gpu.device, &s).unwrap();
+        let mut scene = SceneGpu::new(&gpu.device, &gpu.queue, &s).unwrap();
         let mut t = techniques::build(
             v,
             &BuildContext::new(&gpu, &scene, Target::new(s.width, s.height, false)),

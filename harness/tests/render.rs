@@ -16,7 +16,7 @@ fn render(
     s: &tessera::scenario::Scenario,
     v: &Variant,
 ) -> frames::Rendered {
-    let mut scene = SceneGpu::new(&gpu.device, s).unwrap();
+    let mut scene = SceneGpu::new(&gpu.device, &gpu.queue, s).unwrap();
     let mut t = techniques::build(
         v,
         &BuildContext::new(

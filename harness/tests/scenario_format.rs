@@ -55,7 +55,7 @@ fn a_minimal_scenario_gets_defaults() {
 fn unknown_keys_are_rejected_with_the_allowed_ones() {
     assert_eq!(
         errors("\n[scene]\nshading_costs = 3\n"),
-        ["s.toml:18:1: `scene.shading_costs`: unknown key `shading_costs`, expected one of `background`, `ambient`, `shading_cost`, `ground`, `lights`, `objects`"]
+        ["s.toml:18:1: `scene.shading_costs`: unknown key `shading_costs`, expected one of `background`, `ambient`, `shading_cost`, `ground`, `lights`, `objects`, `anisotropy`, `city`"]
     );
 }
 
@@ -272,5 +272,38 @@ fn measured_auto_defaults_and_errors() {
             "expected an integer, \"auto\" or a table { min, max, precision, timeout_s }"
         ),
         "{wrong:?}"
+    );
+}
+
+#[test]
+fn city_and_material_keys_are_checked() {
+    let e = errors("\n[scene.city]\ntexture_size = 100\ntexture_detail = 2.0\nblocks = 0\n");
+    assert_eq!(e.len(), 3, "{e:?}");
+    assert!(
+        e.iter()
+            .any(|m| m.contains("`scene.city.texture_size`: 100 is not a power of two")),
+        "{e:?}"
+    );
+    assert!(
+        e.iter()
+            .any(|m| m.contains("`scene.city.texture_detail`: 2 is above 1")),
+        "{e:?}"
+    );
+    assert!(e.iter().any(|m| m.contains("`scene.city.blocks`")), "{e:?}");
+    let city = scenario::parse(
+        Path::new("s.toml"),
+        &format!("{VALID}\n[scene.city]\nmoving = 3\n"),
+    )
+    .unwrap();
+    assert!(
+        city.scene.has_dynamic_objects(),
+        "moving vehicles are dynamic objects"
+    );
+    let e = errors("\n[[scene.objects]]\nshape = \"box\"\nmaterials = \"file\"\n");
+    assert!(e[0].contains("`materials`"), "{e:?}");
+    let e = errors("\n[scene]\nanisotropy = 32\n");
+    assert!(
+        e[0].contains("`scene.anisotropy`: 32 is out of range"),
+        "{e:?}"
     );
 }

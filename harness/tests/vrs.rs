@@ -92,7 +92,7 @@ fn pixel_sampling_needs_the_software_path() {
 fn without_the_extension_hardware_variants_are_skipped() {
     let gpu = common::gpu();
     let target = Target::new(48, 32, false);
-    let scene = SceneGpu::new(&gpu.device, &common::scenario(common::TINY)).unwrap();
+    let scene = SceneGpu::new(&gpu.device, &gpu.queue, &common::scenario(common::TINY)).unwrap();
     for v in [
         common::variant(
             "adaptive-shading",

@@ -97,7 +97,7 @@ pub fn record_scene_pass_on(
         ScenePipeline::Velocity => wgpu::Color::TRANSPARENT,
         _ => scene.clear_color(),
     };
-    let pipeline = scene.pipeline(&gpu.device, kind).clone();
+    scene.pipeline(&gpu.device, kind);
     let q = timers.begin(name, encoder);
     {
         let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -124,7 +124,7 @@ pub fn record_scene_pass_on(
             multiview_mask: None,
         });
         timers.begin_stats(&mut rp, name);
-        scene.draw(&mut rp, &pipeline, slot);
+        scene.draw_kind(&mut rp, kind, slot);
         timers.end_stats(&mut rp, name);
     }
     timers.end(encoder, q);

@@ -252,7 +252,7 @@ pub fn build(shape: &Shape) -> Result<Mesh, MeshError> {
             rails,
             thickness,
         } => fence(*end, *height, *posts, *rails, *thickness),
-        Shape::Mesh { path, scale } => load_gltf(path, *scale)?,
+        Shape::Mesh { path, scale, .. } => load_gltf(path, *scale)?,
     })
 }
 

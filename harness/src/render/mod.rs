@@ -1,11 +1,17 @@
-//! Rendering infrastructure that knows no technique: the scene on the GPU (`scene.rs`, `mesh.rs`),
+//! Rendering infrastructure that knows no technique: the scene on the GPU (`scene.rs`, `mesh.rs`;
+//! textured models: `material.rs`, `texture.rs`, `mips.rs`, `gltf_model.rs`, `city.rs`),
 //! the pass graph, per-pass timers, readback, the [`renderer::Renderer`] interface the run loop
 //! drives, and a kit of GPU helpers techniques build with. Techniques are in `techniques/`.
 
+pub mod city;
+pub mod gltf_model;
 pub mod graph;
 pub mod kit;
+pub mod material;
 pub mod mesh;
+pub mod mips;
 pub mod readback;
 pub mod renderer;
 pub mod scene;
+pub mod texture;
 pub mod timers;

@@ -5,13 +5,19 @@
 //! near maps to 1, far to 0, cleared to 0, compared with `Greater`; with Depth32Float this keeps
 //! precision from near = 1e-4 to far = 1e7. Techniques call [`SceneGpu::write_view`] once per view
 //! slot and frame, then [`SceneGpu::draw`] inside their render passes.
+//!
+//! Procedural shapes and `materials = "color"` meshes are drawn as before with the scene's own
+//! colours; glTF files with `materials = "file"` and the generated city are textured models
+//! (`material.rs`), drawn after them in the same passes with the same objects buffer.
 
 use std::collections::HashMap;
 
 use bytemuck::{Pod, Zeroable};
 use glam::{DMat4, DVec3, Vec2, Vec4};
 
+use super::material::{MaterialGpu, Model, Placement};
 use super::mesh::{self, Mesh, MeshError, Vertex};
+use super::{city, gltf_model};
 use crate::scenario::scene::{CameraPose, GroundFilter, Light, Stage};
 
 pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
@@ -67,8 +73,12 @@ pub struct View {
     /// showing the whole frame; techniques use it to jitter and to render parts of the frame.
     pub ndc_offset: Vec2,
     pub ndc_scale: Vec2,
-    /// Multiplies screen-space derivatives of the ground pattern (1 at native resolution).
+    /// Multiplies screen-space derivatives of the ground pattern and of texture coordinates (1 at
+    /// native resolution; a technique rendering at a reduced density corrects with it).
     pub gradient_scale: f32,
+    /// Texture LOD bias in mip levels on top of `gradient_scale` (texture gradients are scaled by
+    /// 2^lod_bias): an upscaler's -log2(output / render). 0 by default.
+    pub lod_bias: f32,
 }
 
 impl View {
@@ -81,6 +91,7 @@ impl View {
             ndc_offset: Vec2::ZERO,
             ndc_scale: Vec2::ONE,
             gradient_scale: 1.0,
+            lod_bias: 0.0,
         }
     }
 }
@@ -130,22 +141,55 @@ pub struct SceneGpu {
     layout: wgpu::PipelineLayout,
     module: wgpu::ShaderModule,
     pipelines: HashMap<ScenePipeline, wgpu::RenderPipeline>,
+    /// Textured models (glTF materials, the city), when the scene has any.
+    materials: Option<MaterialGpu>,
+    /// The city's objects, after the scenario's in the objects buffer.
+    city_objects: Vec<city::CityObject>,
     pub triangles: usize,
-    /// Bytes of geometry and uniform buffers, shared by every variant.
+    /// Bytes of geometry and uniform buffers and of textures with their mip chains, shared by
+    /// every variant.
     pub buffer_bytes: u64,
 }
 
 impl SceneGpu {
-    /// Builds geometry (loading glTF files) and GPU objects once per scenario (`&Scenario` gives
-    /// its [`Stage`]).
-    pub fn new(device: &wgpu::Device, stage: impl Into<Stage>) -> Result<SceneGpu, MeshError> {
+    /// Builds geometry (loading glTF files, generating the city and every texture's mip chain)
+    /// and GPU objects once per scenario (`&Scenario` gives its [`Stage`]).
+    pub fn new(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        stage: impl Into<Stage>,
+    ) -> Result<SceneGpu, MeshError> {
         let scenario: Stage = stage.into();
         let mut meshes: Vec<Mesh> = Vec::new();
         if let Some(g) = &scenario.scene.ground {
             meshes.push(mesh::ground_quad(g.size));
         }
+        // Textured objects keep their slot in the objects buffer (an empty untextured mesh) and
+        // are drawn by the material path.
+        let mut models: Vec<(Model, Vec<Placement>)> = Vec::new();
         for o in &scenario.scene.objects {
-            meshes.push(mesh::build(&o.shape)?);
+            match &o.shape {
+                crate::scenario::Shape::Mesh {
+                    path,
+                    scale,
+                    textured: true,
+                } => {
+                    let placement = Placement {
+                        part: 0,
+                        first_object: meshes.len() as u32,
+                        count: 1,
+                    };
+                    models.push((gltf_model::load(path, *scale)?, vec![placement]));
+                    meshes.push(Mesh::default());
+                }
+                shape => meshes.push(mesh::build(shape)?),
+            }
+        }
+        let mut city_objects = Vec::new();
+        if let Some(c) = &scenario.scene.city {
+            let generated = city::generate(c, meshes.len() as u32);
+            city_objects = generated.objects;
+            models.push((generated.model, generated.placements));
         }
         let mut vertices: Vec<Vertex> = Vec::new();
         let mut indices: Vec<u32> = Vec::new();
@@ -185,7 +229,7 @@ impl SceneGpu {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let object_count = draws.len().max(1) as u64;
+        let object_count = (draws.len() + city_objects.len()).max(1) as u64;
         let object_buffer = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("scene objects"),
             size: object_count * std::mem::size_of::<GpuObject>() as u64,
@@ -246,8 +290,17 @@ impl SceneGpu {
             label: Some("scene.wgsl"),
             source: wgpu::ShaderSource::Wgsl(SCENE_WGSL.into()),
         });
-        let buffer_bytes =
-            vertex_buffer.size() + index_buffer.size() + frame_buffer.size() + object_buffer.size();
+        let materials = (!models.is_empty()).then(|| {
+            let refs: Vec<(&Model, Vec<Placement>)> =
+                models.iter().map(|(m, p)| (m, p.clone())).collect();
+            MaterialGpu::new(device, queue, &bgl, &refs, scenario.scene.anisotropy)
+        });
+        let triangles = triangles + materials.as_ref().map_or(0, |m| m.triangles);
+        let buffer_bytes = vertex_buffer.size()
+            + index_buffer.size()
+            + frame_buffer.size()
+            + object_buffer.size()
+            + materials.as_ref().map_or(0, |m| m.bytes);
         Ok(SceneGpu {
             stage: scenario,
             vertex_buffer,
@@ -259,9 +312,17 @@ impl SceneGpu {
             layout,
             module,
             pipelines: HashMap::new(),
+            materials,
+            city_objects,
             triangles,
             buffer_bytes,
         })
+    }
+
+    /// Whether the scene has textured models (glTF materials or the city): techniques that
+    /// shade without the scene's forward pipelines cannot draw them.
+    pub fn has_materials(&self) -> bool {
+        self.materials.is_some()
     }
 
     /// A pipeline of the scene shader, built on first use.
@@ -270,6 +331,9 @@ impl SceneGpu {
         device: &wgpu::Device,
         kind: ScenePipeline,
     ) -> &wgpu::RenderPipeline {
+        if let Some(m) = &mut self.materials {
+            m.prepare(device, kind);
+        }
         let (layout, module) = (&self.layout, &self.module);
         self.pipelines.entry(kind).or_insert_with(|| {
             let (vs, fs, samples, label) = match kind {
@@ -386,6 +450,23 @@ impl SceneGpu {
                 flags: [o.inject.map_or(0.0, |i| i.code()), 0.0, 0.0, 0.0],
             });
         }
+        for c in &self.city_objects {
+            objects.push(GpuObject {
+                model: rel(c.model_at(time)),
+                prev_model: rel(c.model_at(prev_time)),
+                color: [1.0, 1.0, 1.0, 0.0],
+                emissive: [0.0, 0.0, 0.0, if c.is_dynamic() { 2.0 } else { 0.0 }],
+                flags: [0.0; 4],
+            });
+        }
+        if let Some(m) = &self.materials {
+            if m.has_blend() {
+                m.sort(|object, center| {
+                    glam::Mat4::from_cols_array_2d(&objects[object as usize].model)
+                        .transform_point3(center)
+                });
+            }
+        }
         if !objects.is_empty() {
             queue.write_buffer(&self.object_buffer, 0, bytemuck::cast_slice(&objects));
         }
@@ -468,7 +549,7 @@ impl SceneGpu {
             ground: [
                 checker as f32,
                 ground.map(|g| g.filter_epsilon).unwrap_or(0.0),
-                0.0,
+                view.lod_bias,
                 0.0,
             ],
             ground_a: ground
@@ -527,7 +608,23 @@ impl SceneGpu {
         }
     }
 
-    /// Draws every object with view `slot` into the current render pass.
+    /// Draws every object with view `slot` into the current render pass with the pipelines of
+    /// `kind` ([`SceneGpu::pipeline`] first): the untextured objects, then the textured models.
+    pub fn draw_kind(&self, pass: &mut wgpu::RenderPass<'_>, kind: ScenePipeline, slot: u32) {
+        let pipeline = &self.pipelines[&kind];
+        self.draw(pass, pipeline, slot);
+        if let Some(m) = &self.materials {
+            m.draw(
+                pass,
+                kind,
+                &self.bind_group,
+                (slot as u64 * SLOT_STRIDE) as u32,
+            );
+        }
+    }
+
+    /// Draws every untextured object with view `slot` into the current render pass with
+    /// `pipeline` (a technique's own scene shader; textured models are [`SceneGpu::draw_kind`]'s).
     pub fn draw(
         &self,
         pass: &mut wgpu::RenderPass<'_>,
@@ -539,6 +636,9 @@ impl SceneGpu {
         pass.set_vertex_buffer(0, self.vertex_buffer.slice(..));
         pass.set_index_buffer(self.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
         for (i, d) in self.draws.iter().enumerate() {
+            if d.index_count == 0 {
+                continue; // a textured object's slot
+            }
             let i = i as u32;
             pass.draw_indexed(
                 d.first_index..d.first_index + d.index_count,

@@ -38,7 +38,7 @@ pub fn run(
 ) -> ScenarioResult {
     let start = Instant::now();
     let mut results: Vec<VariantResult> = Vec::new();
-    let scene = SceneGpu::new(&gpu.device, scenario);
+    let scene = SceneGpu::new(&gpu.device, &gpu.queue, scenario);
     let mut scene = match scene {
         Ok(s) => s,
         Err(e) => {

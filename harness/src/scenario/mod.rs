@@ -17,8 +17,8 @@ use tessera_results::measure::Measure;
 
 use crate::techniques::Variant;
 pub use scene::{
-    Animation, CameraPose, CameraTrack, Ground, GroundFilter, Inject, Interpolation, Keyframe,
-    Light, Object, Scene, Shape, Stage,
+    Animation, CameraPose, CameraTrack, City, Ground, GroundFilter, Inject, Interpolation,
+    Keyframe, Light, Object, Scene, Shape, Stage,
 };
 pub use span::KeyPath;
 

@@ -126,6 +126,28 @@ pub struct RawScene {
     pub lights: Vec<RawLight>,
     #[serde(default)]
     pub objects: Vec<RawObject>,
+    /// Maximum sampler anisotropy for textured materials (1..=16). Default 1.
+    pub anisotropy: Option<i64>,
+    /// A generated city.
+    pub city: Option<RawCity>,
+}
+
+/// `[scene.city]`: every key optional; see `scenarios/README.md`.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawCity {
+    pub seed: Option<i64>,
+    pub blocks: Option<i64>,
+    pub block_size: Option<f64>,
+    pub buildings: Option<i64>,
+    pub texture_size: Option<i64>,
+    pub texture_detail: Option<f64>,
+    pub trees: Option<i64>,
+    pub tree_cards: Option<i64>,
+    pub poles: Option<i64>,
+    pub parked: Option<i64>,
+    pub moving: Option<i64>,
+    pub speed: Option<f64>,
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -174,6 +196,9 @@ pub struct RawObject {
     pub path: Option<String>,
     /// Mesh: uniform scale.
     pub scale: Option<f64>,
+    /// Mesh: `color` (default: the object's colour, untextured) or `file` (the file's textured
+    /// PBR materials).
+    pub materials: Option<String>,
     /// Degrees about the y axis.
     pub yaw: Option<f64>,
     pub color: Option<Vec<f64>>,

@@ -16,13 +16,44 @@ pub struct Scene {
     pub ground: Option<Ground>,
     pub lights: Vec<Light>,
     pub objects: Vec<Object>,
+    /// Maximum anisotropy of texture samplers whose filters are all linear (1: none).
+    pub anisotropy: u16,
+    /// A generated city (`[scene.city]`).
+    pub city: Option<City>,
 }
 
 impl Scene {
     /// Whether anything moves by itself (not counting the camera).
     pub fn has_dynamic_objects(&self) -> bool {
         self.objects.iter().any(|o| o.animation.is_some())
+            || self.city.as_ref().is_some_and(|c| c.moving > 0)
     }
+}
+
+/// `[scene.city]`: a generated city, deterministic from its seed (`render/city.rs`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct City {
+    pub seed: u64,
+    /// Blocks per side of the square grid.
+    pub blocks: u32,
+    /// Side of one block in metres (streets of 12 m between blocks).
+    pub block_size: f32,
+    /// Buildings per block (object count).
+    pub buildings: u32,
+    /// Texels per side of each generated texture (before its mip chain).
+    pub texture_size: u32,
+    /// Frequency of the finest texture detail as a fraction of level 0's Nyquist frequency.
+    pub texture_detail: f32,
+    /// Trees per block, each of `tree_cards` alpha-tested foliage cards (overdraw).
+    pub trees: u32,
+    pub tree_cards: u32,
+    /// Poles per block side, joined by wires (thin geometry).
+    pub poles: u32,
+    /// Parked vehicles per block.
+    pub parked: u32,
+    /// Moving vehicles in the whole city, driving along the streets at `speed` m/s.
+    pub moving: u32,
+    pub speed: f32,
 }
 
 #[derive(Clone, Debug)]
@@ -116,6 +147,9 @@ pub enum Shape {
     Mesh {
         path: PathBuf,
         scale: f32,
+        /// `materials = "file"`: the file's textured PBR materials; otherwise the object's
+        /// `color` (untextured Blinn-Phong, as procedural shapes).
+        textured: bool,
     },
 }
 

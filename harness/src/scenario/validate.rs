@@ -517,6 +517,8 @@ fn scene(ctx: &mut Ctx, path: &KeyPath, file: &Path, raw: &RawScene) -> Scene {
         .enumerate()
         .map(|(i, o)| object(ctx, &path.key("objects").index(i), file, o))
         .collect();
+    let anisotropy = ctx.count(&path.key("anisotropy"), raw.anisotropy.unwrap_or(1), 1, 16) as u16;
+    let city = raw.city.as_ref().map(|c| city(ctx, &path.key("city"), c));
     Scene {
         background,
         ambient,
@@ -524,6 +526,44 @@ fn scene(ctx: &mut Ctx, path: &KeyPath, file: &Path, raw: &RawScene) -> Scene {
         ground,
         lights,
         objects,
+        anisotropy,
+        city,
+    }
+}
+
+fn city(ctx: &mut Ctx, path: &KeyPath, c: &RawCity) -> City {
+    let detail = ctx.positive(&path.key("texture_detail"), c.texture_detail.unwrap_or(0.5));
+    if detail > 1.0 {
+        ctx.err(
+            &path.key("texture_detail"),
+            format!("{detail} is above 1 (the finest detail is a fraction of the texture's Nyquist frequency, in (0, 1])"),
+        );
+    }
+    let texture_size = ctx.count(
+        &path.key("texture_size"),
+        c.texture_size.unwrap_or(256),
+        16,
+        4096,
+    );
+    if !texture_size.is_power_of_two() {
+        ctx.err(
+            &path.key("texture_size"),
+            format!("{texture_size} is not a power of two (16, 32, ..., 4096)"),
+        );
+    }
+    City {
+        seed: ctx.count(&path.key("seed"), c.seed.unwrap_or(1), 0, u32::MAX as i64) as u64,
+        blocks: ctx.count(&path.key("blocks"), c.blocks.unwrap_or(4), 1, 64),
+        block_size: ctx.positive(&path.key("block_size"), c.block_size.unwrap_or(40.0)),
+        buildings: ctx.count(&path.key("buildings"), c.buildings.unwrap_or(8), 0, 64),
+        texture_size,
+        texture_detail: detail,
+        trees: ctx.count(&path.key("trees"), c.trees.unwrap_or(4), 0, 256),
+        tree_cards: ctx.count(&path.key("tree_cards"), c.tree_cards.unwrap_or(6), 1, 64),
+        poles: ctx.count(&path.key("poles"), c.poles.unwrap_or(3), 0, 64),
+        parked: ctx.count(&path.key("parked"), c.parked.unwrap_or(4), 0, 64),
+        moving: ctx.count(&path.key("moving"), c.moving.unwrap_or(8), 0, 4096),
+        speed: ctx.non_negative(&path.key("speed"), c.speed.unwrap_or(8.0)),
     }
 }
 
@@ -628,6 +668,7 @@ fn object(ctx: &mut Ctx, path: &KeyPath, file: &Path, o: &RawObject) -> Object {
         ("thickness", o.thickness.is_some()),
         ("path", o.path.is_some()),
         ("scale", o.scale.is_some()),
+        ("materials", o.materials.is_some()),
     ];
     let shapes = ["box", "sphere", "pole", "fence", "mesh"];
     let shape_name = ctx.choice(&path.key("shape"), "shape", &o.shape, &shapes);
@@ -680,7 +721,18 @@ fn object(ctx: &mut Ctx, path: &KeyPath, file: &Path, o: &RawObject) -> Object {
             }
         }
         Some("mesh") => {
-            ctx.unused(path, "shape \"mesh\"", &set, &["path", "scale"]);
+            ctx.unused(
+                path,
+                "shape \"mesh\"",
+                &set,
+                &["path", "scale", "materials"],
+            );
+            let textured = ctx.choice(
+                &path.key("materials"),
+                "materials",
+                o.materials.as_deref().unwrap_or("color"),
+                &["color", "file"],
+            ) == Some("file");
             let rel = match &o.path {
                 Some(p) => p.clone(),
                 None => {
@@ -701,6 +753,7 @@ fn object(ctx: &mut Ctx, path: &KeyPath, file: &Path, o: &RawObject) -> Object {
             Shape::Mesh {
                 path: resolved,
                 scale: ctx.positive(&path.key("scale"), o.scale.unwrap_or(1.0)),
+                textured,
             }
         }
         _ => Shape::Sphere { radius: 1.0 },

@@ -114,10 +114,17 @@ impl MotionPass {
 /// Every WGSL module of every technique (and the adapter probe's), for validation without a
 /// GPU.
 pub fn shaders() -> Vec<Shader> {
-    let mut all = vec![Shader::file(
-        "sample_positions.wgsl",
-        crate::gpu::PROBE_WGSL,
-    )];
+    let mut all = vec![
+        Shader::file("sample_positions.wgsl", crate::gpu::PROBE_WGSL),
+        // Textured materials and their mip chains (`render/material.rs`, `render/mips.rs`),
+        // drawn by every technique that uses the scene's forward pipelines.
+        Shader {
+            name: "material".into(),
+            source: crate::render::material::material_wgsl(),
+            files: vec!["scene.wgsl", "material/material.wgsl"],
+        },
+        Shader::file("material/mips.wgsl", crate::render::mips::MIPS_WGSL),
+    ];
     for t in ALL {
         all.extend(t.shaders());
     }

@@ -198,6 +198,18 @@ fn hardware_shaders() -> Vec<Shader> {
 
 /// The hardware path on `gpu`, or why this adapter cannot run it (its requirements were met, so
 /// the caps are there).
+/// Textured materials (glTF `materials = "file"`, the city) are drawn by the scene's forward
+/// pipelines; the G-buffer (software path) and the raw Vulkan pass (hardware path) carry no
+/// texture coordinates or materials yet, so such a scene is not this technique's to draw.
+fn check_untextured(name: &str, cx: &BuildContext<'_>) -> Result<(), Unsupported> {
+    if cx.scene.has_materials() {
+        return Err(Unsupported(format!(
+            "{name} cannot draw textured materials: its G-buffer and raw Vulkan pass carry no texture coordinates or materials yet"
+        )));
+    }
+    Ok(())
+}
+
 fn build_hardware(rates: Rates, cx: &BuildContext<'_>) -> Result<Box<dyn Renderer>, Unsupported> {
     let (gpu, t) = (cx.gpu, cx.target);
     match &gpu.vrs {
@@ -273,6 +285,7 @@ impl Definition for AdaptiveShading {
         options: &Options,
         cx: &BuildContext<'_>,
     ) -> Result<Box<dyn Renderer>, Unsupported> {
+        check_untextured("adaptive-shading", cx)?;
         let t = cx.target;
         if options.vrs == Vrs::Hardware {
             return build_hardware(Rates::Adaptive(options.rates), cx);
@@ -334,6 +347,7 @@ impl Definition for NativeVrs {
         rate: &FixedRate,
         cx: &BuildContext<'_>,
     ) -> Result<Box<dyn Renderer>, Unsupported> {
+        check_untextured("native-vrs", cx)?;
         let (rx, ry) = rate.size();
         build_hardware(Rates::Fixed(rx, ry), cx)
     }
@@ -368,6 +382,7 @@ impl Definition for NativeDeferred {
         _options: &(),
         cx: &BuildContext<'_>,
     ) -> Result<Box<dyn Renderer>, Unsupported> {
+        check_untextured("native-deferred", cx)?;
         let t = cx.target;
         Ok(Box::new(AdaptiveGpu::new(cx.gpu, None, t.width, t.height)))
     }

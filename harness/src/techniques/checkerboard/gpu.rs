@@ -326,6 +326,8 @@ impl Renderer for CheckerboardGpu {
             ndc_offset: Vec2::ZERO,
             ndc_scale: Vec2::ONE,
             gradient_scale: self.gradient_scale,
+            // `gradient_scale` is its texture LOD bias too (0.7071: Intel's -0.5).
+            lod_bias: 0.0,
         };
         match self.sampling {
             Sampling::TwoPass => {

@@ -39,6 +39,8 @@ pub struct Forward {
     scene_views: (wgpu::TextureView, wgpu::TextureView),
     /// What the scene pass draws: shaded colour, or (`velocity_only`) screen motion.
     kind: ScenePipeline,
+    /// Texture LOD bias of the scene pass ([`View::lod_bias`]).
+    lod_bias: f32,
 }
 
 /// The pass graph of forward rendering at `width` x `height`, resampled by `resample` if any.
@@ -96,7 +98,14 @@ impl Forward {
             resample,
             scene_views,
             kind: ScenePipeline::Forward { samples: 1 },
+            lod_bias: 0.0,
         }
+    }
+
+    /// The same, sampling textures `lod_bias` mip levels sharper (negative) or blurrier: an
+    /// upscaler's -log2(output / render), so textures keep the output's detail.
+    pub fn with_lod_bias(self, lod_bias: f32) -> Forward {
+        Forward { lod_bias, ..self }
     }
 
     /// The velocity pass alone at output resolution (the `tde` metric's exact motion): `output()`
@@ -162,7 +171,10 @@ impl Renderer for Forward {
         encoder: &mut wgpu::CommandEncoder,
         frame: FrameInfo,
     ) {
-        let view = View::whole(frame.time, frame.prev_time);
+        let view = View {
+            lod_bias: self.lod_bias,
+            ..View::whole(frame.time, frame.prev_time)
+        };
         scene.write_view(&gpu.queue, 0, &view);
         record_scene_pass(
             gpu,

@@ -96,7 +96,11 @@ impl Definition for Upscale {
         };
         let make: MakeResample =
             Box::new(move |gpu, src, dst| upscale_pipeline(gpu, src, dst, filter));
-        Ok(Box::new(Forward::new(cx.gpu, w, h, Some((resample, make)))))
+        // Textures sampled as at the output resolution (the upscalers' mip bias).
+        let lod_bias = -(cx.target.width as f32 / w as f32).log2();
+        Ok(Box::new(
+            Forward::new(cx.gpu, w, h, Some((resample, make))).with_lod_bias(lod_bias),
+        ))
     }
 
     fn shaders(&self) -> Vec<Shader> {

@@ -1,0 +1,743 @@
+//! Textured materials: what a model is on the CPU ([`Model`]: vertices with texture coordinates and
+//! tangents, glTF 2.0 metallic-roughness [`Material`]s, their images) and the scene's textured
+//! draws on the GPU ([`MaterialGpu`]).
+//!
+//! A model's parts are drawn instanced: each [`Placement`] names a part and a run of consecutive
+//! scene objects (their model matrices and motion are `scene.rs`'s object buffer), so the city's
+//! hundreds of buildings are a few draws. Opaque draws go first, then alpha-tested (`MASK`,
+//! discarded below `alphaCutoff`), then blended (`BLEND`, depth test without depth writes, sorted
+//! back to front per frame by each draw's centre). The velocity pass draws opaque and
+//! alpha-tested surfaces only: a blended surface has no one motion.
+//!
+//! Shading is `shaders/material/material.wgsl`, appended to `scene.wgsl` (same frame uniforms,
+//! lights and objects); each material picks the GGX metallic-roughness BRDF or Blinn-Phong.
+//! Not here: reading glTF files (`gltf_model.rs`), the city (`city.rs`), mip levels (`mips.rs`).
+
+use std::collections::HashMap;
+use std::sync::Mutex;
+
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat3, Vec2, Vec3, Vec4};
+
+use super::mips::MipGenerator;
+use super::scene::{ScenePipeline, COLOR_FORMAT, DEPTH_FORMAT};
+use super::texture::{self, Encoding, Image, SamplerDesc};
+
+pub static MATERIAL_WGSL: &str = include_str!("../../../shaders/material/material.wgsl");
+
+/// `scene.wgsl` with the textured-material entry points appended, as the GPU compiles it.
+pub fn material_wgsl() -> String {
+    format!("{}\n{MATERIAL_WGSL}", super::scene::SCENE_WGSL)
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable, PartialEq)]
+pub struct MaterialVertex {
+    pub position: [f32; 3],
+    pub normal: [f32; 3],
+    /// glTF `TEXCOORD_0`.
+    pub uv: [f32; 2],
+    /// xyz: tangent (along +u); w: handedness of the bitangent (+1 or -1). Zero: no tangent.
+    pub tangent: [f32; 4],
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum AlphaMode {
+    Opaque,
+    /// Alpha test: fragments with base-colour alpha below the cutoff are discarded.
+    Mask {
+        cutoff: f32,
+    },
+    Blend,
+}
+
+/// Which BRDF a material is shaded with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Brdf {
+    /// The procedural scenes' shading (Lambert plus a Blinn-Phong lobe of exponent 48).
+    BlinnPhong,
+    /// glTF 2.0's metallic-roughness model: GGX distribution, height-correlated Smith
+    /// visibility, Schlick Fresnel, Lambert diffuse (glTF 2.0 spec, appendix B).
+    Ggx,
+}
+
+/// An affine map of texture coordinates (`KHR_texture_transform`): offset, rotation (radians,
+/// counter-clockwise in uv) and scale, applied as translation * rotation * scale.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct UvTransform {
+    pub offset: Vec2,
+    pub rotation: f32,
+    pub scale: Vec2,
+}
+
+impl UvTransform {
+    pub const IDENTITY: UvTransform = UvTransform {
+        offset: Vec2::ZERO,
+        rotation: 0.0,
+        scale: Vec2::ONE,
+    };
+
+    /// The two rows of the 2x3 matrix, as the shader reads them.
+    fn rows(&self) -> [[f32; 4]; 2] {
+        let (s, c) = self.rotation.sin_cos();
+        // The extension's rotation matrix is [cos sin; -sin cos].
+        let m = Mat3::from_cols(
+            Vec3::new(c * self.scale.x, -s * self.scale.x, 0.0),
+            Vec3::new(s * self.scale.y, c * self.scale.y, 0.0),
+            Vec3::new(self.offset.x, self.offset.y, 1.0),
+        );
+        [
+            [m.x_axis.x, m.y_axis.x, m.z_axis.x, 0.0],
+            [m.x_axis.y, m.y_axis.y, m.z_axis.y, 0.0],
+        ]
+    }
+}
+
+/// One texture slot of a material: which of the model's images, sampled how.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TextureRef {
+    pub image: usize,
+    pub sampler: SamplerDesc,
+    pub transform: UvTransform,
+}
+
+/// The texture slots, in the order of the shader's bindings.
+pub const SLOTS: [&str; 5] = [
+    "base colour",
+    "metallic-roughness",
+    "normal",
+    "occlusion",
+    "emissive",
+];
+
+/// A material: glTF 2.0's metallic-roughness parameters and textures.
+#[derive(Clone, Debug)]
+pub struct Material {
+    pub name: String,
+    /// Linear RGBA, multiplied with the base-colour texture.
+    pub base_color: Vec4,
+    pub metallic: f32,
+    pub roughness: f32,
+    /// Linear radiance (emissive strength applied), multiplied with the emissive texture.
+    pub emissive: Vec3,
+    pub normal_scale: f32,
+    pub occlusion_strength: f32,
+    pub alpha: AlphaMode,
+    pub brdf: Brdf,
+    /// Blinn-Phong's specular weight (unused by GGX).
+    pub specular: f32,
+    /// Per slot of [`SLOTS`]: base colour (sRGB), metallic-roughness (B metal, G rough), normal
+    /// (tangent space), occlusion (R), emissive (sRGB).
+    pub textures: [Option<TextureRef>; 5],
+}
+
+impl Material {
+    /// glTF's default material (a primitive that names none): white, fully metallic and rough.
+    pub fn gltf_default() -> Material {
+        Material {
+            name: "default".into(),
+            base_color: Vec4::ONE,
+            metallic: 1.0,
+            roughness: 1.0,
+            emissive: Vec3::ZERO,
+            normal_scale: 1.0,
+            occlusion_strength: 1.0,
+            alpha: AlphaMode::Opaque,
+            brdf: Brdf::Ggx,
+            specular: 0.0,
+            textures: [None; 5],
+        }
+    }
+
+    /// The encoding slot `i`'s image is uploaded with.
+    pub fn slot_encoding(i: usize) -> Encoding {
+        if i == 0 || i == 4 {
+            Encoding::Srgb
+        } else {
+            Encoding::Linear
+        }
+    }
+}
+
+/// A range of a model's indices drawn with one material.
+#[derive(Clone, Debug)]
+pub struct Primitive {
+    pub first_index: u32,
+    pub index_count: u32,
+    pub material: usize,
+    /// Centre of its bounds in the part's space: the sort key of blended draws.
+    pub center: Vec3,
+}
+
+/// Textured geometry: vertices and indices (relative to the model's first vertex), the images
+/// its materials sample (each with the encoding it is uploaded in), and parts (lists of
+/// primitives) that placements instance.
+#[derive(Clone, Debug, Default)]
+pub struct Model {
+    pub name: String,
+    pub vertices: Vec<MaterialVertex>,
+    pub indices: Vec<u32>,
+    pub images: Vec<(Image, Encoding)>,
+    pub materials: Vec<Material>,
+    pub parts: Vec<Vec<Primitive>>,
+}
+
+impl Model {
+    pub fn triangles(&self) -> usize {
+        self.indices.len() / 3
+    }
+}
+
+/// `count` instances of a model's `part`, drawn as scene objects `first_object..+count`.
+#[derive(Clone, Copy, Debug)]
+pub struct Placement {
+    pub part: usize,
+    pub first_object: u32,
+    pub count: u32,
+}
+
+/// Per-vertex tangents from positions, normals and texture coordinates (Lengyel's method:
+/// per-triangle tangents accumulated per vertex, Gram-Schmidt against the normal, handedness from
+/// -dP/dv). Vertices without a usable uv gradient keep a zero tangent (no normal mapping).
+pub fn generate_tangents(vertices: &mut [MaterialVertex], indices: &[u32]) {
+    let mut tan = vec![Vec3::ZERO; vertices.len()];
+    let mut bit = vec![Vec3::ZERO; vertices.len()];
+    for tri in indices.chunks_exact(3) {
+        let [a, b, c] = [tri[0] as usize, tri[1] as usize, tri[2] as usize];
+        let (p0, p1, p2) = (
+            Vec3::from(vertices[a].position),
+            Vec3::from(vertices[b].position),
+            Vec3::from(vertices[c].position),
+        );
+        let (t0, t1, t2) = (
+            Vec2::from(vertices[a].uv),
+            Vec2::from(vertices[b].uv),
+            Vec2::from(vertices[c].uv),
+        );
+        let (e1, e2) = (p1 - p0, p2 - p0);
+        let (d1, d2) = (t1 - t0, t2 - t0);
+        let det = d1.x * d2.y - d2.x * d1.y;
+        if det.abs() < 1e-20 {
+            continue;
+        }
+        let r = 1.0 / det;
+        let du = (e1 * d2.y - e2 * d1.y) * r;
+        let dv = (e2 * d1.x - e1 * d2.x) * r;
+        for i in [a, b, c] {
+            tan[i] += du;
+            bit[i] += dv;
+        }
+    }
+    for (i, v) in vertices.iter_mut().enumerate() {
+        let n = Vec3::from(v.normal);
+        let t = (tan[i] - n * n.dot(tan[i])).normalize_or_zero();
+        if t == Vec3::ZERO {
+            v.tangent = [0.0; 4];
+            continue;
+        }
+        // glTF's v grows down the image and a normal map's +y points up it: the bitangent is
+        // -dP/dv, and w says whether it is n x t (+1) or its opposite.
+        let w = if n.cross(t).dot(bit[i]) > 0.0 {
+            -1.0
+        } else {
+            1.0
+        };
+        v.tangent = [t.x, t.y, t.z, w];
+    }
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct GpuMaterial {
+    base_color: [f32; 4],
+    emissive: [f32; 4],
+    /// x metallic, y roughness, z alpha cutoff, w normal scale.
+    pbr: [f32; 4],
+    /// x occlusion strength, y BRDF (0 Blinn-Phong, 1 GGX), z Blinn-Phong specular, w alpha mode
+    /// (0 opaque, 1 mask, 2 blend).
+    mode: [f32; 4],
+    /// Per slot, the two rows of its uv transform.
+    uv: [[f32; 4]; 10],
+}
+
+/// How a draw's fragments reach the target: its pipeline family.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+enum Class {
+    Opaque,
+    Mask,
+    Blend,
+}
+
+struct Draw {
+    first_index: u32,
+    index_count: u32,
+    base_vertex: i32,
+    bind_group: usize,
+    class: Class,
+    first_object: u32,
+    object_count: u32,
+    center: Vec3,
+}
+
+/// The scene's textured geometry, materials and textures on the GPU, and their pipelines.
+pub struct MaterialGpu {
+    vertex_buffer: wgpu::Buffer,
+    index_buffer: wgpu::Buffer,
+    bind_groups: Vec<wgpu::BindGroup>,
+    draws: Vec<Draw>,
+    layout: wgpu::PipelineLayout,
+    module: wgpu::ShaderModule,
+    pipelines: HashMap<(ScenePipeline, Class), wgpu::RenderPipeline>,
+    /// Draw order of this frame: opaque, alpha-tested, then blended back to front.
+    order: Mutex<Vec<usize>>,
+    pub triangles: usize,
+    /// Bytes of vertex, index and material buffers and of textures with their mip chains.
+    pub bytes: u64,
+}
+
+impl MaterialGpu {
+    /// Uploads `models` (each with its placements), generating every texture's mip chain, with
+    /// samplers at most `anisotropy`x anisotropic. `scene_layout` is group 0 of `scene.wgsl`.
+    pub fn new(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        scene_layout: &wgpu::BindGroupLayout,
+        models: &[(&Model, Vec<Placement>)],
+        anisotropy: u16,
+    ) -> MaterialGpu {
+        use wgpu::util::DeviceExt;
+        let mut vertices: Vec<MaterialVertex> = Vec::new();
+        let mut indices: Vec<u32> = Vec::new();
+        let mut mips = MipGenerator::new(device);
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("material textures"),
+        });
+        let layout = material_layout(device);
+        let mut samplers: HashMap<SamplerDesc, wgpu::Sampler> = HashMap::new();
+        let defaults: Vec<wgpu::Texture> = [
+            [255, 255, 255, 255],
+            [255, 255, 255, 255],
+            [128, 128, 255, 255],
+            [255, 255, 255, 255],
+            [255, 255, 255, 255],
+        ]
+        .iter()
+        .enumerate()
+        .map(|(i, t)| {
+            texture::upload(
+                device,
+                queue,
+                &mut mips,
+                &mut encoder,
+                &Image::texel(*t),
+                Material::slot_encoding(i),
+                "default material texture",
+            )
+        })
+        .collect();
+        let mut bytes = 0u64;
+        let mut bind_groups = Vec::new();
+        let mut draws = Vec::new();
+        let mut triangles = 0usize;
+        for (model, placements) in models {
+            let base_vertex = vertices.len() as i32;
+            let first_index = indices.len() as u32;
+            vertices.extend_from_slice(&model.vertices);
+            indices.extend_from_slice(&model.indices);
+            let textures: Vec<wgpu::Texture> = model
+                .images
+                .iter()
+                .map(|(img, enc)| {
+                    bytes += texture::bytes_with_mips(img);
+                    texture::upload(
+                        device,
+                        queue,
+                        &mut mips,
+                        &mut encoder,
+                        img,
+                        *enc,
+                        &model.name,
+                    )
+                })
+                .collect();
+            let first_group = bind_groups.len();
+            for m in &model.materials {
+                let uniform = gpu_material(m);
+                let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("material"),
+                    contents: bytemuck::bytes_of(&uniform),
+                    usage: wgpu::BufferUsages::UNIFORM,
+                });
+                bytes += buffer.size();
+                let views: Vec<wgpu::TextureView> = (0..5)
+                    .map(|i| match &m.textures[i] {
+                        Some(t) => textures[t.image].create_view(&Default::default()),
+                        None => defaults[i].create_view(&Default::default()),
+                    })
+                    .collect();
+                for t in m.textures.iter() {
+                    let desc = t.map_or(SamplerDesc::DEFAULT, |t| t.sampler);
+                    let desc = SamplerDesc {
+                        anisotropy: anisotropy.max(1),
+                        ..desc
+                    };
+                    samplers.entry(desc).or_insert_with(|| desc.create(device));
+                }
+                let sampler_of = |i: usize| {
+                    let desc = m.textures[i].map_or(SamplerDesc::DEFAULT, |t| t.sampler);
+                    &samplers[&SamplerDesc {
+                        anisotropy: anisotropy.max(1),
+                        ..desc
+                    }]
+                };
+                let mut entries = vec![wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: buffer.as_entire_binding(),
+                }];
+                for (i, v) in views.iter().enumerate() {
+                    entries.push(wgpu::BindGroupEntry {
+                        binding: 1 + i as u32,
+                        resource: wgpu::BindingResource::TextureView(v),
+                    });
+                }
+                for i in 0..5 {
+                    entries.push(wgpu::BindGroupEntry {
+                        binding: 6 + i as u32,
+                        resource: wgpu::BindingResource::Sampler(sampler_of(i)),
+                    });
+                }
+                bind_groups.push(device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("material"),
+                    layout: &layout,
+                    entries: &entries,
+                }));
+            }
+            for p in placements {
+                for prim in &model.parts[p.part] {
+                    triangles += (prim.index_count / 3) as usize * p.count as usize;
+                    draws.push(Draw {
+                        first_index: first_index + prim.first_index,
+                        index_count: prim.index_count,
+                        base_vertex,
+                        bind_group: first_group + prim.material,
+                        class: match model.materials[prim.material].alpha {
+                            AlphaMode::Opaque => Class::Opaque,
+                            AlphaMode::Mask { .. } => Class::Mask,
+                            AlphaMode::Blend => Class::Blend,
+                        },
+                        first_object: p.first_object,
+                        object_count: p.count,
+                        center: prim.center,
+                    });
+                }
+            }
+        }
+        queue.submit([encoder.finish()]);
+        if vertices.is_empty() {
+            vertices.push(MaterialVertex::default());
+            indices.extend([0, 0, 0]);
+        }
+        let vertex_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("material vertices"),
+            contents: bytemuck::cast_slice(&vertices),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+        let index_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("material indices"),
+            contents: bytemuck::cast_slice(&indices),
+            usage: wgpu::BufferUsages::INDEX,
+        });
+        bytes += vertex_buffer.size() + index_buffer.size();
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("material"),
+            bind_group_layouts: &[Some(scene_layout), Some(&layout)],
+            immediate_size: 0,
+        });
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("material.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(material_wgsl().into()),
+        });
+        let mut order: Vec<usize> = (0..draws.len()).collect();
+        order.sort_by_key(|&i| draws[i].class);
+        MaterialGpu {
+            vertex_buffer,
+            index_buffer,
+            bind_groups,
+            draws,
+            layout: pipeline_layout,
+            module,
+            pipelines: HashMap::new(),
+            order: Mutex::new(order),
+            triangles,
+            bytes,
+        }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.draws.is_empty()
+    }
+
+    /// Whether any draw is alpha-blended.
+    pub fn has_blend(&self) -> bool {
+        self.draws.iter().any(|d| d.class == Class::Blend)
+    }
+
+    /// Sorts this frame's blended draws back to front: `center_of(object, center)` is a draw
+    /// centre's camera-relative position for its first object.
+    pub fn sort(&self, center_of: impl Fn(u32, Vec3) -> Vec3) {
+        let mut order = self.order.lock().expect("draw order lock");
+        let key = |i: usize| {
+            let d = &self.draws[i];
+            center_of(d.first_object, d.center).length()
+        };
+        let (front, mut blend): (Vec<usize>, Vec<usize>) = order
+            .iter()
+            .partition(|&&i| self.draws[i].class != Class::Blend);
+        blend.sort_by(|&a, &b| key(b).total_cmp(&key(a)));
+        *order = front.into_iter().chain(blend).collect();
+    }
+
+    /// Builds the pipelines `kind` draws with (call before the render pass).
+    pub fn prepare(&mut self, device: &wgpu::Device, kind: ScenePipeline) {
+        for class in [Class::Opaque, Class::Mask, Class::Blend] {
+            if kind == ScenePipeline::Velocity && class == Class::Blend {
+                continue;
+            }
+            let (layout, module) = (&self.layout, &self.module);
+            self.pipelines
+                .entry((kind, class))
+                .or_insert_with(|| pipeline(device, layout, module, kind, class));
+        }
+    }
+
+    /// Draws every textured object with view bind group `scene_group` (group 0, at `offset`)
+    /// into the current pass, with the pipelines of `kind` ([`MaterialGpu::prepare`] first).
+    pub fn draw(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        kind: ScenePipeline,
+        scene_group: &wgpu::BindGroup,
+        offset: u32,
+    ) {
+        if self.draws.is_empty() {
+            return;
+        }
+        pass.set_bind_group(0, scene_group, &[offset]);
+        pass.set_vertex_buffer(0, self.vertex_buffer.slice(..));
+        pass.set_index_buffer(self.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
+        let order = self.order.lock().expect("draw order lock");
+        let mut current: Option<Class> = None;
+        for &i in order.iter() {
+            let d = &self.draws[i];
+            let Some(p) = self.pipelines.get(&(kind, d.class)) else {
+                continue; // blended surfaces in the velocity pass
+            };
+            if current != Some(d.class) {
+                pass.set_pipeline(p);
+                current = Some(d.class);
+            }
+            pass.set_bind_group(1, &self.bind_groups[d.bind_group], &[]);
+            pass.draw_indexed(
+                d.first_index..d.first_index + d.index_count,
+                d.base_vertex,
+                d.first_object..d.first_object + d.object_count,
+            );
+        }
+    }
+}
+
+fn gpu_material(m: &Material) -> GpuMaterial {
+    let mut uv = [[0.0; 4]; 10];
+    for (i, t) in m.textures.iter().enumerate() {
+        let rows = t.map_or(UvTransform::IDENTITY, |t| t.transform).rows();
+        uv[2 * i] = rows[0];
+        uv[2 * i + 1] = rows[1];
+    }
+    let (cutoff, mode) = match m.alpha {
+        AlphaMode::Opaque => (0.0, 0.0),
+        AlphaMode::Mask { cutoff } => (cutoff, 1.0),
+        AlphaMode::Blend => (0.0, 2.0),
+    };
+    GpuMaterial {
+        base_color: m.base_color.into(),
+        emissive: m.emissive.extend(0.0).into(),
+        pbr: [m.metallic, m.roughness, cutoff, m.normal_scale],
+        mode: [
+            m.occlusion_strength,
+            match m.brdf {
+                Brdf::BlinnPhong => 0.0,
+                Brdf::Ggx => 1.0,
+            },
+            m.specular,
+            mode,
+        ],
+        uv,
+    }
+}
+
+fn material_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+    let mut entries = vec![wgpu::BindGroupLayoutEntry {
+        binding: 0,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: wgpu::BufferSize::new(std::mem::size_of::<GpuMaterial>() as u64),
+        },
+        count: None,
+    }];
+    for i in 0..5 {
+        entries.push(wgpu::BindGroupLayoutEntry {
+            binding: 1 + i,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                view_dimension: wgpu::TextureViewDimension::D2,
+                multisampled: false,
+            },
+            count: None,
+        });
+    }
+    for i in 0..5 {
+        entries.push(wgpu::BindGroupLayoutEntry {
+            binding: 6 + i,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+            count: None,
+        });
+    }
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("material"),
+        entries: &entries,
+    })
+}
+
+fn pipeline(
+    device: &wgpu::Device,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    kind: ScenePipeline,
+    class: Class,
+) -> wgpu::RenderPipeline {
+    let (vs, fs, samples) = match (kind, class) {
+        (ScenePipeline::Forward { samples }, Class::Opaque) => {
+            ("vs_material", "fs_material", samples)
+        }
+        (ScenePipeline::Forward { samples }, _) => ("vs_material", "fs_material_alpha", samples),
+        (ScenePipeline::PerSample { samples }, Class::Opaque) => {
+            ("vs_material_sample", "fs_material_sample", samples)
+        }
+        (ScenePipeline::PerSample { samples }, _) => {
+            ("vs_material_sample", "fs_material_sample_alpha", samples)
+        }
+        (ScenePipeline::Velocity, Class::Opaque) => {
+            ("vs_material_velocity", "fs_material_velocity", 1)
+        }
+        (ScenePipeline::Velocity, _) => ("vs_material_velocity", "fs_material_velocity_mask", 1),
+    };
+    let blend = class == Class::Blend;
+    let target = wgpu::ColorTargetState {
+        format: COLOR_FORMAT,
+        blend: blend.then_some(wgpu::BlendState::ALPHA_BLENDING),
+        write_mask: wgpu::ColorWrites::ALL,
+    };
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(match class {
+            Class::Opaque => "material opaque",
+            Class::Mask => "material alpha-tested",
+            Class::Blend => "material blended",
+        }),
+        layout: Some(layout),
+        vertex: wgpu::VertexState {
+            module,
+            entry_point: Some(vs),
+            compilation_options: Default::default(),
+            buffers: &[Some(wgpu::VertexBufferLayout {
+                array_stride: std::mem::size_of::<MaterialVertex>() as u64,
+                step_mode: wgpu::VertexStepMode::Vertex,
+                attributes: &wgpu::vertex_attr_array![
+                    0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Float32x4
+                ],
+            })],
+        },
+        fragment: Some(wgpu::FragmentState {
+            module,
+            entry_point: Some(fs),
+            compilation_options: Default::default(),
+            targets: &[Some(target)],
+        }),
+        primitive: wgpu::PrimitiveState {
+            cull_mode: None,
+            ..Default::default()
+        },
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: DEPTH_FORMAT,
+            depth_write_enabled: Some(!blend),
+            depth_compare: Some(wgpu::CompareFunction::Greater),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }),
+        multisample: wgpu::MultisampleState {
+            count: samples,
+            ..Default::default()
+        },
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tangents_follow_increasing_u_with_handedness() {
+        // A quad in the xy plane, normal +z, u along +x, v along -y (glTF's v points down).
+        let v = |x: f32, y: f32, u: f32, w: f32| MaterialVertex {
+            position: [x, y, 0.0],
+            normal: [0.0, 0.0, 1.0],
+            uv: [u, w],
+            tangent: [0.0; 4],
+        };
+        let mut verts = vec![
+            v(0.0, 0.0, 0.0, 1.0),
+            v(1.0, 0.0, 1.0, 1.0),
+            v(1.0, 1.0, 1.0, 0.0),
+            v(0.0, 1.0, 0.0, 0.0),
+        ];
+        generate_tangents(&mut verts, &[0, 1, 2, 0, 2, 3]);
+        for t in &verts {
+            assert!((Vec3::from_slice(&t.tangent[..3]) - Vec3::X).length() < 1e-5);
+            // Bitangent along -v = +y = n x t: right-handed.
+            assert_eq!(t.tangent[3], 1.0);
+        }
+        // Mirrored u: the tangent flips, the handedness too.
+        for t in verts.iter_mut() {
+            t.uv[0] = 1.0 - t.uv[0];
+        }
+        generate_tangents(&mut verts, &[0, 1, 2, 0, 2, 3]);
+        assert!((Vec3::from_slice(&verts[0].tangent[..3]) + Vec3::X).length() < 1e-5);
+        assert_eq!(verts[0].tangent[3], -1.0);
+    }
+
+    #[test]
+    fn uv_transform_rows_match_the_extension() {
+        let t = UvTransform {
+            offset: Vec2::new(0.5, 0.25),
+            rotation: std::f32::consts::FRAC_PI_2,
+            scale: Vec2::new(2.0, 3.0),
+        };
+        let r = t.rows();
+        let apply = |uv: Vec2| {
+            Vec2::new(
+                r[0][0] * uv.x + r[0][1] * uv.y + r[0][2],
+                r[1][0] * uv.x + r[1][1] * uv.y + r[1][2],
+            )
+        };
+        // Scale (1, 0) -> (2, 0); rotate by [cos sin; -sin cos] at 90 degrees -> (0, -2); offset.
+        let p = apply(Vec2::X);
+        assert!((p - Vec2::new(0.5, -1.75)).length() < 1e-5, "{p}");
+        let p = apply(Vec2::Y);
+        assert!((p - Vec2::new(3.5, 0.25)).length() < 1e-5, "{p}");
+    }
+}
