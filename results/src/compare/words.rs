@@ -5,9 +5,11 @@
 
 use crate::stats::TimeChange;
 
-/// A relative change as a signed percentage with one decimal: `+18.3%`.
+/// A relative change as a signed percentage with one decimal: `+18.3%`; what rounds to zero is
+/// `+0.0%`, never `-0.0%`.
 pub fn pct(change: f64) -> String {
-    format!("{:+.1}%", change * 100.0)
+    let p = change * 100.0;
+    format!("{:+.1}%", if p.abs() < 0.05 { 0.0 } else { p })
 }
 
 /// `p<0.001` or `p=0.042`.

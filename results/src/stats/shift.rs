@@ -151,8 +151,8 @@ mod tests {
         let s = hodges_lehmann(&a, &b, 0.01).unwrap();
         assert!((s.estimate - 0.2).abs() < 1e-9, "{s:?}");
         let [lo, hi] = s.interval.unwrap();
-        // Exact critical U for 10 and 10 at 0.01 (two-sided) is 16: the 17th and 84th
-        // differences (scipy/R `wilcox.test(conf.int = TRUE, conf.level = 0.99)` agree).
+        // The tables' two-sided critical U for 10 and 10 frames at 0.01 is 16: the interval is
+        // the 17th to the 84th of the 100 differences.
         assert!((lo - brute(&a, &b, 17)).abs() < 1e-12, "{lo}");
         assert!((hi - brute(&a, &b, 84)).abs() < 1e-12, "{hi}");
         assert!(lo > 0.0 && hi < 0.3);
