@@ -18,6 +18,10 @@ use tessera_results::RunInfo;
 use super::query::CompareRunsQuery;
 use crate::html::{commit, enc, esc, num};
 
+fn plural(n: usize, word: &str) -> String {
+    format!("{n} {word}{}", if n == 1 { "" } else { "s" })
+}
+
 fn opt(v: Option<f64>) -> String {
     v.map_or("–".into(), num)
 }
@@ -281,9 +285,9 @@ pub fn render(c: &Comparison) -> String {
     };
     let _ = write!(
         b,
-        "<p id=verdict><strong class={class}>Verdict: {verdict}</strong> · {} regressions · {} improvements</p><p id=tally><span class=worse>{} slower</span> · <span class=better>{} faster</span> · {} within noise · {} below threshold · {} too few frames</p>",
-        c.findings_of(Verdict::Worse).count(),
-        c.findings_of(Verdict::Better).count(),
+        "<p id=verdict><strong class={class}>Verdict: {verdict}</strong> · {} · {}</p><p id=tally><span class=worse>{} slower</span> · <span class=better>{} faster</span> · {} within noise · {} below threshold · {} too few frames</p>",
+        plural(c.findings_of(Verdict::Worse).count(), "regression"),
+        plural(c.findings_of(Verdict::Better).count(), "improvement"),
         c.count_time(TimeVerdict::Slower),
         c.count_time(TimeVerdict::Faster),
         c.count_time(TimeVerdict::WithinNoise),
