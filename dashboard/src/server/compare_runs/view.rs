@@ -285,7 +285,7 @@ pub fn render(c: &Comparison) -> String {
     };
     let _ = write!(
         b,
-        "<p id=verdict><strong class={class}>Verdict: {verdict}</strong> · {} · {}</p><p id=tally><span class=worse>{} slower</span> · <span class=better>{} faster</span> · {} within noise · {} below threshold · {} too few frames</p>",
+        "<p id=verdict><strong class={class}>Verdict: {verdict}</strong> · {} · {}</p><p id=tally><span class={slow}>{} slower</span> · <span class={fast}>{} faster</span> · {} within noise · {} below threshold · {} too few frames</p>",
         plural(c.findings_of(Verdict::Worse).count(), "regression"),
         plural(c.findings_of(Verdict::Better).count(), "improvement"),
         c.count_time(TimeVerdict::Slower),
@@ -293,6 +293,9 @@ pub fn render(c: &Comparison) -> String {
         c.count_time(TimeVerdict::WithinNoise),
         c.count_time(TimeVerdict::BelowThreshold),
         c.count_time(TimeVerdict::TooFewFrames),
+        // On a CPU adapter time verdicts are shown, not counted: not in colour.
+        slow = if c.timings_count { "worse" } else { "muted" },
+        fast = if c.timings_count { "better" } else { "muted" },
     );
     findings(&mut b, c);
     for s in &c.scenarios {
