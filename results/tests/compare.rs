@@ -57,6 +57,7 @@ fn variant(name: &str, samples: &[f64], psnr: f64) -> VariantResult {
     VariantResult {
         variant: name.into(),
         technique: name.split('[').next().unwrap().into(),
+            baseline: None,
         params: BTreeMap::new(),
         status: Status::Ok,
         reference: Some("native".into()),
@@ -322,6 +323,55 @@ fn a_slower_baseline_is_one_regression_not_better_speedups() {
 "
         )
     );
+}
+
+#[test]
+fn baselines_are_per_variant() {
+    // adaptive-shading declares native-deferred: its slowdown moves adaptive-shading's speedup,
+    // not upscale's, which is measured against native.
+    let adaptive = |samples: &[f64]| {
+        let mut v = variant("adaptive-shading", samples, 33.0);
+        v.baseline = Some("native-deferred".into());
+        v
+    };
+    let (c, md) = run(
+        vec![
+            variant("native", &frames(10, 1.0, 0.01), f64::INFINITY),
+            variant("native-deferred", &frames(10, 1.2, 0.01), f64::INFINITY),
+            adaptive(&frames(10, 0.8, 0.01)),
+            variant("upscale", &frames(10, 0.5, 0.01), 30.0),
+        ],
+        vec![
+            variant("native", &frames(10, 1.0, 0.01), f64::INFINITY),
+            variant("native-deferred", &frames(10, 1.5, 0.01), f64::INFINITY),
+            adaptive(&frames(10, 0.8, 0.01)),
+            variant("upscale", &frames(10, 0.5, 0.01), 30.0),
+        ],
+        &Options::default(),
+    );
+    assert_eq!(
+        md,
+        format!(
+            "{HEADER}\
+### basic
+
+| variant | GPU ms | change [99% interval] | time | speedup | PSNR dB | SSIM | FLIP | status |
+|---|---:|---:|---|---:|---:|---:|---:|---|
+| native | 1.000 | +0.0% [-4.0%, +4.0%] | within noise (p=1.000) | - | inf | - | - | ok |
+| native-deferred | 1.200 → 1.500 | +25.0% [+21.7%, +28.3%] | **slower (p<0.001)** | 0.83x → 0.67x | inf | - | - | ok |
+| adaptive-shading | 0.800 | +0.0% [-5.0%, +5.0%] | within noise (p=1.000) | 1.50x → 1.88x (moved with native-deferred) | 33.00 | - | - | ok |
+| upscale | 0.500 | +0.0% [-8.0%, +8.0%] | within noise (p=1.000) | 2.00x | 30.00 | - | - | ok |
+
+**Regressions**
+
+- `basic` / `native-deferred`: GPU time +25.0% [+21.7%, +28.3%] (p<0.001); the speedups of `adaptive-shading` moved with it (counted here once)
+
+**Verdict: regressed** (1 regression, 0 improvements; time: Mann-Whitney U p < 0.01 and a Hodges-Lehmann shift of at least 5%; too few frames below 5 per side)
+"
+        )
+    );
+    let v = &c.scenarios[0].variants[2];
+    assert_eq!(v.baseline.b.as_deref(), Some("native-deferred"));
 }
 
 #[test]

@@ -20,13 +20,11 @@ pub fn same_adapter(a: &RunInfo, b: &RunInfo) -> bool {
         && x.driver_info == y.driver_info
 }
 
-/// The baseline a result declares, where its record carries one (the technique's per-variant
-/// `baseline`, written by the harness from the technique's definition). Results written before
-/// the record had the field declare none.
-fn declared(_r: &VariantResult) -> Option<&str> {
-    // The result record gains `baseline` with issue 21's technique seam; until then every
-    // result falls back to `native`, as the CSV's `speedup` does.
-    None
+/// The baseline a result declares: its record's `baseline` (the technique's per-variant
+/// same-pipeline baseline, written by the harness). Results written before the record had the
+/// field declare none and fall back to `native`, as the CSV's `speedup` does.
+fn declared(r: &VariantResult) -> Option<&str> {
+    r.baseline.as_deref()
 }
 
 /// Whether `x` is measured against nothing: a variant of the technique it would be measured
@@ -74,6 +72,34 @@ mod tests {
             r: &results[1],
         })
         .is_none());
+    }
+
+    #[test]
+    fn a_declared_baseline_is_found_by_technique_then_native_for_the_rest() {
+        let mut hardware = result("adaptive-shading[vrs=hardware]", &[0.5]);
+        hardware.baseline = Some("native-vrs".into());
+        let mut software = result("adaptive-shading[vrs=software]", &[0.5]);
+        software.baseline = Some("native-deferred".into());
+        let results = vec![
+            result("native", &[1.0]),
+            result("native-deferred", &[1.1]),
+            result("native-vrs[rate=1x1]", &[1.2]),
+            hardware,
+            software,
+        ];
+        let base = |i: usize| {
+            of(InRun {
+                results: &results,
+                r: &results[i],
+            })
+            .map(|r| r.variant.as_str())
+        };
+        assert_eq!(base(3), Some("native-vrs[rate=1x1]"));
+        assert_eq!(base(4), Some("native-deferred"));
+        // The baselines themselves fall back to native.
+        assert_eq!(base(1), Some("native"));
+        assert_eq!(base(2), Some("native"));
+        assert_eq!(base(0), None);
     }
 
     #[test]

@@ -166,6 +166,7 @@ pub(crate) mod tests {
         VariantResult {
             variant: name.into(),
             technique: name.split('[').next().unwrap().into(),
+            baseline: None,
             params: BTreeMap::new(),
             status: Status::Ok,
             reference: None,
