@@ -735,7 +735,9 @@ async fn browse_checks(app: Router, name: &str) {
         let md = get(&app, &format!("/api/compare/runs?a={a}&b={b}&format=md")).await;
         assert!(
             md.1.starts_with("text/markdown")
-                && md.2.contains("| variant | GPU ms | change [99% interval] | time |"),
+                && md
+                    .2
+                    .contains("| variant | GPU ms | change [99% interval] | time |"),
             "{name}"
         );
         let csv = get(&app, &format!("/api/compare/runs?a={a}&b={b}&format=csv")).await;

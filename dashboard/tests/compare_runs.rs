@@ -118,7 +118,11 @@ async fn a_slower_native_is_one_regression_on_the_page() {
     let app = app(AppState::new(store.pool.clone(), Some(TOKEN.into())));
     let (a, b) = ("20261122T030520Z-34ab2b4", "20261122T040520Z-34ab2b4");
     let base = on_gpu(common::template(), a, |_| 1.0);
-    let slower = on_gpu(common::template(), b, |v| if v == "native" { 1.3 } else { 1.0 });
+    let slower = on_gpu(
+        common::template(),
+        b,
+        |v| if v == "native" { 1.3 } else { 1.0 },
+    );
     for run in [base, slower] {
         let body = serde_json::to_string(&run.to_upload()).unwrap();
         let req = Request::post("/api/runs")
@@ -142,7 +146,9 @@ async fn a_slower_native_is_one_regression_on_the_page() {
     );
     let page = get(&app, &format!("/compare/runs?{q}")).await;
     assert!(
-        page.contains("<strong class=worse>Verdict: regressed</strong> · 1 regression · 0 improvements"),
+        page.contains(
+            "<strong class=worse>Verdict: regressed</strong> · 1 regression · 0 improvements"
+        ),
         "{page}"
     );
     assert!(

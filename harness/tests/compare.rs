@@ -279,7 +279,9 @@ fn slower_variant_and_worse_psnr_are_regressions_on_one_adapter() {
     );
     let md = compare::markdown::render(&c);
     assert!(
-        md.contains("| upscale | 0.545 → 0.645 | +18.3% [+11.0%, +25.7%] | below threshold (p<0.001) |"),
+        md.contains(
+            "| upscale | 0.545 → 0.645 | +18.3% [+11.0%, +25.7%] | below threshold (p<0.001) |"
+        ),
         "{md}"
     );
     assert!(md.ends_with("**Verdict: regressed** (1 regression, 0 improvements; time: Mann-Whitney U p < 0.01 and a Hodges-Lehmann shift of at least 20%; too few frames below 5 per side)\n"), "{md}");

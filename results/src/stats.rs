@@ -127,7 +127,9 @@ pub fn smallest_p(m: usize, n: usize) -> f64 {
 /// The fewest frames per side (the same count in both runs) at which the test can reach
 /// p < `alpha`: 5 for 0.01 (2/252 = 0.008).
 pub fn frames_needed(alpha: f64) -> usize {
-    (1..=10_000).find(|&k| smallest_p(k, k) < alpha).unwrap_or(10_000)
+    (1..=10_000)
+        .find(|&k| smallest_p(k, k) < alpha)
+        .unwrap_or(10_000)
 }
 
 /// Per-frame GPU times: the sum over passes of each measured frame's sample. `None` without
@@ -296,7 +298,10 @@ mod tests {
         assert_eq!(verdict(0.04, 0.001, ten, 5.0), TimeVerdict::BelowThreshold);
         assert_eq!(verdict(0.10, 0.02, ten, 5.0), TimeVerdict::WithinNoise);
         // 4 frames per side: even a complete separation has p = 2/70.
-        assert_eq!(verdict(15.31, 0.0286, (4, 4), 5.0), TimeVerdict::TooFewFrames);
+        assert_eq!(
+            verdict(15.31, 0.0286, (4, 4), 5.0),
+            TimeVerdict::TooFewFrames
+        );
         assert_eq!(verdict(0.5, 0.0079, (5, 5), 5.0), TimeVerdict::Slower);
         let a: Vec<f64> = (0..10).map(|i| 1.0 + 0.01 * f64::from(i)).collect();
         let b: Vec<f64> = a.iter().map(|x| x * 1.2).collect();

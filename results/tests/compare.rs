@@ -57,7 +57,7 @@ fn variant(name: &str, samples: &[f64], psnr: f64) -> VariantResult {
     VariantResult {
         variant: name.into(),
         technique: name.split('[').next().unwrap().into(),
-            baseline: None,
+        baseline: None,
         params: BTreeMap::new(),
         status: Status::Ok,
         reference: Some("native".into()),
@@ -113,11 +113,7 @@ fn scenario(run_id: &str, results: Vec<VariantResult>) -> ScenarioResult {
 const A: &str = "20261201T030000Z-aaaaaaa";
 const B: &str = "20261201T040000Z-bbbbbbb";
 
-fn run(
-    a: Vec<VariantResult>,
-    b: Vec<VariantResult>,
-    opts: &Options,
-) -> (Comparison, String) {
+fn run(a: Vec<VariantResult>, b: Vec<VariantResult>, opts: &Options) -> (Comparison, String) {
     let (ia, ib) = (info(A, "aaaaaaa000"), info(B, "bbbbbbb000"));
     let (sa, sb) = ([scenario(A, a)], [scenario(B, b)]);
     let c = compare::compare(
@@ -148,7 +144,9 @@ fn noisy(n: usize, median: f64, seed: u64) -> Vec<f64> {
     let mut x = seed;
     (0..n)
         .map(|_| {
-            x = x.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+            x = x
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
             let u = (x >> 11) as f64 / (1u64 << 53) as f64;
             median * (1.0 + 0.04 * (u - 0.5))
         })
@@ -242,7 +240,10 @@ fn a_real_change_in_many_frames_is_flagged_and_noise_is_not() {
     assert!(c.regressed());
     let worse: Vec<_> = c.findings_of(Verdict::Worse).collect();
     assert_eq!(worse.len(), 1);
-    assert_eq!((worse[0].variant.as_str(), worse[0].what.as_str()), ("upscale", "GPU time"));
+    assert_eq!(
+        (worse[0].variant.as_str(), worse[0].what.as_str()),
+        ("upscale", "GPU time")
+    );
 }
 
 #[test]

@@ -44,8 +44,7 @@ pub(crate) fn of<'a>(x: InRun<'a>) -> Option<&'a VariantResult> {
         return None;
     }
     let wanted = declared(x.r).unwrap_or(DEFAULT_BASELINE);
-    x
-        .results
+    x.results
         .iter()
         .find(|v| v.variant == wanted && v.status == Status::Ok)
         .or_else(|| baseline_of(x.results, wanted))
@@ -66,7 +65,10 @@ mod tests {
             results: &results,
             r: &results[0],
         });
-        assert_eq!(of_upscale.map(|r| r.variant.as_str()), Some("native[label=full]"));
+        assert_eq!(
+            of_upscale.map(|r| r.variant.as_str()),
+            Some("native[label=full]")
+        );
         assert!(of(InRun {
             results: &results,
             r: &results[1],
@@ -105,9 +107,7 @@ mod tests {
     #[test]
     fn a_skipped_baseline_is_no_baseline() {
         let mut native = result("native", &[1.0]);
-        native.status = Status::Skipped {
-            reason: "x".into(),
-        };
+        native.status = Status::Skipped { reason: "x".into() };
         let results = vec![native, result("upscale", &[0.5])];
         assert!(of(InRun {
             results: &results,

@@ -152,6 +152,10 @@ fn of_variant(s: &ScenarioComparison, v: &VariantComparison, timings_count: bool
 pub(crate) fn collect(scenarios: &[ScenarioComparison], timings_count: bool) -> Vec<Finding> {
     scenarios
         .iter()
-        .flat_map(|s| s.variants.iter().flat_map(move |v| of_variant(s, v, timings_count)))
+        .flat_map(|s| {
+            s.variants
+                .iter()
+                .flat_map(move |v| of_variant(s, v, timings_count))
+        })
         .collect()
 }

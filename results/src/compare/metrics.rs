@@ -73,7 +73,10 @@ pub fn judge(name: &str, a: f64, b: f64, higher_is_better: bool) -> Verdict {
 }
 
 /// Every metric of `a` and `b`, A's first.
-pub(crate) fn compare(a: Option<&VariantResult>, b: Option<&VariantResult>) -> Vec<MetricComparison> {
+pub(crate) fn compare(
+    a: Option<&VariantResult>,
+    b: Option<&VariantResult>,
+) -> Vec<MetricComparison> {
     let all = a.into_iter().chain(b).flat_map(|r| &r.metrics);
     let mut out: Vec<MetricComparison> = Vec::new();
     for m in all {
@@ -81,7 +84,10 @@ pub(crate) fn compare(a: Option<&VariantResult>, b: Option<&VariantResult>) -> V
             continue;
         }
         let value = |r: Option<&VariantResult>| {
-            r?.metrics.iter().find(|x| x.name == m.name).map(|x| x.value)
+            r?.metrics
+                .iter()
+                .find(|x| x.name == m.name)
+                .map(|x| x.value)
         };
         let values = Pair::new(value(a), value(b));
         let higher_is_better = direction(&m.name, m.higher_is_better);

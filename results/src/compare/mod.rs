@@ -192,7 +192,9 @@ impl Comparison {
     }
 
     /// Every (scenario, variant) whose frame times were too few to tell.
-    pub fn too_few_frames(&self) -> impl Iterator<Item = (&ScenarioComparison, &VariantComparison)> {
+    pub fn too_few_frames(
+        &self,
+    ) -> impl Iterator<Item = (&ScenarioComparison, &VariantComparison)> {
         self.variants()
             .filter(|(_, v)| v.time_verdict() == Some(TimeVerdict::TooFewFrames))
     }
@@ -287,7 +289,10 @@ fn compare_variant(
             va.and_then(|r| Some(r.conditions.as_ref()?.recorded()?.throttled)),
             vb.and_then(|r| Some(r.conditions.as_ref()?.recorded()?.throttled)),
         ),
-        images: Pair::new(va.map(|r| !r.images.is_empty()), vb.map(|r| !r.images.is_empty())),
+        images: Pair::new(
+            va.map(|r| !r.images.is_empty()),
+            vb.map(|r| !r.images.is_empty()),
+        ),
     }
 }
 
@@ -303,8 +308,10 @@ fn compare_scenario(
     opts: &Options,
 ) -> ScenarioComparison {
     let names = union(
-        a.iter().flat_map(|s| s.results.iter().map(|r| r.variant.as_str())),
-        b.iter().flat_map(|s| s.results.iter().map(|r| r.variant.as_str())),
+        a.iter()
+            .flat_map(|s| s.results.iter().map(|r| r.variant.as_str())),
+        b.iter()
+            .flat_map(|s| s.results.iter().map(|r| r.variant.as_str())),
     );
     fn find<'a>(s: Option<&'a ScenarioResult>, name: &str) -> Option<InRun<'a>> {
         let s = s?;

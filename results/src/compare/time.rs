@@ -138,16 +138,21 @@ pub(crate) fn passes(a: &VariantResult, b: &VariantResult, opts: &Options) -> Ve
             let pb = b.passes.iter().find(|p| p.name == pa.name);
             let (sa, sb) = (samples(pa), pb.and_then(samples));
             let time = match (&sa, &sb) {
-                (Some(x), Some(y)) => compare_times(x, y, opts.threshold_pct)
-                    .map_or(Time::NotCompared("not timed"), |test| Time::Tested {
+                (Some(x), Some(y)) => compare_times(x, y, opts.threshold_pct).map_or(
+                    Time::NotCompared("not timed"),
+                    |test| Time::Tested {
                         test,
                         relative_to: Pair::default(),
-                    }),
+                    },
+                ),
                 _ => Time::NotCompared("not timed in both"),
             };
             PassComparison {
                 name: pa.name.clone(),
-                gpu_ms: Pair::new(sa.as_deref().and_then(median), sb.as_deref().and_then(median)),
+                gpu_ms: Pair::new(
+                    sa.as_deref().and_then(median),
+                    sb.as_deref().and_then(median),
+                ),
                 time,
             }
         })

@@ -122,7 +122,10 @@ mod tests {
 
     /// The k-th difference the slow way.
     fn brute(a: &[f64], b: &[f64], k: usize) -> f64 {
-        let mut d: Vec<f64> = b.iter().flat_map(|y| a.iter().map(move |x| y - x)).collect();
+        let mut d: Vec<f64> = b
+            .iter()
+            .flat_map(|y| a.iter().map(move |x| y - x))
+            .collect();
         d.sort_by(f64::total_cmp);
         d[k - 1]
     }
@@ -166,7 +169,10 @@ mod tests {
         // At 0.05 four per side give the widest interval: smallest to largest difference.
         let s = hodges_lehmann(&[1.0, 1.1, 1.2, 1.3], &[16.0, 16.5, 17.0, 17.5], 0.05).unwrap();
         let [lo, hi] = s.interval.unwrap();
-        assert!((lo - 14.7).abs() < 1e-9 && (hi - 16.5).abs() < 1e-9, "{s:?}");
+        assert!(
+            (lo - 14.7).abs() < 1e-9 && (hi - 16.5).abs() < 1e-9,
+            "{s:?}"
+        );
     }
 
     #[test]

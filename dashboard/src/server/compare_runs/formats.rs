@@ -32,7 +32,11 @@ pub fn csv_rows(c: &Comparison) -> Vec<Vec<String>> {
     let mut rows = Vec::new();
     let gpu_ms = Key::of(Measure::GpuMs).statistic("median");
     for (s, v) in c.variants() {
-        let mut row = |measure: String, a: Option<f64>, b: Option<f64>, time: Option<&Time>, verdict: String| {
+        let mut row = |measure: String,
+                       a: Option<f64>,
+                       b: Option<f64>,
+                       time: Option<&Time>,
+                       verdict: String| {
             let t = time.and_then(Time::tested);
             let interval = t.and_then(|t| t.interval);
             rows.push(vec![
@@ -49,7 +53,13 @@ pub fn csv_rows(c: &Comparison) -> Vec<Vec<String>> {
             ]);
         };
         if c.same_adapter {
-            row(gpu_ms.render(), v.gpu_ms.a, v.gpu_ms.b, Some(&v.time), v.time.words().into());
+            row(
+                gpu_ms.render(),
+                v.gpu_ms.a,
+                v.gpu_ms.b,
+                Some(&v.time),
+                v.time.words().into(),
+            );
         } else {
             // Not a measure of a result: the median over the run's baseline's median.
             let cost = |s: Option<f64>| s.filter(|x| *x > 0.0).map(|x| 1.0 / x);
@@ -75,7 +85,13 @@ pub fn csv_rows(c: &Comparison) -> Vec<Vec<String>> {
                 .speedup_moved_with
                 .as_ref()
                 .map_or_else(String::new, |b| format!("moved with {b}"));
-            row(Measure::Speedup.name().into(), v.speedup.a, v.speedup.b, None, moved);
+            row(
+                Measure::Speedup.name().into(),
+                v.speedup.a,
+                v.speedup.b,
+                None,
+                moved,
+            );
         }
         for m in &v.metrics {
             let verdict = match m.higher_is_better {

@@ -216,7 +216,10 @@ fn scenario_table(b: &mut String, c: &Comparison, s: &ScenarioComparison) {
     );
     for v in &s.variants {
         let name = match v.only_in {
-            Some(side) => format!("{} <span class=muted>(only in {side:?})</span>", esc(&v.variant)),
+            Some(side) => format!(
+                "{} <span class=muted>(only in {side:?})</span>",
+                esc(&v.variant)
+            ),
             None => esc(&v.variant),
         };
         let label = |x: &Option<String>| x.as_deref().unwrap_or("–").to_string();
