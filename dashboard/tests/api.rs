@@ -734,13 +734,16 @@ async fn browse_checks(app: Router, name: &str) {
         );
         let md = get(&app, &format!("/api/compare/runs?a={a}&b={b}&format=md")).await;
         assert!(
-            md.1.starts_with("text/markdown") && md.2.contains("| variant | status A → B |"),
+            md.1.starts_with("text/markdown")
+                && md
+                    .2
+                    .contains("| variant | GPU ms | change [99% interval] | time |"),
             "{name}"
         );
         let csv = get(&app, &format!("/api/compare/runs?a={a}&b={b}&format=csv")).await;
         assert!(
             csv.2
-                .starts_with("scenario,variant,measure,a,b,change,p,verdict\n"),
+                .starts_with("scenario,variant,measure,a,b,change,low,high,p,verdict\n"),
             "{name}"
         );
         ok(

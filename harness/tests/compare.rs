@@ -1,5 +1,6 @@
 //! `tessera compare`: the Markdown from records built in code (whole expected strings), and the
-//! command's exit codes on run folders written from those records. No GPU needed.
+//! command's exit codes on run folders written from those records. No GPU needed. The rules are
+//! `results/COMPARISON.md`'s; the engine's own cases are in `results/tests/compare.rs`.
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -203,12 +204,13 @@ fn energy_per_frame_and_throttled_results_are_reported() {
         )],
     };
     let c = compare::compare(&a, &b, &Options::default());
+    let upscale = &c.scenarios[0].variants[1];
     assert_eq!(
-        c.scenarios[0].variants[1].energy_saving,
+        (upscale.energy_saving.a, upscale.energy_saving.b),
         (Some(2.0), Some(1.6))
     );
     assert_eq!(
-        c.scenarios[0].variants[1].throttled,
+        (upscale.throttled.a, upscale.throttled.b),
         (Some(false), Some(true))
     );
     // Energy is reported, not judged.
@@ -218,7 +220,7 @@ fn energy_per_frame_and_throttled_results_are_reported() {
     assert!(!md.contains("in run A"), "{md}");
     assert!(
         md.contains(
-            "### Energy per frame\n\n| scenario | variant | mJ/frame | change | saving vs native |\n|---|---|---:|---:|---:|\n| a | native | 4.000 | +0.0% | 1.00x |\n| a | upscale | 2.000 → 2.500 | +25.0% | 2.00x → 1.60x |\n"
+            "### Energy per frame\n\n| scenario | variant | mJ/frame | change | saving vs baseline |\n|---|---|---:|---:|---:|\n| a | native | 4.000 | +0.0% | - |\n| a | upscale | 2.000 → 2.500 | +25.0% | 2.00x → 1.60x |\n"
         ),
         "{md}"
     );
@@ -255,20 +257,20 @@ fn slower_variant_and_worse_psnr_are_regressions_on_one_adapter() {
 
 ### a
 
-| variant | GPU ms | change | time | speedup | PSNR dB | SSIM | FLIP | status |
+| variant | GPU ms | change [99% interval] | time | speedup | PSNR dB | SSIM | FLIP | status |
 |---|---:|---:|---|---:|---:|---:|---:|---|
-| native | 1.045 | +0.0% | within noise (p=1.000) | 1.00x | inf | 1.0000 | 0.0000 | ok |
-| upscale | 0.545 → 0.645 | +18.3% | **slower** (p<0.001) | 1.92x → 1.62x | 30.00 → 29.50 **worse** | 0.9000 → 0.9005 | 0.1000 → 0.1005 | ok |
+| native | 1.045 | +0.0% [-3.8%, +3.8%] | within noise (p=1.000) | - | inf | 1.0000 | 0.0000 | ok |
+| upscale | 0.545 → 0.645 | +18.3% [+11.0%, +25.7%] | **slower (p<0.001)** | 1.92x → 1.62x | 30.00 → 29.50 **worse** | 0.9000 → 0.9005 | 0.1000 → 0.1005 | ok |
 
 **Regressions**
 
-- `a` / `upscale`: GPU time +18.3% (p<0.001)
+- `a` / `upscale`: GPU time +18.3% [+11.0%, +25.7%] (p<0.001)
 - `a` / `upscale`: PSNR dB 30.00 → 29.50
 
-**Verdict: regressed** (2 regressions beyond noise, 0 improvements; time: Mann-Whitney U p < 0.01 and a median change of at least 5%)
+**Verdict: regressed** (2 regressions, 0 improvements; time: Mann-Whitney U p < 0.01 and a Hodges-Lehmann shift of at least 5%; too few frames below 5 per side)
 "
     );
-    // Below the threshold the same separation is within noise, and the PSNR loss remains.
+    // Below the threshold the same separation is real but not marked, and the PSNR loss remains.
     let c = compare::compare(
         &base(),
         &b,
@@ -278,10 +280,12 @@ fn slower_variant_and_worse_psnr_are_regressions_on_one_adapter() {
     );
     let md = compare::markdown::render(&c);
     assert!(
-        md.contains("| upscale | 0.545 → 0.645 | +18.3% | within noise (p<0.001) |"),
+        md.contains(
+            "| upscale | 0.545 → 0.645 | +18.3% [+11.0%, +25.7%] | below threshold (p<0.001) |"
+        ),
         "{md}"
     );
-    assert!(md.ends_with("**Verdict: regressed** (1 regression beyond noise, 0 improvements; time: Mann-Whitney U p < 0.01 and a median change of at least 20%)\n"), "{md}");
+    assert!(md.ends_with("**Verdict: regressed** (1 regression, 0 improvements; time: Mann-Whitney U p < 0.01 and a Hodges-Lehmann shift of at least 20%; too few frames below 5 per side)\n"), "{md}");
 }
 
 #[test]
@@ -329,17 +333,17 @@ fn other_adapter_is_compared_by_speedup_and_its_skips_are_not_regressions() {
 | driver | NVIDIA, 580.65 | NVIDIA, Mesa 24 |
 | status | complete | complete |
 
-> **Warning:** the adapters or drivers differ: GPU times are compared by speedup against native on each adapter, not in milliseconds.
+> **Warning:** the adapters or drivers differ: GPU times are compared relative to each variant's baseline on each adapter (its speedup), not in milliseconds.
 
 ### a
 
-| variant | GPU ms | change | time | speedup | PSNR dB | SSIM | FLIP | status |
+| variant | GPU ms | change [99% interval] | time | speedup | PSNR dB | SSIM | FLIP | status |
 |---|---:|---:|---|---:|---:|---:|---:|---|
-| native | 1.045 → 0.545 | - | baseline | 1.00x | inf | 1.0000 | 0.0000 | ok |
-| upscale | 0.545 → 0.295 | +3.8% | within noise (p=0.481) | 1.92x → 1.85x | 30.00 | 0.9000 | 0.1000 | ok |
+| native | 1.045 → 0.545 | - | baseline | - | inf | 1.0000 | 0.0000 | ok |
+| upscale | 0.545 → 0.295 | +3.8% [-7.9%, +15.5%] | within noise (p=0.481) | 1.92x → 1.85x | 30.00 | 0.9000 | 0.1000 | ok |
 | checkerboard | 0.745 → - | - | not ok in both | 1.40x → - | 35.00 → - | 0.9500 → - | 0.0500 → - | ok → skipped: needs MULTISAMPLE_X2 for Rgba16Float |
 
-**Verdict: no regression** (0 regressions beyond noise, 0 improvements; time: Mann-Whitney U p < 0.01 and a median change of at least 5%)
+**Verdict: no regression** (0 regressions, 0 improvements; time: Mann-Whitney U p < 0.01 and a Hodges-Lehmann shift of at least 5%; too few frames below 5 per side)
 "
     );
 }
@@ -398,16 +402,16 @@ fn failures_gates_and_missing_scenarios() {
 
 ### a (only in A)
 
-| variant | GPU ms | change | time | speedup | PSNR dB | SSIM | FLIP | status |
+| variant | GPU ms | change [99% interval] | time | speedup | PSNR dB | SSIM | FLIP | status |
 |---|---:|---:|---|---:|---:|---:|---:|---|
-| native (only in A) | 1.045 → - | - | not in both | 1.00x → - | inf → - | 1.0000 → - | 0.0000 → - | ok → - |
+| native (only in A) | 1.045 → - | - | not in both | - | inf → - | 1.0000 → - | 0.0000 → - | ok → - |
 | upscale (only in A) | 0.545 → - | - | not in both | 1.92x → - | 30.00 → - | 0.9000 → - | 0.1000 → - | ok → - |
 
 ### b
 
-| variant | GPU ms | change | time | speedup | PSNR dB | SSIM | FLIP | status |
+| variant | GPU ms | change [99% interval] | time | speedup | PSNR dB | SSIM | FLIP | status |
 |---|---:|---:|---|---:|---:|---:|---:|---|
-| native | 1.045 | +0.0% | within noise (p=1.000) | 1.00x | inf | 1.0000 | 0.0000 | **ok → gate failed** |
+| native | 1.045 | +0.0% [-3.8%, +3.8%] | within noise (p=1.000) | - | inf | 1.0000 | 0.0000 | **ok → gate failed** |
 | upscale | 0.545 → - | - | not ok in both | 1.92x → - | 30.00 → - | 0.9000 → - | 0.1000 → - | **ok → failed: the GPU device was lost \\| twice** |
 | native-2 (only in B) | - → 1.045 | - | not in both | - → 1.00x | - | - | - | - → ok |
 
@@ -416,7 +420,7 @@ fn failures_gates_and_missing_scenarios() {
 - `b` / `native`: status ok → gate failed
 - `b` / `upscale`: status ok → failed: the GPU device was lost \\| twice
 
-**Verdict: regressed** (2 regressions beyond noise, 0 improvements; time: Mann-Whitney U p < 0.01 and a median change of at least 5%)
+**Verdict: regressed** (2 regressions, 0 improvements; time: Mann-Whitney U p < 0.01 and a Hodges-Lehmann shift of at least 5%; too few frames below 5 per side)
 "
     );
 }
@@ -458,7 +462,7 @@ fn exit_codes_of_the_command() {
     let same = write_run(dir.path(), &same);
     let (code, out, _) = tessera(&["compare", &a, &same]);
     assert_eq!(code, 0, "{out}");
-    assert!(out.ends_with("**Verdict: no regression** (0 regressions beyond noise, 0 improvements; time: Mann-Whitney U p < 0.01 and a median change of at least 5%)\n"), "{out}");
+    assert!(out.ends_with("**Verdict: no regression** (0 regressions, 0 improvements; time: Mann-Whitney U p < 0.01 and a Hodges-Lehmann shift of at least 5%; too few frames below 5 per side)\n"), "{out}");
 
     let mut slower = base();
     slower.info.run_id = "slower".into();

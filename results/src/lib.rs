@@ -1,7 +1,8 @@
 //! Result record types shared by the harness (which writes them) and the dashboard (which reads
 //! them), and their meaning: [`measure`] (every measure's name, unit, direction and label, the
 //! baseline lookup by technique, the values that become series), [`folder`] (the one run-folder
-//! reader, upgrading older schema versions) and [`upload`] (the body of `POST /api/runs`).
+//! reader, upgrading older schema versions), [`upload`] (the body of `POST /api/runs`), and
+//! [`compare`] (the one comparison of two runs, its rules in `COMPARISON.md`) on [`stats`].
 //!
 //! No GPU, no HTTP, no writing. The file format built from these types is documented in
 //! `results/README.md`; bump [`SCHEMA_VERSION`] on any change a reader could notice, and teach
@@ -11,6 +12,7 @@ use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
+pub mod compare;
 pub mod conditions;
 pub mod folder;
 pub mod measure;

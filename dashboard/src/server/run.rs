@@ -98,7 +98,8 @@ fn change_cell(
             let (class, word) = match c.verdict {
                 TimeVerdict::Slower => ("worse", "slower"),
                 TimeVerdict::Faster => ("better", "faster"),
-                TimeVerdict::Same => ("muted", "within noise"),
+                // The engine's other words: within noise, below threshold, too few frames.
+                v => ("muted", v.words()),
             };
             format!(
                 "<td class=\"n {class}\" title=\"{word}, Mann-Whitney U p={:.4}\">{}</td>",

@@ -1,0 +1,320 @@
+//! The compare page's HTML: the form, both runs, the rule, the verdict and its tally, the
+//! regressions and improvements (a baseline's change once, with the speedups that moved with it),
+//! the variants with too few frames, and one table per scenario (frame time with its 99% interval
+//! and verdict, speedup, passes, metrics, status, images). Every word and number comes from the
+//! engine's [`Comparison`]; every name is escaped.
+//!
+//! Not for: the API's formats ([`super::formats`]).
+
+use std::fmt::Write;
+
+use tessera_results::compare::words::{change_with_interval, p_value, pct};
+use tessera_results::compare::{
+    markdown, Comparison, Finding, PassComparison, ScenarioComparison, Time, TimeVerdict,
+    VariantComparison, Verdict,
+};
+use tessera_results::RunInfo;
+
+use super::query::CompareRunsQuery;
+use crate::html::{commit, enc, esc, num};
+
+fn plural(n: usize, word: &str) -> String {
+    format!("{n} {word}{}", if n == 1 { "" } else { "s" })
+}
+
+fn opt(v: Option<f64>) -> String {
+    v.map_or("–".into(), num)
+}
+
+/// The CSS class of a time verdict: red where it counts as a regression.
+fn time_class(t: &Time, counts: bool) -> &'static str {
+    match t.tested().map(|t| t.verdict) {
+        Some(TimeVerdict::Slower) if counts => "worse",
+        Some(TimeVerdict::Faster) if counts => "better",
+        _ => "muted",
+    }
+}
+
+fn verdict_class(v: Verdict) -> &'static str {
+    match v {
+        Verdict::Worse => "worse",
+        Verdict::Better => "better",
+        Verdict::Same => "muted",
+    }
+}
+
+/// The verdict with its evidence: `slower p<0.001`, `too few frames (4 vs 4; 5 per side
+/// needed)`, `baseline`.
+fn time_words(t: &Time, frames_needed: usize) -> String {
+    match t.tested() {
+        Some(x) if x.verdict == TimeVerdict::TooFewFrames => format!(
+            "too few frames <span class=muted>({} vs {}; {frames_needed} per side needed)</span>",
+            x.frames[0], x.frames[1]
+        ),
+        Some(x) => format!(
+            "{} <span class=muted>{}</span>",
+            x.verdict.words(),
+            p_value(x.p)
+        ),
+        None => esc(t.words()),
+    }
+}
+
+fn change_cell(t: &Time) -> String {
+    t.tested().map_or("–".into(), change_with_interval)
+}
+
+fn run_line(label: &str, r: &RunInfo) -> String {
+    format!(
+        "<p>{label}: <a href=\"/runs/{}\">{}</a> · commit <code>{}</code> · {} · {} · {} {} · suite {}</p>",
+        enc(&r.run_id),
+        esc(&r.run_id),
+        esc(&commit(r.commit.as_ref().map(|c| c.sha.as_str()))),
+        esc(&r.started_at),
+        esc(&r.adapter.name),
+        esc(&r.adapter.driver),
+        esc(&r.adapter.driver_info),
+        esc(r.suite.as_deref().unwrap_or("–"))
+    )
+}
+
+fn finding_item(f: &Finding) -> String {
+    let mut li = format!(
+        "<li><a href=\"#s-{}\">{}</a> / {}: {} <span class={}>{}</span>",
+        esc(&f.scenario),
+        esc(&f.scenario),
+        esc(&f.variant),
+        esc(&f.what),
+        verdict_class(f.verdict),
+        esc(&f.change)
+    );
+    if !f.moves_speedups_of.is_empty() {
+        let _ = write!(
+            li,
+            " <span class=muted>· the speedups of {} moved with it (counted here once)</span>",
+            esc(&f.moves_speedups_of.join(", "))
+        );
+    }
+    li.push_str("</li>");
+    li
+}
+
+fn findings(b: &mut String, c: &Comparison) {
+    for (title, v) in [
+        ("Regressions", Verdict::Worse),
+        ("Improvements", Verdict::Better),
+    ] {
+        let items: Vec<String> = c.findings_of(v).map(finding_item).collect();
+        if !items.is_empty() {
+            let _ = write!(
+                b,
+                "<h2 class={}>{title}</h2><ul class=findings>{}</ul>",
+                verdict_class(v),
+                items.concat()
+            );
+        }
+    }
+    let few: Vec<String> = c
+        .too_few_frames()
+        .map(|(s, v)| format!("{} / {}", esc(&s.scenario), esc(&v.variant)))
+        .collect();
+    if !few.is_empty() {
+        let _ = write!(
+            b,
+            "<p id=too-few><strong>Too few frames</strong> to tell a time change in {} (the test cannot reach p &lt; {} with so few frames, whatever the change): {}. It takes {} measured frames per side (<code>frames.measured</code>).</p>",
+            few.len(),
+            c.rule.alpha,
+            few.join(", "),
+            c.rule.frames_needed
+        );
+    }
+}
+
+fn passes_cell(passes: &[PassComparison], counts: bool) -> String {
+    passes
+        .iter()
+        .map(|p| {
+            let change = p.time.tested().map_or("–".into(), |t| pct(t.change));
+            format!(
+                "{} <span class={}>{change} {}</span>",
+                esc(&p.name),
+                time_class(&p.time, counts),
+                esc(p.time.words())
+            )
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+fn metrics_cell(v: &VariantComparison) -> String {
+    v.metrics
+        .iter()
+        .map(|m| {
+            format!(
+                "{} {} → <span class={}>{}</span>",
+                esc(&m.name),
+                opt(m.values.a),
+                verdict_class(m.verdict),
+                opt(m.values.b)
+            )
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+fn speedup_cell(v: &VariantComparison) -> String {
+    let x = |s: Option<f64>| s.map_or("–".into(), |s| format!("{s:.2}x"));
+    let mut out = format!("{} → {}", x(v.speedup.a), x(v.speedup.b));
+    if v.speedup.a.is_none() && v.speedup.b.is_none() {
+        out = "–".into();
+    }
+    if let Some(base) = &v.speedup_moved_with {
+        let _ = write!(out, " <span class=muted>(moved with {})</span>", esc(base));
+    }
+    out
+}
+
+fn images_cell(c: &Comparison, s: &ScenarioComparison, v: &VariantComparison) -> String {
+    let link = |run: &str, label: &str| {
+        format!(
+            "<a href=\"/runs/{}/images/{}/{}\">{label}</a>",
+            enc(run),
+            enc(&s.scenario),
+            enc(&v.variant)
+        )
+    };
+    let mut out = Vec::new();
+    if v.images.a == Some(true) {
+        out.push(link(&c.a.run_id, "A"));
+    }
+    if v.images.b == Some(true) {
+        out.push(link(&c.b.run_id, "B"));
+    }
+    if v.images.a == Some(true) && v.images.b == Some(true) {
+        out.push(format!(
+            "<a href=\"/runs/{}/images/{}/{}?other={}\">A beside B</a>",
+            enc(&c.b.run_id),
+            enc(&s.scenario),
+            enc(&v.variant),
+            enc(&c.a.run_id)
+        ));
+    }
+    out.join(" ")
+}
+
+fn scenario_table(b: &mut String, c: &Comparison, s: &ScenarioComparison) {
+    let only = match s.only_in {
+        Some(side) => format!(" <span class=muted>(only in {side:?})</span>"),
+        None => String::new(),
+    };
+    let _ = write!(
+        b,
+        "<h2 id=\"s-{}\">{}{only}</h2><div class=scroll><table class=compare><tr><th>variant</th><th>status A → B</th><th class=n>GPU ms A</th><th class=n>GPU ms B</th><th class=n>change [{:.0}% interval]</th><th>verdict</th><th class=n>speedup A → B</th><th>passes (change, verdict)</th><th>metrics A → B</th><th>images</th></tr>",
+        esc(&s.scenario),
+        esc(&s.scenario),
+        c.rule.confidence * 100.0
+    );
+    for v in &s.variants {
+        let name = match v.only_in {
+            Some(side) => format!(
+                "{} <span class=muted>(only in {side:?})</span>",
+                esc(&v.variant)
+            ),
+            None => esc(&v.variant),
+        };
+        let label = |x: &Option<String>| x.as_deref().unwrap_or("–").to_string();
+        let status = if v.status.a == v.status.b {
+            esc(&label(&v.status.a))
+        } else {
+            format!(
+                "<span class={}>{} → {}</span>",
+                verdict_class(v.status_verdict),
+                esc(&label(&v.status.a)),
+                esc(&label(&v.status.b))
+            )
+        };
+        let class = time_class(&v.time, c.timings_count);
+        let _ = write!(
+            b,
+            "<tr><td>{name}</td><td>{status}</td><td class=n>{}</td><td class=n>{}</td><td class=\"n {class}\">{}</td><td class={class}>{}</td><td class=n>{}</td><td class=wrap>{}</td><td class=wrap>{}</td><td>{}</td></tr>",
+            opt(v.gpu_ms.a),
+            opt(v.gpu_ms.b),
+            change_cell(&v.time),
+            time_words(&v.time, c.rule.frames_needed),
+            speedup_cell(v),
+            passes_cell(&v.passes, c.timings_count),
+            metrics_cell(v),
+            images_cell(c, s, v),
+        );
+    }
+    b.push_str("</table></div>");
+}
+
+/// The page body below the form.
+pub fn render(c: &Comparison) -> String {
+    let q = format!("a={}&b={}", enc(&c.a.run_id), enc(&c.b.run_id));
+    let thr = if c.rule.threshold_pct == tessera_results::stats::DEFAULT_THRESHOLD_PCT {
+        String::new()
+    } else {
+        format!("&threshold={}", c.rule.threshold_pct)
+    };
+    let mut b = run_line("A (base)", &c.a);
+    b.push_str(&run_line("B (new)", &c.b));
+    let _ = write!(
+        b,
+        "<p><a id=permalink href=\"/compare/runs?{q}{thr}\">permalink</a> · export <a href=\"/api/compare/runs?{q}{thr}&format=md\">Markdown</a> <a href=\"/api/compare/runs?{q}{thr}&format=csv\">CSV</a> <a href=\"/api/compare/runs?{q}{thr}\">JSON</a> · <a href=\"/compare/runs?a={}&b={}{thr}\">swap A and B</a></p>",
+        enc(&c.b.run_id),
+        enc(&c.a.run_id),
+    );
+    let _ = write!(
+        b,
+        "<p class=muted>Time: a Mann-Whitney U test on per-frame GPU times, the test of <code>tessera compare</code>. <em>slower</em> or <em>faster</em> when p &lt; {alpha} and the Hodges-Lehmann shift (with its {conf:.0}% interval) is at least {thr}%; <em>below threshold</em> when significant but smaller; <em>within noise</em> when p ≥ {alpha}; <em>too few frames</em> when the frame counts cannot reach p &lt; {alpha} whatever the change (it takes {need} per side). Metrics by their direction beyond a tolerance; a baseline's change is counted once, on the baseline (<code>results/COMPARISON.md</code>).</p>",
+        alpha = c.rule.alpha,
+        conf = c.rule.confidence * 100.0,
+        thr = c.rule.threshold_pct,
+        need = c.rule.frames_needed,
+    );
+    if !c.same_adapter {
+        b.push_str("<p class=worse>The adapters or drivers differ: times are relative to each variant's baseline in its own run (a change means its speedup changed); the baseline itself reads <em>baseline</em>.</p>");
+    }
+    if !c.timings_count {
+        b.push_str("<p class=muted>A run is on a CPU adapter (lavapipe): its timings measure CPU work and the machine's load, so time verdicts are shown but never count as regressions.</p>");
+    }
+    let verdict = markdown::verdict_words(c);
+    let class = match verdict {
+        "regressed" => "worse",
+        "no regression" => "better",
+        _ => "muted",
+    };
+    let _ = write!(
+        b,
+        "<p id=verdict><strong class={class}>Verdict: {verdict}</strong> · {} · {}</p><p id=tally><span class={slow}>{} slower</span> · <span class={fast}>{} faster</span> · {} within noise · {} below threshold · {} too few frames</p>",
+        plural(c.findings_of(Verdict::Worse).count(), "regression"),
+        plural(c.findings_of(Verdict::Better).count(), "improvement"),
+        c.count_time(TimeVerdict::Slower),
+        c.count_time(TimeVerdict::Faster),
+        c.count_time(TimeVerdict::WithinNoise),
+        c.count_time(TimeVerdict::BelowThreshold),
+        c.count_time(TimeVerdict::TooFewFrames),
+        // On a CPU adapter time verdicts are shown, not counted: not in colour.
+        slow = if c.timings_count { "worse" } else { "muted" },
+        fast = if c.timings_count { "better" } else { "muted" },
+    );
+    findings(&mut b, c);
+    for s in &c.scenarios {
+        scenario_table(&mut b, c, s);
+    }
+    b
+}
+
+/// The form at the top of the page.
+pub fn form(q: &CompareRunsQuery) -> String {
+    format!(
+        "<form id=pick>A <input name=a size=28 value=\"{}\" placeholder=\"run id or commit\"> B <input name=b size=28 value=\"{}\" placeholder=\"run id or commit\"> suite <input name=suite size=10 value=\"{}\"> adapter id <input name=adapter size=4 value=\"{}\"> threshold % <input name=threshold size=4 value=\"{}\"> <button>compare</button></form>",
+        esc(q.a.as_deref().unwrap_or("")),
+        esc(q.b.as_deref().unwrap_or("")),
+        esc(q.suite.as_deref().unwrap_or("")),
+        q.adapter.map_or(String::new(), |a| a.to_string()),
+        q.threshold
+    )
+}
