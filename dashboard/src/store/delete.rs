@@ -82,12 +82,14 @@ fn delete_once(c: &mut dyn Connection, run_id: &str) -> Result<Deleted, StoreErr
 }
 
 /// Which runs a retention rule keeps. A run is kept when any given rule keeps it; with no rule
-/// every run is kept.
+/// every run is kept. Runs are placed in time by their commit time, or, for a run without one, by
+/// when the server stored it ([`order_time`]): never by the client's `started_at`, which a
+/// runner's clock (or a bad upload) can put anywhere.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Retention {
-    /// Keep runs that started at most this many days ago.
+    /// Keep runs whose commit (or, without one, storing) is at most this many days old.
     pub keep_days: Option<u32>,
-    /// Keep the newest this many runs of each adapter (by start time).
+    /// Keep the newest this many runs of each adapter (by commit time, else storing time).
     pub keep_runs: Option<u32>,
 }
 
@@ -95,11 +97,31 @@ pub struct Retention {
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Expired {
     pub run_id: String,
-    pub started_at: String,
+    /// The time retention placed it at (RFC 3339 UTC) and which one it is: `commit` or `stored`.
+    pub at: String,
+    pub by: &'static str,
     pub adapter: String,
 }
 
-/// The runs `rule` does not keep, oldest first. `now` is RFC 3339 UTC (the cut-off is
+/// Where retention places a run: its commit time when it has one that parses, else the time the
+/// server stored it; as RFC 3339 UTC to the second, which sorts as text.
+pub fn order_time(commit_time: Option<&str>, imported_at: &str) -> (String, &'static str) {
+    let norm = |t: &str| {
+        chrono::DateTime::parse_from_rfc3339(t).ok().map(|d| {
+            d.with_timezone(&chrono::Utc)
+                .to_rfc3339_opts(chrono::SecondsFormat::Secs, true)
+        })
+    };
+    match commit_time.and_then(norm) {
+        Some(t) => (t, "commit"),
+        None => (
+            norm(imported_at).unwrap_or_else(|| imported_at.to_string()),
+            "stored",
+        ),
+    }
+}
+
+/// The runs `rule` does not keep, oldest first. `now` is the server's clock (the cut-off is
 /// `now - keep_days`).
 pub fn expired(
     conn: &mut dyn Connection,
@@ -110,26 +132,46 @@ pub fn expired(
         return Ok(Vec::new());
     }
     let rows = conn.query(
-        "SELECT r.run_id, r.started_at, a.name, \
-                ROW_NUMBER() OVER (PARTITION BY r.adapter_id ORDER BY r.started_at DESC, r.id DESC) \
-         FROM runs r JOIN adapters a ON a.id = r.adapter_id \
-         ORDER BY r.started_at, r.id",
+        "SELECT r.run_id, r.commit_time, r.imported_at, r.adapter_id, a.name, r.id \
+         FROM runs r JOIN adapters a ON a.id = r.adapter_id",
         &[],
     )?;
+    // (at, imported_at, id): a total order; the newest last.
+    let mut runs = Vec::with_capacity(rows.len());
+    for r in &rows {
+        let imported = r.string(2)?;
+        let (at, by) = order_time(r.opt_string(1)?.as_deref(), &imported);
+        runs.push((
+            at,
+            imported,
+            r.i64(5)?,
+            r.i64(3)?,
+            r.string(0)?,
+            by,
+            r.string(4)?,
+        ));
+    }
+    runs.sort();
+    let mut per_adapter: std::collections::HashMap<i64, i64> = std::collections::HashMap::new();
+    let mut rank = vec![0i64; runs.len()];
+    for (i, r) in runs.iter().enumerate().rev() {
+        let n = per_adapter.entry(r.3).or_insert(0);
+        *n += 1;
+        rank[i] = *n;
+    }
     let cutoff = rule.keep_days.map(|d| {
         (now - chrono::Duration::days(d.into())).to_rfc3339_opts(chrono::SecondsFormat::Secs, true)
     });
     let mut out = Vec::new();
-    for r in rows {
-        let started_at = r.string(1)?;
-        let rank = r.i64(3)?;
-        let kept_by_age = cutoff.as_ref().is_some_and(|c| started_at >= *c);
-        let kept_by_count = rule.keep_runs.is_some_and(|n| rank <= i64::from(n));
+    for (i, (at, _, _, _, run_id, by, adapter)) in runs.into_iter().enumerate() {
+        let kept_by_age = cutoff.as_ref().is_some_and(|c| at >= *c);
+        let kept_by_count = rule.keep_runs.is_some_and(|n| rank[i] <= i64::from(n));
         if !kept_by_age && !kept_by_count {
             out.push(Expired {
-                run_id: r.string(0)?,
-                started_at,
-                adapter: r.string(2)?,
+                run_id,
+                at,
+                by,
+                adapter,
             });
         }
     }

@@ -26,4 +26,7 @@ pub enum StoreError {
     NotFound(String),
     #[error("{0}")]
     Invalid(String),
+    /// The request contradicts what is stored (a run id stored with different content).
+    #[error("{0}")]
+    Conflict(String),
 }
