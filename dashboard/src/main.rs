@@ -9,7 +9,7 @@ use std::time::Duration;
 use clap::{Parser, Subcommand};
 use tessera_dashboard::notify::webhook;
 use tessera_dashboard::server::auth::{AuthConfig, Scope};
-use tessera_dashboard::store::delete::{delete_run, expired, Retention};
+use tessera_dashboard::store::delete::{expired, Retention};
 use tessera_dashboard::store::ingest::{ingest, Ingested};
 use tessera_dashboard::store::tokens;
 use tessera_dashboard::{
@@ -220,9 +220,13 @@ fn retention(rule: Retention, apply: bool, db: &str) -> anyhow::Result<()> {
         return Ok(());
     }
     for r in &runs {
-        let d = delete_run(&mut *conn, &r.run_id)?;
+        let (d, _) = tessera_dashboard::regressions::delete_and_detect(
+            &mut *conn,
+            &r.run_id,
+            &Params::default(),
+        )?;
         println!(
-            "deleted {}: {} results, {} images, {} alerts",
+            "deleted {}: {} results, {} images, {} alerts re-pointed",
             r.run_id, d.results, d.images, d.alerts
         );
     }

@@ -401,7 +401,7 @@ impl Report {
 fn open_alerts(conn: &mut dyn Connection) -> Result<Vec<(i64, i64, bool, String)>, StoreError> {
     conn.query(
         "SELECT series_id, run_pk_after, relative_change, status FROM regressions WHERE status <> $1",
-        &[WITHDRAWN.into()],
+        &[WITHDRAWN.as_str().into()],
     )?
     .iter()
     .map(|r| {
@@ -485,7 +485,7 @@ pub fn run(
         for (s, pk, up, status) in open_alerts(&mut *conn)? {
             first_seen.entry((s, pk)).or_insert(pos);
             ever.insert((s, pk, up));
-            if status == regressions::CONFIRMED {
+            if status == regressions::CONFIRMED.as_str() {
                 confirmed_at.entry((s, pk)).or_insert(pos);
                 ever_confirmed.insert((s, pk));
             }

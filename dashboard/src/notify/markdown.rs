@@ -5,7 +5,8 @@
 use std::fmt::Write;
 
 use crate::html::{commit, num, pct};
-use crate::store::groups::{title, Alert, Group};
+use crate::store::alerts::Alert;
+use crate::store::groups::{title, Group};
 
 /// Most series rows written; the rest are counted.
 pub const MAX_ROWS: usize = 50;
@@ -48,7 +49,7 @@ pub fn render(g: &Group, base: &str) -> String {
         g.status,
         g.worse,
         g.better,
-        super::group_url(base, &g.key)
+        super::group_url(base, g.id)
     );
     if !g.note.is_empty() || !g.bug_url.is_empty() {
         let mut line = String::new();

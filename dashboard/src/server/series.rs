@@ -396,7 +396,7 @@ pub fn render(v: &SeriesView) -> String {
             if r.is_regression { "worse" } else { "better" },
             pct(r.relative_change),
             r.confidence * 100.0,
-            esc(&r.state)
+            esc(r.state.as_str())
         );
     }
     b.push_str("</table>");

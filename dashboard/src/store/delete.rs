@@ -2,11 +2,13 @@
 //! (`DELETE /api/runs/{run_id}`), and choosing which runs a retention rule drops
 //! (`tessera-dashboard retention`), which then deletes each with the same [`delete_run`].
 //!
-//! What goes with a run: its scenario results, results, points, images, the blobs that no other
-//! run's images use, and every regression (alert) whose before or after run it was, with its
-//! history (`regression_events`). Series stay
-//! (other runs' points may use them; an empty series shows no points). Detection is not re-run
-//! here. Not for: HTTP (see [`crate::server::delete`]).
+//! What goes with a run: its scenario results, results, points, images and the blobs that no
+//! other run's images use. Alerts stay: those whose before or after run it was are re-pointed to
+//! the neighbouring runs of their series first ([`crate::store::alerts::repoint_for_deleted_run`]),
+//! so that an alert keeps its id, group, history and triage (ids are never reused). Series stay
+//! (other runs' points may use them; an empty series shows no points). Detection is re-run on the
+//! run's series by [`crate::regressions::delete_and_detect`], which the server and retention use.
+//! Not for: HTTP (see [`crate::server::delete`]).
 
 use super::StoreError;
 use crate::db::{transaction, Connection, Value};
@@ -19,6 +21,7 @@ pub struct Deleted {
     pub points: u64,
     pub images: u64,
     pub blobs: u64,
+    /// Alerts re-pointed away from the run (none is deleted).
     pub alerts: u64,
 }
 
@@ -26,27 +29,32 @@ pub struct Deleted {
 pub fn delete_run(conn: &mut dyn Connection, run_id: &str) -> Result<Deleted, StoreError> {
     let mut attempt = 0;
     loop {
-        match transaction(conn, |c| delete_once(c, run_id)) {
+        match transaction(conn, |c| delete_in_transaction(c, run_id).map(|d| d.0)) {
             Err(StoreError::Db(e)) if e.is_retryable() && attempt < 5 => attempt += 1,
             other => return other,
         }
     }
 }
 
-fn delete_once(c: &mut dyn Connection, run_id: &str) -> Result<Deleted, StoreError> {
+/// The body of [`delete_run`] for a caller that holds a transaction; also returns the series the
+/// run had points in (for detection).
+pub fn delete_in_transaction(
+    c: &mut dyn Connection,
+    run_id: &str,
+) -> Result<(Deleted, Vec<i64>), StoreError> {
     let Some(row) = c.query_opt("SELECT id FROM runs WHERE run_id = $1", &[run_id.into()])? else {
         return Err(StoreError::NotFound(format!("run {run_id}")));
     };
     let pk = [Value::Int(row.i64(0)?)];
-    c.execute(
-        "DELETE FROM regression_events WHERE regression_id IN \
-         (SELECT id FROM regressions WHERE run_pk_before = $1 OR run_pk_after = $1)",
-        &pk,
-    )?;
-    let alerts = c.execute(
-        "DELETE FROM regressions WHERE run_pk_before = $1 OR run_pk_after = $1",
-        &pk,
-    )?;
+    let series: Vec<i64> = c
+        .query(
+            "SELECT series_id FROM points WHERE run_pk = $1 ORDER BY series_id",
+            &pk,
+        )?
+        .iter()
+        .map(|r| r.i64(0))
+        .collect::<Result<_, _>>()?;
+    let alerts = super::alerts::repoint_for_deleted_run(c, row.i64(0)?)?;
     // The p5-p95 bands of the run's timed points (series charts).
     c.execute("DELETE FROM point_bands WHERE run_pk = $1", &pk)?;
     let points = c.execute("DELETE FROM points WHERE run_pk = $1", &pk)?;
@@ -71,14 +79,17 @@ fn delete_once(c: &mut dyn Connection, run_id: &str) -> Result<Deleted, StoreErr
     let results = c.execute("DELETE FROM results WHERE run_pk = $1", &pk)?;
     c.execute("DELETE FROM scenario_results WHERE run_pk = $1", &pk)?;
     c.execute("DELETE FROM runs WHERE id = $1", &pk)?;
-    Ok(Deleted {
-        run_id: run_id.to_string(),
-        results,
-        points,
-        images,
-        blobs,
-        alerts,
-    })
+    Ok((
+        Deleted {
+            run_id: run_id.to_string(),
+            results,
+            points,
+            images,
+            blobs,
+            alerts,
+        },
+        series,
+    ))
 }
 
 /// Which runs a retention rule keeps. A run is kept when any given rule keeps it; with no rule
