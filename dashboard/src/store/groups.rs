@@ -184,9 +184,16 @@ fn median(mut v: Vec<f64>) -> f64 {
 
 /// The group's one-line title. With `code`, names are wrapped in backticks (Markdown).
 pub fn title(commit_after: &str, alerts: &[&Alert], code: bool) -> String {
+    // In Markdown, names are code spans, in which nothing can be escaped: backticks and pipes
+    // are replaced (names are validated on upload; older stores may hold anything).
     let q = |s: &str| {
         if code {
-            format!("`{s}`")
+            format!(
+                "`{}`",
+                s.replace('`', "'")
+                    .replace('|', "¦")
+                    .replace(['\n', '\r'], " ")
+            )
         } else {
             s.to_string()
         }
