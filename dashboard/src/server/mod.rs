@@ -13,6 +13,7 @@ pub mod compare_runs;
 pub mod delete;
 pub mod error;
 pub mod export;
+pub mod frame_charts;
 pub mod headers;
 pub mod health;
 pub mod images;

@@ -389,7 +389,12 @@ pub fn render_group(g: &Group, charts: &[(Alert, read::SeriesDetail)]) -> String
             esc(&a.series.measure),
             change_cell(a)
         );
-        b.push_str(&series_chart(&marks, &cps, &[], &a.series.measure));
+        b.push_str(&series_chart(
+            &marks,
+            &cps,
+            &[],
+            &crate::html::axis_label(&a.series.measure),
+        ));
     }
     if g.alerts.len() > charts.len() {
         let _ = write!(
