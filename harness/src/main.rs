@@ -207,6 +207,14 @@ fn validate_command(paths: &[PathBuf]) -> u8 {
         Some(s) => {
             let variants: usize = s.iter().map(|s| s.variants.len()).sum();
             println!("{} scenarios valid ({variants} variants)", s.len());
+            // What needs more than every adapter has, said before any device is opened.
+            for scenario in &s {
+                for v in &scenario.variants {
+                    for reason in tessera::techniques::skip_reasons(v) {
+                        println!("{}: {}: {reason}", scenario.file.display(), v.name);
+                    }
+                }
+            }
             0
         }
         None => EXIT_INPUT,

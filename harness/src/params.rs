@@ -1,15 +1,12 @@
 //! Technique parameters as the scenario format sees them: their kinds, ranges and defaults
 //! ([`ParamSpec`]), typed handles a technique reads its options through ([`Param`]), concrete
-//! values and variants, and variant names.
+//! values. Variants (a technique with values) are `techniques/definition.rs`'s.
 //!
 //! Which techniques exist and which parameters each takes is the registry's (`techniques/`); this
-//! module knows no technique.
+//! module knows no technique and names no other module of the harness.
 
-use std::collections::BTreeMap;
 use std::fmt;
 use std::marker::PhantomData;
-
-use crate::techniques::Technique;
 
 /// One parameter of a technique.
 #[derive(Debug)]
@@ -165,47 +162,6 @@ impl fmt::Display for ParamValue {
     }
 }
 
-/// A technique with concrete parameter values.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Variant {
-    pub name: String,
-    pub technique: &'static dyn Technique,
-    /// Every parameter of the technique, defaults filled in.
-    pub params: BTreeMap<String, ParamValue>,
-}
-
-impl Variant {
-    /// The value of `param`. Validation checked every value against its technique's
-    /// [`ParamSpec`]s, so a missing or mistyped value is a bug in the technique (its options read
-    /// a parameter it does not declare): the registry's tests read every technique's defaults.
-    pub fn get<T: FromParam>(&self, param: &Param<T>) -> T {
-        self.params
-            .get(param.spec.name)
-            .and_then(T::from_param)
-            .unwrap_or_else(|| {
-                panic!(
-                    "variant {} of {} lacks a valid parameter {}",
-                    self.name,
-                    self.technique.name(),
-                    param.spec.name
-                )
-            })
-    }
-
-    /// A variant of `technique` with every parameter at its default.
-    pub fn with_defaults(technique: &'static dyn Technique) -> Variant {
-        Variant {
-            name: technique.name().to_string(),
-            technique,
-            params: technique
-                .params()
-                .iter()
-                .map(|p| (p.name.to_string(), p.default.value()))
-                .collect(),
-        }
-    }
-}
-
 /// A parameter with the Rust type its technique reads it as: the spec the scenario format checks
 /// and the typed reading come from one declaration, so a technique cannot read a parameter under
 /// a name or type it does not declare.
@@ -329,15 +285,6 @@ macro_rules! choice {
             }
         }
     };
-}
-
-/// `technique` or `technique[a=1,b=x]` listing the parameters the scenario set explicitly.
-pub fn variant_name(technique: &dyn Technique, explicit: &[(String, ParamValue)]) -> String {
-    if explicit.is_empty() {
-        return technique.name().to_string();
-    }
-    let parts: Vec<String> = explicit.iter().map(|(k, v)| format!("{k}={v}")).collect();
-    format!("{}[{}]", technique.name(), parts.join(","))
 }
 
 /// The closest known name to `unknown`, if any is close enough to be a likely typo.

@@ -6,7 +6,7 @@
 
 mod common;
 
-use tessera::params::{ParamValue, Variant};
+use tessera::params::ParamValue;
 use tessera::render::readback::read_texture_raw;
 use tessera::render::renderer::Renderer;
 use tessera::render::scene::SceneGpu;
@@ -17,7 +17,8 @@ use tessera::techniques::adaptive_shading::model::{
     self, b_half, b_quarter, decode, Inputs, Mode, RateParams, TileStats,
 };
 use tessera::techniques::adaptive_shading::{rates_of, AdaptiveGpu as Adaptive};
-use tessera::techniques::{self, Target};
+use tessera::techniques::Variant;
+use tessera::techniques::{self, BuildContext, Target};
 
 /// Eq. 20 and 21 against the values in notes/techniques.md section 2 (evaluated from the fits).
 #[test]
@@ -189,9 +190,12 @@ fn adaptive(params: &[(&str, ParamValue)]) -> Variant {
 fn render(gpu: &tessera::gpu::Gpu, s: &Scenario, v: &Variant) -> frames::Rendered {
     let mut scene = SceneGpu::new(&gpu.device, s).unwrap();
     let mut t = techniques::build(
-        gpu,
         v,
-        Target::new(s.width, s.height, s.scene.has_dynamic_objects()),
+        &BuildContext::new(
+            gpu,
+            &scene,
+            Target::new(s.width, s.height, s.scene.has_dynamic_objects()),
+        ),
     )
     .unwrap();
     frames::render(gpu, &mut scene, s, t.as_mut(), true, true, &mut || {}).unwrap()
@@ -212,7 +216,8 @@ fn native_deferred_renders_what_native_renders() {
         );
     }
     for e in &deferred.extras {
-        assert_eq!(e.values, vec![("shading-rate", 1.0)]);
+        let values: Vec<(&str, f64)> = e.values.iter().map(|v| (v.name, v.value)).collect();
+        assert_eq!(values, vec![("shading-rate", 1.0)]);
     }
     assert_eq!(deferred.non_finite, 0);
 }
@@ -449,7 +454,8 @@ fn reported_shading_rate_is_within_the_rates_bounds() {
         &s,
         &adaptive(&[("threshold", ParamValue::Float(1.0))]),
     );
-    let rate = r.extras[0].values[0];
+    let v = r.extras[0].values[0];
+    let rate = (v.name, v.value);
     assert_eq!(rate.0, "shading-rate");
     assert!(
         rate.1 > 1.0 / 8.0 && rate.1 < 1.0,

@@ -5,7 +5,7 @@
 mod common;
 
 use glam::Vec4;
-use tessera::params::{ParamValue, Variant};
+use tessera::params::ParamValue;
 use tessera::render::readback::{read_texture, read_texture_layer};
 use tessera::render::renderer::Renderer;
 use tessera::render::scene::SceneGpu;
@@ -13,7 +13,8 @@ use tessera::render::timers::Timers;
 use tessera::scenario::Scenario;
 use tessera::techniques::checkerboard::model::{self, Inputs, Samples, Source};
 use tessera::techniques::checkerboard::{CheckerboardGpu as Checkerboard, Options};
-use tessera::techniques::{self, Target};
+use tessera::techniques::Variant;
+use tessera::techniques::{self, BuildContext, Target};
 
 fn variant(params: &[(&str, ParamValue)]) -> Variant {
     common::variant("checkerboard", params)
@@ -215,7 +216,11 @@ fn static_scene_reconstructs_native_within_one_level() {
     let gpu = common::gpu();
     let render = |v: &Variant| {
         let mut scene = SceneGpu::new(&gpu.device, &s).unwrap();
-        let mut t = techniques::build(&gpu, v, Target::new(s.width, s.height, false)).unwrap();
+        let mut t = techniques::build(
+            v,
+            &BuildContext::new(&gpu, &scene, Target::new(s.width, s.height, false)),
+        )
+        .unwrap();
         let mut s2 = s.clone();
         s2.warmup_frames = 3;
         s2.measured_frames = 2;

@@ -8,7 +8,7 @@ mod common;
 
 use glam::{Vec3, Vec4};
 use tessera::gpu::Gpu;
-use tessera::params::{ParamValue, Variant};
+use tessera::params::ParamValue;
 use tessera::render::readback::read_texture;
 use tessera::render::renderer::Renderer;
 use tessera::render::scene::{SceneGpu, ScenePipeline, COLOR_FORMAT, DEPTH_FORMAT};
@@ -18,7 +18,8 @@ use tessera::techniques::checkerboard_2x2::model::{self, shaded, Inputs, Source}
 use tessera::techniques::checkerboard_2x2::{
     Bindings, Checkerboard2x2Gpu, Clamp, FrameParams, Options, Reconstitution,
 };
-use tessera::techniques::{self, Target};
+use tessera::techniques::Variant;
+use tessera::techniques::{self, BuildContext, Target};
 
 fn vec4s(v: Vec<f32>) -> Vec<Vec4> {
     v.chunks_exact(4).map(Vec4::from_slice).collect()
@@ -541,9 +542,12 @@ fn a_camera_cut_resets_history() {
 fn render(gpu: &Gpu, s: &Scenario, v: &Variant) -> tessera::run::frames::Rendered {
     let mut scene = SceneGpu::new(&gpu.device, s).unwrap();
     let mut t = techniques::build(
-        gpu,
         v,
-        Target::new(s.width, s.height, s.scene.has_dynamic_objects()),
+        &BuildContext::new(
+            gpu,
+            &scene,
+            Target::new(s.width, s.height, s.scene.has_dynamic_objects()),
+        ),
     )
     .unwrap();
     tessera::run::frames::render(gpu, &mut scene, s, t.as_mut(), true, true, &mut || {}).unwrap()
@@ -638,9 +642,8 @@ fn the_depth_test_rejects_half_the_samples_native_shades() {
     let mut scene = SceneGpu::new(&gpu.device, &s).unwrap();
     let t = Checkerboard2x2Gpu::new(&gpu, &variant(&[]), s.width, s.height);
     let native = techniques::build(
-        &gpu,
         &common::variant("native", &[]),
-        Target::new(s.width, s.height, true),
+        &BuildContext::new(&gpu, &scene, Target::new(s.width, s.height, true)),
     )
     .unwrap();
     scene.write_objects(&gpu.queue, 0.0, 0.0);

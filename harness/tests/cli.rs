@@ -241,3 +241,31 @@ fn smoke_suite_passes() {
     assert!(verdict.starts_with("PASSED"), "{verdict}");
     assert!(!verdict.contains(" 0 ok"), "{verdict}");
 }
+
+/// `tessera validate` says, without opening a device, which variants need more than every
+/// adapter has and what: hardware-only ones (VRS) as skipped without such a GPU.
+#[test]
+fn validate_prints_the_skip_reasons_of_hardware_only_variants() {
+    let file = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../scenarios/adaptive/detailed.toml"
+    );
+    let (code, out, err) = tessera(&["validate", file]);
+    assert_eq!(code, 0, "{err}");
+    let needs = "needs VK_KHR_fragment_shading_rate with attachmentFragmentShadingRate (skipped without a GPU that offers it)";
+    for variant in [
+        "native-vrs[rate=1x1]",
+        "adaptive-shading[threshold=0.15,vrs=hardware]",
+    ] {
+        assert!(
+            out.lines()
+                .any(|l| l.ends_with(&format!("detailed.toml: {variant}: {needs}"))),
+            "no skip reason for {variant}:\n{out}"
+        );
+    }
+    // A software variant needs nothing of the adapter: no line.
+    assert!(
+        !out.contains("adaptive-shading[coarse_sample=pixel"),
+        "{out}"
+    );
+}

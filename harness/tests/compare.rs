@@ -78,6 +78,7 @@ fn variant(name: &str, samples: &[f64], quality: Option<(f64, f64, f64)>) -> Var
     VariantResult {
         variant: name.into(),
         technique: name.split('[').next().unwrap().into(),
+        baseline: None,
         params: BTreeMap::new(),
         status: Status::Ok,
         reference: quality.map(|_| "native".into()),

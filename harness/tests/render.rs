@@ -3,10 +3,11 @@
 
 mod common;
 
-use tessera::params::{ParamValue, Variant};
+use tessera::params::ParamValue;
 use tessera::render::scene::SceneGpu;
 use tessera::run::frames;
-use tessera::techniques::{self, Target};
+use tessera::techniques::Variant;
+use tessera::techniques::{self, BuildContext, Target};
 
 use common::variant;
 
@@ -17,9 +18,12 @@ fn render(
 ) -> frames::Rendered {
     let mut scene = SceneGpu::new(&gpu.device, s).unwrap();
     let mut t = techniques::build(
-        gpu,
         v,
-        Target::new(s.width, s.height, s.scene.has_dynamic_objects()),
+        &BuildContext::new(
+            gpu,
+            &scene,
+            Target::new(s.width, s.height, s.scene.has_dynamic_objects()),
+        ),
     )
     .unwrap();
     frames::render(gpu, &mut scene, s, t.as_mut(), true, true, &mut || {}).unwrap()

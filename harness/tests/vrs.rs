@@ -7,10 +7,12 @@
 
 mod common;
 
-use tessera::gpu::vrs::{spirv, NEEDS};
+use tessera::gpu::vrs::NEEDS;
 use tessera::params::ParamValue;
+use tessera::render::scene::SceneGpu;
 use tessera::techniques::adaptive_shading::hardware::{vrs_source, SCENE_PASS};
-use tessera::techniques::{self, Target};
+use tessera::techniques::adaptive_shading::raw_pass::spirv;
+use tessera::techniques::{self, BuildContext, Target};
 
 fn validate_spirv(words: &[u32], what: &str) {
     assert_eq!(words[0], 0x0723_0203, "{what}: not SPIR-V");
@@ -90,6 +92,7 @@ fn pixel_sampling_needs_the_software_path() {
 fn without_the_extension_hardware_variants_are_skipped() {
     let gpu = common::gpu();
     let target = Target::new(48, 32, false);
+    let scene = SceneGpu::new(&gpu.device, &common::scenario(common::TINY)).unwrap();
     for v in [
         common::variant(
             "adaptive-shading",
@@ -97,7 +100,10 @@ fn without_the_extension_hardware_variants_are_skipped() {
         ),
         common::variant("native-vrs", &[]),
     ] {
-        match (&gpu.vrs, techniques::build(&gpu, &v, target)) {
+        match (
+            &gpu.vrs,
+            techniques::build(&v, &BuildContext::new(&gpu, &scene, target)),
+        ) {
             (Ok(caps), Ok(_)) => eprintln!("{} offers VRS: {caps:?}", gpu.info.name),
             (Err(reason), Err(u)) => {
                 assert!(u.0.starts_with(NEEDS), "{}", u.0);

@@ -169,6 +169,14 @@ pub struct VariantResult {
     /// `technique` or `technique[key=value,...]` for swept parameters.
     pub variant: String,
     pub technique: String,
+    /// The technique this variant's speed-up is also read against besides `native` (its
+    /// same-pipeline baseline, chosen per variant: `native-deferred` for `adaptive-shading` in
+    /// software, `native-vrs` for it in hardware); `speedup.<baseline>` is computed against the
+    /// first ok result of that technique in the scenario. `None` when `native` is the only one,
+    /// and in files written before it was recorded (readers may then fall back on the
+    /// technique's).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub baseline: Option<String>,
     /// Concrete parameter values of this variant.
     pub params: BTreeMap<String, serde_json::Value>,
     pub status: Status,

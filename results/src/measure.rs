@@ -180,7 +180,11 @@ measures! {
         ..info("energy_saving", "x", Higher, "energy saving", Source::Record) },
     Throttled => Info { gate: true,
         ..info("throttled", "bool", Lower, "throttled", Source::Record) },
-    FragmentInvocations => info("fragment_invocations", "count", Lower, "fragment invocations", Source::Pass),
+    // One measure for fragment-shader invocations, per pass: hardware VRS's raw pass is counted
+    // as `pass.scene_vrs.fragment_invocations` like any other; `fragment-invocations`, its
+    // per-frame metric before issue 21, is read as this one.
+    FragmentInvocations => Info { aliases: &["fragment-invocations"],
+        ..info("fragment_invocations", "count", Lower, "fragment invocations", Source::Pass) },
     AllocatedBytes => Info { stored: true,
         ..info("allocated_bytes", "bytes", Lower, "allocated bytes", Source::Record) },
     NonFiniteValues => Info { gate: true, aliases: &["non-finite"],
@@ -206,12 +210,11 @@ measures! {
     ShadingRate => Info { source: Source::TechniqueMetric,
         ..metric("shading-rate", "", Lower, "shading rate") },
     // Hardware variable-rate shading's own checks (adaptive_shading/hardware.rs): the coarse-pixel
-    // shades the CPU model gives for the rate image, the GPU's fragment-shader invocations of the
-    // VRS pass, their ratio, and attachment texels that differ from the CPU mapping.
+    // shades the CPU model gives for the rate image, the ratio of the VRS pass's fragment-shader
+    // invocations (`pass.scene_vrs.fragment_invocations`) to them, and attachment texels that
+    // differ from the CPU mapping.
     ModelShades => Info { source: Source::TechniqueMetric, gate: false, stored: false,
         ..metric("model-shades", "count", Lower, "coarse-pixel shades (CPU model)") },
-    VrsInvocations => Info { source: Source::TechniqueMetric, gate: false,
-        ..metric("fragment-invocations", "count", Lower, "VRS pass fragment invocations") },
     InvocationsOverModel => Info { source: Source::TechniqueMetric, stored: false,
         ..metric("invocations-over-model", "x", Neither, "invocations / model shades") },
     AttachmentTexelsDiffering => Info { source: Source::TechniqueMetric, stored: false,

@@ -1,12 +1,15 @@
 //! Adapters and devices: listing, choosing, and opening one with its real limits.
 //!
 //! Only this module talks to `wgpu::Instance`. It does not render; `render/` does. What an
-//! adapter can do beyond its limits and features is probed in `probe.rs`.
+//! adapter can do beyond its limits and features is probed in `probe.rs`; what a variant needs of
+//! it is declared as `requirements.rs`' data.
 
 mod probe;
+pub mod requirements;
 pub mod vrs;
 
 pub use probe::{PROBE_WGSL, STANDARD_2X};
+pub use requirements::{Extension, Requirements};
 
 use std::collections::BTreeMap;
 

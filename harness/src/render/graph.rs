@@ -60,6 +60,9 @@ pub struct Pass {
     pub kind: PassKind,
     pub reads: Vec<&'static str>,
     pub writes: Vec<&'static str>,
+    /// Its renderer counts its pipeline statistics itself (`Renderer::own_statistics`): a pass
+    /// recorded outside wgpu, which the timers' queries cannot reach. Timed like any other.
+    pub self_counted: bool,
 }
 
 /// A technique's passes in submission order, its resources, and what leaves the frame.
@@ -108,7 +111,16 @@ impl Graph {
             kind,
             reads: reads.to_vec(),
             writes: writes.to_vec(),
+            self_counted: false,
         });
+        self
+    }
+
+    /// Marks the pass just added as counted by its renderer ([`Pass::self_counted`]).
+    pub fn self_counted(&mut self) -> &mut Self {
+        if let Some(p) = self.passes.last_mut() {
+            p.self_counted = true;
+        }
         self
     }
 

@@ -199,3 +199,63 @@ pub fn compute_pipeline(
         cache: None,
     })
 }
+
+/// One compute pass, timed as `name`: `pipeline` with `groups` bound at 0, 1, ... and
+/// `size` workgroups (x, y). The one way a technique records a compute pass.
+pub fn timed_dispatch(
+    encoder: &mut wgpu::CommandEncoder,
+    timers: &Timers,
+    name: &'static str,
+    pipeline: &wgpu::ComputePipeline,
+    groups: &[&wgpu::BindGroup],
+    size: [u32; 2],
+) {
+    let q = timers.begin(name, encoder);
+    {
+        let mut cp = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(name),
+            timestamp_writes: q.compute_pass_timestamp_writes(),
+        });
+        cp.set_pipeline(pipeline);
+        for (i, g) in groups.iter().enumerate() {
+            cp.set_bind_group(i as u32, *g, &[]);
+        }
+        cp.dispatch_workgroups(size[0], size[1], 1);
+    }
+    timers.end(encoder, q);
+}
+
+/// Two of a kind that trade roles every frame (kajiya's `PingPongTemporalResource`): frame `i`
+/// writes `pair[i & 1]` and reads the other, last frame's, as history. Holds textures' names,
+/// bind groups, or anything made once per side.
+pub struct PingPong<T> {
+    pair: [T; 2],
+    current: usize,
+}
+
+impl<T> PingPong<T> {
+    /// Side 0 is current until [`PingPong::select`].
+    pub fn new(pair: [T; 2]) -> PingPong<T> {
+        PingPong { pair, current: 0 }
+    }
+
+    /// Makes frame `index`'s side current.
+    pub fn select(&mut self, index: u32) {
+        self.current = (index & 1) as usize;
+    }
+
+    /// The side written this frame (0 or 1).
+    pub fn side(&self) -> usize {
+        self.current
+    }
+
+    /// What this frame writes.
+    pub fn current(&self) -> &T {
+        &self.pair[self.current]
+    }
+
+    /// What this frame reads as history: the other side.
+    pub fn history(&self) -> &T {
+        &self.pair[1 - self.current]
+    }
+}

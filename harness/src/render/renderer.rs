@@ -34,23 +34,11 @@ pub trait Renderer {
         encoder: &mut wgpu::CommandEncoder,
         frame: FrameInfo,
     );
-    /// Why the frames just rendered are not the technique's (a pass it could not build on this
-    /// device): the run loop then records the variant as failed with this reason instead of
-    /// measuring empty frames. None by default.
-    fn failure(&self) -> Option<String> {
-        None
-    }
-
-    /// Render passes recorded outside wgpu (hardware variable-rate shading's raw Vulkan pass),
-    /// which count their own fragment-shader invocations ([`Renderer::raw_invocations`]) instead
-    /// of through [`Timers`]' queries. None by default.
-    fn raw_passes(&self) -> &'static [&'static str] {
-        &[]
-    }
-
-    /// Fragment-shader invocations of the [`Renderer::raw_passes`] of the last frame, asked for
-    /// after each captured frame has completed. Empty by default.
-    fn raw_invocations(&mut self, _gpu: &Gpu) -> std::collections::BTreeMap<String, u64> {
+    /// Fragment-shader invocations of the plan's [`Pass::self_counted`](super::graph::Pass)
+    /// passes in the last frame, by pass, asked for after each captured frame has completed: the
+    /// run loop records them as it records the timers' counts of the other passes. Empty by
+    /// default.
+    fn own_statistics(&mut self, _gpu: &Gpu) -> std::collections::BTreeMap<String, u64> {
         std::collections::BTreeMap::new()
     }
 
@@ -71,9 +59,44 @@ pub trait Renderer {
 /// What [`Renderer::frame_extras`] reports for one frame.
 #[derive(Clone, Debug, Default)]
 pub struct FrameExtras {
-    /// Named values (e.g. `shading-rate`): each becomes a metric of the variant's own frames.
-    pub values: Vec<(&'static str, f64)>,
+    /// Named values (e.g. `shading-rate`): each becomes a metric of the variant's own frames,
+    /// with the unit and direction it declares here.
+    pub values: Vec<FrameValue>,
     /// Named images (image kinds, e.g. `rate`: a shading-rate image), saved next to the frame's as
     /// `<variant>-<kind>-fNNN.png`.
     pub images: Vec<(&'static str, tessera_metrics::Rgb8Image)>,
+}
+
+/// One value a technique measures of its own frame (a check of its own, e.g. adaptive shading's
+/// `shading-rate`), with its unit and which way is better: both travel with it into the result
+/// (`MetricRecord::unit`, `higher_is_better`), so no shared table needs to know it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrameValue {
+    pub name: &'static str,
+    pub value: f64,
+    /// The CSV unit (`count`, `x`; empty for a plain ratio).
+    pub unit: &'static str,
+    pub direction: tessera_results::measure::Direction,
+}
+
+impl FrameValue {
+    /// A value where lower is better.
+    pub fn lower(name: &'static str, value: f64, unit: &'static str) -> FrameValue {
+        FrameValue {
+            name,
+            value,
+            unit,
+            direction: tessera_results::measure::Direction::LowerIsBetter,
+        }
+    }
+
+    /// A value with no better direction (a ratio that should be 1).
+    pub fn neither(name: &'static str, value: f64, unit: &'static str) -> FrameValue {
+        FrameValue {
+            name,
+            value,
+            unit,
+            direction: tessera_results::measure::Direction::Neither,
+        }
+    }
 }

@@ -12,7 +12,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::{DMat4, DVec3, Vec2, Vec4};
 
 use super::mesh::{self, Mesh, MeshError, Vertex};
-use crate::scenario::{CameraPose, GroundFilter, Light, Scenario};
+use crate::scenario::scene::{CameraPose, GroundFilter, Light, Stage};
 
 pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
@@ -119,7 +119,8 @@ pub struct RawDraw<'a> {
 }
 
 pub struct SceneGpu {
-    scenario: Scenario,
+    /// The scenario's scene, camera and size: nothing else of it (`scenario/scene.rs`).
+    stage: Stage,
     vertex_buffer: wgpu::Buffer,
     index_buffer: wgpu::Buffer,
     draws: Vec<Draw>,
@@ -135,8 +136,10 @@ pub struct SceneGpu {
 }
 
 impl SceneGpu {
-    /// Builds geometry (loading glTF files) and GPU objects once per scenario.
-    pub fn new(device: &wgpu::Device, scenario: &Scenario) -> Result<SceneGpu, MeshError> {
+    /// Builds geometry (loading glTF files) and GPU objects once per scenario (`&Scenario` gives
+    /// its [`Stage`]).
+    pub fn new(device: &wgpu::Device, stage: impl Into<Stage>) -> Result<SceneGpu, MeshError> {
+        let scenario: Stage = stage.into();
         let mut meshes: Vec<Mesh> = Vec::new();
         if let Some(g) = &scenario.scene.ground {
             meshes.push(mesh::ground_quad(g.size));
@@ -246,7 +249,7 @@ impl SceneGpu {
         let buffer_bytes =
             vertex_buffer.size() + index_buffer.size() + frame_buffer.size() + object_buffer.size();
         Ok(SceneGpu {
-            scenario: scenario.clone(),
+            stage: scenario,
             vertex_buffer,
             index_buffer,
             draws,
@@ -323,7 +326,7 @@ impl SceneGpu {
 
     /// Current and previous view-projection, both relative to the current camera position (f64).
     pub fn view_projections(&self, time: f64, prev_time: f64) -> (DMat4, DMat4) {
-        let s = &self.scenario;
+        let s = &self.stage;
         let pose = s.camera.pose_at(time);
         let prev = s.camera.pose_at(prev_time);
         let aspect = s.width as f64 / s.height as f64;
@@ -345,7 +348,7 @@ impl SceneGpu {
 
     /// Writes object matrices for `time` relative to the camera at `time`. Call once per frame.
     pub fn write_objects(&self, queue: &wgpu::Queue, time: f64, prev_time: f64) {
-        let pose = self.scenario.camera.pose_at(time);
+        let pose = self.stage.camera.pose_at(time);
         let eye = pose.position;
         let rel = |m: DMat4| {
             (DMat4::from_translation(-eye) * m)
@@ -353,7 +356,7 @@ impl SceneGpu {
                 .to_cols_array_2d()
         };
         let mut objects = Vec::new();
-        if let Some(g) = &self.scenario.scene.ground {
+        if let Some(g) = &self.stage.scene.ground {
             // The quad follows the camera in x and z; the pattern is anchored in world space, so
             // the point seen on it now was at the same world position last frame: its previous
             // model is this frame's (motion passes then give the ground the camera's motion, not
@@ -371,7 +374,7 @@ impl SceneGpu {
                 flags: [0.0; 4],
             });
         }
-        for o in &self.scenario.scene.objects {
+        for o in &self.stage.scene.objects {
             objects.push(GpuObject {
                 model: rel(o.model_at(time)),
                 prev_model: rel(o.model_at(prev_time)),
@@ -391,7 +394,7 @@ impl SceneGpu {
     /// Writes the uniforms of view `slot` (0..VIEW_SLOTS) for this frame.
     pub fn write_view(&self, queue: &wgpu::Queue, slot: u32, view: &View) {
         assert!((slot as u64) < VIEW_SLOTS, "view slot {slot} out of range");
-        let s = &self.scenario;
+        let s = &self.stage;
         let pose = s.camera.pose_at(view.time);
         let jitter = Vec4::new(
             view.ndc_offset.x,
@@ -491,12 +494,12 @@ impl SceneGpu {
 
     /// The camera's near and far planes.
     pub fn near_far(&self) -> (f32, f32) {
-        (self.scenario.camera.near, self.scenario.camera.far)
+        (self.stage.camera.near, self.stage.camera.far)
     }
 
     /// Clear colour of the scene pass (linear radiance).
     pub fn clear_color(&self) -> wgpu::Color {
-        let b = self.scenario.scene.background;
+        let b = self.stage.scene.background;
         wgpu::Color {
             r: b.x as f64,
             g: b.y as f64,
@@ -506,7 +509,7 @@ impl SceneGpu {
     }
 
     /// What a pass recorded outside wgpu needs to draw the scene itself (hardware variable-rate
-    /// shading, `gpu/vrs.rs`): the buffers, view `slot`'s frame uniforms and one draw per object.
+    /// shading, `techniques/adaptive_shading/raw_pass.rs`): the buffers, view `slot`'s frame uniforms and one draw per object.
     pub fn raw_draw(&self, slot: u32) -> RawDraw<'_> {
         RawDraw {
             vertex: &self.vertex_buffer,

@@ -80,7 +80,7 @@ pub fn records(
     let frames: Vec<u32> = (0..n as u32).collect();
     let record = |m: Measure, per_frame: Vec<f64>, value: f64| MetricRecord {
         name: m.name().to_string(),
-        frame_stats: super::metrics::frame_stats(&per_frame),
+        frame_stats: super::summary::frame_stats(&per_frame),
         frames: frames[..per_frame.len()].to_vec(),
         per_frame,
         value,

@@ -79,9 +79,6 @@ pub enum RenderError {
     Timers(#[from] crate::render::timers::TimerError),
     #[error("reading the frame back failed (device lost?)")]
     Readback,
-    /// The technique could not render on this device ([`Renderer::failure`]).
-    #[error("{0}")]
-    Technique(String),
 }
 
 /// Whether frame `index` continues the previous frame's shot: false on the first frame and at a
@@ -220,12 +217,11 @@ pub fn render_sampled(
     sampler: Option<&Sampler>,
     on_frame: &mut dyn FnMut(),
 ) -> Result<Rendered, RenderError> {
-    let raw_passes = technique.raw_passes();
     let render_passes: Vec<&'static str> = technique
         .plan()
         .passes
         .iter()
-        .filter(|p| p.kind == PassKind::Render && !raw_passes.contains(&p.name))
+        .filter(|p| p.kind == PassKind::Render && !p.self_counted)
         .map(|p| p.name)
         .collect();
     let mut timers = Timers::new(&gpu.device, &render_passes)?;
@@ -381,7 +377,7 @@ pub fn render_sampled(
         let _ = timers.try_collect(&gpu.queue);
         let mut stats = timers.read_stats(&gpu.device);
         if timers.stats_enabled() {
-            stats.extend(technique.raw_invocations(gpu));
+            stats.extend(technique.own_statistics(gpu));
         }
         if index >= scenario.warmup_frames {
             if let Some(m) = rendered
@@ -413,9 +409,6 @@ pub fn render_sampled(
             }
         }
         on_frame();
-    }
-    if let Some(why) = technique.failure() {
-        return Err(RenderError::Technique(why));
     }
     Ok(rendered)
 }

@@ -6,7 +6,7 @@ use std::path::Path;
 use tessera_metrics::Rgb8Image;
 use tessera_results::{ImageRecord, VariantResult};
 
-use super::metrics::MetricInputs;
+use super::captured::MetricInputs;
 use crate::render::renderer::FrameExtras;
 
 /// Saves the frames at `save_frames` (measured-frame indices) as `<variant>-fNNN.png` (or

@@ -2,23 +2,17 @@
 //! frame of the same index, aggregated over frames (PSNR from the mean MSE, max-abs-error as the
 //! maximum, the others as the mean); `tde` and `flicker`; and the technique's own per-frame values.
 //!
-//! Pure: frames in, records out. Rendering is `frames.rs`, the reference `reference.rs`.
+//! Pure: frames in, records out. Rendering is `frames.rs`, the reference `reference.rs`; what they capture for this module,
+//! `captured.rs`.
 
-use tessera_metrics::{HdrImage, Rgb8Image};
+use tessera_metrics::Rgb8Image;
 use tessera_results::MetricRecord;
 
+pub use super::captured::MetricInputs;
 use super::motion;
-use super::reference::ReferenceFrames;
-use crate::render::renderer::FrameExtras;
+use super::summary::frame_stats;
+use crate::render::renderer::{FrameExtras, FrameValue};
 use crate::scenario::MetricKind;
-
-/// What a variant's metrics are computed from.
-pub struct MetricInputs<'a> {
-    pub reference: &'a ReferenceFrames,
-    pub test: &'a [Rgb8Image],
-    pub test_hdr: &'a [HdrImage],
-    pub motion: &'a Result<Vec<Option<motion::MotionField>>, String>,
-}
 
 #[derive(Debug, thiserror::Error)]
 pub enum MetricError {
@@ -114,15 +108,6 @@ pub fn compute(
     Ok(out)
 }
 
-pub(super) fn frame_stats(per_frame: &[f64]) -> Option<tessera_results::FrameStats> {
-    tessera_metrics::series_stats(per_frame).map(|s| tessera_results::FrameStats {
-        mean: s.mean,
-        p95: s.p95,
-        max: s.max,
-        std_dev: s.std_dev,
-    })
-}
-
 /// Temporal difference error (notes/metrics.md 3.3, item 1) per measured frame that has motion
 /// from a previous measured frame in the same shot; the value is the mean over those frames.
 fn tde(
@@ -191,20 +176,21 @@ fn flicker(frames: &[Rgb8Image]) -> MetricRecord {
 /// frames, the value their mean.
 pub fn extra_values(extras: &[FrameExtras]) -> Vec<MetricRecord> {
     let mut out = Vec::new();
-    let mut names: Vec<&'static str> = Vec::new();
+    let mut first: Vec<FrameValue> = Vec::new();
     for e in extras {
-        for (name, _) in &e.values {
-            if !names.contains(name) {
-                names.push(name);
+        for v in &e.values {
+            if !first.iter().any(|f| f.name == v.name) {
+                first.push(*v);
             }
         }
     }
-    for name in names {
+    for kind in first {
+        let name = kind.name;
         let (frames, per_frame): (Vec<u32>, Vec<f64>) = extras
             .iter()
             .enumerate()
             .filter_map(|(f, e)| {
-                let v = e.values.iter().find(|(n, _)| *n == name)?.1;
+                let v = e.values.iter().find(|v| v.name == name)?.value;
                 Some((f as u32, v))
             })
             .unzip();
@@ -215,9 +201,8 @@ pub fn extra_values(extras: &[FrameExtras]) -> Vec<MetricRecord> {
             per_frame,
             frames,
             value,
-            // A technique's own values are lower-is-better unless the measure table says.
-            higher_is_better: tessera_results::measure::Measure::from_name(name)
-                .is_some_and(|m| m.direction().higher_is_better()),
+            // A technique's own values carry their direction (and unit) themselves.
+            higher_is_better: kind.direction.higher_is_better(),
         });
     }
     out

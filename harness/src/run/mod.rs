@@ -4,8 +4,10 @@
 //! the end; each scenario's JSON and the whole `results.csv` are rewritten atomically after every
 //! scenario, so an interrupted run keeps what it completed.
 
+pub mod captured;
 pub mod console;
 pub mod cvvdp;
+pub mod evaluate;
 pub mod frames;
 pub mod gates;
 pub mod images;
@@ -14,8 +16,10 @@ pub mod motion;
 pub mod output;
 pub mod record;
 pub mod reference;
+pub mod report;
 pub mod scenario;
 pub mod stability;
+pub mod summary;
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -28,7 +32,8 @@ use tessera_results::{
 use crate::conditions::Sensors;
 use crate::gpu::{self, Gpu, GpuError};
 use crate::scenario::Scenario;
-use output::{write_atomic, WriteError};
+use output::WriteError;
+use report::Report;
 
 pub struct Options {
     pub adapter: Option<String>,
@@ -118,8 +123,6 @@ pub fn run_with_sensors(
         suite: opts.suite.clone(),
         branch: opts.branch.clone().or_else(git_branch),
     };
-    write_atomic(&run_dir.join("run.json"), &output::run_json(&run))?;
-
     let total: u64 = scenarios
         .iter()
         .map(|s| 2 * s.total_frames() as u64 * (s.variants.len() as u64 + 1))
@@ -137,6 +140,20 @@ pub fn run_with_sensors(
         indicatif::ProgressBar::hidden()
     };
 
+    // Every output of the run, called in this order at each stage.
+    let mut files = report::Files {
+        run_dir: run_dir.clone(),
+    };
+    let mut screen = report::Console { bar: &bar };
+    let mut junit = opts.junit.clone().map(|path| report::JUnit { path });
+    let mut reports: Vec<&mut dyn Report> = vec![&mut files, &mut screen];
+    if let Some(j) = junit.as_mut() {
+        reports.push(j);
+    }
+    for r in reports.iter_mut() {
+        r.started(&run)?;
+    }
+
     let mut results: Vec<ScenarioResult> = Vec::new();
     for s in scenarios {
         bar.set_message(s.name.clone());
@@ -145,30 +162,17 @@ pub fn run_with_sensors(
         } else {
             scenario::run(gpu, s, &run_id, &run_dir, sensors, &mut || bar.inc(1))
         };
-        write_atomic(
-            &run_dir.join("scenarios").join(format!("{}.json", s.name)),
-            &output::scenario_json(&result),
-        )?;
         results.push(result);
-        write_atomic(
-            &run_dir.join("results.csv"),
-            &output::results_csv(&run, &results),
-        )?;
-        bar.suspend(|| {
-            let last = results.last().expect("just pushed");
-            print!("{}", console::scenario_table(last));
-            for hint in console::throttle_hints(last) {
-                eprintln!("{hint}");
-            }
-        });
+        for r in reports.iter_mut() {
+            r.scenario(&run, &results)?;
+        }
     }
     bar.finish_and_clear();
 
     run.finished_at = Some(chrono::Utc::now().to_rfc3339_opts(chrono::SecondsFormat::Secs, true));
     run.status = RunStatus::Complete;
-    write_atomic(&run_dir.join("run.json"), &output::run_json(&run))?;
-    if let Some(path) = &opts.junit {
-        write_atomic(path, &output::junit(&run, &results))?;
+    for r in reports.iter_mut() {
+        r.finished(&run, &results)?;
     }
     Ok(SuiteOutcome {
         run_dir,

@@ -9,11 +9,10 @@
 use super::frames::{history_valid, submit_frame};
 use crate::gpu::Gpu;
 use crate::render::readback::read_texture;
-use crate::render::renderer::Renderer;
 use crate::render::scene::SceneGpu;
 use crate::render::timers::Timers;
 use crate::scenario::Scenario;
-use crate::techniques::native::Forward;
+use crate::techniques::MotionPass;
 
 /// How far the previous frame's depth at the reprojected position may be from the point's own
 /// previous depth before the pixel counts as disoccluded: 1% (reversed-Z depth is proportional to
@@ -35,12 +34,12 @@ pub fn capture(
     scenario: &Scenario,
 ) -> Result<Vec<Option<MotionField>>, String> {
     let (w, h) = (scenario.width, scenario.height);
-    let mut pass = Forward::velocity_only(gpu, w, h);
+    let mut pass = MotionPass::new(gpu, w, h);
     let mut timers = Timers::new(&gpu.device, &[]).map_err(|e| e.to_string())?;
     let mut out = Vec::new();
     let mut prev_depth: Option<Vec<f32>> = None;
     for index in 0..scenario.total_frames() {
-        submit_frame(gpu, scene, scenario, &mut pass, &mut timers, index);
+        submit_frame(gpu, scene, scenario, pass.renderer(), &mut timers, index);
         let _ = gpu.device.poll(wgpu::PollType::Wait {
             submission_index: None,
             timeout: None,
@@ -54,7 +53,7 @@ pub fn capture(
         if index >= scenario.warmup_frames {
             let field = match (&prev_depth, history_valid(scenario, index)) {
                 (Some(prev), true) => {
-                    let velocity = read_texture(&gpu.device, &gpu.queue, pass.output());
+                    let velocity = read_texture(&gpu.device, &gpu.queue, pass.motion());
                     Some(field(&velocity, prev, w, h))
                 }
                 _ => None,

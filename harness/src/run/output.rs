@@ -116,9 +116,14 @@ fn csv_rows(
     if let Some(sp) = measure::speedup(results, r, DEFAULT_BASELINE) {
         rows.push(row(Key::of(Speedup), num(sp)));
     }
-    // A technique's own baseline (the registry's), beside native.
-    let baseline = crate::techniques::by_name(&r.technique).and_then(|t| t.baseline());
-    if let Some(b) = baseline {
+    // The variant's own baseline (its technique's, per variant), beside native; a file written
+    // before results recorded it gets its technique's default variant's (what was read then).
+    let recorded = r.baseline.as_deref();
+    let fallback = || {
+        let t = crate::techniques::by_name(&r.technique)?;
+        t.baseline(&crate::techniques::Variant::with_defaults(t))
+    };
+    if let Some(b) = recorded.or_else(fallback) {
         if let Some(sp) = measure::speedup(results, r, b) {
             rows.push(row(Key::speedup_over(b), num(sp)));
         }
@@ -296,4 +301,14 @@ pub fn junit(run: &RunInfo, scenarios: &[ScenarioResult]) -> Vec<u8> {
 
 fn failed(r: &tessera_results::VariantResult) -> bool {
     matches!(r.status, Status::Failed { .. }) || r.gates.iter().any(|g| g.level == GateLevel::Fail)
+}
+
+/// The first lines of a GPU error, joined: enough to tell what failed.
+pub fn first_line(s: &str) -> String {
+    s.lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty())
+        .take(3)
+        .collect::<Vec<_>>()
+        .join(" ")
 }

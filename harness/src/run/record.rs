@@ -8,9 +8,9 @@ use tessera_results::{PassRecord, ScenarioResult, Status, Summary, VariantResult
 
 use super::frames::Rendered;
 use crate::conditions::Sensors;
-use crate::params::Variant;
 use crate::render::renderer::Renderer;
 use crate::scenario::Scenario;
+use crate::techniques::{FramePattern, Variant};
 use crate::timing::{pacing, stop};
 
 /// The scenario's record from its variants' results.
@@ -41,6 +41,7 @@ pub fn empty_result(v: &Variant, status: Status) -> VariantResult {
     VariantResult {
         variant: v.name.clone(),
         technique: v.technique.name().to_string(),
+        baseline: v.technique.baseline(v).map(str::to_string),
         params: v
             .params
             .iter()
@@ -175,7 +176,7 @@ pub fn fill_conditions(
         result.pacing = pacing::pacing(
             &r.frame_ms,
             scenario.warmup_frames,
-            variant.technique.alternates_frames(),
+            variant.technique.frames(variant) == FramePattern::Alternating,
         );
     }
     result.conditions = Some(sensors.result_record(

@@ -3,41 +3,14 @@
 //!
 //! Not here: metrics (`metrics.rs`), which variant is the reference (`scenario.rs`).
 
-use tessera_metrics::{ExposureRange, HdrImage, Rgb8Image};
-
+pub use super::captured::ReferenceFrames;
 use super::frames;
+use super::output::first_line;
 use crate::gpu::Gpu;
-use crate::params::Variant;
 use crate::render::renderer::{Renderer, Unsupported};
 use crate::render::scene::SceneGpu;
 use crate::scenario::{MetricKind, Reference, Scenario};
-use crate::techniques::{self, native, Target};
-
-/// Frames a reference render produced, in measured-frame order.
-pub struct ReferenceFrames {
-    pub frames: Vec<Rgb8Image>,
-    /// Linear frames and their HDR-FLIP exposure ranges, when `flip-hdr` is asked for: the range
-    /// of each reference frame is held fixed for every variant diffed against it.
-    pub hdr: Vec<HdrImage>,
-    pub exposures: Vec<ExposureRange>,
-    /// Non-finite pixels per frame (what the scene injected, as the reference renders it).
-    pub masks: Vec<Option<Vec<u64>>>,
-}
-
-impl ReferenceFrames {
-    pub fn new(frames: Vec<Rgb8Image>, hdr: Vec<HdrImage>, masks: Vec<Option<Vec<u64>>>) -> Self {
-        let exposures = hdr
-            .iter()
-            .map(tessera_metrics::hdr_exposure_range)
-            .collect();
-        ReferenceFrames {
-            frames,
-            hdr,
-            exposures,
-            masks,
-        }
-    }
-}
+use crate::techniques::{self, BuildContext, Target};
 
 /// Linear frames are kept only for HDR-FLIP.
 /// Linear frames are kept only for HDR-FLIP, and for `cvvdp` on an HDR display.
@@ -55,20 +28,13 @@ pub fn render(
     on_frame: &mut dyn FnMut(),
 ) -> Result<ReferenceFrames, String> {
     let validation = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
-    let built: Result<Box<dyn Renderer>, Unsupported> = match scenario.reference {
-        Reference::GroundTruth { supersample } => {
-            native::ground_truth(gpu, scenario.width, scenario.height, supersample)
-        }
-        _ => techniques::build(
-            gpu,
-            &Variant::with_defaults(&native::Native),
-            Target {
-                width: scenario.width,
-                height: scenario.height,
-                dynamic_scene: false,
-            },
-        ),
+    let supersample = match scenario.reference {
+        Reference::GroundTruth { supersample } => Some(supersample),
+        _ => None,
     };
+    let target = Target::new(scenario.width, scenario.height, false);
+    let built: Result<Box<dyn Renderer>, Unsupported> =
+        techniques::reference(supersample, &BuildContext::new(gpu, scene, target));
     let result = match built {
         Err(Unsupported(reason)) => Err(format!("no reference: {reason}")),
         Ok(mut t) => frames::render(
@@ -89,7 +55,7 @@ pub fn render(
     if let Some(e) = pollster::block_on(validation.pop()) {
         return Err(format!(
             "reference render failed: GPU error: {}",
-            super::scenario::first_line(&e.to_string())
+            first_line(&e.to_string())
         ));
     }
     result

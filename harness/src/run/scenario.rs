@@ -11,17 +11,19 @@ use std::time::Instant;
 
 use tessera_results::{ScenarioResult, Status, VariantResult};
 
+use super::evaluate::{CpuMetrics, Evaluator};
 use super::frames::{self, Rendered};
+use super::output::first_line;
 use super::record::{empty_result, fill_conditions, fill_timings, finish, plan_record, PlanRecord};
 use super::reference::{self, ReferenceFrames};
-use super::{cvvdp, gates, images, metrics, motion, stability};
+use super::{gates, images, metrics, motion, stability};
 use crate::conditions::Sensors;
 use crate::gpu::Gpu;
-use crate::params::Variant;
 use crate::render::renderer::Unsupported;
 use crate::render::scene::SceneGpu;
 use crate::scenario::{MetricKind, Reference, Scenario};
-use crate::techniques::{self, native, Target};
+use crate::techniques::Variant;
+use crate::techniques::{self, BuildContext, Target};
 
 /// Runs `scenario`. Images go under `run_dir/images/<scenario>/`. `on_frame` ticks progress.
 pub fn run(
@@ -52,7 +54,7 @@ pub fn run(
 
     let needs_reference = scenario.needs_reference();
     let native_is_reference =
-        |v: &Variant| v.technique.name() == native::NAME && scenario.reference == Reference::Native;
+        |v: &Variant| techniques::is_reference(v) && scenario.reference == Reference::Native;
     // The reference renders first; when it is the native variant itself, that render is reused.
     let mut reference: Option<Result<ReferenceFrames, String>> = None;
     if scenario.needs_separate_reference() {
@@ -73,6 +75,7 @@ pub fn run(
     order.extend(scenario.variants.iter().filter(|v| !native_is_reference(v)));
 
     let image_dir = run_dir.join("images").join(&scenario.name);
+    let evaluator: &dyn Evaluator = &CpuMetrics;
     for variant in order {
         let is_reference = needs_reference && native_is_reference(variant) && reference.is_none();
         let keep = needs_reference || !scenario.save_frames.is_empty();
@@ -137,41 +140,11 @@ pub fn run(
                         test_hdr: hdr.as_deref().unwrap_or(&r.hdr),
                         motion: &motion,
                     };
-                    let video = if scenario.metrics.contains(&MetricKind::Cvvdp) {
-                        Some(cvvdp::records(
-                            scenario,
-                            (&r.frames, &r.hdr),
-                            (inputs.test, inputs.test_hdr),
-                        ))
-                    } else {
-                        None
-                    };
-                    match metrics::compute(&scenario.metrics, &inputs) {
-                        Ok(mut m) => {
-                            match video {
-                                Some(Ok((records, maps))) => {
-                                    m.extend(records);
-                                    images::save_cvvdp_maps(
-                                        &mut result,
-                                        &maps,
-                                        &image_dir,
-                                        run_dir,
-                                    );
-                                }
-                                Some(Err(e)) => {
-                                    result.status = Status::Failed {
-                                        error: format!("metrics: {e}"),
-                                    }
-                                }
-                                None => {}
-                            }
-                            result.metrics = m;
-                        }
-                        Err(e) => {
-                            result.status = Status::Failed {
-                                error: format!("metrics: {e}"),
-                            }
-                        }
+                    let evaluation = evaluator.evaluate(scenario, &inputs);
+                    images::save_cvvdp_maps(&mut result, &evaluation.maps, &image_dir, run_dir);
+                    result.metrics = evaluation.metrics;
+                    if let Some(error) = evaluation.error {
+                        result.status = Status::Failed { error };
                     }
                     // The reference against itself has no error to show.
                     if frames.is_some() {
@@ -268,15 +241,12 @@ fn render_variant(
 ) -> VariantOutcome {
     let validation = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
     let oom = gpu.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
-    let built = techniques::build(
-        gpu,
-        variant,
-        Target {
-            width: scenario.width,
-            height: scenario.height,
-            dynamic_scene: scenario.scene.has_dynamic_objects(),
-        },
+    let target = Target::new(
+        scenario.width,
+        scenario.height,
+        scenario.scene.has_dynamic_objects(),
     );
+    let built = techniques::build(variant, &BuildContext::new(gpu, scene, target));
     let result = match built {
         Err(u) => Ok(Err(u)),
         Ok(mut t) => {
@@ -304,14 +274,4 @@ fn render_variant(
         return Err(format!("GPU error: {}", first_line(&e.to_string())));
     }
     result
-}
-
-/// The first lines of a GPU error, joined: enough to tell what failed.
-pub fn first_line(s: &str) -> String {
-    s.lines()
-        .map(str::trim)
-        .filter(|l| !l.is_empty())
-        .take(3)
-        .collect::<Vec<_>>()
-        .join(" ")
 }

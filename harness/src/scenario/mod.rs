@@ -6,16 +6,20 @@
 //! limits that depend on the adapter are checked when a scenario runs.
 
 mod raw;
+pub mod scene;
 pub mod span;
 mod validate;
 
 use std::fmt;
 use std::path::{Path, PathBuf};
 
-use glam::{DMat4, DVec3, Vec3};
 use tessera_results::measure::Measure;
 
-use crate::params::Variant;
+use crate::techniques::Variant;
+pub use scene::{
+    Animation, CameraPose, CameraTrack, Ground, GroundFilter, Inject, Interpolation, Keyframe,
+    Light, Object, Scene, Shape, Stage,
+};
 pub use span::KeyPath;
 
 /// Largest width or height accepted without an adapter (wgpu's largest texture limit on any
@@ -52,6 +56,17 @@ pub struct Scenario {
     pub gates: Vec<Gate>,
 }
 
+impl From<&Scenario> for Stage {
+    fn from(s: &Scenario) -> Stage {
+        Stage {
+            width: s.width,
+            height: s.height,
+            scene: s.scene.clone(),
+            camera: s.camera.clone(),
+        }
+    }
+}
+
 impl Scenario {
     /// Whether a reference is rendered at all: only when there are metrics to compute against it.
     pub fn needs_reference(&self) -> bool {
@@ -63,10 +78,7 @@ impl Scenario {
     pub fn needs_separate_reference(&self) -> bool {
         self.needs_reference()
             && !(self.reference == Reference::Native
-                && self
-                    .variants
-                    .iter()
-                    .any(|v| v.technique.name() == crate::techniques::native::NAME))
+                && self.variants.iter().any(crate::techniques::is_reference))
     }
 
     /// Clock warm-up for an adapter of `device_type`: as set, or 1000 ms on GPUs (an H200 took
@@ -172,278 +184,6 @@ impl MetricKind {
     pub fn higher_is_better(self) -> bool {
         self.measure().direction().higher_is_better()
     }
-}
-
-/// What is drawn.
-#[derive(Clone, Debug)]
-pub struct Scene {
-    pub background: Vec3,
-    pub ambient: f32,
-    pub shading_cost: u32,
-    pub ground: Option<Ground>,
-    pub lights: Vec<Light>,
-    pub objects: Vec<Object>,
-}
-
-impl Scene {
-    /// Whether anything moves by itself (not counting the camera).
-    pub fn has_dynamic_objects(&self) -> bool {
-        self.objects.iter().any(|o| o.animation.is_some())
-    }
-}
-
-#[derive(Clone, Debug)]
-pub struct Ground {
-    pub size: f32,
-    pub height: f32,
-    pub checker_size: f32,
-    pub colors: [Vec3; 2],
-    pub filter: GroundFilter,
-    pub filter_epsilon: f32,
-}
-
-/// How the ground's checkerboard is filtered (`seeds/iq-filtered-checkerboard.txt`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum GroundFilter {
-    /// Point-sampled: aliases at a distance.
-    None,
-    /// IQ's analytic box filter over the pixel footprint from screen-space gradients.
-    Box,
-}
-
-#[derive(Clone, Debug)]
-pub enum Light {
-    Directional {
-        direction: Vec3,
-        color: Vec3,
-        intensity: f32,
-    },
-    Point {
-        position: Vec3,
-        color: Vec3,
-        intensity: f32,
-    },
-}
-
-#[derive(Clone, Debug)]
-pub struct Object {
-    pub shape: Shape,
-    /// f64: a scene far from the origin keeps its precision (stress suite).
-    pub position: DVec3,
-    pub yaw_degrees: f32,
-    pub color: Vec3,
-    pub emissive: Vec3,
-    pub specular: f32,
-    pub animation: Option<Animation>,
-    /// Stress suite: the object's pixels are written non-finite, to check that a technique does
-    /// not spread them (issue 8).
-    pub inject: Option<Inject>,
-}
-
-/// A non-finite value an object's shader writes instead of its colour.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Inject {
-    Nan,
-    Inf,
-}
-
-impl Inject {
-    /// The value the scene shader reads (`Object.flags.x`).
-    pub fn code(self) -> f32 {
-        match self {
-            Inject::Nan => 1.0,
-            Inject::Inf => 2.0,
-        }
-    }
-}
-
-#[derive(Clone, Debug)]
-pub enum Shape {
-    /// Full extents.
-    Box {
-        size: Vec3,
-    },
-    Sphere {
-        radius: f32,
-    },
-    /// A thin vertical cylinder standing on `position`.
-    Pole {
-        radius: f32,
-        height: f32,
-    },
-    /// Posts from `position` to `end` with horizontal rails.
-    Fence {
-        end: Vec3,
-        height: f32,
-        posts: u32,
-        rails: u32,
-        thickness: f32,
-    },
-    /// A glTF 2.0 file, resolved against the scenario's folder.
-    Mesh {
-        path: PathBuf,
-        scale: f32,
-    },
-}
-
-impl Shape {
-    pub fn name(&self) -> &'static str {
-        match self {
-            Shape::Box { .. } => "box",
-            Shape::Sphere { .. } => "sphere",
-            Shape::Pole { .. } => "pole",
-            Shape::Fence { .. } => "fence",
-            Shape::Mesh { .. } => "mesh",
-        }
-    }
-}
-
-#[derive(Clone, Debug)]
-pub enum Animation {
-    Rotate { axis: Vec3, degrees_per_second: f32 },
-    Translate { velocity: Vec3 },
-    Oscillate { amplitude: Vec3, period: f32 },
-}
-
-impl Object {
-    /// World-space model matrix at scene time `t` (seconds), in f64 so that objects far from the
-    /// origin keep their precision once made camera-relative.
-    pub fn model_at(&self, t: f64) -> DMat4 {
-        let base = DMat4::from_translation(self.position)
-            * DMat4::from_rotation_y((self.yaw_degrees as f64).to_radians());
-        match &self.animation {
-            None => base,
-            Some(Animation::Rotate {
-                axis,
-                degrees_per_second,
-            }) => {
-                let angle = (*degrees_per_second as f64 * t).to_radians();
-                base * DMat4::from_axis_angle(axis.as_dvec3().normalize(), angle)
-            }
-            Some(Animation::Translate { velocity }) => {
-                DMat4::from_translation(velocity.as_dvec3() * t) * base
-            }
-            Some(Animation::Oscillate { amplitude, period }) => {
-                let phase = (std::f64::consts::TAU * t / *period as f64).sin();
-                DMat4::from_translation(amplitude.as_dvec3() * phase) * base
-            }
-        }
-    }
-}
-
-/// Timed keyframes of the camera, with cuts.
-#[derive(Clone, Debug)]
-pub struct CameraTrack {
-    pub near: f32,
-    pub far: f32,
-    pub interpolation: Interpolation,
-    pub keyframes: Vec<Keyframe>,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Interpolation {
-    Linear,
-    /// Catmull-Rom through the keyframe positions and targets.
-    Smooth,
-}
-
-#[derive(Clone, Debug)]
-pub struct Keyframe {
-    pub time: f64,
-    pub position: DVec3,
-    pub target: DVec3,
-    pub fov_degrees: f32,
-    pub cut: bool,
-}
-
-/// The camera at one instant.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CameraPose {
-    /// f64 and interpolated in f64: in f32 a camera 1e6 units from the origin moves in 1/16-unit
-    /// steps (found by scenarios/stress/far-from-origin.toml).
-    pub position: DVec3,
-    pub target: DVec3,
-    pub fov_degrees: f32,
-    /// Index of the segment (between cuts) the pose belongs to: history is invalid across a change.
-    pub segment: usize,
-}
-
-impl CameraTrack {
-    /// The pose at scene time `t`. Before the first keyframe the camera holds it; after the last, too.
-    /// A cut keyframe is not interpolated towards: the camera holds the previous pose until the cut.
-    pub fn pose_at(&self, t: f64) -> CameraPose {
-        let k = &self.keyframes;
-        let segment_of = |i: usize| k[..=i].iter().filter(|f| f.cut).count();
-        let hold = |i: usize| CameraPose {
-            position: k[i].position,
-            target: k[i].target,
-            fov_degrees: k[i].fov_degrees,
-            segment: segment_of(i),
-        };
-        if t <= k[0].time {
-            return hold(0);
-        }
-        let Some(next) = k.iter().position(|f| f.time > t) else {
-            return hold(k.len() - 1);
-        };
-        let prev = next - 1;
-        if k[next].cut {
-            return hold(prev);
-        }
-        let span = k[next].time - k[prev].time;
-        let s = (t - k[prev].time) / span;
-        let (position, target) = match self.interpolation {
-            Interpolation::Linear => (
-                k[prev].position.lerp(k[next].position, s),
-                k[prev].target.lerp(k[next].target, s),
-            ),
-            Interpolation::Smooth => {
-                // Neighbours across a cut do not shape the curve.
-                let before = if prev > 0 && !k[prev].cut {
-                    prev - 1
-                } else {
-                    prev
-                };
-                let after = if next + 1 < k.len() && !k[next + 1].cut {
-                    next + 1
-                } else {
-                    next
-                };
-                (
-                    catmull_rom(
-                        k[before].position,
-                        k[prev].position,
-                        k[next].position,
-                        k[after].position,
-                        s,
-                    ),
-                    catmull_rom(
-                        k[before].target,
-                        k[prev].target,
-                        k[next].target,
-                        k[after].target,
-                        s,
-                    ),
-                )
-            }
-        };
-        CameraPose {
-            position,
-            target,
-            fov_degrees: k[prev].fov_degrees
-                + (k[next].fov_degrees - k[prev].fov_degrees) * s as f32,
-            segment: segment_of(prev),
-        }
-    }
-}
-
-fn catmull_rom(p0: DVec3, p1: DVec3, p2: DVec3, p3: DVec3, t: f64) -> DVec3 {
-    let t2 = t * t;
-    let t3 = t2 * t;
-    0.5 * ((2.0 * p1)
-        + (-p0 + p2) * t
-        + (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3) * t2
-        + (-p0 + 3.0 * p1 - 3.0 * p2 + p3) * t3)
 }
 
 /// A threshold on a metric or timing.

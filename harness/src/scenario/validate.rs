@@ -13,8 +13,9 @@ use toml_edit::Document;
 use super::raw::*;
 use super::span::{line_col, locate, KeyPath};
 use super::*;
-use crate::params::{self, closest, quoted_list, ParamValue, Variant};
+use crate::params::{closest, quoted_list, ParamValue};
 use crate::techniques;
+use crate::techniques::{variant_name, Variant};
 use crate::timing::stop::{AutoRule, AUTO_MAX, AUTO_MIN, AUTO_TIMEOUT_S, DEFAULT_PRECISION};
 
 /// Collects errors with their key paths; positions are resolved at the end.
@@ -953,7 +954,7 @@ fn variants(ctx: &mut Ctx, path: &KeyPath, raw: &[RawTechnique]) -> Vec<Variant>
             let name = t
                 .label
                 .clone()
-                .unwrap_or_else(|| params::variant_name(kind, &shown));
+                .unwrap_or_else(|| variant_name(kind, &shown));
             if out.iter().any(|v| v.name == name) {
                 ctx.err(
                     &p,

@@ -1,17 +1,22 @@
-//! What a technique is to the harness: the [`Technique`] definition every technique folder
-//! implements once, and the [`Shader`] modules it declares.
+//! What a technique is to the harness: the [`Definition`] every technique folder implements once
+//! (a type, with its options as a type), the object-safe [`Technique`] the registry and variants
+//! hold (every `Definition` is one), [`Variant`], and the [`Shader`] modules it declares.
 //!
-//! A definition is static data plus pure functions: its parameters, the checks across them, the
-//! pass graph for an output size, construction on a device, its WGSL, and the technique its
-//! speedup is also read against. It knows no other technique; the list of all of them is
-//! `registry.rs`.
+//! A definition is static data plus pure functions of its options: its parameters and the one
+//! reader of them ([`Definition::options`]), the checks across them, what it needs of an adapter
+//! ([`Requirements`]), the pass graph for an output size, construction on a device (with the scene
+//! and the target: [`BuildContext`]), its WGSL, the technique its speed-up is read against and its
+//! frame pattern, each per variant. It knows no other technique; the list of all of them is
+//! `registry.rs`. How to write one: `harness/README.md`, "Adding a technique".
 
+use std::collections::BTreeMap;
 use std::fmt;
 
-use crate::gpu::Gpu;
-use crate::params::{ParamSpec, Variant};
+use crate::gpu::{Gpu, Requirements};
+use crate::params::{FromParam, Param, ParamSpec, ParamValue};
 use crate::render::graph::Plan;
 use crate::render::renderer::{Renderer, Unsupported};
+use crate::render::scene::SceneGpu;
 
 /// Where a variant renders: the output size and what the scene does (techniques that need motion
 /// add passes only when something moves by itself).
@@ -33,8 +38,37 @@ impl Target {
     }
 }
 
-/// A technique: one implementation per folder under `techniques/`, one line in the registry.
-pub trait Technique: Sync + 'static {
+/// What [`Definition::build`] builds with: the device, the scene already on it (a pass that
+/// draws the scene itself, e.g. outside wgpu, can fail here, before any frame is rendered) and
+/// where the variant renders.
+pub struct BuildContext<'a> {
+    pub gpu: &'a Gpu,
+    pub scene: &'a SceneGpu,
+    pub target: Target,
+}
+
+impl<'a> BuildContext<'a> {
+    pub fn new(gpu: &'a Gpu, scene: &'a SceneGpu, target: Target) -> BuildContext<'a> {
+        BuildContext { gpu, scene, target }
+    }
+}
+
+/// Whether consecutive frames do the same work or alternate between two kinds (checkerboarding
+/// shades even and odd pixel sets on alternate frames, interlacing even and odd columns):
+/// frame-time pacing then reports even and odd frames apart.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FramePattern {
+    Same,
+    Alternating,
+}
+
+/// A technique, written once per folder under `techniques/`, listed once in the registry.
+///
+/// `Options` is the variant's parameters as a type, read from the declared [`Definition::params`]
+/// by [`Definition::options`] alone; every other method sees only the options.
+pub trait Definition: Sync + 'static {
+    type Options: Clone + fmt::Debug;
+
     /// The name scenarios and results use (`checkerboard-2x2`).
     fn name(&self) -> &'static str;
 
@@ -46,42 +80,108 @@ pub trait Technique: Sync + 'static {
         &[]
     }
 
-    /// Checks across parameters of a variant whose values each passed their own spec
-    /// (`blend_min < blend_max`): the reason, in words, when they do not fit together.
-    fn check(&self, _variant: &Variant) -> Result<(), String> {
+    /// The options of a variant whose values each passed their own [`ParamSpec`]: the only
+    /// place that reads parameter values ([`Variant::get`]).
+    fn options(&self, variant: &Variant) -> Self::Options;
+
+    /// Checks across parameters (`blend_min < blend_max`): the reason, in words, when they do not
+    /// fit together. Reported by validation with the variant's file and line.
+    fn check(&self, _options: &Self::Options) -> Result<(), String> {
         Ok(())
     }
 
-    /// The pass graph `variant` runs at `target`, without a GPU: which passes run, which are
-    /// culled, what is allocated. [`Technique::build`] allocates the same plan.
-    fn plan(&self, variant: &Variant, target: Target) -> Plan;
+    /// What the variant needs of an adapter (features, MSAA per format, extensions): printed by
+    /// `tessera validate` without a GPU, checked on the device before [`Definition::build`];
+    /// a variant that lacks one is `skipped` with the reason.
+    fn requirements(&self, _options: &Self::Options) -> Requirements {
+        Requirements::none()
+    }
 
-    /// The variant on `gpu`, or why this adapter cannot run it (reported as `skipped`).
+    /// The pass graph at `target`, without a GPU: which passes run, which are culled, what is
+    /// allocated. [`Definition::build`] allocates the same plan.
+    fn plan(&self, options: &Self::Options, target: Target) -> Plan;
+
+    /// The variant on the context's device, or why it cannot run there (reported as `skipped`).
+    /// Called after its requirements were met.
     fn build(
         &self,
-        gpu: &Gpu,
-        variant: &Variant,
-        target: Target,
+        options: &Self::Options,
+        cx: &BuildContext<'_>,
     ) -> Result<Box<dyn Renderer>, Unsupported>;
 
-    /// Every WGSL module it builds, composed as the GPU sees it.
+    /// Every WGSL module it builds, composed as the GPU sees it (files in its own folder).
     fn shaders(&self) -> Vec<Shader>;
 
-    /// The technique its speedup is read against besides `native` (its own cheaper path, e.g.
-    /// `native-deferred` for `adaptive-shading`); `None` when `native` is the only one.
-    fn baseline(&self) -> Option<&'static str> {
+    /// The technique this variant's speed-up is read against besides `native` (its same-pipeline
+    /// baseline, e.g. `native-deferred` for software adaptive shading, `native-vrs` for hardware);
+    /// `None` when `native` is the only one. Recorded as the result's `baseline`.
+    fn baseline(&self, _options: &Self::Options) -> Option<&'static str> {
         None
     }
 
-    /// Whether consecutive frames alternate between two kinds of work (checkerboarding shades
-    /// even and odd pixel sets on alternate frames): frame-time pacing then reports even and odd
-    /// frames apart.
-    fn alternates_frames(&self) -> bool {
-        false
+    /// Whether the variant's frames alternate between two kinds of work.
+    fn frames(&self, _options: &Self::Options) -> FramePattern {
+        FramePattern::Same
     }
 }
 
-/// One WGSL module as the GPU sees it, and the files under `shaders/` it is made of.
+/// A technique as the registry and a [`Variant`] hold it: a [`Definition`] with its options
+/// read from the variant on each call. Implemented for every `Definition`; never by hand.
+pub trait Technique: Sync + 'static {
+    fn name(&self) -> &'static str;
+    fn summary(&self) -> &'static str;
+    fn params(&self) -> &'static [&'static ParamSpec];
+    fn check(&self, variant: &Variant) -> Result<(), String>;
+    fn requirements(&self, variant: &Variant) -> Requirements;
+    fn plan(&self, variant: &Variant, target: Target) -> Plan;
+    fn build(
+        &self,
+        variant: &Variant,
+        cx: &BuildContext<'_>,
+    ) -> Result<Box<dyn Renderer>, Unsupported>;
+    fn shaders(&self) -> Vec<Shader>;
+    fn baseline(&self, variant: &Variant) -> Option<&'static str>;
+    fn frames(&self, variant: &Variant) -> FramePattern;
+}
+
+impl<D: Definition> Technique for D {
+    fn name(&self) -> &'static str {
+        Definition::name(self)
+    }
+    fn summary(&self) -> &'static str {
+        Definition::summary(self)
+    }
+    fn params(&self) -> &'static [&'static ParamSpec] {
+        Definition::params(self)
+    }
+    fn check(&self, variant: &Variant) -> Result<(), String> {
+        Definition::check(self, &self.options(variant))
+    }
+    fn requirements(&self, variant: &Variant) -> Requirements {
+        Definition::requirements(self, &self.options(variant))
+    }
+    fn plan(&self, variant: &Variant, target: Target) -> Plan {
+        Definition::plan(self, &self.options(variant), target)
+    }
+    fn build(
+        &self,
+        variant: &Variant,
+        cx: &BuildContext<'_>,
+    ) -> Result<Box<dyn Renderer>, Unsupported> {
+        Definition::build(self, &self.options(variant), cx)
+    }
+    fn shaders(&self) -> Vec<Shader> {
+        Definition::shaders(self)
+    }
+    fn baseline(&self, variant: &Variant) -> Option<&'static str> {
+        Definition::baseline(self, &self.options(variant))
+    }
+    fn frames(&self, variant: &Variant) -> FramePattern {
+        Definition::frames(self, &self.options(variant))
+    }
+}
+
+/// One WGSL module as the GPU sees it, and the files it is made of (`scene.wgsl` in `shaders/`, a technique's own as `<folder>/<file>.wgsl`, in its folder).
 pub struct Shader {
     pub name: String,
     pub source: String,
@@ -116,4 +216,54 @@ impl PartialEq for dyn Technique {
     fn eq(&self, other: &Self) -> bool {
         self.name() == other.name()
     }
+}
+
+/// A technique with concrete parameter values.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Variant {
+    pub name: String,
+    pub technique: &'static dyn Technique,
+    /// Every parameter of the technique, defaults filled in.
+    pub params: BTreeMap<String, ParamValue>,
+}
+
+impl Variant {
+    /// The value of `param`. Validation checked every value against its technique's
+    /// [`ParamSpec`]s, so a missing or mistyped value is a bug in the technique (its options read
+    /// a parameter it does not declare): the registry's tests read every technique's defaults.
+    pub fn get<T: FromParam>(&self, param: &Param<T>) -> T {
+        self.params
+            .get(param.spec.name)
+            .and_then(T::from_param)
+            .unwrap_or_else(|| {
+                panic!(
+                    "variant {} of {} lacks a valid parameter {}",
+                    self.name,
+                    self.technique.name(),
+                    param.spec.name
+                )
+            })
+    }
+
+    /// A variant of `technique` with every parameter at its default.
+    pub fn with_defaults(technique: &'static dyn Technique) -> Variant {
+        Variant {
+            name: technique.name().to_string(),
+            technique,
+            params: technique
+                .params()
+                .iter()
+                .map(|p| (p.name.to_string(), p.default.value()))
+                .collect(),
+        }
+    }
+}
+
+/// `technique` or `technique[a=1,b=x]` listing the parameters the scenario set explicitly.
+pub fn variant_name(technique: &dyn Technique, explicit: &[(String, ParamValue)]) -> String {
+    if explicit.is_empty() {
+        return technique.name().to_string();
+    }
+    let parts: Vec<String> = explicit.iter().map(|(k, v)| format!("{k}={v}")).collect();
+    format!("{}[{}]", technique.name(), parts.join(","))
 }

@@ -1,9 +1,11 @@
-//! Techniques: one folder each (its definition and options, its GPU part, its CPU model; its
-//! shaders under `shaders/<folder>/`), and the registry that lists them.
+//! Techniques: one folder each (its definition and options, its GPU part, its CPU model, its
+//! shaders), and the registry that lists them.
 //!
 //! A folder depends on `params`, `render/` (infrastructure that knows no technique) and `gpu`;
-//! `registry.rs` depends on the folders; nothing here depends on `run/`. `upscale` reuses
-//! `native`'s forward path.
+//! `registry.rs` depends on the folders; nothing here depends on `run/` or on scenarios (only on
+//! what they draw, `scenario/scene.rs`, through `render/`). `upscale` reuses `native`'s forward
+//! path. What the run loop needs of the reference and of exact motion is asked here, by role
+//! ([`is_reference`], [`reference`], [`MotionPass`]), so `run/` names no technique.
 
 pub mod adaptive_shading;
 pub mod checkerboard;
@@ -15,11 +17,12 @@ pub mod native;
 pub mod registry;
 pub mod upscale;
 
-pub use definition::{Shader, Target, Technique};
+pub use definition::{
+    variant_name, BuildContext, Definition, FramePattern, Shader, Target, Technique, Variant,
+};
 pub use registry::{by_name, names, ALL};
 
-use crate::gpu::Gpu;
-use crate::params::Variant;
+use crate::gpu::{Gpu, Requirements};
 use crate::render::graph::Plan;
 use crate::render::renderer::{Renderer, Unsupported};
 
@@ -28,15 +31,73 @@ pub fn plan(variant: &Variant, target: Target) -> Plan {
     variant.technique.plan(variant, target)
 }
 
-/// Builds `variant` on `gpu` at `target`: unsupported when the adapter's texture size limit is
-/// exceeded or the technique says so.
-pub fn build(
-    gpu: &Gpu,
-    variant: &Variant,
-    target: Target,
+/// What `variant` needs of an adapter, without a GPU.
+pub fn requirements(variant: &Variant) -> Requirements {
+    variant.technique.requirements(variant)
+}
+
+/// Why `variant` may be skipped, in words, without a GPU: its [`Requirements`], each as the skip
+/// reason says it, and where it is skipped (`tessera validate`, the plan). Empty when every
+/// adapter can run it.
+pub fn skip_reasons(variant: &Variant) -> Vec<String> {
+    let r = requirements(variant);
+    let where_ = if r.hardware_only() {
+        "skipped without a GPU that offers it"
+    } else {
+        "skipped on adapters without it"
+    };
+    r.describe()
+        .into_iter()
+        .map(|need| format!("{need} ({where_})"))
+        .collect()
+}
+
+/// Builds `variant` in `cx`: unsupported when the adapter's texture size limit is exceeded, when
+/// it lacks one of the variant's [`Requirements`], or when the technique says so.
+pub fn build(variant: &Variant, cx: &BuildContext<'_>) -> Result<Box<dyn Renderer>, Unsupported> {
+    cx.gpu.check_size(cx.target.width, cx.target.height)?;
+    requirements(variant).check(cx.gpu)?;
+    variant.technique.build(variant, cx)
+}
+
+/// Whether `variant` is the technique a `reference = "native"` scenario is diffed against.
+pub fn is_reference(variant: &Variant) -> bool {
+    variant.technique.name() == native::NAME
+}
+
+/// The reference renderer: native at the target, or with `supersample` the ground truth (native
+/// at `supersample`x per axis, box-downsampled).
+pub fn reference(
+    supersample: Option<u32>,
+    cx: &BuildContext<'_>,
 ) -> Result<Box<dyn Renderer>, Unsupported> {
-    gpu.check_size(target.width, target.height)?;
-    variant.technique.build(gpu, variant, target)
+    match supersample {
+        Some(n) => native::ground_truth(cx.gpu, cx.target.width, cx.target.height, n),
+        None => build(&Variant::with_defaults(&native::Native), cx),
+    }
+}
+
+/// The scene's exact motion: the velocity pass alone at output resolution (what the `tde`
+/// metric reads): [`MotionPass::motion`] is the motion target, [`MotionPass::depth`] its depth.
+pub struct MotionPass(native::Forward);
+
+impl MotionPass {
+    pub fn new(gpu: &Gpu, width: u32, height: u32) -> MotionPass {
+        MotionPass(native::Forward::velocity_only(gpu, width, height))
+    }
+
+    /// What the run loop records each frame.
+    pub fn renderer(&mut self) -> &mut dyn Renderer {
+        &mut self.0
+    }
+
+    pub fn motion(&self) -> &wgpu::Texture {
+        self.0.output()
+    }
+
+    pub fn depth(&self) -> &wgpu::Texture {
+        self.0.depth()
+    }
 }
 
 /// Every WGSL module of every technique (and the adapter probe's), for validation without a

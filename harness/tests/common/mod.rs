@@ -5,8 +5,9 @@
 use std::path::Path;
 
 use tessera::gpu::{self, Gpu};
-use tessera::params::{ParamValue, Variant};
+use tessera::params::ParamValue;
 use tessera::scenario::{self, Scenario};
+use tessera::techniques::Variant;
 
 /// Opens the adapter the harness would pick. CI installs lavapipe (ci/setup.sh), so a missing
 /// adapter is a failure, not a skip.

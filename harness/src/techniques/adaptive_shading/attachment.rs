@@ -1,6 +1,6 @@
 //! From per-tile rates to a fragment-shading-rate attachment, and how many coarse-pixel shades an
 //! attachment implies: the CPU side of the hardware path (`vrs = "hardware"`), step for step with
-//! `shaders/adaptive_shading/attachment.wgsl`. No GPU and no Vulkan here (that is `gpu/vrs.rs`).
+//! `attachment.wgsl`. No GPU and no Vulkan here (that is `raw_pass.rs`).
 //!
 //! The mapping, in three steps:
 //!
@@ -18,7 +18,7 @@
 //! The shade-count model: hardware VRS shades a fragment area of `w` x `h` pixels aligned to
 //! multiples of `w` and `h` in framebuffer coordinates, once per primitive that covers a sample of
 //! it and passes the depth test. The hardware pass has a depth pre-pass and shades with depth test
-//! EQUAL (`gpu/vrs.rs`), so only visible primitives are shaded. Counted per coarse pixel that holds
+//! EQUAL (`raw_pass.rs`), so only visible primitives are shaded. Counted per coarse pixel that holds
 //! at least one covered pixel (partial coarse pixels at the image's right and bottom edges count
 //! once), the model is exact at 1x1 and wherever one visible primitive fills a coarse pixel; where
 //! a coarse pixel straddles a triangle edge or an object's silhouette the hardware shades it once

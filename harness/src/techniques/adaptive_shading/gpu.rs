@@ -4,9 +4,9 @@
 //!
 //! Each frame: a `gbuffer` render pass at full resolution (what `shade_surface` in `scene.wgsl`
 //! needs per pixel, plus per-pixel motion); a `rates` compute pass choosing a rate per 16x16 tile
-//! from the previous frame's output (`shaders/adaptive_shading/rate.wgsl`, CPU model in
+//! from the previous frame's output (`rate.wgsl`, CPU model in
 //! `model.rs`); optionally the `rate_filter` pass (section 5.4); and a `shade` compute pass
-//! shading once per coarse pixel and object (`shaders/adaptive_shading/shade.wgsl`). `native-deferred` is
+//! shading once per coarse pixel and object (`shade.wgsl`). `native-deferred` is
 //! the same G-buffer and shading pass at 1x1 everywhere, with no rate pass, no motion and no
 //! history. Outputs and depth buffers are ping-ponged: the rate pass reads the previous frame's.
 //!
@@ -19,14 +19,16 @@ use tessera_metrics::{encode_srgb8, HdrImage, Rgb8Image};
 use super::model::{self, CoarseSample, RateParams, TILE};
 use crate::gpu::Gpu;
 use crate::render::graph::{Graph, PassKind, Plan, TextureDesc};
-use crate::render::kit::{allocate, bind_group, compute_pipeline, placeholder_texture};
+use crate::render::kit::{
+    allocate, bind_group, compute_pipeline, placeholder_texture, timed_dispatch,
+};
 use crate::render::readback::read_texture_raw;
-use crate::render::renderer::{FrameExtras, FrameInfo, Renderer};
+use crate::render::renderer::{FrameExtras, FrameInfo, FrameValue, Renderer};
 use crate::render::scene::{SceneGpu, View, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::render::timers::Timers;
 
-pub static RATE_WGSL: &str = include_str!("../../../../shaders/adaptive_shading/rate.wgsl");
-pub static SHADE_WGSL: &str = include_str!("../../../../shaders/adaptive_shading/shade.wgsl");
+pub static RATE_WGSL: &str = include_str!("rate.wgsl");
+pub static SHADE_WGSL: &str = include_str!("shade.wgsl");
 
 /// `scene.wgsl` with the G-buffer and shading entry points appended.
 pub fn shade_source() -> String {
@@ -218,7 +220,7 @@ impl RatePass {
         };
         gpu.queue
             .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&u));
-        dispatch(
+        timed_dispatch(
             encoder,
             timers,
             "rates",
@@ -227,7 +229,7 @@ impl RatePass {
             [tw, th],
         );
         if let Some((pipeline, group)) = &self.filter {
-            dispatch(
+            timed_dispatch(
                 encoder,
                 timers,
                 "rate_filter",
@@ -462,30 +464,6 @@ impl AdaptiveGpu {
     }
 }
 
-/// One compute pass, timed.
-pub(super) fn dispatch(
-    encoder: &mut wgpu::CommandEncoder,
-    timers: &Timers,
-    name: &'static str,
-    pipeline: &wgpu::ComputePipeline,
-    groups: &[&wgpu::BindGroup],
-    size: [u32; 2],
-) {
-    let q = timers.begin(name, encoder);
-    {
-        let mut cp = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some(name),
-            timestamp_writes: q.compute_pass_timestamp_writes(),
-        });
-        cp.set_pipeline(pipeline);
-        for (i, g) in groups.iter().enumerate() {
-            cp.set_bind_group(i as u32, *g, &[]);
-        }
-        cp.dispatch_workgroups(size[0], size[1], 1);
-    }
-    timers.end(encoder, q);
-}
-
 impl Renderer for AdaptiveGpu {
     fn plan(&self) -> &Plan {
         &self.plan
@@ -560,7 +538,7 @@ impl Renderer for AdaptiveGpu {
         }
         encoder.clear_buffer(&self.counters, 0, None);
         let (_, scene_group) = self.scene_objects.as_ref().expect("made above");
-        dispatch(
+        timed_dispatch(
             encoder,
             timers,
             "shade",
@@ -579,7 +557,9 @@ impl Renderer for AdaptiveGpu {
         } else {
             1.0
         };
-        extras.values.push(("shading-rate", rate));
+        extras
+            .values
+            .push(FrameValue::lower("shading-rate", rate, ""));
         if image {
             if let Some(codes) = self.rates(gpu) {
                 extras.images.push(("rate", rate_image(frame, &codes)));

@@ -8,14 +8,14 @@
 //! section 5.1's reprojection with last frame's vectors); `rate_attachment` turns the per-tile
 //! codes into attachment texels (`attachment.wgsl`, CPU model in `attachment.rs`); `clear` clears
 //! this frame's colour, motion and depth in wgpu; `scene_vrs` is the forward pass, `fs_main`'s
-//! shading, drawn by raw Vulkan with the attachment (`gpu/vrs.rs`), writing colour and motion.
+//! shading, drawn by raw Vulkan with the attachment (`raw_pass.rs`), writing colour and motion.
 //! `native-vrs` is the same `clear` and `scene_vrs` with a constant attachment (every tile 1x1,
 //! 2x2 or 4x4): one pipeline with and without rates.
 //!
 //! Timing: `scene_vrs` is timed by wgpu-profiler timestamps written at the end of the encoder
 //! before it and at the start of one submitted right after it, in the same submission; its
 //! fragment-shader invocations come from the raw pass's own pipeline-statistics query
-//! ([`Renderer::raw_invocations`]).
+//! (a `self_counted` pass of the plan, reported by [`Renderer::own_statistics`]).
 
 use std::collections::{BTreeMap, HashMap};
 
@@ -23,21 +23,21 @@ use tessera_metrics::HdrImage;
 
 use super::attachment::{self as att, Attachment};
 use super::gpu::{
-    dispatch, LastFrame, RatePass, COLORS, DEPTHS, MOTION_FORMAT, RATE_FORMAT, STATES, STATE_FORMAT,
+    LastFrame, RatePass, COLORS, DEPTHS, MOTION_FORMAT, RATE_FORMAT, STATES, STATE_FORMAT,
 };
 use super::model::{self, RateParams};
-use crate::gpu::vrs::{RawVrsPass, Shaders, Targets, VrsCaps};
+use super::raw_pass::{RawVrsPass, Shaders, Targets};
+use crate::gpu::vrs::VrsCaps;
 use crate::gpu::Gpu;
 use crate::render::graph::{Graph, PassKind, Plan, TextureDesc};
-use crate::render::kit::{allocate, bind_group, compute_pipeline};
+use crate::render::kit::{allocate, bind_group, compute_pipeline, timed_dispatch};
 use crate::render::readback::read_texture_raw;
-use crate::render::renderer::{FrameExtras, FrameInfo, Renderer};
+use crate::render::renderer::{FrameExtras, FrameInfo, FrameValue, Renderer};
 use crate::render::scene::{SceneGpu, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::render::timers::Timers;
 
-pub static VRS_WGSL: &str = include_str!("../../../../shaders/adaptive_shading/vrs.wgsl");
-pub static ATTACHMENT_WGSL: &str =
-    include_str!("../../../../shaders/adaptive_shading/attachment.wgsl");
+pub static VRS_WGSL: &str = include_str!("vrs.wgsl");
+pub static ATTACHMENT_WGSL: &str = include_str!("attachment.wgsl");
 
 /// `scene.wgsl` with the hardware path's forward entry points appended.
 pub fn vrs_source() -> String {
@@ -73,7 +73,7 @@ pub fn graph(rates: &Rates, width: u32, height: u32, texel: [u32; 2]) -> Plan {
     let (tw, th) = model::tiles(width, height);
     let (aw, ah) = att::attachment_size(width, height, texel);
     let mut g = Graph::default();
-    // The attachment: an R8_UINT image made by gpu/vrs.rs (wgpu cannot give it the usage).
+    // The attachment: an R8_UINT image made by raw_pass.rs (wgpu cannot give it the usage).
     g.resource("attachment", tex(wgpu::TextureFormat::R8Uint, aw, ah))
         .resource("motion", tex(MOTION_FORMAT, width, height));
     match rates {
@@ -111,24 +111,18 @@ pub fn graph(rates: &Rates, width: u32, height: u32, texel: [u32; 2]) -> Plan {
                 &["attachment"],
             );
             let targets = [COLORS[0], COLORS[1], "motion", DEPTHS[0], DEPTHS[1]];
-            g.pass("clear", PassKind::Render, &[], &targets).pass(
-                SCENE_PASS,
-                PassKind::Render,
-                &["attachment"],
-                &targets,
-            );
+            g.pass("clear", PassKind::Render, &[], &targets)
+                .pass(SCENE_PASS, PassKind::Render, &["attachment"], &targets)
+                .self_counted();
             g.output(COLORS[0]).output(COLORS[1]);
         }
         Rates::Fixed(..) => {
             g.resource(COLORS[0], tex(COLOR_FORMAT, width, height))
                 .resource(DEPTHS[0], tex(DEPTH_FORMAT, width, height));
             let targets = [COLORS[0], "motion", DEPTHS[0]];
-            g.pass("clear", PassKind::Render, &[], &targets).pass(
-                SCENE_PASS,
-                PassKind::Render,
-                &["attachment"],
-                &targets,
-            );
+            g.pass("clear", PassKind::Render, &[], &targets)
+                .pass(SCENE_PASS, PassKind::Render, &["attachment"], &targets)
+                .self_counted();
             g.output(COLORS[0]);
         }
     }
@@ -156,16 +150,26 @@ pub struct HardwareGpu {
     /// The attachment's bytes, tightly packed, copied into the raw image each frame.
     staging: wgpu::Buffer,
     staging_readback: wgpu::Buffer,
-    /// Made on the first frame, when the scene is known; `Err`: why it could not be built
-    /// ([`Renderer::failure`] fails the result with it).
-    raw: Option<Result<RawVrsPass, String>>,
+    /// Built with the renderer, from the scene in the build context (a failure is the build's
+    /// error, before any frame is rendered); `None` only while [`HardwareGpu::new`] runs.
+    raw: Option<RawVrsPass>,
     parities: usize,
     parity: usize,
     last: Option<LastFrame>,
 }
 
 impl HardwareGpu {
-    pub fn new(gpu: &Gpu, caps: &VrsCaps, rates: Rates, width: u32, height: u32) -> HardwareGpu {
+    /// The hardware path on `gpu` drawing `scene`, with its raw Vulkan pass built (why not, in
+    /// words, when that fails on an adapter that offers the extension: a driver problem or a bug,
+    /// found before any frame is rendered).
+    pub fn new(
+        gpu: &Gpu,
+        caps: &VrsCaps,
+        rates: Rates,
+        scene: &SceneGpu,
+        width: u32,
+        height: u32,
+    ) -> Result<HardwareGpu, String> {
         let device = &gpu.device;
         let texel = texel_of(caps);
         let table = att::code_table(&caps.fragment_sizes);
@@ -226,7 +230,7 @@ impl HardwareGpu {
                 (None, None, 1)
             }
         };
-        HardwareGpu {
+        let mut hw = HardwareGpu {
             plan,
             textures,
             width,
@@ -243,7 +247,12 @@ impl HardwareGpu {
             parities,
             parity: 0,
             last: None,
-        }
+        };
+        hw.raw = Some(
+            hw.make_raw(gpu, scene)
+                .map_err(|e| format!("the hardware VRS pass could not be built: {e}"))?,
+        );
+        Ok(hw)
     }
 
     pub fn last_frame(&self) -> Option<LastFrame> {
@@ -321,7 +330,7 @@ impl HardwareGpu {
 
     /// Fragment-shader invocations of the last frame's `scene_vrs` pass (frame completed).
     pub fn invocations(&self) -> Option<u64> {
-        self.raw.as_ref()?.as_ref().ok()?.invocations()
+        self.raw.as_ref()?.invocations()
     }
 
     fn make_raw(&mut self, gpu: &Gpu, scene: &SceneGpu) -> Result<RawVrsPass, String> {
@@ -400,10 +409,6 @@ fn padded(bytes: &[u8]) -> Vec<u8> {
 }
 
 impl Renderer for HardwareGpu {
-    fn failure(&self) -> Option<String> {
-        self.raw.as_ref()?.as_ref().err().cloned()
-    }
-
     fn plan(&self) -> &Plan {
         &self.plan
     }
@@ -420,17 +425,6 @@ impl Renderer for HardwareGpu {
         encoder: &mut wgpu::CommandEncoder,
         frame: FrameInfo,
     ) {
-        if self.raw.is_none() {
-            // Construction failing on an adapter that offers the extension is a bug or a driver
-            // problem, not user input: nothing is drawn and `failure()` reports it.
-            self.raw = Some(
-                self.make_raw(gpu, scene)
-                    .map_err(|e| format!("the hardware VRS pass could not be built: {e}")),
-            );
-        }
-        if matches!(self.raw, Some(Err(_))) {
-            return;
-        }
         self.parity = (frame.index as usize) % self.parities;
         scene.write_view(
             &gpu.queue,
@@ -448,7 +442,7 @@ impl Renderer for HardwareGpu {
                 self.width,
                 self.height,
             ));
-            dispatch(
+            timed_dispatch(
                 encoder,
                 timers,
                 "rate_attachment",
@@ -467,7 +461,7 @@ impl Renderer for HardwareGpu {
         let mut raw = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some(SCENE_PASS),
         });
-        if let Some(Ok(r)) = self.raw.as_mut() {
+        if let Some(r) = self.raw.as_mut() {
             r.record(&mut raw, self.parity);
         }
         let mut after = device.create_command_encoder(&Default::default());
@@ -476,11 +470,7 @@ impl Renderer for HardwareGpu {
             .submit([before.finish(), raw.finish(), after.finish()]);
     }
 
-    fn raw_passes(&self) -> &'static [&'static str] {
-        &[SCENE_PASS]
-    }
-
-    fn raw_invocations(&mut self, _gpu: &Gpu) -> BTreeMap<String, u64> {
+    fn own_statistics(&mut self, _gpu: &Gpu) -> BTreeMap<String, u64> {
         self.invocations()
             .map(|n| BTreeMap::from([(SCENE_PASS.to_string(), n)]))
             .unwrap_or_default()
@@ -495,15 +485,19 @@ impl Renderer for HardwareGpu {
         let (w, h) = (self.width, self.height);
         let shades = att::shades(&model, w, h, &|x, y| coverage[(y * w + x) as usize]);
         // The CPU model's shades over covered pixels, as the software path reports its rate.
+        let rate = att::rate(shades, covered);
         extras
             .values
-            .push(("shading-rate", att::rate(shades, covered)));
-        extras.values.push(("model-shades", shades as f64));
+            .push(FrameValue::lower("shading-rate", rate, ""));
+        let model_shades = FrameValue::lower("model-shades", shades as f64, "count");
+        extras.values.push(model_shades);
+        // The pass's own invocations are its `pass.scene_vrs.fragment_invocations` (counted like
+        // any pass's, through `Renderer::own_statistics`); their ratio to the model is this check.
         if let Some(n) = self.invocations() {
-            extras.values.push(("fragment-invocations", n as f64));
+            let ratio = n as f64 / shades.max(1) as f64;
             extras
                 .values
-                .push(("invocations-over-model", n as f64 / shades.max(1) as f64));
+                .push(FrameValue::neither("invocations-over-model", ratio, "x"));
         }
         // The attachment the GPU used against the model's from the same rate codes.
         let gpu_attachment = self.attachment(gpu);
@@ -513,9 +507,12 @@ impl Renderer for HardwareGpu {
             .zip(&model.data)
             .filter(|(a, b)| a != b)
             .count();
-        extras
-            .values
-            .push(("attachment-texels-differing", differ as f64));
+        let differ = differ as f64;
+        extras.values.push(FrameValue::lower(
+            "attachment-texels-differing",
+            differ,
+            "count",
+        ));
         if image {
             if let Some(codes) = codes {
                 extras

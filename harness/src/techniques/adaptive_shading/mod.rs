@@ -1,8 +1,8 @@
 //! Techniques `adaptive-shading` and `native-deferred`: NVIDIA's content and motion adaptive
 //! shading (Yang et al. 2019, `seeds/nvidia-adaptive-shading.txt`) on software variable-rate
 //! shading, and its baseline, the same deferred path at 1x1 everywhere. Parameters here, the GPU
-//! part in `gpu.rs`, the CPU model of rate selection in `model.rs`, shaders under
-//! `shaders/adaptive_shading/`.
+//! part in `gpu.rs`, the CPU model of rate selection in `model.rs`, shaders in
+//! this folder (`*.wgsl`).
 //!
 //! Defaults are the paper's: t = 0.15 and l = 0.05 (section 6), k = 2.13 (Eq. 14), e = 0.1
 //! (section 4.2's example), 4x4 off (section 3.4), the 2x neighbour filter on (section 5.4). The
@@ -13,12 +13,14 @@ pub mod attachment;
 pub mod gpu;
 pub mod hardware;
 pub mod model;
+pub mod raw_pass;
 
-use super::definition::{Shader, Target, Technique};
-use crate::gpu::{Gpu, Unsupported};
-use crate::params::{Param, ParamSpec, Variant};
+use super::definition::{BuildContext, Definition, Shader, Target, Technique};
+use crate::gpu::{Extension, Requirements, Unsupported};
+use crate::params::{Param, ParamSpec};
 use crate::render::graph::Plan;
 use crate::render::renderer::Renderer;
+use crate::techniques::Variant;
 
 pub use gpu::{graph, rate_image, AdaptiveGpu, LastFrame};
 pub use hardware::{HardwareGpu, Rates};
@@ -153,7 +155,19 @@ pub fn rate_params(v: &Variant) -> RateParams {
 /// The rate selection a variant runs: its parameters for `adaptive-shading`, `None` (every tile at
 /// 1x1, no rate pass) for `native-deferred`.
 pub fn rates_of(v: &Variant) -> Option<RateParams> {
-    (v.technique.name() == AdaptiveShading.name()).then(|| rate_params(v))
+    (v.technique.name() == Technique::name(&AdaptiveShading)).then(|| rate_params(v))
+}
+
+/// An `adaptive-shading` variant's options: where it shades at its rates, and the rates.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Options {
+    pub vrs: Vrs,
+    pub rates: RateParams,
+}
+
+/// What the hardware path needs: VK_KHR_fragment_shading_rate with attachment rates.
+fn hardware_requirements() -> Requirements {
+    Requirements::none().extension(Extension::FragmentShadingRate)
 }
 
 fn shaders() -> Vec<Shader> {
@@ -182,20 +196,14 @@ fn hardware_shaders() -> Vec<Shader> {
     ]
 }
 
-/// The hardware path on `gpu`, or why this adapter cannot run it.
-fn build_hardware(
-    gpu: &Gpu,
-    rates: Rates,
-    target: Target,
-) -> Result<Box<dyn Renderer>, Unsupported> {
+/// The hardware path on `gpu`, or why this adapter cannot run it (its requirements were met, so
+/// the caps are there).
+fn build_hardware(rates: Rates, cx: &BuildContext<'_>) -> Result<Box<dyn Renderer>, Unsupported> {
+    let (gpu, t) = (cx.gpu, cx.target);
     match &gpu.vrs {
-        Ok(caps) => Ok(Box::new(HardwareGpu::new(
-            gpu,
-            caps,
-            rates,
-            target.width,
-            target.height,
-        ))),
+        Ok(caps) => HardwareGpu::new(gpu, caps, rates, cx.scene, t.width, t.height)
+            .map(|hw| Box::new(hw) as Box<dyn Renderer>)
+            .map_err(Unsupported),
         Err(reason) => Err(Unsupported(reason.clone())),
     }
 }
@@ -205,9 +213,34 @@ const PLAN_TEXEL: [u32; 2] = [model::TILE, model::TILE];
 
 pub struct AdaptiveShading;
 
-impl Technique for AdaptiveShading {
+impl Definition for AdaptiveShading {
+    type Options = Options;
+
     fn name(&self) -> &'static str {
         "adaptive-shading"
+    }
+
+    fn options(&self, variant: &Variant) -> Options {
+        Options {
+            vrs: variant.get(&VRS),
+            rates: rate_params(variant),
+        }
+    }
+
+    fn requirements(&self, options: &Options) -> Requirements {
+        match options.vrs {
+            Vrs::Software => Requirements::none(),
+            Vrs::Hardware => hardware_requirements(),
+        }
+    }
+
+    /// Each path against its own full-rate pipeline: `native-deferred` (software), `native-vrs`
+    /// at 1x1 (hardware).
+    fn baseline(&self, options: &Options) -> Option<&'static str> {
+        Some(match options.vrs {
+            Vrs::Software => Technique::name(&NativeDeferred),
+            Vrs::Hardware => Technique::name(&NativeVrs),
+        })
     }
 
     fn summary(&self) -> &'static str {
@@ -218,17 +251,16 @@ impl Technique for AdaptiveShading {
         &PARAMS
     }
 
-    fn check(&self, variant: &Variant) -> Result<(), String> {
-        if variant.get(&VRS) == Vrs::Hardware && variant.get(&COARSE_SAMPLE) == CoarseSample::Pixel
-        {
+    fn check(&self, options: &Options) -> Result<(), String> {
+        if options.vrs == Vrs::Hardware && options.rates.coarse_sample == CoarseSample::Pixel {
             return Err("`coarse_sample = \"pixel\"` needs `vrs = \"software\"`: hardware variable-rate shading shades each coarse pixel at its centre".into());
         }
         Ok(())
     }
 
-    fn plan(&self, variant: &Variant, target: Target) -> Plan {
-        let p = rate_params(variant);
-        match variant.get(&VRS) {
+    fn plan(&self, options: &Options, target: Target) -> Plan {
+        let p = options.rates;
+        match options.vrs {
             Vrs::Software => graph(Some(&p), target.width, target.height),
             Vrs::Hardware => {
                 hardware::graph(&Rates::Adaptive(p), target.width, target.height, PLAN_TEXEL)
@@ -238,19 +270,18 @@ impl Technique for AdaptiveShading {
 
     fn build(
         &self,
-        gpu: &Gpu,
-        variant: &Variant,
-        target: Target,
+        options: &Options,
+        cx: &BuildContext<'_>,
     ) -> Result<Box<dyn Renderer>, Unsupported> {
-        if variant.get(&VRS) == Vrs::Hardware {
-            return build_hardware(gpu, Rates::Adaptive(rate_params(variant)), target);
+        let t = cx.target;
+        if options.vrs == Vrs::Hardware {
+            return build_hardware(Rates::Adaptive(options.rates), cx);
         }
-        let rates = Some(rate_params(variant));
         Ok(Box::new(AdaptiveGpu::new(
-            gpu,
-            rates,
-            target.width,
-            target.height,
+            cx.gpu,
+            Some(options.rates),
+            t.width,
+            t.height,
         )))
     }
 
@@ -259,17 +290,24 @@ impl Technique for AdaptiveShading {
         all.extend(hardware_shaders());
         all
     }
-
-    fn baseline(&self) -> Option<&'static str> {
-        Some(NativeDeferred.name())
-    }
 }
 
 pub struct NativeVrs;
 
-impl Technique for NativeVrs {
+impl Definition for NativeVrs {
+    /// Every tile's rate.
+    type Options = FixedRate;
+
     fn name(&self) -> &'static str {
         "native-vrs"
+    }
+
+    fn options(&self, variant: &Variant) -> FixedRate {
+        variant.get(&RATE)
+    }
+
+    fn requirements(&self, _rate: &FixedRate) -> Requirements {
+        hardware_requirements()
     }
 
     fn summary(&self) -> &'static str {
@@ -281,8 +319,8 @@ impl Technique for NativeVrs {
         &P
     }
 
-    fn plan(&self, variant: &Variant, target: Target) -> Plan {
-        let (rx, ry) = variant.get(&RATE).size();
+    fn plan(&self, rate: &FixedRate, target: Target) -> Plan {
+        let (rx, ry) = rate.size();
         hardware::graph(
             &Rates::Fixed(rx, ry),
             target.width,
@@ -293,12 +331,11 @@ impl Technique for NativeVrs {
 
     fn build(
         &self,
-        gpu: &Gpu,
-        variant: &Variant,
-        target: Target,
+        rate: &FixedRate,
+        cx: &BuildContext<'_>,
     ) -> Result<Box<dyn Renderer>, Unsupported> {
-        let (rx, ry) = variant.get(&RATE).size();
-        build_hardware(gpu, Rates::Fixed(rx, ry), target)
+        let (rx, ry) = rate.size();
+        build_hardware(Rates::Fixed(rx, ry), cx)
     }
 
     fn shaders(&self) -> Vec<Shader> {
@@ -308,31 +345,31 @@ impl Technique for NativeVrs {
 
 pub struct NativeDeferred;
 
-impl Technique for NativeDeferred {
+impl Definition for NativeDeferred {
+    /// `native-deferred` has no parameters.
+    type Options = ();
+
     fn name(&self) -> &'static str {
         "native-deferred"
     }
 
+    fn options(&self, _variant: &Variant) {}
+
     fn summary(&self) -> &'static str {
-        "the deferred path of `adaptive-shading` with every tile at 1x1: a full-resolution G-buffer pass, then a compute pass shading every pixel with the forward path's shading function (bitwise the same image as `native` on lavapipe); the baseline `adaptive-shading` is compared with"
+        "the deferred path of `adaptive-shading` with every tile at 1x1: a full-resolution G-buffer pass, then a compute pass shading every pixel with the forward path's shading function (bitwise the same image as `native` on lavapipe); the baseline of `adaptive-shading` in software (`speedup.native-deferred`; in hardware it is `native-vrs`)"
     }
 
-    fn plan(&self, _variant: &Variant, target: Target) -> Plan {
+    fn plan(&self, _options: &(), target: Target) -> Plan {
         graph(None, target.width, target.height)
     }
 
     fn build(
         &self,
-        gpu: &Gpu,
-        _variant: &Variant,
-        target: Target,
+        _options: &(),
+        cx: &BuildContext<'_>,
     ) -> Result<Box<dyn Renderer>, Unsupported> {
-        Ok(Box::new(AdaptiveGpu::new(
-            gpu,
-            None,
-            target.width,
-            target.height,
-        )))
+        let t = cx.target;
+        Ok(Box::new(AdaptiveGpu::new(cx.gpu, None, t.width, t.height)))
     }
 
     fn shaders(&self) -> Vec<Shader> {

@@ -1,4 +1,4 @@
-//! CPU model of adaptive shading's rate selection (`shaders/adaptive_shading/rate.wgsl`), step for step in
+//! CPU model of adaptive shading's rate selection (`rate.wgsl`), step for step in
 //! f32, in the shader's order (the same tree reductions): the oracle the GPU rates are compared
 //! with in tests, and the place where the paper's equations can be checked without a GPU.
 //!

@@ -2,7 +2,7 @@
 //! full-resolution pixel centres of one checkerboard parity (even frames quadrants {0 = TL,
 //! 3 = BR}, odd frames {1 = TR, 2 = BL}, the odd frames shifted one full-resolution pixel right
 //! through the projection), then a compute pass that rebuilds every full-resolution pixel from
-//! this frame's samples and the previous frame's (`shaders/checkerboard/resolve.wgsl`, CPU model
+//! this frame's samples and the previous frame's (`resolve.wgsl`, CPU model
 //! in `model.rs`). Sampling is either a 2x MSAA target shaded per sample (Intel, mosaiikki) or two
 //! jittered single-sample renders (same samples on any adapter).
 //!
@@ -19,15 +19,15 @@ use super::{Occlusion, Options, Sampling};
 use crate::gpu::{Gpu, Unsupported, STANDARD_2X};
 use crate::render::graph::{Graph, PassKind, Plan, TextureDesc};
 use crate::render::kit::{
-    allocate, bind_group, compute_pipeline, placeholder_texture, record_scene_pass,
+    allocate, bind_group, compute_pipeline, placeholder_texture, record_scene_pass, timed_dispatch,
 };
 use crate::render::renderer::{FrameInfo, Renderer};
 use crate::render::scene::{SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::render::timers::Timers;
 
-pub static RESOLVE_WGSL: &str = include_str!("../../../../shaders/checkerboard/resolve.wgsl");
-pub static TWO_PASS_WGSL: &str = include_str!("../../../../shaders/checkerboard/two_pass.wgsl");
-pub static MSAA2X_WGSL: &str = include_str!("../../../../shaders/checkerboard/msaa2x.wgsl");
+pub static RESOLVE_WGSL: &str = include_str!("resolve.wgsl");
+pub static TWO_PASS_WGSL: &str = include_str!("two_pass.wgsl");
+pub static MSAA2X_WGSL: &str = include_str!("msaa2x.wgsl");
 
 /// Quarter-resolution texture size for a full resolution: one column wider than half (see the
 /// module doc).
@@ -194,13 +194,8 @@ impl CheckerboardGpu {
         height: u32,
         dynamic_scene: bool,
     ) -> Result<CheckerboardGpu, Unsupported> {
+        // 2x MSAA was checked before the build (`Definition::requirements`).
         let sampling = options.sampling;
-        if sampling == Sampling::Msaa2x {
-            gpu.check_msaa2x(&[
-                (COLOR_FORMAT, "rgba16float"),
-                (DEPTH_FORMAT, "depth32float"),
-            ])?;
-        }
         let (plan, use_velocity) = graph(&options, width, height, dynamic_scene);
         let textures = allocate(&gpu.device, &plan);
 
@@ -432,16 +427,13 @@ impl Renderer for CheckerboardGpu {
             near: near_far.0,
             far: near_far.1,
         });
-        let q = timers.begin("reconstruct", encoder);
-        {
-            let mut cp = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("reconstruct"),
-                timestamp_writes: q.compute_pass_timestamp_writes(),
-            });
-            cp.set_pipeline(&self.pipeline);
-            cp.set_bind_group(0, &self.bind_groups[parity], &[]);
-            cp.dispatch_workgroups(self.width.div_ceil(8), self.height.div_ceil(8), 1);
-        }
-        timers.end(encoder, q);
+        timed_dispatch(
+            encoder,
+            timers,
+            "reconstruct",
+            &self.pipeline,
+            &[&self.bind_groups[parity]],
+            [self.width.div_ceil(8), self.height.div_ceil(8)],
+        );
     }
 }

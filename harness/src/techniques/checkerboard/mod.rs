@@ -1,6 +1,6 @@
 //! Technique `checkerboard`: Intel's checkerboard rendering (McFerron & Lake 2018) with
 //! mosaiikki's refinements: its parameters and options here, the GPU part in `gpu.rs`, the CPU
-//! model of the reconstruction in `model.rs`, shaders under `shaders/checkerboard/`.
+//! model of the reconstruction in `model.rs`, its shaders beside them (`*.wgsl`).
 //!
 //! Defaults trace to the sources: sampling portable; gradients as Intel's code (DDXY_BIAS 0.5);
 //! CSO with mosaiikki's tolerance (view units); mosaiikki's differential fill; Intel's unclamped
@@ -9,11 +9,13 @@
 pub mod gpu;
 pub mod model;
 
-use super::definition::{Shader, Target, Technique};
-use crate::gpu::{Gpu, Unsupported};
-use crate::params::{Param, ParamSpec, Variant};
+use super::definition::{BuildContext, Definition, FramePattern, Shader, Target};
+use crate::gpu::{Requirements, Unsupported};
+use crate::params::{Param, ParamSpec};
 use crate::render::graph::Plan;
 use crate::render::renderer::Renderer;
+use crate::render::scene::{COLOR_FORMAT, DEPTH_FORMAT};
+use crate::techniques::Variant;
 
 pub use gpu::{quarter_size, quarter_view, two_pass_jitter, CheckerboardGpu, LastFrame};
 
@@ -159,13 +161,30 @@ impl Default for Options {
 
 pub struct Checkerboard;
 
-impl Technique for Checkerboard {
+impl Definition for Checkerboard {
+    type Options = Options;
+
     fn name(&self) -> &'static str {
         "checkerboard"
     }
 
-    fn alternates_frames(&self) -> bool {
-        true
+    fn options(&self, variant: &Variant) -> Options {
+        Options::from_variant(variant)
+    }
+
+    /// 2x MSAA targets at the standard sample positions for `msaa2x`.
+    fn requirements(&self, options: &Options) -> Requirements {
+        match options.sampling {
+            Sampling::Msaa2x => Requirements::none()
+                .msaa(2, COLOR_FORMAT, "rgba16float")
+                .msaa(2, DEPTH_FORMAT, "depth32float"),
+            Sampling::TwoPass => Requirements::none(),
+        }
+    }
+
+    /// Even and odd frames shade the two checkerboard parities.
+    fn frames(&self, _options: &Options) -> FramePattern {
+        FramePattern::Alternating
     }
 
     fn summary(&self) -> &'static str {
@@ -176,23 +195,22 @@ impl Technique for Checkerboard {
         &PARAMS
     }
 
-    fn plan(&self, variant: &Variant, target: Target) -> Plan {
-        let options = Options::from_variant(variant);
-        gpu::graph(&options, target.width, target.height, target.dynamic_scene).0
+    fn plan(&self, options: &Options, target: Target) -> Plan {
+        gpu::graph(options, target.width, target.height, target.dynamic_scene).0
     }
 
     fn build(
         &self,
-        gpu: &Gpu,
-        variant: &Variant,
-        target: Target,
+        options: &Options,
+        cx: &BuildContext<'_>,
     ) -> Result<Box<dyn Renderer>, Unsupported> {
+        let t = cx.target;
         Ok(Box::new(CheckerboardGpu::new(
-            gpu,
-            Options::from_variant(variant),
-            target.width,
-            target.height,
-            target.dynamic_scene,
+            cx.gpu,
+            *options,
+            t.width,
+            t.height,
+            t.dynamic_scene,
         )?))
     }
 

@@ -1,4 +1,4 @@
-//! CPU model of the checkerboard reconstruction (`shaders/checkerboard_resolve.wgsl`), step for
+//! CPU model of the checkerboard reconstruction (`resolve.wgsl`), step for
 //! step, in f32: the oracle the GPU output is compared with in tests.
 //!
 //! Not used when rendering. Inputs are the quarter-resolution samples of the current and previous

@@ -4,7 +4,7 @@
 //! Per frame (parity `p = index & 1`):
 //! 1. `precondition` (copy): the scene depth starts as a copy of one of two pre-conditioned depth
 //!    buffers, "white" on even frames and "black" on odd ones, whose masked 2x2 blocks hold the
-//!    nearest depth (5.3.6; drawn once at build time by `shaders/checkerboard_2x2/mask.wgsl`, 5.3.2).
+//!    nearest depth (5.3.6; drawn once at build time by `mask.wgsl`, 5.3.2).
 //! 2. `scene` (render): the ordinary forward pipeline, depth loaded, not cleared: the early depth
 //!    test rejects every fragment of a masked block, so about half the pixels are shaded. The
 //!    fragment shader writes no `frag_depth` (early-Z stays on); the depth *attachment* is still
@@ -15,7 +15,7 @@
 //!    rendered only where the frame will be reconstituted (5.3.6).
 //! 4. `reconstitute` (compute, one invocation per pair of blocks): copies the shaded blocks and
 //!    rebuilds the masked ones by motion reprojection into the previous output, with the report's
-//!    clamps (`shaders/checkerboard_2x2/reconstitute.wgsl`; CPU model in
+//!    clamps (`reconstitute.wgsl`; CPU model in
 //!    `model.rs`).
 //!
 //! History. The report copies the back buffer, depth and motion into caches at the end of each
@@ -33,14 +33,14 @@ use crate::gpu::Gpu;
 use crate::render::graph::{Graph, PassKind, Plan, TextureDesc};
 use crate::render::kit::{
     allocate_with, bind_group, compute_pipeline, placeholder_texture, record_scene_pass_on,
+    timed_dispatch,
 };
 use crate::render::renderer::{FrameInfo, Renderer};
 use crate::render::scene::{SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::render::timers::Timers;
 
-pub static MASK_WGSL: &str = include_str!("../../../../shaders/checkerboard_2x2/mask.wgsl");
-pub static RECONSTITUTE_WGSL: &str =
-    include_str!("../../../../shaders/checkerboard_2x2/reconstitute.wgsl");
+pub static MASK_WGSL: &str = include_str!("mask.wgsl");
+pub static RECONSTITUTE_WGSL: &str = include_str!("reconstitute.wgsl");
 
 /// The pass graph at `width` x `height`: pure bookkeeping, so the memory of every resource can be
 /// checked without a GPU. Resource names by role; see the module doc for the ping-pong pairs.
@@ -199,18 +199,16 @@ impl Reconstitution {
         width: u32,
         height: u32,
     ) {
-        let q = timers.begin("reconstitute", encoder);
-        {
-            let mut cp = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("reconstitute"),
-                timestamp_writes: q.compute_pass_timestamp_writes(),
-            });
-            cp.set_pipeline(&self.pipeline);
-            cp.set_bind_group(0, bind_group, &[]);
-            let (pairs, rows) = workgroups(width, height);
-            cp.dispatch_workgroups(pairs, rows, 1);
-        }
-        timers.end(encoder, q);
+        let (pairs, rows) = workgroups(width, height);
+        let (pipeline, groups) = (&self.pipeline, [bind_group]);
+        timed_dispatch(
+            encoder,
+            timers,
+            "reconstitute",
+            pipeline,
+            &groups,
+            [pairs, rows],
+        );
     }
 }
 
@@ -253,7 +251,7 @@ pub struct Checkerboard2x2Gpu {
 impl Checkerboard2x2Gpu {
     pub fn new(
         gpu: &Gpu,
-        variant: &crate::params::Variant,
+        variant: &crate::techniques::Variant,
         width: u32,
         height: u32,
     ) -> Checkerboard2x2Gpu {

@@ -1,7 +1,7 @@
 //! Technique `checkerboard-2x2`: the depth-based report's 2x2 checkerboarding
 //! (`seeds/depth-based-checkerboarding.txt`, sections 5.3.1 to 5.3.8): its parameters and options
 //! here, the GPU part in `gpu.rs`, the CPU model of the reconstitution in `model.rs`, shaders
-//! under `shaders/checkerboard_2x2/`.
+//! beside them (`*.wgsl`).
 //!
 //! Defaults are the report's final implementation (sections 5.3.4 to 5.3.8): blended clamping
 //! with motion coherency, its small-motion constant and its blend limits. Motion is in pixels per
@@ -11,11 +11,12 @@
 pub mod gpu;
 pub mod model;
 
-use super::definition::{Shader, Target, Technique};
-use crate::gpu::{Gpu, Unsupported};
-use crate::params::{Param, ParamSpec, Variant};
+use super::definition::{BuildContext, Definition, FramePattern, Shader, Target};
+use crate::gpu::Unsupported;
+use crate::params::{Param, ParamSpec};
 use crate::render::graph::Plan;
 use crate::render::renderer::Renderer;
+use crate::techniques::Variant;
 
 pub use gpu::{
     graph, workgroups, Bindings, Checkerboard2x2Gpu, FrameParams, LastFrame, Reconstitution,
@@ -120,13 +121,20 @@ impl Options {
 
 pub struct Checkerboard2x2;
 
-impl Technique for Checkerboard2x2 {
+impl Definition for Checkerboard2x2 {
+    type Options = Options;
+
     fn name(&self) -> &'static str {
         "checkerboard-2x2"
     }
 
-    fn alternates_frames(&self) -> bool {
-        true
+    fn options(&self, variant: &Variant) -> Options {
+        Options::from_variant(variant)
+    }
+
+    /// Even and odd frames shade the two halves of the 2x2 block mask.
+    fn frames(&self, _options: &Options) -> FramePattern {
+        FramePattern::Alternating
     }
 
     fn summary(&self) -> &'static str {
@@ -137,8 +145,8 @@ impl Technique for Checkerboard2x2 {
         &PARAMS
     }
 
-    fn check(&self, variant: &Variant) -> Result<(), String> {
-        let (min, max) = (variant.get(&BLEND_MIN), variant.get(&BLEND_MAX));
+    fn check(&self, options: &Options) -> Result<(), String> {
+        let (min, max) = (options.blend_min, options.blend_max);
         if min >= max {
             return Err(format!(
                 "blend_min ({min}) must be less than blend_max ({max}): depth differences between them blend the clamp in"
@@ -147,23 +155,20 @@ impl Technique for Checkerboard2x2 {
         Ok(())
     }
 
-    fn plan(&self, variant: &Variant, target: Target) -> Plan {
-        graph(target.width, target.height, &Options::from_variant(variant))
+    fn plan(&self, options: &Options, target: Target) -> Plan {
+        graph(target.width, target.height, options)
             .plan()
             .expect("built-in graphs are well formed")
     }
 
     fn build(
         &self,
-        gpu: &Gpu,
-        variant: &Variant,
-        target: Target,
+        options: &Options,
+        cx: &BuildContext<'_>,
     ) -> Result<Box<dyn Renderer>, Unsupported> {
-        Ok(Box::new(Checkerboard2x2Gpu::new(
-            gpu,
-            variant,
-            target.width,
-            target.height,
+        let t = cx.target;
+        Ok(Box::new(Checkerboard2x2Gpu::with_options(
+            cx.gpu, *options, t.width, t.height,
         )))
     }
 

@@ -1,4 +1,4 @@
-//! CPU model of the `checkerboard-2x2` reconstitution (`shaders/checkerboard_2x2_reconstitute.wgsl`),
+//! CPU model of the `checkerboard-2x2` reconstitution (`reconstitute.wgsl`),
 //! step for step, in f32: the oracle the GPU output is compared with in tests.
 //!
 //! Not used when rendering. Inputs are full-resolution images as the shader reads them (the scene

@@ -2,7 +2,7 @@
 //! width whose texel i of each row samples full-resolution column 2i + p at its pixel centre (the
 //! projection remapped, `View::ndc_scale` / `ndc_offset`); a full-resolution `velocity` pass when
 //! the scene has animated objects; and a `reconstruct` compute pass writing every full-resolution
-//! pixel (`shaders/interlace/reconstruct.wgsl`, CPU model in `model.rs`). The output and the
+//! pixel (`reconstruct.wgsl`, CPU model in `model.rs`). The output and the
 //! previous output are a ping-pong pair (`color` / `color_history`).
 
 use std::collections::HashMap;
@@ -14,13 +14,14 @@ use super::Options;
 use crate::gpu::Gpu;
 use crate::render::graph::{Graph, PassKind, Plan, TextureDesc};
 use crate::render::kit::{
-    allocate, bind_group, compute_pipeline, placeholder_texture, record_scene_pass,
+    allocate, bind_group, compute_pipeline, placeholder_texture, record_scene_pass, timed_dispatch,
+    PingPong,
 };
 use crate::render::renderer::{FrameInfo, Renderer};
 use crate::render::scene::{SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::render::timers::Timers;
 
-pub static RECONSTRUCT_WGSL: &str = include_str!("../../../../shaders/interlace/reconstruct.wgsl");
+pub static RECONSTRUCT_WGSL: &str = include_str!("reconstruct.wgsl");
 
 /// The output pair: written this frame, read as history.
 const OUTPUTS: [&str; 2] = ["color", "color_history"];
@@ -106,8 +107,7 @@ pub struct InterlaceGpu {
     pipeline: wgpu::ComputePipeline,
     params: wgpu::Buffer,
     /// By parity: parity k writes `OUTPUTS[k]` and reads the other as history.
-    bind_groups: [wgpu::BindGroup; 2],
-    current: usize,
+    bind_groups: PingPong<wgpu::BindGroup>,
     scene_views: (wgpu::TextureView, wgpu::TextureView),
     velocity_views: Option<(wgpu::TextureView, wgpu::TextureView)>,
     _dummy_velocity: Option<wgpu::Texture>,
@@ -167,8 +167,7 @@ impl InterlaceGpu {
             height,
             pipeline,
             params,
-            bind_groups,
-            current: 0,
+            bind_groups: PingPong::new(bind_groups),
             scene_views,
             velocity_views,
             _dummy_velocity: dummy,
@@ -180,7 +179,7 @@ impl InterlaceGpu {
     /// output the last frame read.
     pub fn texture(&self, name: &str) -> Option<&wgpu::Texture> {
         match name {
-            "history" => self.textures.get(OUTPUTS[1 - self.current]),
+            "history" => self.textures.get(OUTPUTS[1 - self.bind_groups.side()]),
             _ => self.textures.get(name),
         }
     }
@@ -196,7 +195,7 @@ impl Renderer for InterlaceGpu {
     }
 
     fn output(&self) -> &wgpu::Texture {
-        &self.textures[OUTPUTS[self.current]]
+        &self.textures[OUTPUTS[self.bind_groups.side()]]
     }
 
     fn record(
@@ -259,7 +258,7 @@ impl Renderer for InterlaceGpu {
         };
         gpu.queue
             .write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
-        self.current = parity as usize;
+        self.bind_groups.select(parity);
         self.last = Some(LastFrame {
             parity,
             history_valid: frame.history_valid,
@@ -267,16 +266,13 @@ impl Renderer for InterlaceGpu {
             velocity: use_velocity,
             clamp: self.options.clamp,
         });
-        let q = timers.begin("reconstruct", encoder);
-        {
-            let mut cp = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("reconstruct"),
-                timestamp_writes: q.compute_pass_timestamp_writes(),
-            });
-            cp.set_pipeline(&self.pipeline);
-            cp.set_bind_group(0, &self.bind_groups[self.current], &[]);
-            cp.dispatch_workgroups(self.width.div_ceil(8), self.height.div_ceil(8), 1);
-        }
-        timers.end(encoder, q);
+        timed_dispatch(
+            encoder,
+            timers,
+            "reconstruct",
+            &self.pipeline,
+            &[self.bind_groups.current()],
+            [self.width.div_ceil(8), self.height.div_ceil(8)],
+        );
     }
 }

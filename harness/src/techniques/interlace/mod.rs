@@ -3,7 +3,7 @@
 //! describes it, `seeds/depth-based-checkerboarding.txt` section 3.3): each frame shades alternate
 //! pixel columns at half width; the other columns are the previous output reprojected through the
 //! camera and the velocity buffer, clamped to the shaded neighbours. Parameters here, the GPU
-//! part in `gpu.rs`, the CPU model in `model.rs`, the shader in `shaders/interlace/`.
+//! part in `gpu.rs`, the CPU model in `model.rs`, the shader beside them (`reconstruct.wgsl`).
 //!
 //! Simpler than the report's account of Siege: no confidence blend back towards the unclamped
 //! colour, no colour-coherency or velocity weights, a bilinear history fetch.
@@ -11,11 +11,12 @@
 pub mod gpu;
 pub mod model;
 
-use super::definition::{Shader, Target, Technique};
-use crate::gpu::{Gpu, Unsupported};
-use crate::params::{Param, ParamSpec, Variant};
+use super::definition::{BuildContext, Definition, FramePattern, Shader, Target};
+use crate::gpu::Unsupported;
+use crate::params::{Param, ParamSpec};
 use crate::render::graph::Plan;
 use crate::render::renderer::Renderer;
+use crate::techniques::Variant;
 
 pub use gpu::{half_view, InterlaceGpu, LastFrame};
 
@@ -57,9 +58,20 @@ impl Options {
 
 pub struct Interlace;
 
-impl Technique for Interlace {
+impl Definition for Interlace {
+    type Options = Options;
+
     fn name(&self) -> &'static str {
         "interlace"
+    }
+
+    fn options(&self, variant: &Variant) -> Options {
+        Options::from_variant(variant)
+    }
+
+    /// Even and odd frames shade the even and odd pixel columns.
+    fn frames(&self, _options: &Options) -> FramePattern {
+        FramePattern::Alternating
     }
 
     fn summary(&self) -> &'static str {
@@ -70,23 +82,22 @@ impl Technique for Interlace {
         &PARAMS
     }
 
-    fn plan(&self, variant: &Variant, target: Target) -> Plan {
-        let options = Options::from_variant(variant);
-        gpu::graph(&options, target.width, target.height, target.dynamic_scene).0
+    fn plan(&self, options: &Options, target: Target) -> Plan {
+        gpu::graph(options, target.width, target.height, target.dynamic_scene).0
     }
 
     fn build(
         &self,
-        gpu: &Gpu,
-        variant: &Variant,
-        target: Target,
+        options: &Options,
+        cx: &BuildContext<'_>,
     ) -> Result<Box<dyn Renderer>, Unsupported> {
+        let t = cx.target;
         Ok(Box::new(InterlaceGpu::new(
-            gpu,
-            Options::from_variant(variant),
-            target.width,
-            target.height,
-            target.dynamic_scene,
+            cx.gpu,
+            *options,
+            t.width,
+            t.height,
+            t.dynamic_scene,
         )))
     }
 

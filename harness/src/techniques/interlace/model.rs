@@ -1,4 +1,4 @@
-//! CPU model of the interlace reconstruction (`shaders/interlace/reconstruct.wgsl`), step for
+//! CPU model of the interlace reconstruction (`reconstruct.wgsl`), step for
 //! step in f32: the oracle the GPU output is compared with in tests.
 //!
 //! Not used when rendering.

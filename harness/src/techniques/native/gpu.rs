@@ -6,12 +6,12 @@ use std::collections::HashMap;
 
 use crate::gpu::Gpu;
 use crate::render::graph::{Graph, PassKind, Plan, TextureDesc};
-use crate::render::kit::{allocate, compute_pipeline, record_scene_pass};
+use crate::render::kit::{allocate, compute_pipeline, record_scene_pass, timed_dispatch};
 use crate::render::renderer::{FrameInfo, Renderer, Unsupported};
 use crate::render::scene::{SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::render::timers::Timers;
 
-pub static DOWNSAMPLE_WGSL: &str = include_str!("../../../../shaders/native/downsample.wgsl");
+pub static DOWNSAMPLE_WGSL: &str = include_str!("downsample.wgsl");
 
 /// A compute pass that turns the forward render into the `width` x `height` output: its pass
 /// name and the names of the render's colour and depth targets.
@@ -177,17 +177,8 @@ impl Renderer for Forward {
         );
         if let Some((pipeline, bind_group, [w, h])) = &self.resample {
             let name = self.plan.passes[1].name;
-            let q = timers.begin(name, encoder);
-            {
-                let mut cp = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some(name),
-                    timestamp_writes: q.compute_pass_timestamp_writes(),
-                });
-                cp.set_pipeline(pipeline);
-                cp.set_bind_group(0, bind_group, &[]);
-                cp.dispatch_workgroups(w.div_ceil(8), h.div_ceil(8), 1);
-            }
-            timers.end(encoder, q);
+            let size = [w.div_ceil(8), h.div_ceil(8)];
+            timed_dispatch(encoder, timers, name, pipeline, &[bind_group], size);
         }
     }
 }

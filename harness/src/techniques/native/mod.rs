@@ -4,11 +4,10 @@
 
 pub mod gpu;
 
-use super::definition::{Shader, Target, Technique};
-use crate::gpu::Gpu;
-use crate::params::Variant;
+use super::definition::{BuildContext, Definition, Shader, Target};
 use crate::render::graph::Plan;
 use crate::render::renderer::{Renderer, Unsupported};
+use crate::techniques::Variant;
 
 pub use gpu::{ground_truth, Forward};
 
@@ -17,7 +16,10 @@ pub const NAME: &str = "native";
 
 pub struct Native;
 
-impl Technique for Native {
+impl Definition for Native {
+    /// `native` has no parameters.
+    type Options = ();
+
     fn name(&self) -> &'static str {
         NAME
     }
@@ -26,22 +28,19 @@ impl Technique for Native {
         "full-resolution forward rendering: the reference and the baseline"
     }
 
-    fn plan(&self, _variant: &Variant, target: Target) -> Plan {
+    fn options(&self, _variant: &Variant) {}
+
+    fn plan(&self, _options: &(), target: Target) -> Plan {
         gpu::forward_graph(target.width, target.height, None)
     }
 
     fn build(
         &self,
-        gpu: &Gpu,
-        _variant: &Variant,
-        target: Target,
+        _options: &(),
+        cx: &BuildContext<'_>,
     ) -> Result<Box<dyn Renderer>, Unsupported> {
-        Ok(Box::new(Forward::new(
-            gpu,
-            target.width,
-            target.height,
-            None,
-        )))
+        let t = cx.target;
+        Ok(Box::new(Forward::new(cx.gpu, t.width, t.height, None)))
     }
 
     fn shaders(&self) -> Vec<Shader> {

@@ -1,15 +1,16 @@
 //! Technique `upscale`: render at a scale factor, then upscale to the output with a bilinear or
 //! nearest filter (a compute pass): what a user would pick instead of a technique.
 
-use super::definition::{Shader, Target, Technique};
+use super::definition::{BuildContext, Definition, Shader, Target};
 use super::native::gpu::{forward_graph, Forward, MakeResample, Resample};
 use crate::gpu::Gpu;
-use crate::params::{Param, ParamSpec, Variant};
+use crate::params::{Param, ParamSpec};
 use crate::render::graph::Plan;
 use crate::render::kit::compute_pipeline;
 use crate::render::renderer::{Renderer, Unsupported};
+use crate::techniques::Variant;
 
-pub static UPSCALE_WGSL: &str = include_str!("../../../../shaders/upscale/upscale.wgsl");
+pub static UPSCALE_WGSL: &str = include_str!("upscale.wgsl");
 
 crate::choice! {
     /// The upscaling filter.
@@ -34,9 +35,16 @@ static PARAMS: [&ParamSpec; 2] = [&SCALE.spec, &FILTER.spec];
 
 pub struct Upscale;
 
+/// A variant's options, typed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Options {
+    pub scale: f64,
+    pub filter: Filter,
+}
+
 /// Render size and the upscale pass of a variant at `target`.
-fn setup(variant: &Variant, target: Target) -> (u32, u32, Resample, Filter) {
-    let s = variant.get(&SCALE);
+fn setup(options: &Options, target: Target) -> (u32, u32, Resample, Filter) {
+    let s = options.scale;
     let lw = ((target.width as f64 * s).round() as u32).max(1);
     let lh = ((target.height as f64 * s).round() as u32).max(1);
     let resample = Resample {
@@ -46,10 +54,12 @@ fn setup(variant: &Variant, target: Target) -> (u32, u32, Resample, Filter) {
         width: target.width,
         height: target.height,
     };
-    (lw, lh, resample, variant.get(&FILTER))
+    (lw, lh, resample, options.filter)
 }
 
-impl Technique for Upscale {
+impl Definition for Upscale {
+    type Options = Options;
+
     fn name(&self) -> &'static str {
         "upscale"
     }
@@ -62,25 +72,31 @@ impl Technique for Upscale {
         &PARAMS
     }
 
-    fn plan(&self, variant: &Variant, target: Target) -> Plan {
-        let (w, h, resample, _) = setup(variant, target);
+    fn options(&self, variant: &Variant) -> Options {
+        Options {
+            scale: variant.get(&SCALE),
+            filter: variant.get(&FILTER),
+        }
+    }
+
+    fn plan(&self, options: &Options, target: Target) -> Plan {
+        let (w, h, resample, _) = setup(options, target);
         forward_graph(w, h, Some(&resample))
     }
 
     fn build(
         &self,
-        gpu: &Gpu,
-        variant: &Variant,
-        target: Target,
+        options: &Options,
+        cx: &BuildContext<'_>,
     ) -> Result<Box<dyn Renderer>, Unsupported> {
-        let (w, h, resample, filter) = setup(variant, target);
+        let (w, h, resample, filter) = setup(options, cx.target);
         let filter = match filter {
             Filter::Bilinear => wgpu::FilterMode::Linear,
             Filter::Nearest => wgpu::FilterMode::Nearest,
         };
         let make: MakeResample =
             Box::new(move |gpu, src, dst| upscale_pipeline(gpu, src, dst, filter));
-        Ok(Box::new(Forward::new(gpu, w, h, Some((resample, make)))))
+        Ok(Box::new(Forward::new(cx.gpu, w, h, Some((resample, make)))))
     }
 
     fn shaders(&self) -> Vec<Shader> {

@@ -1,0 +1,768 @@
+//! The raw Vulkan pass of `adaptive-shading`'s hardware path (VK_KHR_fragment_shading_rate beside
+//! wgpu: the only raw Vulkan pass in Tessera): one forward pass drawn with a fragment-shading-rate
+//! attachment. The device with the extension turned on is `gpu/vrs.rs`'s.
+//!
+//! How the pass fits into wgpu's frame (`hardware.rs` drives it):
+//! wgpu clears the pass's colour, motion and depth targets in an ordinary render pass, which leaves
+//! them, as wgpu tracks them, in COLOR_TARGET / DEPTH_STENCIL_WRITE (COLOR_ATTACHMENT_OPTIMAL /
+//! DEPTH_STENCIL_ATTACHMENT_OPTIMAL) and initialised. [`RawVrsPass::record`] then writes a command
+//! encoder of its own (wgpu forbids mixing raw and wgpu commands in one encoder): a full memory
+//! barrier; a copy of the attachment bytes (written by a wgpu compute pass into a wgpu buffer) into
+//! the R8_UINT attachment image this module owns; the render pass (load, store) in the same
+//! layouts it found the targets in; another full barrier. wgpu's own barriers before the next use
+//! of the targets then hold, since its tracked state is still true. The encoders are submitted
+//! together, in order.
+//!
+//! The pass draws the scene twice in one render pass: a depth pre-pass (vertex shader only), then
+//! the shading draw with depth test EQUAL and no depth writes, so that every covered pixel is
+//! shaded once by its visible primitive (the engines of the paper's section 5 have one).
+//! The pipeline is the project's WGSL (`scene.wgsl` + `adaptive_shading/vrs.wgsl`) compiled to
+//! SPIR-V by naga with the options wgpu uses (no coordinate flip in the shader; the viewport is
+//! flipped, as wgpu-hal does), with `VkPipelineFragmentShadingRateStateCreateInfoKHR` at 1x1 and
+//! combiner ops (KEEP, REPLACE): the attachment alone decides the rate. Fragment-shader invocations
+//! are counted by a pipeline-statistics query of this module's own.
+//!
+//! Not here: which rates (the rate pass and the CPU model, this folder's `gpu.rs` and `model.rs`), timing
+//! (wgpu-profiler timestamps around the encoder).
+
+use ash::vk;
+use wgpu::hal::api::Vulkan;
+
+use crate::render::scene::RawDraw;
+
+/// The targets of one frame parity: colour (Rgba16Float), motion (Rgba16Float), depth
+/// (Depth32Float), all `width` x `height`, as wgpu allocated them.
+pub struct Targets<'a> {
+    pub color: &'a wgpu::Texture,
+    pub motion: &'a wgpu::Texture,
+    pub depth: &'a wgpu::Texture,
+}
+
+/// Where the pass's SPIR-V comes from: one WGSL module and its two entry points.
+pub struct Shaders<'a> {
+    pub wgsl: &'a str,
+    pub vertex: &'a str,
+    pub fragment: &'a str,
+}
+
+/// The raw objects of the pass: render pass and framebuffers (one per parity), the attachment
+/// image, the pipeline and its descriptor set, the statistics query.
+pub struct RawVrsPass {
+    device: ash::Device,
+    size: [u32; 2],
+    attachment_size: [u32; 2],
+    render_pass: vk::RenderPass,
+    framebuffers: Vec<vk::Framebuffer>,
+    views: Vec<vk::ImageView>,
+    rate_image: vk::Image,
+    rate_memory: vk::DeviceMemory,
+    set_layout: vk::DescriptorSetLayout,
+    pool: vk::DescriptorPool,
+    set: vk::DescriptorSet,
+    layout: vk::PipelineLayout,
+    pipeline: vk::Pipeline,
+    prepass: vk::Pipeline,
+    modules: [vk::ShaderModule; 2],
+    stats: vk::QueryPool,
+    recorded: bool,
+    /// wgpu objects the raw handles point into, kept alive as long as the pass.
+    _keep_textures: Vec<wgpu::Texture>,
+    _keep_buffers: Vec<wgpu::Buffer>,
+    vertex: vk::Buffer,
+    index: vk::Buffer,
+    staging: vk::Buffer,
+    draws: Vec<(u32, u32, i32)>,
+}
+
+/// SPIR-V of one entry point of `wgsl`, with the options wgpu-hal uses on Vulkan (bindings by
+/// group and binding, no coordinate adjustment).
+pub fn spirv(wgsl: &str, stage: naga::ShaderStage, entry: &str) -> Result<Vec<u32>, String> {
+    let module = naga::front::wgsl::parse_str(wgsl).map_err(|e| e.emit_to_string(wgsl))?;
+    let info = naga::valid::Validator::new(
+        naga::valid::ValidationFlags::all(),
+        naga::valid::Capabilities::all(),
+    )
+    .validate(&module)
+    .map_err(|e| e.emit_to_string(wgsl))?;
+    let options = naga::back::spv::Options {
+        lang_version: (1, 3),
+        flags: naga::back::spv::WriterFlags::LABEL_VARYINGS,
+        ..Default::default()
+    };
+    let pipeline = naga::back::spv::PipelineOptions {
+        shader_stage: stage,
+        entry_point: entry.to_string(),
+    };
+    naga::back::spv::write_vec(&module, &info, &options, Some(&pipeline)).map_err(|e| e.to_string())
+}
+
+fn vk_err(what: &'static str) -> impl Fn(vk::Result) -> String {
+    move |e| format!("{what}: {e}")
+}
+
+impl RawVrsPass {
+    /// Builds the pass for `targets` (one per frame parity) at `size`, with an attachment of
+    /// `attachment_size` texels of `texel` pixels filled each frame from `staging` (tightly packed
+    /// bytes), drawing `scene`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        device: &wgpu::Device,
+        adapter: &wgpu::Adapter,
+        shaders: &Shaders<'_>,
+        targets: &[Targets<'_>],
+        size: [u32; 2],
+        texel: [u32; 2],
+        attachment_size: [u32; 2],
+        staging: &wgpu::Buffer,
+        scene: &RawDraw<'_>,
+    ) -> Result<RawVrsPass, String> {
+        let vs = spirv(shaders.wgsl, naga::ShaderStage::Vertex, shaders.vertex)?;
+        let fs = spirv(shaders.wgsl, naga::ShaderStage::Fragment, shaders.fragment)?;
+        // SAFETY: read-only access to the hal objects for their raw handles; wgpu keeps ownership
+        // and the clones below keep every object alive as long as this pass.
+        let (raw, memory_props, formats) = unsafe {
+            let hal_device = device.as_hal::<Vulkan>().ok_or("not a Vulkan device")?;
+            let hal_adapter = adapter.as_hal::<Vulkan>().ok_or("not a Vulkan adapter")?;
+            let instance = hal_device.shared_instance().raw_instance();
+            let memory =
+                instance.get_physical_device_memory_properties(hal_device.raw_physical_device());
+            let formats = [
+                hal_adapter.texture_format_as_raw(targets[0].color.format()),
+                hal_adapter.texture_format_as_raw(targets[0].motion.format()),
+                hal_adapter.texture_format_as_raw(targets[0].depth.format()),
+            ];
+            (hal_device.raw_device().clone(), memory, formats)
+        };
+        let image_of = |t: &wgpu::Texture| -> Result<vk::Image, String> {
+            // SAFETY: the handle is only used while `t` (kept in `_keep_textures`) is alive.
+            unsafe { t.as_hal::<Vulkan>().map(|h| h.raw_handle()) }
+                .ok_or_else(|| "texture is not a Vulkan texture".to_string())
+        };
+        let buffer_of = |b: &wgpu::Buffer| -> Result<vk::Buffer, String> {
+            // SAFETY: the handle is only used while `b` (kept in `_keep_buffers`) is alive.
+            unsafe { b.as_hal::<Vulkan>().map(|h| h.raw_handle()) }
+                .ok_or_else(|| "buffer is not a Vulkan buffer".to_string())
+        };
+        let mut pass = RawVrsPass {
+            device: raw,
+            size,
+            attachment_size,
+            render_pass: vk::RenderPass::null(),
+            framebuffers: Vec::new(),
+            views: Vec::new(),
+            rate_image: vk::Image::null(),
+            rate_memory: vk::DeviceMemory::null(),
+            set_layout: vk::DescriptorSetLayout::null(),
+            pool: vk::DescriptorPool::null(),
+            set: vk::DescriptorSet::null(),
+            layout: vk::PipelineLayout::null(),
+            pipeline: vk::Pipeline::null(),
+            prepass: vk::Pipeline::null(),
+            modules: [vk::ShaderModule::null(); 2],
+            stats: vk::QueryPool::null(),
+            recorded: false,
+            _keep_textures: targets
+                .iter()
+                .flat_map(|t| [t.color.clone(), t.motion.clone(), t.depth.clone()])
+                .collect(),
+            _keep_buffers: vec![
+                scene.vertex.clone(),
+                scene.index.clone(),
+                scene.frame.clone(),
+                scene.objects.clone(),
+                staging.clone(),
+            ],
+            vertex: buffer_of(scene.vertex)?,
+            index: buffer_of(scene.index)?,
+            staging: buffer_of(staging)?,
+            draws: scene.draws.clone(),
+        };
+        let frame = buffer_of(scene.frame)?;
+        let objects = buffer_of(scene.objects)?;
+        let d = pass.device.clone();
+
+        // The attachment image: R8_UINT, device-local, written by a copy.
+        // SAFETY: every create call gets a fully initialised create-info that outlives the call;
+        // each object is stored in `pass` as soon as it exists, so `Drop` destroys exactly what
+        // was made, also when a later step fails.
+        unsafe {
+            let info = vk::ImageCreateInfo::default()
+                .image_type(vk::ImageType::TYPE_2D)
+                .format(vk::Format::R8_UINT)
+                .extent(vk::Extent3D {
+                    width: attachment_size[0],
+                    height: attachment_size[1],
+                    depth: 1,
+                })
+                .mip_levels(1)
+                .array_layers(1)
+                .samples(vk::SampleCountFlags::TYPE_1)
+                .tiling(vk::ImageTiling::OPTIMAL)
+                .usage(
+                    vk::ImageUsageFlags::FRAGMENT_SHADING_RATE_ATTACHMENT_KHR
+                        | vk::ImageUsageFlags::TRANSFER_DST,
+                )
+                .initial_layout(vk::ImageLayout::UNDEFINED);
+            pass.rate_image = d
+                .create_image(&info, None)
+                .map_err(vk_err("attachment image"))?;
+            let req = d.get_image_memory_requirements(pass.rate_image);
+            let types = &memory_props.memory_types[..memory_props.memory_type_count as usize];
+            let pick = |flags: vk::MemoryPropertyFlags| {
+                types.iter().enumerate().position(|(i, t)| {
+                    req.memory_type_bits & (1 << i) != 0 && t.property_flags.contains(flags)
+                })
+            };
+            let type_index = pick(vk::MemoryPropertyFlags::DEVICE_LOCAL)
+                .or_else(|| pick(vk::MemoryPropertyFlags::empty()))
+                .ok_or("no memory type for the attachment image")?;
+            let alloc = vk::MemoryAllocateInfo::default()
+                .allocation_size(req.size)
+                .memory_type_index(type_index as u32);
+            pass.rate_memory = d
+                .allocate_memory(&alloc, None)
+                .map_err(vk_err("attachment memory"))?;
+            d.bind_image_memory(pass.rate_image, pass.rate_memory, 0)
+                .map_err(vk_err("binding attachment memory"))?;
+        }
+
+        let view =
+            |pass: &mut RawVrsPass, image, format, aspect| -> Result<vk::ImageView, String> {
+                let info = vk::ImageViewCreateInfo::default()
+                    .image(image)
+                    .view_type(vk::ImageViewType::TYPE_2D)
+                    .format(format)
+                    .subresource_range(vk::ImageSubresourceRange {
+                        aspect_mask: aspect,
+                        base_mip_level: 0,
+                        level_count: 1,
+                        base_array_layer: 0,
+                        layer_count: 1,
+                    });
+                // SAFETY: `image` is alive (ours or a kept wgpu texture's) and the view matches its
+                // format, type and single mip and layer.
+                let v =
+                    unsafe { d.create_image_view(&info, None) }.map_err(vk_err("image view"))?;
+                pass.views.push(v);
+                Ok(v)
+            };
+        let rate_image = pass.rate_image;
+        let rate_view = view(
+            &mut pass,
+            rate_image,
+            vk::Format::R8_UINT,
+            vk::ImageAspectFlags::COLOR,
+        )?;
+
+        // Render pass: colour and motion (load, store), depth (load, store), the rate attachment.
+        let attachment = |format, layout, store| {
+            vk::AttachmentDescription2::default()
+                .format(format)
+                .samples(vk::SampleCountFlags::TYPE_1)
+                .load_op(vk::AttachmentLoadOp::LOAD)
+                .store_op(store)
+                .stencil_load_op(vk::AttachmentLoadOp::DONT_CARE)
+                .stencil_store_op(vk::AttachmentStoreOp::DONT_CARE)
+                .initial_layout(layout)
+                .final_layout(layout)
+        };
+        let color_layout = vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL;
+        let depth_layout = vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
+        let rate_layout = vk::ImageLayout::FRAGMENT_SHADING_RATE_ATTACHMENT_OPTIMAL_KHR;
+        let attachments = [
+            attachment(formats[0], color_layout, vk::AttachmentStoreOp::STORE),
+            attachment(formats[1], color_layout, vk::AttachmentStoreOp::STORE),
+            attachment(formats[2], depth_layout, vk::AttachmentStoreOp::STORE),
+            attachment(
+                vk::Format::R8_UINT,
+                rate_layout,
+                vk::AttachmentStoreOp::DONT_CARE,
+            ),
+        ];
+        let reference = |i, layout| {
+            vk::AttachmentReference2::default()
+                .attachment(i)
+                .layout(layout)
+        };
+        let color_refs = [reference(0, color_layout), reference(1, color_layout)];
+        let depth_ref = reference(2, depth_layout);
+        let rate_ref = reference(3, rate_layout);
+        let mut rate_info = vk::FragmentShadingRateAttachmentInfoKHR::default()
+            .fragment_shading_rate_attachment(&rate_ref)
+            .shading_rate_attachment_texel_size(vk::Extent2D {
+                width: texel[0],
+                height: texel[1],
+            });
+        let subpass = vk::SubpassDescription2::default()
+            .pipeline_bind_point(vk::PipelineBindPoint::GRAPHICS)
+            .color_attachments(&color_refs)
+            .depth_stencil_attachment(&depth_ref)
+            .push_next(&mut rate_info);
+        let subpasses = [subpass];
+        let rp_info = vk::RenderPassCreateInfo2::default()
+            .attachments(&attachments)
+            .subpasses(&subpasses);
+        // SAFETY: the create-info chain (attachments, subpass, shading-rate attachment info)
+        // lives across the call; the extension is enabled on this device (`open`).
+        pass.render_pass =
+            unsafe { d.create_render_pass2(&rp_info, None) }.map_err(vk_err("render pass"))?;
+
+        for t in targets {
+            let c = view(
+                &mut pass,
+                image_of(t.color)?,
+                formats[0],
+                vk::ImageAspectFlags::COLOR,
+            )?;
+            let m = view(
+                &mut pass,
+                image_of(t.motion)?,
+                formats[1],
+                vk::ImageAspectFlags::COLOR,
+            )?;
+            let z = view(
+                &mut pass,
+                image_of(t.depth)?,
+                formats[2],
+                vk::ImageAspectFlags::DEPTH,
+            )?;
+            let views = [c, m, z, rate_view];
+            let info = vk::FramebufferCreateInfo::default()
+                .render_pass(pass.render_pass)
+                .attachments(&views)
+                .width(size[0])
+                .height(size[1])
+                .layers(1);
+            // SAFETY: the views are alive and match the render pass's attachments; the rate
+            // view covers ceil(size / texel) texels as the framebuffer size requires.
+            let fb = unsafe { d.create_framebuffer(&info, None) }.map_err(vk_err("framebuffer"))?;
+            pass.framebuffers.push(fb);
+        }
+
+        // Descriptor set: group 0 of scene.wgsl (frame uniforms, objects).
+        let stages = vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT;
+        let bindings = [
+            vk::DescriptorSetLayoutBinding::default()
+                .binding(0)
+                .descriptor_type(vk::DescriptorType::UNIFORM_BUFFER)
+                .descriptor_count(1)
+                .stage_flags(stages),
+            vk::DescriptorSetLayoutBinding::default()
+                .binding(1)
+                .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                .descriptor_count(1)
+                .stage_flags(stages),
+        ];
+        let pool_sizes = [
+            vk::DescriptorPoolSize {
+                ty: vk::DescriptorType::UNIFORM_BUFFER,
+                descriptor_count: 1,
+            },
+            vk::DescriptorPoolSize {
+                ty: vk::DescriptorType::STORAGE_BUFFER,
+                descriptor_count: 1,
+            },
+        ];
+        // SAFETY: create-infos outlive their calls; the set is written with buffers that the
+        // pass keeps alive, at the offset and size scene.wgsl's layout expects.
+        unsafe {
+            pass.set_layout = d
+                .create_descriptor_set_layout(
+                    &vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings),
+                    None,
+                )
+                .map_err(vk_err("descriptor set layout"))?;
+            pass.pool = d
+                .create_descriptor_pool(
+                    &vk::DescriptorPoolCreateInfo::default()
+                        .max_sets(1)
+                        .pool_sizes(&pool_sizes),
+                    None,
+                )
+                .map_err(vk_err("descriptor pool"))?;
+            let layouts = [pass.set_layout];
+            pass.set = d
+                .allocate_descriptor_sets(
+                    &vk::DescriptorSetAllocateInfo::default()
+                        .descriptor_pool(pass.pool)
+                        .set_layouts(&layouts),
+                )
+                .map_err(vk_err("descriptor set"))?[0];
+            let frame_info = [vk::DescriptorBufferInfo {
+                buffer: frame,
+                offset: scene.frame_offset,
+                range: scene.frame_size,
+            }];
+            let objects_info = [vk::DescriptorBufferInfo {
+                buffer: objects,
+                offset: 0,
+                range: vk::WHOLE_SIZE,
+            }];
+            let writes = [
+                vk::WriteDescriptorSet::default()
+                    .dst_set(pass.set)
+                    .dst_binding(0)
+                    .descriptor_type(vk::DescriptorType::UNIFORM_BUFFER)
+                    .buffer_info(&frame_info),
+                vk::WriteDescriptorSet::default()
+                    .dst_set(pass.set)
+                    .dst_binding(1)
+                    .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                    .buffer_info(&objects_info),
+            ];
+            d.update_descriptor_sets(&writes, &[]);
+            pass.layout = d
+                .create_pipeline_layout(
+                    &vk::PipelineLayoutCreateInfo::default().set_layouts(&layouts),
+                    None,
+                )
+                .map_err(vk_err("pipeline layout"))?;
+            pass.modules[0] = d
+                .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&vs), None)
+                .map_err(vk_err("vertex shader"))?;
+            pass.modules[1] = d
+                .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&fs), None)
+                .map_err(vk_err("fragment shader"))?;
+        }
+
+        // Pipeline: scene.wgsl's vertex layout, reversed-Z depth test (greater), no culling, two
+        // colour targets without blending, the attachment deciding the rate.
+        let vs_name = std::ffi::CString::new(shaders.vertex).map_err(|e| e.to_string())?;
+        let fs_name = std::ffi::CString::new(shaders.fragment).map_err(|e| e.to_string())?;
+        let stage_infos = [
+            vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::VERTEX)
+                .module(pass.modules[0])
+                .name(&vs_name),
+            vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::FRAGMENT)
+                .module(pass.modules[1])
+                .name(&fs_name),
+        ];
+        let vertex_bindings = [vk::VertexInputBindingDescription {
+            binding: 0,
+            stride: scene.vertex_stride,
+            input_rate: vk::VertexInputRate::VERTEX,
+        }];
+        let vertex_attributes = [
+            vk::VertexInputAttributeDescription {
+                location: 0,
+                binding: 0,
+                format: vk::Format::R32G32B32_SFLOAT,
+                offset: 0,
+            },
+            vk::VertexInputAttributeDescription {
+                location: 1,
+                binding: 0,
+                format: vk::Format::R32G32B32_SFLOAT,
+                offset: 12,
+            },
+        ];
+        let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
+            .vertex_binding_descriptions(&vertex_bindings)
+            .vertex_attribute_descriptions(&vertex_attributes);
+        let assembly = vk::PipelineInputAssemblyStateCreateInfo::default()
+            .topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+        let viewport = vk::PipelineViewportStateCreateInfo::default()
+            .viewport_count(1)
+            .scissor_count(1);
+        let raster = vk::PipelineRasterizationStateCreateInfo::default()
+            .polygon_mode(vk::PolygonMode::FILL)
+            .cull_mode(vk::CullModeFlags::NONE)
+            .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
+            .line_width(1.0);
+        let multisample = vk::PipelineMultisampleStateCreateInfo::default()
+            .rasterization_samples(vk::SampleCountFlags::TYPE_1);
+        // The shading draw tests EQUAL against the depth pre-pass and writes no depth: each
+        // covered pixel is shaded by its visible primitive only (no overdraw), so at 1x1 the
+        // invocation count is the covered pixels exactly (the shade-count model's premise).
+        let depth = vk::PipelineDepthStencilStateCreateInfo::default()
+            .depth_test_enable(true)
+            .depth_write_enable(false)
+            .depth_compare_op(vk::CompareOp::EQUAL);
+        let prepass_depth = vk::PipelineDepthStencilStateCreateInfo::default()
+            .depth_test_enable(true)
+            .depth_write_enable(true)
+            .depth_compare_op(vk::CompareOp::GREATER);
+        let no_color = [vk::PipelineColorBlendAttachmentState::default(); 2];
+        let prepass_blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&no_color);
+        let blend_attachments = [vk::PipelineColorBlendAttachmentState::default()
+            .color_write_mask(vk::ColorComponentFlags::RGBA); 2];
+        let blend =
+            vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
+        let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+        let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
+        let mut rate_state = vk::PipelineFragmentShadingRateStateCreateInfoKHR::default()
+            .fragment_size(vk::Extent2D {
+                width: 1,
+                height: 1,
+            })
+            .combiner_ops([
+                vk::FragmentShadingRateCombinerOpKHR::KEEP,
+                vk::FragmentShadingRateCombinerOpKHR::REPLACE,
+            ]);
+        let info = vk::GraphicsPipelineCreateInfo::default()
+            .stages(&stage_infos)
+            .vertex_input_state(&vertex_input)
+            .input_assembly_state(&assembly)
+            .viewport_state(&viewport)
+            .rasterization_state(&raster)
+            .multisample_state(&multisample)
+            .depth_stencil_state(&depth)
+            .color_blend_state(&blend)
+            .dynamic_state(&dynamic)
+            .layout(pass.layout)
+            .render_pass(pass.render_pass)
+            .subpass(0)
+            .push_next(&mut rate_state);
+        // The depth pre-pass: the same vertex shader (its position is `@invariant`), no
+        // fragment shader, no colour writes, depth test greater and write.
+        let prepass_info = vk::GraphicsPipelineCreateInfo::default()
+            .stages(&stage_infos[..1])
+            .vertex_input_state(&vertex_input)
+            .input_assembly_state(&assembly)
+            .viewport_state(&viewport)
+            .rasterization_state(&raster)
+            .multisample_state(&multisample)
+            .depth_stencil_state(&prepass_depth)
+            .color_blend_state(&prepass_blend)
+            .dynamic_state(&dynamic)
+            .layout(pass.layout)
+            .render_pass(pass.render_pass)
+            .subpass(0);
+        // SAFETY: every state struct and the shading-rate chain live across the calls; the
+        // render pass and layout are alive; the pipeline features are enabled on this device
+        // (`open`).
+        unsafe {
+            pass.pipeline = d
+                .create_graphics_pipelines(vk::PipelineCache::null(), &[info], None)
+                .map_err(|(_, e)| format!("VRS pipeline: {e}"))?[0];
+            pass.prepass = d
+                .create_graphics_pipelines(vk::PipelineCache::null(), &[prepass_info], None)
+                .map_err(|(_, e)| format!("depth pre-pass pipeline: {e}"))?[0];
+        }
+        // SAFETY: a one-query pool of fragment-shader invocations; pipelineStatisticsQuery is on
+        // when wgpu has PIPELINE_STATISTICS_QUERY (the caller checks).
+        pass.stats = unsafe {
+            d.create_query_pool(
+                &vk::QueryPoolCreateInfo::default()
+                    .query_type(vk::QueryType::PIPELINE_STATISTICS)
+                    .query_count(1)
+                    .pipeline_statistics(
+                        vk::QueryPipelineStatisticFlags::FRAGMENT_SHADER_INVOCATIONS,
+                    ),
+                None,
+            )
+        }
+        .map_err(vk_err("statistics query pool"))?;
+        Ok(pass)
+    }
+
+    /// Records the pass for frame `parity` into `encoder`, which must hold nothing else (wgpu
+    /// forbids mixing); submit it after the encoder that cleared the targets and filled the
+    /// staging buffer, before anything that reads the targets.
+    pub fn record(&mut self, encoder: &mut wgpu::CommandEncoder, parity: usize) {
+        let d = &self.device;
+        let full_barrier = vk::MemoryBarrier::default()
+            .src_access_mask(vk::AccessFlags::MEMORY_WRITE)
+            .dst_access_mask(vk::AccessFlags::MEMORY_READ | vk::AccessFlags::MEMORY_WRITE);
+        let range = vk::ImageSubresourceRange {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            base_mip_level: 0,
+            level_count: 1,
+            base_array_layer: 0,
+            layer_count: 1,
+        };
+        let to_copy = vk::ImageMemoryBarrier::default()
+            .src_access_mask(vk::AccessFlags::empty())
+            .dst_access_mask(vk::AccessFlags::TRANSFER_WRITE)
+            .old_layout(vk::ImageLayout::UNDEFINED)
+            .new_layout(vk::ImageLayout::TRANSFER_DST_OPTIMAL)
+            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .image(self.rate_image)
+            .subresource_range(range);
+        let to_rate = to_copy
+            .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
+            .dst_access_mask(vk::AccessFlags::FRAGMENT_SHADING_RATE_ATTACHMENT_READ_KHR)
+            .old_layout(vk::ImageLayout::TRANSFER_DST_OPTIMAL)
+            .new_layout(vk::ImageLayout::FRAGMENT_SHADING_RATE_ATTACHMENT_OPTIMAL_KHR);
+        let copy = vk::BufferImageCopy::default()
+            .image_subresource(vk::ImageSubresourceLayers {
+                aspect_mask: vk::ImageAspectFlags::COLOR,
+                mip_level: 0,
+                base_array_layer: 0,
+                layer_count: 1,
+            })
+            .image_extent(vk::Extent3D {
+                width: self.attachment_size[0],
+                height: self.attachment_size[1],
+                depth: 1,
+            });
+        let [w, h] = self.size;
+        let area = vk::Rect2D {
+            offset: vk::Offset2D { x: 0, y: 0 },
+            extent: vk::Extent2D {
+                width: w,
+                height: h,
+            },
+        };
+        // wgpu-hal's convention: the viewport is flipped (negative height) so that clip space is
+        // WebGPU's, y up.
+        let viewport = vk::Viewport {
+            x: 0.0,
+            y: h as f32,
+            width: w as f32,
+            height: -(h as f32),
+            min_depth: 0.0,
+            max_depth: 1.0,
+        };
+        let begin = vk::RenderPassBeginInfo::default()
+            .render_pass(self.render_pass)
+            .framebuffer(self.framebuffers[parity % self.framebuffers.len()])
+            .render_area(area);
+        let subpass = vk::SubpassBeginInfo::default().contents(vk::SubpassContents::INLINE);
+        let (pipeline, prepass, layout, set, stats) = (
+            self.pipeline,
+            self.prepass,
+            self.layout,
+            self.set,
+            self.stats,
+        );
+        let (vertex, index, staging, rate_image) =
+            (self.vertex, self.index, self.staging, self.rate_image);
+        let draws = &self.draws;
+        // SAFETY: `encoder` is used only through this callback and holds no wgpu commands (the
+        // caller's contract); every handle recorded is alive while the pass is (kept clones of
+        // the wgpu objects, our own objects destroyed only in Drop after the device is idle). The
+        // leading full barrier orders everything submitted before (the clear, the staging
+        // writes) before this pass, the trailing one this pass before what follows; the targets
+        // end in the layouts they began in, which are the ones wgpu tracks.
+        let ok = unsafe {
+            encoder.as_hal_mut::<Vulkan, _, _>(|e| {
+                let Some(e) = e else { return false };
+                let cb = e.raw_handle();
+                let all = vk::PipelineStageFlags::ALL_COMMANDS;
+                d.cmd_pipeline_barrier(
+                    cb,
+                    all,
+                    all,
+                    vk::DependencyFlags::empty(),
+                    &[full_barrier],
+                    &[],
+                    &[],
+                );
+                d.cmd_pipeline_barrier(
+                    cb,
+                    vk::PipelineStageFlags::TOP_OF_PIPE,
+                    vk::PipelineStageFlags::TRANSFER,
+                    vk::DependencyFlags::empty(),
+                    &[],
+                    &[],
+                    &[to_copy],
+                );
+                d.cmd_copy_buffer_to_image(
+                    cb,
+                    staging,
+                    rate_image,
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    &[copy],
+                );
+                d.cmd_pipeline_barrier(
+                    cb,
+                    vk::PipelineStageFlags::TRANSFER,
+                    vk::PipelineStageFlags::FRAGMENT_SHADING_RATE_ATTACHMENT_KHR,
+                    vk::DependencyFlags::empty(),
+                    &[],
+                    &[],
+                    &[to_rate],
+                );
+                d.cmd_reset_query_pool(cb, stats, 0, 1);
+                d.cmd_begin_query(cb, stats, 0, vk::QueryControlFlags::empty());
+                d.cmd_begin_render_pass2(cb, &begin, &subpass);
+                d.cmd_set_viewport(cb, 0, &[viewport]);
+                d.cmd_set_scissor(cb, 0, &[area]);
+                d.cmd_bind_descriptor_sets(
+                    cb,
+                    vk::PipelineBindPoint::GRAPHICS,
+                    layout,
+                    0,
+                    &[set],
+                    &[],
+                );
+                d.cmd_bind_vertex_buffers(cb, 0, &[vertex], &[0]);
+                d.cmd_bind_index_buffer(cb, index, 0, vk::IndexType::UINT32);
+                for p in [prepass, pipeline] {
+                    d.cmd_bind_pipeline(cb, vk::PipelineBindPoint::GRAPHICS, p);
+                    for (i, &(first, count, base)) in draws.iter().enumerate() {
+                        d.cmd_draw_indexed(cb, count, 1, first, base, i as u32);
+                    }
+                }
+                d.cmd_end_render_pass2(cb, &vk::SubpassEndInfo::default());
+                d.cmd_end_query(cb, stats, 0);
+                d.cmd_pipeline_barrier(
+                    cb,
+                    all,
+                    all,
+                    vk::DependencyFlags::empty(),
+                    &[full_barrier],
+                    &[],
+                    &[],
+                );
+                true
+            })
+        };
+        self.recorded |= ok;
+    }
+
+    /// Fragment-shader invocations of the last recorded pass, once its frame has completed;
+    /// `None` before any pass or while the result is not available.
+    pub fn invocations(&self) -> Option<u64> {
+        if !self.recorded {
+            return None;
+        }
+        let mut out = [0u64; 1];
+        // SAFETY: the pool has one query, begun and ended in a recorded pass; no WAIT flag, so a
+        // query still in flight returns NOT_READY (an error here) rather than blocking.
+        unsafe {
+            self.device.get_query_pool_results(
+                self.stats,
+                0,
+                &mut out,
+                vk::QueryResultFlags::TYPE_64,
+            )
+        }
+        .ok()
+        .map(|_| out[0])
+    }
+}
+
+impl Drop for RawVrsPass {
+    fn drop(&mut self) {
+        let d = &self.device;
+        // SAFETY: waiting for the device to be idle first means no submitted command buffer
+        // still uses these objects; each was created on `d` by `new` (null handles, from a `new`
+        // that failed part-way, are ignored by the destroy calls).
+        unsafe {
+            let _ = d.device_wait_idle();
+            d.destroy_query_pool(self.stats, None);
+            d.destroy_pipeline(self.pipeline, None);
+            d.destroy_pipeline(self.prepass, None);
+            for m in self.modules {
+                d.destroy_shader_module(m, None);
+            }
+            d.destroy_pipeline_layout(self.layout, None);
+            d.destroy_descriptor_pool(self.pool, None);
+            d.destroy_descriptor_set_layout(self.set_layout, None);
+            for &fb in &self.framebuffers {
+                d.destroy_framebuffer(fb, None);
+            }
+            d.destroy_render_pass(self.render_pass, None);
+            for &v in &self.views {
+                d.destroy_image_view(v, None);
+            }
+            d.destroy_image(self.rate_image, None);
+            d.free_memory(self.rate_memory, None);
+        }
+    }
+}

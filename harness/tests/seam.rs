@@ -1,0 +1,86 @@
+//! The technique seam without a GPU (issue 21): every technique's options, requirements, plan,
+//! baseline and frame pattern are read from a variant alone, and the per-variant answers are the
+//! ones the issue asks for.
+
+mod common;
+
+use tessera::params::ParamValue;
+use tessera::run::record::empty_result;
+use tessera::techniques::{self, FramePattern, Target, ALL};
+use tessera_results::Status;
+
+use common::variant;
+
+fn hardware() -> ParamValue {
+    ParamValue::Str("hardware".into())
+}
+
+#[test]
+fn each_adaptive_path_is_read_against_its_own_pipeline() {
+    let software = variant("adaptive-shading", &[]);
+    let hw = variant("adaptive-shading", &[("vrs", hardware())]);
+    assert_eq!(
+        software.technique.baseline(&software),
+        Some("native-deferred")
+    );
+    assert_eq!(hw.technique.baseline(&hw), Some("native-vrs"));
+    // The result records it, so `speedup.native-vrs` is written for the hardware path.
+    assert_eq!(
+        empty_result(&hw, Status::Ok).baseline.as_deref(),
+        Some("native-vrs")
+    );
+    assert_eq!(
+        empty_result(&variant("native", &[]), Status::Ok).baseline,
+        None
+    );
+}
+
+#[test]
+fn alternating_techniques_say_so() {
+    for (name, pattern) in [
+        ("native", FramePattern::Same),
+        ("upscale", FramePattern::Same),
+        ("checkerboard", FramePattern::Alternating),
+        ("checkerboard-2x2", FramePattern::Alternating),
+        ("interlace", FramePattern::Alternating),
+        ("adaptive-shading", FramePattern::Same),
+    ] {
+        let v = variant(name, &[]);
+        assert_eq!(v.technique.frames(&v), pattern, "{name}");
+    }
+}
+
+#[test]
+fn requirements_are_known_without_a_gpu() {
+    let hw = variant("adaptive-shading", &[("vrs", hardware())]);
+    let fixed = variant("native-vrs", &[]);
+    for v in [&hw, &fixed] {
+        let r = techniques::requirements(v);
+        assert!(r.hardware_only(), "{}", v.name);
+        assert_eq!(
+            techniques::skip_reasons(v),
+            ["needs VK_KHR_fragment_shading_rate with attachmentFragmentShadingRate (skipped without a GPU that offers it)"]
+        );
+    }
+    let msaa = variant(
+        "checkerboard",
+        &[("sampling", ParamValue::Str("msaa2x".into()))],
+    );
+    let reasons = techniques::skip_reasons(&msaa);
+    assert_eq!(reasons.len(), 2, "{reasons:?}");
+    assert!(
+        reasons[0].starts_with("needs MULTISAMPLE_X2 for rgba16float"),
+        "{reasons:?}"
+    );
+    // Every other default variant runs on every adapter.
+    for t in ALL {
+        let v = variant(t.name(), &[]);
+        if t.name() != "native-vrs" {
+            assert!(techniques::requirements(&v).is_empty(), "{}", t.name());
+        }
+        // And plans without a GPU.
+        assert!(!techniques::plan(&v, Target::new(64, 48, true))
+            .passes
+            .is_empty());
+    }
+}
