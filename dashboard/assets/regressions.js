@@ -29,7 +29,7 @@
       const body = { state: f.elements.state.value, note: f.elements.note.value, bug_url: f.elements.bug_url.value };
       out.className = 'result'; out.textContent = 'saving…';
       try {
-        const r = await fetch('/api/regressions/groups/' + encodeURIComponent(f.dataset.key), {
+        const r = await fetch('/api/regressions/groups/' + encodeURIComponent(f.dataset.group || f.dataset.key), {
           method: 'POST',
           headers: { 'Content-Type': 'application/json', 'Authorization': 'Bearer ' + t },
           body: JSON.stringify(body),

@@ -149,27 +149,23 @@ fn chart(s: &FrameSeries) -> String {
         W - RIGHT,
         H - 4.0
     );
-    let mut d = String::new();
-    let mut pen = false;
+    // One polyline per run of finite values (an infinite PSNR is a gap).
+    let mut runs: Vec<String> = vec![String::new()];
     for (f, v) in s.frames.iter().zip(&s.values) {
         if !v.is_finite() {
-            pen = false;
+            runs.push(String::new());
             continue;
         }
-        let _ = write!(
-            d,
-            "{}{:.1},{:.1} ",
-            if pen { "L" } else { "M" },
-            x(*f),
-            y(*v)
-        );
-        pen = true;
+        let last = runs.last_mut().expect("one run");
+        let _ = write!(last, "{:.1},{:.1} ", x(*f), y(*v));
     }
-    let _ = write!(
-        out,
-        "<path d=\"{}\" fill=none stroke=#1f5fa8 stroke-width=1.5/>",
-        d.trim()
-    );
+    for pts in runs.iter().filter(|p| !p.is_empty()) {
+        let _ = write!(
+            out,
+            "<polyline points=\"{}\" fill=none stroke=#1f5fa8 stroke-width=1.5/>",
+            pts.trim()
+        );
+    }
     if let Some((f, v)) = worst {
         let _ = write!(
             out,

@@ -225,7 +225,7 @@ fn group_head(g: &Group, b: &mut String, title_link: bool) {
     }
     let _ = write!(
         b,
-        "</p><form class=triage method=post action=\"/regressions/groups/{key}\" data-key=\"{}\"><select name=state aria-label=state>",
+        "</p><form class=triage method=post action=\"/regressions/groups/{key}\" data-group={key} data-key=\"{}\"><select name=state aria-label=state>",
         esc(&g.key)
     );
     for s in TriageState::ALL {
@@ -285,8 +285,9 @@ pub fn render(groups: &[Group], facets: &Facets, q: &GroupsQuery) -> String {
     for g in groups {
         let _ = write!(
             b,
-            "<tbody class=group id=\"g-{}\"><tr class=head><td colspan=10>",
-            g.id
+            "<tbody class=group id=\"g-{}\" data-key=\"{}\"><tr class=head><td colspan=10>",
+            g.id,
+            esc(&g.key)
         );
         group_head(g, &mut b, true);
         b.push_str("</td></tr>");
@@ -338,8 +339,9 @@ pub fn render_group(g: &Group, charts: &[(Alert, read::SeriesDetail)]) -> String
     b.push_str(TOKEN_BAR);
     let _ = write!(
         b,
-        "<table id=regressions><tbody class=group id=\"g-{}\"><tr class=head><td colspan=10>",
-        g.id
+        "<table id=regressions><tbody class=group id=\"g-{}\" data-key=\"{}\"><tr class=head><td colspan=10>",
+        g.id,
+        esc(&g.key)
     );
     group_head(g, &mut b, false);
     b.push_str("</td></tr>");
