@@ -1064,6 +1064,7 @@ fn artefacts() -> PathBuf {
 const GROUPS: &str = r#"
 return Array.from(document.querySelectorAll('#regressions tbody.group')).map(g => ({
   key: g.dataset.key,
+  id: g.id.slice(2),
   title: g.querySelector('h2').textContent,
   state: g.querySelector('[data-state-of]').textContent,
   rows: Array.from(g.querySelectorAll('tr.series-row')).map(r => Array.from(r.cells).map(c => c.textContent)),
@@ -1271,13 +1272,17 @@ fn regressions_page_triages_groups_with_the_token_entered_once() {
     assert!(console.is_empty(), "{console:?}");
 
     // The Markdown a bot pastes.
-    let md = http(
+    // An old commit-range URL answers 308 to the group's id, for life.
+    let moved = http(
         addr,
         "GET",
         &format!("/regressions/groups/{key30}.md"),
         None,
     );
-    assert_eq!(md.status, 200);
+    assert_eq!(moved.status, 308);
+    let id30 = groups[0]["id"].as_str().unwrap_or_default().to_string();
+    let md = http(addr, "GET", &format!("/regressions/groups/{id30}.md"), None);
+    assert_eq!(md.status, 200, "{id30}");
     assert!(md.content_type.starts_with("text/markdown"));
     let md = String::from_utf8(md.body).unwrap();
     assert!(md.contains("state **acknowledged**") && md.contains("<https://bugs.example/42>"));

@@ -51,7 +51,10 @@ pub fn series_of(v: &VariantResult) -> Vec<FrameSeries> {
         });
     }
     for m in &v.metrics {
-        if m.per_frame.len() < 2 || m.per_frame.len() != m.frames.len() {
+        if m.per_frame.len() < 2
+            || m.per_frame.len() != m.frames.len()
+            || !m.per_frame.iter().any(|v| v.is_finite())
+        {
             continue;
         }
         let unit = Measure::from_name(&m.name).map_or("", |x| x.unit());
@@ -135,7 +138,7 @@ fn chart(s: &FrameSeries) -> String {
     for (v, yy) in [(hi, y(hi)), (lo, y(lo))] {
         let _ = write!(
             out,
-            "<text x={} y={:.1} font-size=10 text-anchor=end fill=#555>{}</text><line x1={LEFT} x2={} y1={yy:.1} y2={yy:.1} stroke=#eee/>",
+            "<text x={} y={:.1} font-size=10 text-anchor=end fill=#555>{}</text><line x1={LEFT} x2={} y1={yy:.1} y2={yy:.1} stroke=#eee />",
             LEFT - 4.0,
             yy + 3.0,
             num(v),
@@ -162,7 +165,7 @@ fn chart(s: &FrameSeries) -> String {
     for pts in runs.iter().filter(|p| !p.is_empty()) {
         let _ = write!(
             out,
-            "<polyline points=\"{}\" fill=none stroke=#1f5fa8 stroke-width=1.5/>",
+            "<polyline points=\"{}\" fill=none stroke=#1f5fa8 stroke-width=1.5 />",
             pts.trim()
         );
     }
@@ -177,7 +180,7 @@ fn chart(s: &FrameSeries) -> String {
     }
     let _ = write!(
         out,
-        "<line class=frame-marker x1={x0:.1} x2={x0:.1} y1={TOP} y2={} stroke=#e08a00 stroke-width=2/></svg></figure>",
+        "<line class=frame-marker x1={x0:.1} x2={x0:.1} y1={TOP} y2={} stroke=#e08a00 stroke-width=2 /></svg></figure>",
         H - BOTTOM,
         x0 = x(f0)
     );
