@@ -255,10 +255,18 @@
       root.querySelectorAll('img.px').forEach(i => { i.style.width = w0 * z + 'px'; i.style.height = h0 * z + 'px'; });
       root.querySelectorAll('.stack').forEach(s => { s.style.width = w0 * z + 'px'; s.style.height = h0 * z + 'px'; });
     }
+    // The per-frame charts: a marker at the shown frame in each.
+    const markers = Array.from(root.querySelectorAll('.frame-chart svg')).map(svg => ({
+      line: svg.querySelector('.frame-marker'), f0: +svg.dataset.f0, x0: +svg.dataset.x0, dx: +svg.dataset.dx,
+    }));
     function setFrame(f) {
       cur = f;
       frame.value = f;
       frameNo.textContent = spec.frames[f];
+      markers.forEach(m => {
+        const x = (m.x0 + (spec.frames[f] - m.f0) * m.dx).toFixed(1);
+        m.line.setAttribute('x1', x); m.line.setAttribute('x2', x);
+      });
       spec.kinds.forEach(k => {
         root.querySelectorAll('img[data-kind="' + k + '"]').forEach(i => { const u = url(f, k); if (u) i.src = u; });
       });
@@ -272,6 +280,7 @@
     }
     function setWipe(p) {
       wipe.value = p;
+      // The top image (the reference, A) shows left of the line.
       wipeImg.style.clipPath = 'inset(0 ' + (100 - p) + '% 0 0)';
       q('#wipe-line').style.left = p + '%';
     }

@@ -39,6 +39,9 @@ pub enum BundleError {
     },
     #[error("{0}")]
     Inconsistent(String),
+    /// A field outside what an upload may hold (see [`crate::validate`]).
+    #[error(transparent)]
+    Field(#[from] crate::validate::FieldError),
     #[error("image {path}: {problem}")]
     Image { path: String, problem: String },
     #[error("cannot read {path}: {source}")]
@@ -109,11 +112,22 @@ const PNG_SIGNATURE: &[u8] = b"\x89PNG\r\n\x1a\n";
 
 impl RunBundle {
     /// Checks the schema versions first (so a newer format is named as such rather than as a
-    /// parse error), then the records, the run ids and every image.
+    /// parse error), then the records, the run ids, every field against [`crate::validate`]
+    /// (times against the server's clock now) and every image.
     pub fn from_parts(
         run: serde_json::Value,
         scenarios: Vec<serde_json::Value>,
         images: BTreeMap<String, Vec<u8>>,
+    ) -> Result<RunBundle, BundleError> {
+        Self::from_parts_at(run, scenarios, images, chrono::Utc::now())
+    }
+
+    /// [`RunBundle::from_parts`] with the server's clock given (tests).
+    pub fn from_parts_at(
+        run: serde_json::Value,
+        scenarios: Vec<serde_json::Value>,
+        images: BTreeMap<String, Vec<u8>>,
+        now: chrono::DateTime<chrono::Utc>,
     ) -> Result<RunBundle, BundleError> {
         let run: RunInfo = parse("run.json", run)?;
         if !valid_run_id(&run.run_id) {
@@ -121,13 +135,6 @@ impl RunBundle {
                 "run_id {:?} may only hold letters, digits, '.', '_' and '-' (at most 128)",
                 run.run_id
             )));
-        }
-        if let Some(t) = &run.commit_time {
-            if chrono::DateTime::parse_from_rfc3339(t).is_err() {
-                return Err(BundleError::Inconsistent(format!(
-                    "run.json: commit_time {t:?} is not an RFC 3339 time (like 2026-11-22T03:05:20Z)"
-                )));
-            }
         }
         let mut parsed: Vec<ScenarioResult> = Vec::with_capacity(scenarios.len());
         for (i, s) in scenarios.into_iter().enumerate() {
@@ -160,6 +167,7 @@ impl RunBundle {
             }
             parsed.push(s);
         }
+        crate::validate::check(&run, &parsed, now)?;
         let referenced: std::collections::BTreeSet<&str> = parsed
             .iter()
             .flat_map(|s| {

@@ -61,6 +61,27 @@ pub fn pct(v: f64) -> String {
     }
 }
 
+/// An axis title for a measure key from the measure table: its label and unit, e.g.
+/// `GPU time (ms)` for `gpu_ms.median`, `reconstruct (ms)` for a pass; the key itself when the
+/// table does not know it.
+pub fn axis_label(key: &str) -> String {
+    match tessera_results::measure::Key::parse(key) {
+        Some(k) => {
+            let unit = k.measure.unit();
+            if unit.is_empty() {
+                k.label()
+            } else {
+                format!("{} ({unit})", k.label())
+            }
+        }
+        None => match tessera_results::measure::Measure::from_name(key) {
+            Some(m) if !m.unit().is_empty() => format!("{} ({})", m.label(), m.unit()),
+            Some(m) => m.label().to_string(),
+            None => key.to_string(),
+        },
+    }
+}
+
 /// Bytes in KiB / MiB.
 pub fn bytes(b: u64) -> String {
     if b >= 1 << 20 {
@@ -91,14 +112,21 @@ form.inline{display:inline}.scroll{overflow-x:auto;max-width:100%}td.wrap{max-wi
 .pane{overflow:auto;max-width:min(100%,720px);max-height:600px;border:1px solid #ccc;background:#333;cursor:grab}
 img.px{image-rendering:pixelated;display:block;max-width:none}.stack{position:relative}.stack img.top{position:absolute;left:0;top:0}.stack img.overlay{opacity:.5}
 #wipe-line{position:absolute;top:0;bottom:0;width:1px;background:#ff0;pointer-events:none}.viewer .controls{margin:8px 0;display:flex;flex-wrap:wrap;gap:16px;align-items:center}
-kbd{border:1px solid #aaa;border-radius:3px;padding:0 4px;font-size:12px}";
+kbd{border:1px solid #aaa;border-radius:3px;padding:0 4px;font-size:12px}
+.pair{display:grid;grid-template-columns:1fr 1fr;gap:8px;width:100%}.pair figure{min-width:0}.pair .pane{max-width:100%}
+.flip-scale{display:flex;align-items:center;gap:4px;font-size:12px;margin:2px 0}.flip-scale .bar{display:inline-block;width:160px;height:10px;border:1px solid #999}
+.frame-charts{display:flex;flex-wrap:wrap;gap:8px;margin:8px 0}.frame-chart{margin:0}.frame-chart svg{border:1px solid #eee}
+main table{display:block;overflow-x:auto;max-width:100%}td{overflow-wrap:anywhere}
+@media (max-width:700px){nav{padding:6px 8px}nav a{display:inline-block;margin:2px 10px 2px 0}main{padding:8px}
+h1{font-size:17px}td,th{padding:3px 4px}select,input{max-width:100%}.pane{max-height:70vh}
+.chart{max-width:100%}form#filters label{display:inline-block;margin:2px 8px 2px 0}form.triage input{max-width:100%}}";
 
 /// The whole page around `body`; `active` names the navigation entry to highlight.
 pub fn page(title: &str, active: &str, body: &str) -> String {
     let mut out = String::with_capacity(body.len() + 2048);
     let _ = write!(
         out,
-        "<!doctype html><html lang=en><head><meta charset=utf-8><link rel=icon href=\"data:,\"><title>{} · Tessera</title><style>{STYLE}</style><link rel=stylesheet href=\"/assets/uPlot.min.css\"><script src=\"/assets/uPlot.iife.min.js\" defer></script><script src=\"/assets/tessera.js\" defer></script></head><body><nav>",
+        "<!doctype html><html lang=en><head><meta charset=utf-8><meta name=viewport content=\"width=device-width, initial-scale=1\"><link rel=icon href=\"data:,\"><title>{} · Tessera</title><style>{STYLE}</style><link rel=stylesheet href=\"/assets/uPlot.min.css\"><script src=\"/assets/uPlot.iife.min.js\" defer></script><script src=\"/assets/tessera.js\" defer></script></head><body><nav>",
         esc(title)
     );
     for (href, label) in [

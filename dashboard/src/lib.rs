@@ -18,6 +18,7 @@ pub mod server;
 pub mod store;
 pub mod svg;
 pub mod synth;
+pub mod validate;
 
 /// The current time, RFC 3339 in UTC, as stored in the `*_at` columns.
 pub fn now_rfc3339() -> String {

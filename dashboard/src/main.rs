@@ -9,7 +9,7 @@ use std::time::Duration;
 use clap::{Parser, Subcommand};
 use tessera_dashboard::notify::webhook;
 use tessera_dashboard::server::auth::{AuthConfig, Scope};
-use tessera_dashboard::store::delete::{delete_run, expired, Retention};
+use tessera_dashboard::store::delete::{expired, Retention};
 use tessera_dashboard::store::ingest::{ingest, Ingested};
 use tessera_dashboard::store::tokens;
 use tessera_dashboard::{
@@ -87,13 +87,14 @@ enum Command {
         #[arg(long, env = "TESSERA_DASHBOARD_DB", default_value = DEFAULT_DB, global = true)]
         db: String,
     },
-    /// Delete runs that no retention rule keeps (dry run unless --apply). A run is kept when it
-    /// is younger than --keep-days or among the newest --keep-runs of its adapter.
+    /// Delete runs that no retention rule keeps (dry run unless --apply; the list is printed
+    /// first either way). A run is kept when its commit time (else the time it was stored) is
+    /// within --keep-days or it is among the newest --keep-runs of its adapter in that order.
     Retention {
-        /// Keep runs that started at most this many days ago.
+        /// Keep runs whose commit (else storing) time is at most this many days old.
         #[arg(long, required_unless_present = "keep_runs")]
         keep_days: Option<u32>,
-        /// Keep the newest this many runs of each adapter.
+        /// Keep the newest this many runs of each adapter (by commit time, else storing time).
         #[arg(long)]
         keep_runs: Option<u32>,
         /// Delete; without it, only list what would be deleted.
@@ -204,28 +205,32 @@ fn retention(rule: Retention, apply: bool, db: &str) -> anyhow::Result<()> {
     let pool = db::open(db)?;
     let mut conn = pool.get()?;
     let runs = expired(&mut *conn, rule, chrono::Utc::now())?;
+    // The whole list first, so that what --apply removes is on screen before the first delete.
     for r in &runs {
-        if apply {
-            let d = delete_run(&mut *conn, &r.run_id)?;
-            println!(
-                "deleted {} ({}, {}): {} results, {} images, {} alerts",
-                r.run_id, r.started_at, r.adapter, d.results, d.images, d.alerts
-            );
-        } else {
-            println!(
-                "would delete {} ({}, {})",
-                r.run_id, r.started_at, r.adapter
-            );
-        }
+        println!(
+            "would delete {} ({} time {}, {})",
+            r.run_id, r.by, r.at, r.adapter
+        );
     }
-    if apply {
-        println!("deleted {} runs", runs.len());
-    } else {
+    if !apply {
         println!(
             "{} runs would be deleted; nothing was changed (add --apply to delete)",
             runs.len()
         );
+        return Ok(());
     }
+    for r in &runs {
+        let (d, _) = tessera_dashboard::regressions::delete_and_detect(
+            &mut *conn,
+            &r.run_id,
+            &Params::default(),
+        )?;
+        println!(
+            "deleted {}: {} results, {} images, {} alerts re-pointed",
+            r.run_id, d.results, d.images, d.alerts
+        );
+    }
+    println!("deleted {} runs", runs.len());
     Ok(())
 }
 

@@ -11,28 +11,42 @@
 //!    are final): a change is the alert stored at its commit, else the nearest open alert within
 //!    [`SAME_CHANGE_WITHIN`] points in the same direction (which then *moves* there, triage and
 //!    all); other open alerts near a matched one are *merged* into it; the rest are *withdrawn*.
-//!    Rows are never deleted; every transition is a `regression_events` row.
+//!    A *confirmed* alert moves only on strong new evidence ([`move_reason`]): a run backfilled
+//!    inside its range, or a location probability at its commit below [`STRONG_EVIDENCE`];
+//!    otherwise it stays where it was announced. Rows are never deleted; every transition is a
+//!    `regression_events` row, and a move says why.
 //!
 //! [`ingest_and_detect`] stores a run and runs this on the series it touched in one transaction, so
 //! a crash cannot leave a stored run unanalysed.
 //!
-//! Not for: the statistics (see [`crate::detect`]) or triage (see [`crate::store::triage`]).
+//! [`delete_and_detect`] deletes a run and re-runs this on the series it had points in, so the
+//! alerts that named it keep their id, group and triage.
+//!
+//! Not for: the statistics (see [`crate::detect`]), the alert row (see [`crate::store::alerts`])
+//! or triage (see [`crate::store::triage`]).
 
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 
 use crate::bundle::RunBundle;
 use crate::db::{transaction, Backend, Connection, Value};
 use crate::detect::{analyse, ChangePoint, Params};
+use crate::store::alerts::{self, DetectionStatus, Placement};
 use crate::store::ingest::{ingest_in_transaction, Ingested};
 use crate::store::StoreError;
+
+pub use crate::store::alerts::StoredAlert;
 
 /// A change point within this many points of an open alert, in the same direction, is that alert.
 pub const SAME_CHANGE_WITHIN: usize = 3;
 
 /// Alert statuses (`regressions.status`).
-pub const PENDING: &str = "pending";
-pub const CONFIRMED: &str = "confirmed";
-pub const WITHDRAWN: &str = "withdrawn";
+pub const PENDING: DetectionStatus = DetectionStatus::Pending;
+pub const CONFIRMED: DetectionStatus = DetectionStatus::Confirmed;
+pub const WITHDRAWN: DetectionStatus = DetectionStatus::Withdrawn;
+
+/// A confirmed alert moves to another commit without a backfill inside its range only when the
+/// location probability at its own commit has fallen below this.
+pub const STRONG_EVIDENCE: f64 = 0.01;
 
 /// One point of a series with what identifies its environment.
 #[derive(Clone, Debug)]
@@ -132,20 +146,11 @@ pub fn window(
     Ok(pts)
 }
 
-/// A stored alert as reconciliation sees it.
-#[derive(Clone, Debug, PartialEq)]
-pub struct StoredAlert {
-    pub id: i64,
-    pub run_pk_after: i64,
-    pub relative_change: f64,
-    pub status: String,
-}
-
 /// A change point found in the window, with its status.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Found {
     pub change: ChangePoint,
-    pub status: &'static str,
+    pub status: DetectionStatus,
 }
 
 /// What reconciliation does to the store.
@@ -277,39 +282,6 @@ pub fn plan(pks: &[i64], open_from: usize, found: &[Found], alerts: &[StoredAler
     actions
 }
 
-fn stored_alerts(
-    conn: &mut dyn Connection,
-    series_id: i64,
-) -> Result<Vec<StoredAlert>, StoreError> {
-    conn.query(
-        "SELECT id, run_pk_after, relative_change, status FROM regressions WHERE series_id = $1",
-        &[Value::Int(series_id)],
-    )?
-    .iter()
-    .map(|r| {
-        Ok(StoredAlert {
-            id: r.i64(0)?,
-            run_pk_after: r.i64(1)?,
-            relative_change: r.opt_f64(2)?.unwrap_or(f64::INFINITY),
-            status: r.string(3)?,
-        })
-    })
-    .collect()
-}
-
-fn event(conn: &mut dyn Connection, id: i64, kind: &str, detail: String) -> Result<(), StoreError> {
-    conn.execute(
-        "INSERT INTO regression_events (regression_id, at, kind, detail) VALUES ($1, $2, $3, $4)",
-        &[
-            Value::Int(id),
-            crate::now_rfc3339().into(),
-            kind.into(),
-            detail.into(),
-        ],
-    )?;
-    Ok(())
-}
-
 fn run_label(conn: &mut dyn Connection, pk: i64) -> Result<String, StoreError> {
     let row = conn.query(
         "SELECT run_id, commit_sha FROM runs WHERE id = $1",
@@ -334,31 +306,47 @@ fn describe(f: &Found) -> String {
     )
 }
 
-/// Stored relative change: finite (a change from 0 is stored as ±1e300).
-fn stored_change(c: &ChangePoint) -> Value {
-    Value::Real(c.relative_change.clamp(-1e300, 1e300))
+/// Why confirmed alert `old` may move to the change `f` (at window index `f.change.index`), or
+/// `None` when it stays where it was announced. `pks` are the window's runs in order.
+pub fn move_reason(old: &StoredAlert, f: &Found, pks: &[i64]) -> Option<String> {
+    let at = |pk: i64| pks.iter().position(|&p| p == pk);
+    let (Some(b), Some(a)) = (at(old.run_pk_before), at(old.run_pk_after)) else {
+        return Some("its runs are no longer both in the window".into());
+    };
+    if a > b + 1 {
+        return Some(format!(
+            "backfill: {} run{} landed inside its range",
+            a - b - 1,
+            if a - b - 1 == 1 { "" } else { "s" }
+        ));
+    }
+    let p_old = f.change.probability_at(a);
+    if p_old < STRONG_EVIDENCE {
+        return Some(format!(
+            "strong new evidence: location probability {:.1}% at the new commit, {:.2}% at the old one",
+            f.change.location_probability() * 100.0,
+            p_old * 100.0
+        ));
+    }
+    None
 }
 
-/// The stored alerts of every series run `run_pk` has a point in, by series: one query for an
-/// upload instead of one per series.
-fn alerts_of_run(
-    conn: &mut dyn Connection,
-    run_pk: i64,
-) -> Result<HashMap<i64, Vec<StoredAlert>>, StoreError> {
-    let mut out: HashMap<i64, Vec<StoredAlert>> = HashMap::new();
-    for r in conn.query(
-        "SELECT series_id, id, run_pk_after, relative_change, status FROM regressions
-         WHERE series_id IN (SELECT series_id FROM points WHERE run_pk = $1)",
-        &[Value::Int(run_pk)],
-    )? {
-        out.entry(r.i64(0)?).or_default().push(StoredAlert {
-            id: r.i64(1)?,
-            run_pk_after: r.i64(2)?,
-            relative_change: r.opt_f64(3)?.unwrap_or(f64::INFINITY),
-            status: r.string(4)?,
-        });
+fn placement(f: &Found, pks: &[i64], at: usize) -> Placement {
+    let c = &f.change;
+    Placement {
+        run_pk_before: pks[at - 1],
+        run_pk_after: pks[at],
+        value_before: c.before,
+        value_after: c.after,
+        relative_change: c.relative_change,
+        change_low: c.change_low,
+        change_high: c.change_high,
+        confidence: c.confidence,
+        location_probability: c.probability_at(at),
+        first_candidate: pks[c.first_candidate.min(at)],
+        last_candidate: pks[c.last_candidate.max(at)],
+        status: f.status,
     }
-    Ok(out)
 }
 
 /// One detection pass over one series (see the module doc). Runs inside the caller's transaction.
@@ -368,7 +356,7 @@ pub fn update_series(
     params: &Params,
     envs: &mut Environments,
 ) -> Result<Changes, StoreError> {
-    let alerts = stored_alerts(conn, series_id)?;
+    let alerts = alerts::of_series(conn, series_id)?;
     update_series_with(conn, series_id, params, envs, alerts)
 }
 
@@ -392,41 +380,40 @@ fn update_series_with(
         match action {
             Action::Insert { found: f } => {
                 let f = &found[f];
-                let now = crate::now_rfc3339();
-                let row = conn.query(
-                    "INSERT INTO regressions (series_id, run_pk_before, run_pk_after, value_before, value_after,
-                         relative_change, confidence, state, note, detected_at, updated_at, status)
-                     VALUES ($1, $2, $3, $4, $5, $6, $7, 'new', '', $8, $9, $10) RETURNING id",
-                    &[
-                        Value::Int(series_id),
-                        Value::Int(pks[f.change.index - 1]),
-                        Value::Int(pks[f.change.index]),
-                        Value::Real(f.change.before),
-                        Value::Real(f.change.after),
-                        stored_change(&f.change),
-                        Value::Real(f.change.confidence),
-                        now.clone().into(),
-                        now.into(),
-                        f.status.into(),
-                    ],
-                )?;
-                event(conn, row[0].i64(0)?, "detected", describe(f))?;
+                let id = alerts::insert(conn, series_id, &placement(f, &pks, f.change.index))?;
+                alerts::event(conn, id, "detected", describe(f))?;
                 changes.detected += 1;
             }
             Action::Update { id, found: f } => {
                 let f = &found[f];
                 let old = by_id[&id];
-                let new_after = pks[f.change.index];
-                if old.run_pk_after != new_after {
-                    let from = run_label(conn, old.run_pk_after)?;
-                    let to = run_label(conn, new_after)?;
-                    event(
-                        conn,
-                        id,
-                        "moved",
-                        format!("from {from} to {to}: {}", describe(f)),
-                    )?;
-                    changes.moved += 1;
+                let mut at = f.change.index;
+                if pks[at] != old.run_pk_after {
+                    let reason = if old.status == CONFIRMED {
+                        move_reason(old, f, &pks)
+                    } else {
+                        Some(format!("{} alerts follow the data", old.status))
+                    };
+                    match reason {
+                        Some(reason) => {
+                            let from = run_label(conn, old.run_pk_after)?;
+                            let to = run_label(conn, pks[at])?;
+                            alerts::event(
+                                conn,
+                                id,
+                                "moved",
+                                format!("from {from} to {to} ({reason}): {}", describe(f)),
+                            )?;
+                            changes.moved += 1;
+                        }
+                        // Stays where it was announced: the evidence for the new commit is weak.
+                        None => {
+                            at = pks
+                                .iter()
+                                .position(|&p| p == old.run_pk_after)
+                                .expect("move_reason checked it");
+                        }
+                    }
                 }
                 if old.status != f.status {
                     let kind = if old.status == WITHDRAWN {
@@ -438,36 +425,19 @@ fn update_series_with(
                     } else {
                         "pending"
                     };
-                    event(conn, id, kind, describe(f))?;
+                    alerts::event(conn, id, kind, describe(f))?;
                 }
-                conn.execute(
-                    "UPDATE regressions SET run_pk_before = $1, run_pk_after = $2, value_before = $3,
-                         value_after = $4, relative_change = $5, confidence = $6, status = $7
-                     WHERE id = $8",
-                    &[
-                        Value::Int(pks[f.change.index - 1]),
-                        Value::Int(new_after),
-                        Value::Real(f.change.before),
-                        Value::Real(f.change.after),
-                        stored_change(&f.change),
-                        Value::Real(f.change.confidence),
-                        f.status.into(),
-                        Value::Int(id),
-                    ],
-                )?;
+                alerts::place(conn, id, &placement(f, &pks, at))?;
             }
             Action::Withdraw { id, into } => {
-                conn.execute(
-                    "UPDATE regressions SET status = $1 WHERE id = $2",
-                    &[WITHDRAWN.into(), Value::Int(id)],
-                )?;
+                alerts::set_status(conn, id, WITHDRAWN)?;
                 match into {
                     Some(into) => {
-                        event(conn, id, "merged", format!("into alert {into}"))?;
+                        alerts::event(conn, id, "merged", format!("into alert {into}"))?;
                         changes.merged += 1;
                     }
                     None => {
-                        event(
+                        alerts::event(
                             conn,
                             id,
                             "withdrawn",
@@ -511,13 +481,39 @@ pub fn ingest_and_detect(
             if let Ingested::Stored { run_pk, series, .. } = &ingested {
                 lock_series_of_run(c, *run_pk)?;
                 let mut envs = Environments::default();
-                let mut alerts = alerts_of_run(c, *run_pk)?;
+                let mut stored_alerts = alerts::of_series_of_run(c, *run_pk)?;
                 for &id in series {
-                    let stored = alerts.remove(&id).unwrap_or_default();
+                    let stored = stored_alerts.remove(&id).unwrap_or_default();
                     changes += update_series_with(c, id, params, &mut envs, stored)?;
                 }
             }
             Ok::<_, StoreError>((ingested, changes))
+        });
+        match outcome {
+            Err(StoreError::Db(e)) if e.is_retryable() && attempt < 5 => attempt += 1,
+            other => return other,
+        }
+    }
+}
+
+/// Deletes run `run_id` ([`crate::store::delete`]) and runs detection on the series it had points
+/// in, in one transaction (retried on a write conflict): the alerts that named the run are
+/// re-pointed first, so they keep their id, group and triage, and then follow the data.
+pub fn delete_and_detect(
+    conn: &mut dyn Connection,
+    run_id: &str,
+    params: &Params,
+) -> Result<(crate::store::delete::Deleted, Changes), StoreError> {
+    let mut attempt = 0;
+    loop {
+        let outcome = transaction(conn, |c| {
+            let (deleted, series) = crate::store::delete::delete_in_transaction(c, run_id)?;
+            let mut envs = Environments::default();
+            let mut changes = Changes::default();
+            for id in series {
+                changes += update_series(c, id, params, &mut envs)?;
+            }
+            Ok::<_, StoreError>((deleted, changes))
         });
         match outcome {
             Err(StoreError::Db(e)) if e.is_retryable() && attempt < 5 => attempt += 1,

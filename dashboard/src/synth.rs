@@ -41,8 +41,8 @@ fn scale(s: &mut Summary, f: f64) {
     }
 }
 
-/// Run `index` made from `template`: run id `<prefix>-<index>`, start time `index` minutes after
-/// the epoch above, commit `c<index>`, and every GPU time multiplied by `factor · (1 + noise·N(0,1))`
+/// Run `index` made from `template`: run id `<prefix>-<index>`, start and commit time `index` minutes
+/// after the epoch above, commit `c<index>`, and every GPU time multiplied by `factor · (1 + noise·N(0,1))`
 /// (one draw per variant).
 pub fn run_from(
     template: &RunBundle,
@@ -57,6 +57,9 @@ pub fn run_from(
     b.run.run_id = id.clone();
     b.run.started_at = time_after(index);
     b.run.finished_at = Some(time_after(index));
+    // A generated history is one commit per run, committed when its run starts: retention and
+    // series order by commit time.
+    b.run.commit_time = Some(time_after(index));
     b.run.commit = Some(tessera_results::CommitInfo {
         sha: format!("{:040x}", index + 1),
         dirty: false,

@@ -421,9 +421,11 @@ async fn triage_is_stored_and_needs_the_token() {
 
 #[test]
 fn regression_summary_text() {
+    use tessera_dashboard::store::alerts::{DetectionStatus, TriageState};
     use tessera_dashboard::store::read::{RegressionRow, SeriesKey};
     let r = RegressionRow {
         id: 1,
+        group_id: 1,
         series: SeriesKey {
             id: 1,
             scenario: "tiny".into(),
@@ -433,6 +435,7 @@ fn regression_summary_text() {
             measure: "gpu_ms.median".into(),
             higher_is_better: false,
         },
+        suite: "smoke".into(),
         run_before: "a".into(),
         commit_before: None,
         run_after: "b".into(),
@@ -441,17 +444,28 @@ fn regression_summary_text() {
         value_before: 3.476,
         value_after: 3.8236,
         relative_change: 0.1,
+        change_low: Some(0.081),
+        change_high: Some(0.119),
         is_regression: true,
+        via_baseline: false,
         confidence: 0.9995,
-        state: "new".into(),
+        location_probability: Some(0.62),
+        first_candidate: Some("a2".into()),
+        last_candidate: Some("b".into()),
+        status: DetectionStatus::Confirmed,
+        state: TriageState::New,
         note: String::new(),
+        bug_url: String::new(),
+        updated_by: String::new(),
         detected_at: String::new(),
         updated_at: String::new(),
-        status: "confirmed".into(),
+        run_pk_before: 1,
+        run_pk_after: 2,
     };
+    // Where the change is and how sure, apart from whether there is one.
     assert_eq!(
         tessera_dashboard::server::regressions::summary(&r),
-        "tiny · upscale[scale=0.5] · llvmpipe (LLVM 15.0.6, 256 bits) · gpu_ms.median: 3.476 → 3.824 (+10.0%, worse), 100.0% confidence"
+        "tiny · upscale[scale=0.5] · llvmpipe (LLVM 15.0.6, 256 bits) · gpu_ms.median: 3.476 → 3.824 (+10.0%, 95% interval +8.1% to +11.9%, worse); at run b with 62% probability, runs a2 to b"
     );
 }
 
@@ -470,6 +484,30 @@ async fn alert_groups_api_triage_markdown_and_feed() {
         .collect();
     assert_eq!(keys, [key.clone(), common::range(14)]);
     let n = groups[0]["series_count"].as_u64().unwrap();
+    let id = groups[0]["id"].as_i64().unwrap();
+    // A commit-range key answers a redirect to the group's id, which it keeps for life.
+    for (from, to) in [
+        (
+            format!("/api/regressions/groups/{key}"),
+            format!("/api/regressions/groups/{id}"),
+        ),
+        (
+            format!("/regressions/groups/{key}"),
+            format!("/regressions/groups/{id}"),
+        ),
+        (
+            format!("/regressions/groups/{key}.md"),
+            format!("/regressions/groups/{id}.md"),
+        ),
+    ] {
+        let res = app
+            .clone()
+            .oneshot(Request::get(&from).body(Body::empty()).unwrap())
+            .await
+            .unwrap();
+        assert_eq!(res.status(), StatusCode::PERMANENT_REDIRECT, "{from}");
+        assert_eq!(res.headers()[header::LOCATION], to.as_str(), "{from}");
+    }
     let sized = json(
         &get(&app, "/api/regressions/groups?sort=size&limit=1")
             .await
@@ -528,7 +566,7 @@ async fn alert_groups_api_triage_markdown_and_feed() {
     let (s, _, body) = send(&app, triage(Some(TOKEN), ack)).await;
     assert_eq!(s, StatusCode::OK, "{body}");
     assert_eq!(json(&body)["updated"].as_u64(), Some(n));
-    let one = json(&get(&app, &format!("/api/regressions/groups/{key}")).await.2);
+    let one = json(&get(&app, &format!("/api/regressions/groups/{id}")).await.2);
     assert_eq!(
         (
             &one["state"],
@@ -557,7 +595,7 @@ async fn alert_groups_api_triage_markdown_and_feed() {
     // Markdown at its own URL, absolute links from the Host header.
     let md = send(
         &app,
-        Request::get(format!("/regressions/groups/{key}.md"))
+        Request::get(format!("/regressions/groups/{id}.md"))
             .header(header::HOST, "dash.example:8080")
             .body(Body::empty())
             .unwrap(),
@@ -568,9 +606,9 @@ async fn alert_groups_api_triage_markdown_and_feed() {
         (StatusCode::OK, "text/markdown; charset=utf-8")
     );
     assert!(md.2.contains(&format!(
-        "(http://dash.example:8080/regressions/groups/{key})"
+        "(http://dash.example:8080/regressions/groups/{id})"
     )));
-    let (s, ctype, page) = get(&app, &format!("/regressions/groups/{key}")).await;
+    let (s, ctype, page) = get(&app, &format!("/regressions/groups/{id}")).await;
     assert_eq!(
         (s, ctype.as_str()),
         (StatusCode::OK, "text/html; charset=utf-8")
@@ -581,6 +619,7 @@ async fn alert_groups_api_triage_markdown_and_feed() {
         format!("/regressions/groups/{}.md", common::range(3)),
         "/regressions/groups/..%2F..%2Fetc".to_string(),
         "/api/regressions/groups/nope".to_string(),
+        "/regressions/groups/999999".to_string(),
     ] {
         let (s, ctype, _) = get(&app, &missing).await;
         assert_eq!(

@@ -828,6 +828,78 @@ return {natural, zoomed, rendering, synced, clip, before, after, label, ref,
 "#,
     );
     std::fs::write(shots.join("images-zoomed-8x.png"), browser.screenshot()).unwrap();
+    // The wipe shows the reference on the side its caption names (the top, clipped image is the
+    // reference, visible left of the line), and the per-frame charts follow the frame slider
+    // (set to the last saved frame above).
+    let w = browser.eval(
+        r#"
+const root = document.getElementById('viewer');
+const top = document.getElementById('wipe-top');
+const svgs = Array.from(root.querySelectorAll('.frame-chart svg'));
+const spec = JSON.parse(document.getElementById('viewer-data').textContent);
+const last = spec.frames[spec.frames.length - 1];
+return {
+  top: top.dataset.kind, caption: document.getElementById('wipe-caption').textContent,
+  left: document.getElementById('wipe-stack').dataset.left,
+  charts: svgs.length,
+  markers: svgs.map(s => [+s.querySelector('.frame-marker').getAttribute('x1'),
+                          +s.dataset.x0 + (last - +s.dataset.f0) * +s.dataset.dx]),
+  pair: getComputedStyle(document.getElementById('pair')).gridTemplateColumns.split(' ').length,
+};
+"#,
+    );
+    assert_eq!(w["top"], "reference", "wipe: {w}");
+    assert_eq!(w["left"], "reference", "wipe: {w}");
+    assert!(
+        w["caption"]
+            .as_str()
+            .unwrap_or("")
+            .contains("A (reference) left"),
+        "wipe caption: {w}"
+    );
+    assert!(w["charts"].as_u64() >= Some(2), "per-frame charts: {w}");
+    for m in w["markers"].as_array().unwrap() {
+        let (got, want) = (m[0].as_f64().unwrap(), m[1].as_f64().unwrap());
+        assert!(
+            (got - want).abs() < 0.2 && got > 52.5,
+            "the marker follows the slider: {w}"
+        );
+    }
+    assert_eq!(w["pair"], 2, "A and B side by side: {w}");
+
+    // At 390 px (a phone): the viewport tag, and no horizontal scroll on the runs, run and
+    // regressions pages.
+    browser.call(
+        "POST",
+        "window/rect",
+        Some(json!({"width": 390, "height": 844})),
+    );
+    for (name, path) in [
+        ("runs", "/".to_string()),
+        ("run", format!("/runs/{}", smoke_runs[1])),
+        ("regressions", "/regressions".to_string()),
+    ] {
+        browser.goto(&format!("{origin}{path}"));
+        let n = browser.eval(
+            "return {inner: window.innerWidth, scroll: document.documentElement.scrollWidth, \
+             viewport: !!document.querySelector('meta[name=viewport][content*=\"width=device-width\"]')};",
+        );
+        std::fs::write(
+            shots.join(format!("narrow-390-{name}.png")),
+            browser.screenshot(),
+        )
+        .unwrap();
+        assert_eq!(n["viewport"], true, "{name}: {n}");
+        assert!(
+            n["scroll"].as_f64().unwrap() <= n["inner"].as_f64().unwrap(),
+            "{name} scrolls sideways at 390 px: {n}"
+        );
+    }
+    browser.call(
+        "POST",
+        "window/rect",
+        Some(json!({"width": 1400, "height": 1000})),
+    );
     let natural = v["natural"].as_f64().unwrap_or(0.0);
     assert!(natural > 0.0, "viewer: {v}");
     assert_eq!(v["zoomed"].as_f64(), Some(natural * 8.0), "zoom 8x: {v}");
@@ -991,7 +1063,8 @@ fn artefacts() -> PathBuf {
 /// What the regressions page shows: its groups, each with its key, state badge and series rows.
 const GROUPS: &str = r#"
 return Array.from(document.querySelectorAll('#regressions tbody.group')).map(g => ({
-  key: g.id.slice(2),
+  key: g.dataset.key,
+  id: g.id.slice(2),
   title: g.querySelector('h2').textContent,
   state: g.querySelector('[data-state-of]').textContent,
   rows: Array.from(g.querySelectorAll('tr.series-row')).map(r => Array.from(r.cells).map(c => c.textContent)),
@@ -1199,13 +1272,17 @@ fn regressions_page_triages_groups_with_the_token_entered_once() {
     assert!(console.is_empty(), "{console:?}");
 
     // The Markdown a bot pastes.
-    let md = http(
+    // An old commit-range URL answers 308 to the group's id, for life.
+    let moved = http(
         addr,
         "GET",
         &format!("/regressions/groups/{key30}.md"),
         None,
     );
-    assert_eq!(md.status, 200);
+    assert_eq!(moved.status, 308);
+    let id30 = groups[0]["id"].as_str().unwrap_or_default().to_string();
+    let md = http(addr, "GET", &format!("/regressions/groups/{id30}.md"), None);
+    assert_eq!(md.status, 200, "{id30}");
     assert!(md.content_type.starts_with("text/markdown"));
     let md = String::from_utf8(md.body).unwrap();
     assert!(md.contains("state **acknowledged**") && md.contains("<https://bugs.example/42>"));

@@ -51,7 +51,7 @@ fn alerts(c: &mut dyn Connection) -> Vec<(String, String, String, String, f64)> 
                 r.series.measure,
                 r.series.variant,
                 r.run_after,
-                r.status,
+                r.status.to_string(),
                 r.relative_change,
             )
         })
@@ -69,14 +69,14 @@ fn check_exact(rows: &[(String, String, String, String, f64)], store: &str) {
     );
     for r in &flip {
         assert_eq!(r.2, "night-000030", "{store}: {r:?}");
-        assert_eq!(r.3, CONFIRMED, "{store}: {r:?}");
+        assert_eq!(r.3, CONFIRMED.as_str(), "{store}: {r:?}");
         assert!((r.4 - 0.2).abs() < 1e-9, "{store}: +20%, not {r:?}");
     }
     let gpu: Vec<_> = rows.iter().filter(|r| r.0 == "gpu_ms.median").collect();
     assert_eq!(gpu.len(), 3, "{store}: one per variant: {rows:?}");
     assert!(
         gpu.iter()
-            .all(|r| r.2 == "night-000025" && r.3 == CONFIRMED),
+            .all(|r| r.2 == "night-000025" && r.3 == CONFIRMED.as_str()),
         "{store}: {gpu:?}"
     );
 }

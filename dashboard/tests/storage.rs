@@ -93,9 +93,12 @@ fn concurrent_uploads_lose_nothing() {
     for store in common::stores("concurrent_uploads_lose_nothing") {
         let template = common::template();
         let mut rng = Rng::new(7);
-        let bundles: Vec<RunBundle> = (0..16)
-            .map(|i| synth::run_from(&template, "conc", i % 12, 1.0, 0.01, &mut rng))
+        // 12 distinct runs; 4 of them uploaded twice, with the same content (the same run id
+        // with other content is a conflict, see tests/validation.rs).
+        let distinct: Vec<RunBundle> = (0..12)
+            .map(|i| synth::run_from(&template, "conc", i, 1.0, 0.01, &mut rng))
             .collect();
+        let bundles: Vec<RunBundle> = (0..16).map(|i| distinct[i % 12].clone()).collect();
         std::thread::scope(|s| {
             for chunk in bundles.chunks(2) {
                 let pool = store.pool.clone();

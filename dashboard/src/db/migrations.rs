@@ -177,6 +177,30 @@ CREATE TABLE api_tokens (
     created_at TEXT NOT NULL
 );
 "#,
+    // i22: alert groups with an identity for life (old commit-range keys kept, so that links keep
+    // answering), and where a change is apart from how sure it is: the interval of its size, the
+    // probability of its split and its candidate range (`store/alerts.rs`). Candidates are run
+    // ids without a foreign key: deleting a run shrinks a range that named it.
+    r#"
+CREATE TABLE alert_groups (
+    id {id},
+    created_at TEXT NOT NULL
+);
+CREATE TABLE alert_group_keys (
+    key TEXT PRIMARY KEY,
+    group_id BIGINT NOT NULL REFERENCES alert_groups (id),
+    created_at TEXT NOT NULL
+);
+CREATE INDEX alert_group_keys_group ON alert_group_keys (group_id);
+ALTER TABLE regressions ADD COLUMN group_id BIGINT REFERENCES alert_groups (id);
+ALTER TABLE regressions ADD COLUMN change_low {real};
+ALTER TABLE regressions ADD COLUMN change_high {real};
+ALTER TABLE regressions ADD COLUMN location_probability {real};
+ALTER TABLE regressions ADD COLUMN first_candidate BIGINT;
+ALTER TABLE regressions ADD COLUMN last_candidate BIGINT;
+CREATE INDEX regressions_group ON regressions (group_id);
+CREATE INDEX regressions_before ON regressions (run_pk_before);
+"#,
 ];
 
 fn render(step: &str, backend: Backend) -> String {

@@ -19,7 +19,11 @@
 //!    new). Such a candidate is placed where a two-mean fit of the points from it to the end has the
 //!    smallest residual sum of squares; the change then has fewer than `min_segment` points after it,
 //!    which keeps it *pending* (see [`Params::confirm_after`]).
-//! 6. Binary segmentation: accepted change points split the segment and both halves are tested
+//! 6. Location apart from certainty: near the statistic's split, each split's probability comes
+//!    from a two-level fit with capped residuals ([`locate`]), which an outlier next to the step
+//!    cannot capture; the most likely split is the change point, the shortest run of candidates
+//!    holding 95% is its commit range, and the size gets a 95% interval.
+//! 7. Binary segmentation: accepted change points split the segment and both halves are tested
 //!    again.
 //!
 //! Not for: reading series from the store or storing regressions (see [`crate::regressions`]).
@@ -75,6 +79,99 @@ pub struct ChangePoint {
     pub confidence: f64,
     /// Noise σ estimated for the tested segment.
     pub sigma: f64,
+    /// The 95% interval of `relative_change` (from σ and the points on each side).
+    pub change_low: f64,
+    pub change_high: f64,
+    /// Where the change lies, apart from whether there is one: the probability of each candidate
+    /// split near `index` (point index, probability; they sum to 1), from a robust two-level fit
+    /// (see [`locate`]). `index` is the most likely one.
+    pub candidates: Vec<(usize, f64)>,
+    /// The shortest run of candidates around `index` holding at least 95% of the probability:
+    /// the commit range the change lies in (first and last candidate point).
+    pub first_candidate: usize,
+    pub last_candidate: usize,
+}
+
+impl ChangePoint {
+    /// The probability that the change lies exactly at point `i` (0 outside the candidates).
+    pub fn probability_at(&self, i: usize) -> f64 {
+        self.candidates
+            .iter()
+            .find(|c| c.0 == i)
+            .map_or(0.0, |c| c.1)
+    }
+
+    /// The probability at `index`.
+    pub fn location_probability(&self) -> f64 {
+        self.probability_at(self.index)
+    }
+}
+
+/// Candidate splits tested on each side of the statistic's split by [`locate`].
+pub const LOCATE_WITHIN: usize = 3;
+/// Residuals beyond this many σ count as this many in [`locate`]: an outlier is one bad point
+/// whichever side it is put on, so it cannot pull the split onto itself.
+pub const LOCATE_CAP_SIGMAS: f64 = 3.0;
+
+/// Where a change found near split `k` lies: the probability of each split `j` within
+/// [`LOCATE_WITHIN`] of `k` (keeping `lo <= j <= hi`), from the likelihood of a two-level model
+/// with Gaussian noise of σ `sigma` whose residuals are capped at [`LOCATE_CAP_SIGMAS`]
+/// (levels are the medians of the two sides). With uncapped squares, a one-night outlier two runs
+/// before a +10% step costs less on the "after" side and the step was blamed on the outlier;
+/// capped, the outlier costs the same on either side and the points between decide.
+pub fn locate(values: &[f64], k: usize, sigma: f64, lo: usize, hi: usize) -> Vec<(usize, f64)> {
+    let from = k.saturating_sub(LOCATE_WITHIN).max(lo).max(1);
+    let to = (k + LOCATE_WITHIN)
+        .min(hi)
+        .min(values.len().saturating_sub(1));
+    let cap = LOCATE_CAP_SIGMAS * LOCATE_CAP_SIGMAS;
+    let cost = |j: usize| {
+        let (l, r) = (&values[..j], &values[j..]);
+        let (ml, mr) = (level(l), level(r));
+        let c = |v: &f64, m: f64| ((v - m) / sigma).powi(2).min(cap);
+        l.iter().map(|v| c(v, ml)).sum::<f64>() + r.iter().map(|v| c(v, mr)).sum::<f64>()
+    };
+    if from > to {
+        return vec![(k, 1.0)];
+    }
+    let costs: Vec<(usize, f64)> = (from..=to).map(|j| (j, cost(j))).collect();
+    let best = costs.iter().map(|c| c.1).fold(f64::INFINITY, f64::min);
+    let weights: Vec<(usize, f64)> = costs
+        .iter()
+        .map(|&(j, c)| (j, (-(c - best) / 2.0).exp()))
+        .collect();
+    let total: f64 = weights.iter().map(|w| w.1).sum();
+    weights.into_iter().map(|(j, w)| (j, w / total)).collect()
+}
+
+/// The shortest contiguous run of candidates around the most likely one holding `mass`.
+fn credible_range(candidates: &[(usize, f64)], mass: f64) -> (usize, usize) {
+    let Some(best) = (0..candidates.len()).max_by(|&a, &b| {
+        candidates[a]
+            .1
+            .total_cmp(&candidates[b].1)
+            .then(candidates[b].0.cmp(&candidates[a].0))
+    }) else {
+        return (0, 0);
+    };
+    let (mut a, mut b) = (best, best);
+    let mut held = candidates[best].1;
+    while held < mass && (a > 0 || b + 1 < candidates.len()) {
+        let left = if a > 0 { candidates[a - 1].1 } else { -1.0 };
+        let right = if b + 1 < candidates.len() {
+            candidates[b + 1].1
+        } else {
+            -1.0
+        };
+        if left >= right {
+            a -= 1;
+            held += left;
+        } else {
+            b += 1;
+            held += right;
+        }
+    }
+    (candidates[a].0, candidates[b].0)
 }
 
 /// Segments and change points of a series.
@@ -113,6 +210,11 @@ pub fn analyse<E: PartialEq>(values: &[f64], environment: &[E], params: &Params)
         let end = segment_starts.get(j + 1).copied().unwrap_or(values.len());
         for mut cp in detect(&values[start..end], params) {
             cp.index += start;
+            cp.first_candidate += start;
+            cp.last_candidate += start;
+            for c in &mut cp.candidates {
+                c.0 += start;
+            }
             change_points.push(cp);
         }
     }
@@ -144,11 +246,22 @@ fn split(values: &[f64], offset: usize, params: &Params, found: &mut Vec<ChangeP
     if p >= params.alpha {
         return;
     }
-    let k = if k == n - params.min_segment.max(1) {
+    let m = params.min_segment.max(1);
+    let at_end = k == n - m;
+    let k = if at_end {
         refine_at_end(&clipped, k)
     } else {
         k
     };
+    // Where exactly: the robust location step may move the split a little (never past the
+    // newest points unless the change already lies among them).
+    let hi = if at_end || k > n - m { n - 1 } else { n - m };
+    let candidates = locate(values, k, sigma, m.min(k), hi);
+    let k = candidates
+        .iter()
+        .max_by(|a, b| a.1.total_cmp(&b.1).then(b.0.cmp(&a.0)))
+        .map_or(k, |c| c.0);
+    let (first, last) = credible_range(&candidates, 0.95);
     // Levels are medians: an outlier on the short side must not cancel (or fake) the step's size.
     let before = level(&values[..k]);
     let after = level(&values[k..]);
@@ -160,6 +273,16 @@ fn split(values: &[f64], offset: usize, params: &Params, found: &mut Vec<ChangeP
     if relative_change.abs() < params.min_relative_change {
         return;
     }
+    // The standard error of a difference of two medians: 1.2533 σ √(1/n₁ + 1/n₂).
+    let se = 1.2533 * sigma * (1.0 / k as f64 + 1.0 / (n - k) as f64).sqrt();
+    let (change_low, change_high) = if before != 0.0 {
+        (
+            (after - before - 1.96 * se) / before.abs(),
+            (after - before + 1.96 * se) / before.abs(),
+        )
+    } else {
+        (relative_change, relative_change)
+    };
     found.push(ChangePoint {
         index: offset + k,
         before,
@@ -167,6 +290,11 @@ fn split(values: &[f64], offset: usize, params: &Params, found: &mut Vec<ChangeP
         relative_change,
         confidence: 1.0 - p,
         sigma,
+        change_low,
+        change_high,
+        candidates: candidates.iter().map(|&(j, p)| (offset + j, p)).collect(),
+        first_candidate: offset + first,
+        last_candidate: offset + last,
     });
     split(&values[..k], offset, params, found);
     split(&values[k..], offset + k, params, found);

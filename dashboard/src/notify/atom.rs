@@ -44,7 +44,7 @@ pub fn feed(groups: &[Group], base: &str, now: &str) -> String {
         xml(&format!("{base}/regressions"))
     );
     for g in groups {
-        let url = super::group_url(base, &g.key);
+        let url = super::group_url(base, g.id);
         let summary = format!(
             "{} · {}{} · {} worse, {} better · {}{}",
             g.status,
@@ -66,8 +66,8 @@ pub fn feed(groups: &[Group], base: &str, now: &str) -> String {
             xml(&g.title),
             xml(&g.detected_at),
             xml(&url),
-            xml(&super::markdown_url(base, &g.key)),
-            xml(&g.state),
+            xml(&super::markdown_url(base, g.id)),
+            xml(g.state.as_str()),
             xml(&summary)
         );
     }

@@ -87,7 +87,7 @@ pub fn target_of(url: &str) -> String {
 
 /// The JSON body POSTed for a group. `text` makes it readable by chat webhooks as it is.
 pub fn body(g: &Group, base: &str) -> serde_json::Value {
-    let url = super::group_url(base, &g.key);
+    let url = super::group_url(base, g.id);
     let alerts: Vec<serde_json::Value> = g
         .alerts
         .iter()
@@ -105,6 +105,7 @@ pub fn body(g: &Group, base: &str) -> serde_json::Value {
                 "value_after": a.value_after,
                 "relative_change": a.relative_change,
                 "worse": a.is_regression,
+                "via_baseline": a.via_baseline,
                 "confidence": a.confidence,
                 "status": a.status,
             })
@@ -112,11 +113,12 @@ pub fn body(g: &Group, base: &str) -> serde_json::Value {
         .collect();
     json!({
         "event": "regression_group_confirmed",
+        "id": g.id,
         "key": g.key,
         "title": g.title,
         "text": format!("{} {url}", g.title),
         "url": url,
-        "markdown_url": super::markdown_url(base, &g.key),
+        "markdown_url": super::markdown_url(base, g.id),
         "commit_before": g.commit_before,
         "commit_after": g.commit_after,
         "state": g.state,
@@ -125,6 +127,8 @@ pub fn body(g: &Group, base: &str) -> serde_json::Value {
         "series_count": g.series_count,
         "worse": g.worse,
         "better": g.better,
+        "via_baseline": g.via_baseline,
+        "direction": g.direction,
         "alerts": alerts,
     })
 }
@@ -181,6 +185,7 @@ impl Notifier {
             let mut conn = self.pool.get()?;
             let confirmed = Filter {
                 status: Some("confirmed".into()),
+                regressions_only: true,
                 ..Filter::default()
             };
             let groups = groups::list(&mut *conn, &confirmed, Sort::Date, usize::MAX)?;
@@ -190,7 +195,11 @@ impl Notifier {
                     .into_iter()
                     .collect();
             for g in &groups {
-                if known.contains(&g.key)
+                // The outbox names a group by its id (older rows by a commit range, which
+                // `get_named` still resolves).
+                let name = g.id.to_string();
+                if known.contains(&name)
+                    || known.contains(&g.key)
                     || (!first && matches!(g.state.as_str(), "invalid" | "ignored"))
                 {
                     continue;
@@ -200,7 +209,7 @@ impl Notifier {
                 } else {
                     outbox::PENDING
                 };
-                if outbox::add(&mut *conn, &self.target, &g.key, state, &now_s)? {
+                if outbox::add(&mut *conn, &self.target, &name, state, &now_s)? {
                     if first {
                         tick.baseline += 1;
                     } else {
@@ -216,7 +225,7 @@ impl Notifier {
                 // Detection never deletes an alert; a group whose alerts were all withdrawn (moved
                 // to another commit, merged, or no longer supported) is gone as far as a
                 // notification goes.
-                match groups::get(&mut *conn, &d.group_key) {
+                match groups::get_named(&mut *conn, &d.group_key) {
                     Ok(g) if g.status == "withdrawn" => {
                         Err(StoreError::NotFound(format!("group {}", g.key)))
                     }
@@ -224,7 +233,10 @@ impl Notifier {
                 }
             };
             let outcome = match group {
-                Ok(g) => self.post(&body(&g, &self.config.public_url), &g.key),
+                Ok(g) => self.post(
+                    &body(&g, &self.config.public_url),
+                    &format!("group-{}", g.id),
+                ),
                 // A group that detection has since moved away: nothing left to announce, and
                 // nothing a retry would change.
                 Err(StoreError::NotFound(_)) => {

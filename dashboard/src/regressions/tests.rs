@@ -2,7 +2,7 @@
 
 use super::*;
 
-fn found(index: usize, rel: f64, status: &'static str) -> Found {
+fn found(index: usize, rel: f64, status: DetectionStatus) -> Found {
     Found {
         change: ChangePoint {
             index,
@@ -11,17 +11,23 @@ fn found(index: usize, rel: f64, status: &'static str) -> Found {
             relative_change: rel,
             confidence: 0.999,
             sigma: 0.01,
+            change_low: rel - 0.01,
+            change_high: rel + 0.01,
+            candidates: vec![(index, 1.0)],
+            first_candidate: index,
+            last_candidate: index,
         },
         status,
     }
 }
 
-fn alert(id: i64, pk: i64, rel: f64, status: &str) -> StoredAlert {
+fn alert(id: i64, pk: i64, rel: f64, status: DetectionStatus) -> StoredAlert {
     StoredAlert {
         id,
+        run_pk_before: pk - 1,
         run_pk_after: pk,
         relative_change: rel,
-        status: status.into(),
+        status,
     }
 }
 

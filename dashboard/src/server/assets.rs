@@ -11,7 +11,7 @@ use axum::response::{IntoResponse, Response};
 use super::AppError;
 
 /// (name, content type, bytes).
-const FILES: [(&str, &str, &[u8]); 4] = [
+const FILES: [(&str, &str, &[u8]); 5] = [
     (
         "uPlot.iife.min.js",
         "text/javascript; charset=utf-8",
@@ -31,6 +31,11 @@ const FILES: [(&str, &str, &[u8]); 4] = [
         "tessera.js",
         "text/javascript; charset=utf-8",
         include_bytes!("../../assets/tessera.js"),
+    ),
+    (
+        "regressions.js",
+        "text/javascript; charset=utf-8",
+        include_bytes!("../../assets/regressions.js"),
     ),
 ];
 

@@ -21,6 +21,12 @@ pub enum AppError {
     BadRequest(String),
     #[error("{0}")]
     Unprocessable(String),
+    /// A refused field of a request: 422 with `{"error", "field"}`.
+    #[error("{field}: {problem}")]
+    Field { field: String, problem: String },
+    /// The request contradicts what is stored: 409.
+    #[error("{0}")]
+    Conflict(String),
     #[error("{0}")]
     PayloadTooLarge(String),
     #[error(
@@ -46,7 +52,8 @@ impl AppError {
         match self {
             AppError::NotFound(_) => StatusCode::NOT_FOUND,
             AppError::BadRequest(_) => StatusCode::BAD_REQUEST,
-            AppError::Unprocessable(_) => StatusCode::UNPROCESSABLE_ENTITY,
+            AppError::Unprocessable(_) | AppError::Field { .. } => StatusCode::UNPROCESSABLE_ENTITY,
+            AppError::Conflict(_) => StatusCode::CONFLICT,
             AppError::PayloadTooLarge(_) => StatusCode::PAYLOAD_TOO_LARGE,
             AppError::Unauthorized | AppError::ReadUnauthorized => StatusCode::UNAUTHORIZED,
             AppError::Forbidden(_) | AppError::WritesDisabled => StatusCode::FORBIDDEN,
@@ -62,11 +69,13 @@ impl IntoResponse for AppError {
         if let AppError::Internal(detail) = &self {
             eprintln!("tessera-dashboard: internal error: {detail}");
         }
-        let mut res = (
-            self.status(),
-            Json(serde_json::json!({ "error": self.to_string() })),
-        )
-            .into_response();
+        let body = match &self {
+            AppError::Field { field, .. } => {
+                serde_json::json!({ "error": self.to_string(), "field": field })
+            }
+            _ => serde_json::json!({ "error": self.to_string() }),
+        };
+        let mut res = (self.status(), Json(body)).into_response();
         let headers = res.headers_mut();
         match self {
             AppError::Unauthorized => {
@@ -98,6 +107,7 @@ impl From<StoreError> for AppError {
         match e {
             StoreError::NotFound(what) => AppError::NotFound(format!("{what} not found")),
             StoreError::Invalid(msg) => AppError::Unprocessable(msg),
+            StoreError::Conflict(msg) => AppError::Conflict(msg),
             StoreError::Db(e) => e.into(),
             StoreError::Corrupt(msg) => AppError::Internal(msg),
         }
@@ -108,6 +118,10 @@ impl From<BundleError> for AppError {
     fn from(e: BundleError) -> Self {
         match e {
             BundleError::Io { .. } => AppError::Internal(e.to_string()),
+            BundleError::Field(f) => AppError::Field {
+                field: f.field,
+                problem: f.problem,
+            },
             _ => AppError::Unprocessable(e.to_string()),
         }
     }

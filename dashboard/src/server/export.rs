@@ -25,12 +25,20 @@ pub struct FormatQuery {
     pub format: Format,
 }
 
-/// One CSV field.
+/// One CSV field. Text that a spreadsheet would run as a formula (starting with `=`, `+`, `-`,
+/// `@`, a tab or a carriage return, e.g. `=HYPERLINK(...)` in a name) gets a leading `'`, as
+/// OWASP advises; a plain number (`-0.05`) is left as it is.
 pub fn csv_field(s: &str) -> String {
+    let formula = s.starts_with(['=', '+', '-', '@', '\t', '\r']) && s.parse::<f64>().is_err();
+    let s = if formula {
+        format!("'{s}")
+    } else {
+        s.to_string()
+    };
     if s.contains([',', '"', '\n', '\r']) {
         format!("\"{}\"", s.replace('"', "\"\""))
     } else {
-        s.to_string()
+        s
     }
 }
 
@@ -102,5 +110,16 @@ mod tests {
             ),
             "a,b\n\"upscale[scale=0.5,x=1]\",\"say \"\"hi\"\"\"\n"
         );
+    }
+
+    #[test]
+    fn csv_neutralises_formulas_not_numbers() {
+        assert_eq!(csv_field("=HYPERLINK(\"x\")"), "\"'=HYPERLINK(\"\"x\"\")\"");
+        assert_eq!(csv_field("+cmd"), "'+cmd");
+        assert_eq!(csv_field("@SUM(A1)"), "'@SUM(A1)");
+        assert_eq!(csv_field("-x"), "'-x");
+        assert_eq!(csv_field("-0.05"), "-0.05");
+        assert_eq!(csv_field("+1e3"), "+1e3");
+        assert_eq!(csv_field("native"), "native");
     }
 }

@@ -71,6 +71,10 @@ const KINDS: [(&str, &str); 7] = [
     ("other", "variant in the other run"),
 ];
 
+/// The colour scale of a FLIP map: the magma colour map the harness writes, from 0 (no
+/// perceived difference, black) to 1 (largest, pale yellow).
+const FLIP_SCALE: &str = "<div class=flip-scale><span>0</span><span class=bar style=\"background:linear-gradient(90deg,#000004,#3b0f70 20%,#8c2981 40%,#de4968 60%,#fe9f6d 80%,#fcfdbf)\"></span><span>1</span> <span class=muted>FLIP error (magma): black none, yellow largest</span></div>";
+
 #[derive(Debug, Deserialize, Default)]
 pub struct ViewerQuery {
     /// Another run whose frames of the same variant are shown beside.
@@ -98,6 +102,8 @@ pub struct Viewer<'a> {
     pub other: Option<(&'a str, &'a [ImageRow])>,
     /// Runs that stored images of this variant, for the picker.
     pub runs_with_images: &'a [String],
+    /// Per-frame charts of the variant (metrics, GPU time), synced with the frame slider.
+    pub frame_charts: String,
 }
 
 fn pick(images: &[ImageRow], variant: &str, frame: i64, kind: &str) -> Option<String> {
@@ -201,22 +207,31 @@ pub fn render(v: &Viewer<'_>) -> Result<String, AppError> {
         )
     };
     if has_ref {
+        // A and B side by side at any zoom: one row of two panes that share the width (they pan
+        // together like every pane).
+        let _ = write!(
+            out,
+            "<div class=pair id=pair><figure><figcaption>reference (A)</figcaption><div class=pane>{}</div></figure><figure><figcaption>variant (B)</figcaption><div class=pane>{}</div></figure></div>",
+            img("reference", &first("reference"), "reference (A)", ""),
+            img("output", &first("output"), "variant (B)", "")
+        );
         let _ = write!(
             out,
             "<figure><figcaption id=ab-label>B: variant</figcaption><div class=pane><img class=px id=img-ab src=\"{}\" alt=\"A/B flicker\"{size}></div></figure>",
             esc(&first("output")),
         );
+        // The wipe: the reference on top, shown left of the line; the variant under it, right.
         let _ = write!(
             out,
-            "<figure><figcaption>wipe: A left, B right</figcaption><div class=pane><div class=stack>{}{}<div id=wipe-line></div></div></div></figure>",
-            img("reference", &first("reference"), "wipe: reference", ""),
-            img("output", &first("output"), "wipe: variant", " top\" id=\"wipe-top")
+            "<figure><figcaption id=wipe-caption>wipe: A (reference) left, B (variant) right</figcaption><div class=pane><div class=stack id=wipe-stack data-left=reference data-right=output>{}{}<div id=wipe-line></div></div></div></figure>",
+            img("output", &first("output"), "wipe: variant", ""),
+            img("reference", &first("reference"), "wipe: reference", " top\" id=\"wipe-top")
         );
     } else {
         out.push_str("<img hidden id=img-ab alt=\"\"><span hidden id=ab-label></span><span hidden id=wipe-top></span><span hidden id=wipe-line></span>");
     }
     for (j, (kind, heading)) in KINDS.iter().enumerate() {
-        if !present[j] {
+        if !present[j] || (has_ref && matches!(*kind, "reference" | "output")) {
             continue;
         }
         let heading = match (*kind, v.other) {
@@ -229,6 +244,9 @@ pub fn render(v: &Viewer<'_>) -> Result<String, AppError> {
             esc(&heading),
             img(kind, &first(kind), &heading, "")
         );
+        if kind.starts_with("heatmap") {
+            out.push_str(FLIP_SCALE);
+        }
         if *kind == "rate" && present[1] {
             let _ = write!(
                 out,
@@ -238,7 +256,9 @@ pub fn render(v: &Viewer<'_>) -> Result<String, AppError> {
             );
         }
     }
-    out.push_str("</div></div>");
+    out.push_str("</div>");
+    out.push_str(&v.frame_charts);
+    out.push_str("</div>");
     let spec = ViewerSpec {
         frames: frames.clone(),
         kinds: KINDS.iter().map(|k| k.0).collect(),
@@ -261,18 +281,22 @@ pub async fn page(
 ) -> Result<Html<String>, AppError> {
     let (r, s, var) = (run_id.clone(), scenario.clone(), variant.clone());
     let other_id = q.other.filter(|o| !o.is_empty());
-    let (images, (w, h), other, runs) = state
+    let (images, (w, h), other, runs, frame_charts) = state
         .db(move |c| {
             let images = read::run_images(c, &r, &s)?;
-            let dims = read::scenario_result(c, &r, &s)
-                .map(|x| (x.width, x.height))
-                .unwrap_or((0, 0));
+            let record = read::scenario_result(c, &r, &s).ok();
+            let dims = record.as_ref().map_or((0, 0), |x| (x.width, x.height));
+            let charts = record
+                .as_ref()
+                .and_then(|x| x.results.iter().find(|v| v.variant == var))
+                .map(|v| super::frame_charts::render(&super::frame_charts::series_of(v)))
+                .unwrap_or_default();
             let other = match other_id {
                 Some(o) => Some((o.clone(), read::run_images(c, &o, &s)?)),
                 None => None,
             };
             let runs = browse::runs_with_images(c, &s, &var)?;
-            Ok((images, dims, other, runs))
+            Ok((images, dims, other, runs, charts))
         })
         .await?;
     let body = render(&Viewer {
@@ -284,6 +308,7 @@ pub async fn page(
         height: h,
         other: other.as_ref().map(|(r, i)| (r.as_str(), i.as_slice())),
         runs_with_images: &runs,
+        frame_charts,
     })?;
     Ok(Html(layout(
         &format!("{scenario} · {variant} · run {run_id}"),

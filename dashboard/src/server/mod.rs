@@ -13,6 +13,8 @@ pub mod compare_runs;
 pub mod delete;
 pub mod error;
 pub mod export;
+pub mod frame_charts;
+pub mod headers;
 pub mod health;
 pub mod images;
 pub mod listen;
@@ -137,6 +139,7 @@ pub fn app(state: AppState) -> Router {
 /// `Router::layer`, so that axum still sets `Allow` on its 405s.
 fn write_path(routes: Router, state: &AppState) -> Router {
     let service = tower::ServiceBuilder::new()
+        .layer(middleware::from_fn(headers::secure))
         .layer(middleware::from_fn(error::json_errors))
         .layer(TimeoutLayer::with_status_code(
             StatusCode::REQUEST_TIMEOUT,

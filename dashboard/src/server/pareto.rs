@@ -242,8 +242,8 @@ pub fn render(v: &ParetoView) -> String {
         .collect();
     let spec = ScatterChart {
         kind: "scatter",
-        x_label: "GPU ms (median)".into(),
-        y_label: v.metric.clone(),
+        x_label: "GPU time, median (ms)".into(),
+        y_label: crate::html::axis_label(&v.metric),
         groups: vec![
             format!("run {}", v.run.as_deref().unwrap_or("–")),
             format!("run {}", v.base.as_deref().unwrap_or("–")),
@@ -259,7 +259,11 @@ pub fn render(v: &ParetoView) -> String {
             })
             .collect(),
     };
-    let fallback = scatter(&pts, "GPU ms", &v.metric);
+    let fallback = scatter(
+        &pts,
+        "GPU time, median (ms)",
+        &crate::html::axis_label(&v.metric),
+    );
     if spec.points.is_empty() {
         b.push_str(&fallback);
     } else {

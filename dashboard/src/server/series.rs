@@ -270,7 +270,7 @@ pub fn render(v: &SeriesView) -> String {
     for (i, (k, pts)) in v.overlays.iter().enumerate() {
         lines.push((legend(k, s), colour(i + 1).to_string(), &pts[..]));
     }
-    let (mut spec, rows) = time_chart(&s.measure, &lines);
+    let (mut spec, rows) = time_chart(&crate::html::axis_label(&s.measure), &lines);
     let row_of = |i: usize| rows[0][i];
     for &i in &v.segment_starts {
         if i > 0 {
@@ -336,7 +336,7 @@ pub fn render(v: &SeriesView) -> String {
         .iter()
         .map(|&i| (i, v.points[i].environment.clone()))
         .collect();
-    let fallback = series_chart(&marks, &cps, &segs, &s.measure);
+    let fallback = series_chart(&marks, &cps, &segs, &crate::html::axis_label(&s.measure));
     let banded = spec.series[0].p5.is_some();
     let mut b = format!(
         "<p>{} · {} · <a href=\"/?adapter={}\">{}</a> · {} ({} is better) · {} points{} · export <a href=\"/api/series/{}?format=csv\">CSV</a> <a href=\"/api/series/{}\">JSON</a></p>",
@@ -396,7 +396,7 @@ pub fn render(v: &SeriesView) -> String {
             if r.is_regression { "worse" } else { "better" },
             pct(r.relative_change),
             r.confidence * 100.0,
-            esc(&r.state)
+            esc(r.state.as_str())
         );
     }
     b.push_str("</table>");

@@ -1,86 +1,48 @@
-//! Alert groups: the alerts (rows of `regressions`, one per series change) that blame the same
-//! commit range (the commits of `run_pk_before` and `run_pk_after`) are one *group*, triaged as
-//! one change ("`c0ffee`: 12 series on 2 adapters; checkerboard gpu_ms +6.0%, reconstruct
-//! +35.0%"). Grouping is done when reading, so it follows whatever detection stores or moves;
-//! the group's triage is kept on each of its alerts (see [`super::triage::set_group`]).
+//! Alert groups: the alerts (rows of `regressions`, one per series change) of one change, seen in
+//! every series and on every adapter it moved ("`c0ffee`: 12 series on 2 adapters; checkerboard
+//! gpu_ms +6.0%, reconstruct +35.0%"), triaged as one. A group has an id for life
+//! (`/regressions/groups/{id}`); an alert joins the group its commit range names when it is
+//! detected and stays in it when detection moves it, so links, feed entries and webhook keys keep
+//! naming the same change. The commit ranges a group was shown under still find it ([`resolve`]).
 //!
-//! Reads the `status` column of detection (`pending`, `confirmed`, `withdrawn`) when the store
-//! has it and takes every alert as `confirmed` when it does not.
+//! Direction-aware: a group says how many of its series got worse and how many better; a
+//! `speedup` series whose baseline variant moved in the same group is counted as *via its
+//! baseline*, not as a change of its own (a slower `native` makes every speed-up against it rise).
 //!
-//! Not for: detection (see [`crate::regressions`]), triage writes (see [`super::triage`]),
-//! rendering (see [`crate::server::regressions`] and [`crate::notify`]).
+//! Not for: the alert row and its writes (see [`super::alerts`]), triage writes (see
+//! [`super::triage`]), rendering (see [`crate::server::regressions`] and [`crate::notify`]).
 
 use std::collections::{BTreeMap, BTreeSet};
 
 use serde::Serialize;
 use tessera_results::measure::Measure;
 
-use super::read::SeriesKey;
+use super::alerts::{self, Alert, DetectionStatus, Select, TriageState};
 use super::StoreError;
-use crate::db::{Backend, Connection, Row, Value};
+use crate::db::Connection;
+
+pub use super::alerts::{has_status_column, is_key, key};
 
 /// Most alerts read for one listing, newest first; older alerts are not grouped.
 pub const MAX_ALERTS: i64 = 20_000;
 
-/// One alert with its series, runs and triage.
-#[derive(Clone, Debug, Serialize, PartialEq)]
-pub struct Alert {
-    pub id: i64,
-    pub series: SeriesKey,
-    /// The scenario file's folder (`quality` for `scenarios/quality/cut.toml`), else the scenario.
-    pub suite: String,
-    pub run_before: String,
-    pub commit_before: Option<String>,
-    pub run_after: String,
-    pub commit_after: Option<String>,
-    /// Start of the run after the change.
-    pub started_at: String,
-    pub value_before: f64,
-    pub value_after: f64,
-    pub relative_change: f64,
-    /// `true` when the change makes the measure worse.
-    pub is_regression: bool,
-    pub confidence: f64,
-    /// `pending`, `confirmed` or `withdrawn` (detection's word on the alert).
-    pub status: String,
-    pub state: String,
-    pub note: String,
-    pub bug_url: String,
-    pub updated_by: String,
-    pub detected_at: String,
-    pub updated_at: String,
-    #[serde(skip)]
-    run_pk_before: i64,
-    #[serde(skip)]
-    run_pk_after: i64,
-}
-
-impl Alert {
-    /// The key of the group this alert belongs to.
-    pub fn group_key(&self) -> String {
-        key(
-            self.commit_before.as_deref(),
-            self.run_pk_before,
-            self.commit_after.as_deref(),
-            self.run_pk_after,
-        )
-    }
-}
-
 /// A group of alerts with one triage.
 #[derive(Clone, Debug, Serialize, PartialEq)]
 pub struct Group {
-    /// `<commit before>..<commit after>`; a run without a usable commit is `~<run pk>`.
+    /// The group's id for life: its page is `/regressions/groups/{id}`.
+    pub id: i64,
+    /// The commit range it is shown under now: `<commit before>..<commit after>` of most of its
+    /// live alerts; a run without a usable commit is `~<run pk>`.
     pub key: String,
     pub commit_before: Option<String>,
     pub commit_after: Option<String>,
     /// One line: commit, series and adapters, the largest changes by variant and measure.
     pub title: String,
     /// `confirmed` when any alert is, else `pending` when any is, else `withdrawn`.
-    pub status: String,
+    pub status: DetectionStatus,
     /// The state shared by the alerts; when they differ (an alert joined after triage),
     /// `new` if any alert is new, else the most recently set state, and `mixed_state` is true.
-    pub state: String,
+    pub state: TriageState,
     pub mixed_state: bool,
     pub note: String,
     pub bug_url: String,
@@ -89,8 +51,13 @@ pub struct Group {
     pub adapters: Vec<String>,
     /// Alerts of the group (withdrawn ones left out unless all are withdrawn).
     pub series_count: usize,
+    /// Series that got worse and better on their own (not through their baseline).
     pub worse: usize,
     pub better: usize,
+    /// Speed-up series that moved only because their baseline did.
+    pub via_baseline: usize,
+    /// `regression` when any series got worse on its own, else `improvement`.
+    pub direction: &'static str,
     /// Largest |relative change| of the group's alerts.
     pub size: f64,
     /// Newest start of a run after the change (the commit's date as the runs saw it).
@@ -99,54 +66,6 @@ pub struct Group {
     pub detected_at: String,
     /// The alerts that match the filter, largest change first.
     pub alerts: Vec<Alert>,
-}
-
-/// One side of a commit range in a group key.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub enum Side {
-    Commit(String),
-    Run(i64),
-}
-
-fn usable_commit(c: &str) -> bool {
-    !c.is_empty()
-        && c.len() <= 64
-        && c.bytes()
-            .all(|b| b.is_ascii_alphanumeric() || b == b'-' || b == b'_')
-}
-
-fn side(commit: Option<&str>, run_pk: i64) -> String {
-    match commit {
-        Some(c) if usable_commit(c) => c.to_string(),
-        _ => format!("~{run_pk}"),
-    }
-}
-
-/// The group key of an alert from its two runs' commits (or run keys without a commit).
-pub fn key(
-    commit_before: Option<&str>,
-    run_pk_before: i64,
-    commit_after: Option<&str>,
-    run_pk_after: i64,
-) -> String {
-    format!(
-        "{}..{}",
-        side(commit_before, run_pk_before),
-        side(commit_after, run_pk_after)
-    )
-}
-
-fn parse_side(s: &str) -> Option<Side> {
-    match s.strip_prefix('~') {
-        Some(pk) => pk.parse().ok().map(Side::Run),
-        None => usable_commit(s).then(|| Side::Commit(s.to_string())),
-    }
-}
-
-/// The two sides of a group key; `None` for anything that is not one.
-pub fn parse_key(k: &str) -> Option<(Side, Side)> {
-    let (b, a) = k.split_once("..")?;
-    Some((parse_side(b)?, parse_side(a)?))
 }
 
 /// What the regressions page and API filter on; every part optional.
@@ -161,10 +80,15 @@ pub struct Filter {
     pub direction: Option<String>,
     /// `pending`, `confirmed`, `withdrawn` or `all`; by default withdrawn alerts are hidden.
     pub status: Option<String>,
+    /// Only groups in which some series got worse on its own (the feed and the webhook of
+    /// confirmed *regressions*: improvements are never announced as regressions).
+    pub regressions_only: bool,
 }
 
 pub const DIRECTIONS: [&str; 2] = ["worse", "better"];
 pub const STATUSES: [&str; 4] = ["pending", "confirmed", "withdrawn", "all"];
+/// Longest filter value accepted, in bytes (longer ones are refused with 400, not searched).
+pub const MAX_FILTER_LEN: usize = 200;
 
 impl Filter {
     /// Checks the values, with a message that says what is allowed.
@@ -176,7 +100,21 @@ impl Filter {
             ))),
             _ => Ok(()),
         };
-        check("state", &self.state, &super::triage::STATES)?;
+        for (what, v) in [
+            ("adapter", &self.adapter.map(|a| a.to_string())),
+            ("suite", &self.suite),
+            ("measure", &self.measure),
+            ("state", &self.state),
+            ("direction", &self.direction),
+            ("status", &self.status),
+        ] {
+            if v.as_ref().is_some_and(|v| v.len() > MAX_FILTER_LEN) {
+                return Err(StoreError::Invalid(format!(
+                    "{what} is longer than {MAX_FILTER_LEN} bytes"
+                )));
+            }
+        }
+        check("state", &self.state, &TriageState::names())?;
         check("direction", &self.direction, &DIRECTIONS)?;
         check("status", &self.status, &STATUSES)
     }
@@ -218,131 +156,6 @@ impl Sort {
     }
 }
 
-/// Whether the store has detection's `status` column (added by its own migration). Asks the
-/// catalogue, so it never fails a statement (which would abort a PostgreSQL transaction).
-pub fn has_status_column(conn: &mut dyn Connection) -> Result<bool, StoreError> {
-    let sql = match conn.backend() {
-        Backend::Sqlite => "SELECT COUNT(*) FROM pragma_table_info('regressions') WHERE name = 'status'",
-        Backend::Postgres => {
-            "SELECT COUNT(*) FROM information_schema.columns
-             WHERE table_schema = current_schema() AND table_name = 'regressions' AND column_name = 'status'"
-        }
-    };
-    Ok(conn.query(sql, &[])?[0].i64(0)? > 0)
-}
-
-/// The suite of each scenario that has alerts: the folder of its newest scenario file (one JSON
-/// read per scenario, not per alert).
-fn suites(conn: &mut dyn Connection) -> Result<BTreeMap<String, String>, StoreError> {
-    let file = match conn.backend() {
-        Backend::Sqlite => "json_extract(sr.record_json, '$.file')",
-        Backend::Postgres => "CAST(sr.record_json AS JSON) ->> 'file'",
-    };
-    let rows = conn.query(
-        &format!(
-            "SELECT sr.scenario, {file} FROM scenario_results sr
-             WHERE sr.id IN (SELECT MAX(id) FROM scenario_results
-                             WHERE scenario IN (SELECT DISTINCT s.scenario FROM regressions g JOIN series s ON s.id = g.series_id)
-                             GROUP BY scenario)"
-        ),
-        &[],
-    )?;
-    let mut out = BTreeMap::new();
-    for r in &rows {
-        let scenario = r.string(0)?;
-        let folder = r.opt_string(1)?.and_then(|f| {
-            std::path::Path::new(&f)
-                .parent()
-                .and_then(|p| p.file_name())
-                .map(|n| n.to_string_lossy().into_owned())
-        });
-        out.insert(scenario.clone(), folder.unwrap_or(scenario));
-    }
-    Ok(out)
-}
-
-/// Alerts, newest first, of one group (`only`) or of all groups.
-fn alerts(
-    conn: &mut dyn Connection,
-    only: Option<&(Side, Side)>,
-    limit: i64,
-) -> Result<Vec<Alert>, StoreError> {
-    let status = if has_status_column(conn)? {
-        "g.status"
-    } else {
-        "'confirmed'"
-    };
-    let suites = suites(conn)?;
-    let (cb, pb) = match only.map(|k| &k.0) {
-        Some(Side::Commit(c)) => (Value::from(c.as_str()), Value::Null),
-        Some(Side::Run(pk)) => (Value::Null, Value::Int(*pk)),
-        None => (Value::Null, Value::Null),
-    };
-    let (ca, pa) = match only.map(|k| &k.1) {
-        Some(Side::Commit(c)) => (Value::from(c.as_str()), Value::Null),
-        Some(Side::Run(pk)) => (Value::Null, Value::Int(*pk)),
-        None => (Value::Null, Value::Null),
-    };
-    let rows = conn.query(
-        &format!(
-            "SELECT s.id, s.scenario, s.variant, s.adapter_id, a.name, s.measure, s.higher_is_better,
-                g.id, g.run_pk_before, rb.run_id, rb.commit_sha, g.run_pk_after, ra.run_id, ra.commit_sha,
-                ra.started_at, g.value_before, g.value_after, g.relative_change, g.confidence,
-                {status}, g.state, g.note, g.bug_url, g.updated_by, g.detected_at, g.updated_at
-             FROM regressions g JOIN series s ON s.id = g.series_id JOIN adapters a ON a.id = s.adapter_id
-             JOIN runs rb ON rb.id = g.run_pk_before JOIN runs ra ON ra.id = g.run_pk_after
-             WHERE (CAST($1 AS TEXT) IS NULL OR rb.commit_sha = $1)
-               AND (CAST($2 AS BIGINT) IS NULL OR g.run_pk_before = $2)
-               AND (CAST($3 AS TEXT) IS NULL OR ra.commit_sha = $3)
-               AND (CAST($4 AS BIGINT) IS NULL OR g.run_pk_after = $4)
-             ORDER BY ra.started_at DESC, g.id DESC LIMIT $5"
-        ),
-        &[cb, pb, ca, pa, Value::Int(limit)],
-    )?;
-    rows.iter().map(|r| alert(r, &suites)).collect()
-}
-
-fn alert(r: &Row, suites: &BTreeMap<String, String>) -> Result<Alert, StoreError> {
-    let series = SeriesKey {
-        id: r.i64(0)?,
-        scenario: r.string(1)?,
-        variant: r.string(2)?,
-        adapter_id: r.i64(3)?,
-        adapter: r.string(4)?,
-        measure: r.string(5)?,
-        higher_is_better: r.bool(6)?,
-    };
-    let relative_change = r.opt_f64(17)?.unwrap_or(f64::INFINITY);
-    let suite = suites
-        .get(&series.scenario)
-        .cloned()
-        .unwrap_or_else(|| series.scenario.clone());
-    Ok(Alert {
-        id: r.i64(7)?,
-        is_regression: (relative_change > 0.0) != series.higher_is_better,
-        suite,
-        run_pk_before: r.i64(8)?,
-        run_before: r.string(9)?,
-        commit_before: r.opt_string(10)?,
-        run_pk_after: r.i64(11)?,
-        run_after: r.string(12)?,
-        commit_after: r.opt_string(13)?,
-        started_at: r.string(14)?,
-        value_before: r.f64(15)?,
-        value_after: r.f64(16)?,
-        relative_change,
-        confidence: r.f64(18)?,
-        status: r.string(19)?,
-        state: r.string(20)?,
-        note: r.string(21)?,
-        bug_url: r.string(22)?,
-        updated_by: r.string(23)?,
-        detected_at: r.string(24)?,
-        updated_at: r.string(25)?,
-        series,
-    })
-}
-
 /// The short name of a measure in a title: `gpu_ms`, a pass name, a metric.
 pub fn measure_label(measure: &str) -> &str {
     // The parts of the key are the measure table's (`tessera_results::measure::Key`): a pass's GPU
@@ -371,9 +184,16 @@ fn median(mut v: Vec<f64>) -> f64 {
 
 /// The group's one-line title. With `code`, names are wrapped in backticks (Markdown).
 pub fn title(commit_after: &str, alerts: &[&Alert], code: bool) -> String {
+    // In Markdown, names are code spans, in which nothing can be escaped: backticks and pipes
+    // are replaced (names are validated on upload; older stores may hold anything).
     let q = |s: &str| {
         if code {
-            format!("`{s}`")
+            format!(
+                "`{}`",
+                s.replace('`', "'")
+                    .replace('|', "¦")
+                    .replace(['\n', '\r'], " ")
+            )
         } else {
             s.to_string()
         }
@@ -440,50 +260,95 @@ pub fn title(commit_after: &str, alerts: &[&Alert], code: bool) -> String {
     t
 }
 
+/// Whether a `speedup` alert moved through its baseline: the baseline variant's frame time moved
+/// in the same group, on the same scenario and adapter. The baseline is the measure's suffix
+/// (`speedup.native-vrs`), else `native`.
+fn via_baseline(a: &Alert, group: &[Alert]) -> bool {
+    let m = a.series.measure.as_str();
+    let Some(rest) = m.strip_prefix("speedup") else {
+        return false;
+    };
+    let baseline = rest
+        .strip_prefix('.')
+        .filter(|b| !b.is_empty())
+        .unwrap_or(tessera_results::measure::DEFAULT_BASELINE);
+    group.iter().any(|b| {
+        b.series.variant == baseline
+            && b.series.scenario == a.series.scenario
+            && b.series.adapter_id == a.series.adapter_id
+            && b.status != DetectionStatus::Withdrawn
+            && (b.series.measure == "gpu_ms.median" || b.series.measure == "cpu_ms.median")
+    })
+}
+
 /// Builds the groups of `alerts` (in their order: newest first); `filter` picks the alerts
 /// listed and the groups kept.
 fn build(all: Vec<Alert>, filter: &Filter) -> Vec<Group> {
-    let mut order: Vec<String> = Vec::new();
-    let mut by_key: BTreeMap<String, Vec<Alert>> = BTreeMap::new();
+    let mut order: Vec<i64> = Vec::new();
+    let mut by_id: BTreeMap<i64, Vec<Alert>> = BTreeMap::new();
     for a in all {
-        let k = a.group_key();
-        if !by_key.contains_key(&k) {
-            order.push(k.clone());
+        if !by_id.contains_key(&a.group_id) {
+            order.push(a.group_id);
         }
-        by_key.entry(k).or_default().push(a);
+        by_id.entry(a.group_id).or_default().push(a);
     }
     let mut out = Vec::new();
-    for k in order {
-        let members = by_key.remove(&k).unwrap_or_default();
-        let live: Vec<&Alert> = members.iter().filter(|a| a.status != "withdrawn").collect();
+    for id in order {
+        let mut members = by_id.remove(&id).unwrap_or_default();
+        let flags: Vec<bool> = members.iter().map(|a| via_baseline(a, &members)).collect();
+        for (a, f) in members.iter_mut().zip(flags) {
+            a.via_baseline = f;
+        }
+        let live: Vec<&Alert> = members
+            .iter()
+            .filter(|a| a.status != DetectionStatus::Withdrawn)
+            .collect();
         let basis: Vec<&Alert> = if live.is_empty() {
             members.iter().collect()
         } else {
             live
         };
-        let first = basis[0];
-        let states: BTreeSet<&str> = basis.iter().map(|a| a.state.as_str()).collect();
+        // The range most of its live alerts are at now (ties: the newest alert's).
+        let mut ranges: BTreeMap<String, (usize, usize)> = BTreeMap::new();
+        for (i, a) in basis.iter().enumerate() {
+            let e = ranges.entry(a.group_key()).or_insert((0, i));
+            e.0 += 1;
+        }
+        let (key, &(_, at)) = ranges
+            .iter()
+            .max_by(|x, y| x.1 .0.cmp(&y.1 .0).then(y.1 .1.cmp(&x.1 .1)))
+            .expect("a group has alerts");
+        let key = key.clone();
+        let first = basis[at];
+        let states: BTreeSet<TriageState> = basis.iter().map(|a| a.state).collect();
         let latest = basis
             .iter()
             .max_by(|x, y| x.updated_at.cmp(&y.updated_at).then(x.id.cmp(&y.id)))
             .unwrap();
         let state = if states.len() == 1 {
-            first.state.clone()
-        } else if states.contains("new") {
-            "new".to_string()
+            first.state
+        } else if states.contains(&TriageState::New) {
+            TriageState::New
         } else {
-            latest.state.clone()
+            latest.state
         };
-        let status = ["confirmed", "pending"]
+        let status = [DetectionStatus::Confirmed, DetectionStatus::Pending]
             .into_iter()
             .find(|s| basis.iter().any(|a| a.status == *s))
-            .unwrap_or("withdrawn")
-            .to_string();
+            .unwrap_or(DetectionStatus::Withdrawn);
         let adapters: BTreeSet<String> = basis.iter().map(|a| a.series.adapter.clone()).collect();
         let commit_after = crate::html::commit(first.commit_after.as_deref());
+        let own: Vec<&Alert> = basis.iter().copied().filter(|a| !a.via_baseline).collect();
+        let worse = own.iter().filter(|a| a.is_regression).count();
+        let titled: Vec<&Alert> = if own.is_empty() {
+            basis.clone()
+        } else {
+            own.clone()
+        };
         let mut group = Group {
-            title: title(&commit_after, &basis, false),
-            key: k,
+            id,
+            title: title(&commit_after, &titled, false),
+            key,
             commit_before: first.commit_before.clone(),
             commit_after: first.commit_after.clone(),
             status,
@@ -495,8 +360,14 @@ fn build(all: Vec<Alert>, filter: &Filter) -> Vec<Group> {
             updated_at: latest.updated_at.clone(),
             adapters: adapters.into_iter().collect(),
             series_count: basis.len(),
-            worse: basis.iter().filter(|a| a.is_regression).count(),
-            better: basis.iter().filter(|a| !a.is_regression).count(),
+            worse,
+            better: own.len() - worse,
+            via_baseline: basis.len() - own.len(),
+            direction: if worse > 0 {
+                "regression"
+            } else {
+                "improvement"
+            },
             size: basis
                 .iter()
                 .map(|a| a.relative_change.abs())
@@ -513,7 +384,14 @@ fn build(all: Vec<Alert>, filter: &Filter) -> Vec<Group> {
                 .unwrap_or_default(),
             alerts: Vec::new(),
         };
-        if filter.state.as_ref().is_some_and(|s| s != &group.state) {
+        if filter
+            .state
+            .as_ref()
+            .is_some_and(|s| s != group.state.as_str())
+        {
+            continue;
+        }
+        if filter.regressions_only && group.worse == 0 {
             continue;
         }
         let mut shown: Vec<Alert> = members.into_iter().filter(|a| filter.shows(a)).collect();
@@ -532,6 +410,17 @@ fn build(all: Vec<Alert>, filter: &Filter) -> Vec<Group> {
     out
 }
 
+fn read_all(conn: &mut dyn Connection, group: Option<i64>) -> Result<Vec<Alert>, StoreError> {
+    alerts::read(
+        conn,
+        Select {
+            group,
+            limit: MAX_ALERTS,
+            ..Select::default()
+        },
+    )
+}
+
 /// The groups matching `filter`, sorted, at most `limit`.
 pub fn list(
     conn: &mut dyn Connection,
@@ -540,36 +429,62 @@ pub fn list(
     limit: usize,
 ) -> Result<Vec<Group>, StoreError> {
     filter.validate()?;
-    let mut groups = build(alerts(conn, None, MAX_ALERTS)?, filter);
+    let mut groups = build(read_all(conn, None)?, filter);
     sort_groups(&mut groups, sort);
     groups.truncate(limit);
     Ok(groups)
 }
 
-/// One group with all its alerts (withdrawn ones included).
-pub fn get(conn: &mut dyn Connection, key: &str) -> Result<Group, StoreError> {
-    let not_found = || StoreError::NotFound(format!("alert group {key:?}"));
-    let parsed = parse_key(key).ok_or_else(not_found)?;
-    let all = alerts(conn, Some(&parsed), MAX_ALERTS)?;
+/// What a group link names: a group id (`12`), or a commit-range key the group is or was shown
+/// under (`c0ffee..beef42`), which the pages redirect to the id.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Named {
+    Id(i64),
+    Key(i64),
+}
+
+impl Named {
+    pub fn id(self) -> i64 {
+        match self {
+            Named::Id(i) | Named::Key(i) => i,
+        }
+    }
+}
+
+/// The group `name` (an id or a key) refers to.
+pub fn resolve(conn: &mut dyn Connection, name: &str) -> Result<Named, StoreError> {
+    let not_found = || StoreError::NotFound(format!("alert group {name:?}"));
+    if let Ok(id) = name.parse::<i64>() {
+        return if alerts::group_exists(conn, id)? {
+            Ok(Named::Id(id))
+        } else {
+            Err(not_found())
+        };
+    }
+    if !is_key(name) {
+        return Err(not_found());
+    }
+    alerts::group_of_key(conn, name)?
+        .map(Named::Key)
+        .ok_or_else(not_found)
+}
+
+/// One group with all its alerts (withdrawn ones included), by id.
+pub fn get(conn: &mut dyn Connection, id: i64) -> Result<Group, StoreError> {
     let filter = Filter {
         status: Some("all".into()),
         ..Filter::default()
     };
-    build(all, &filter)
+    build(read_all(conn, Some(id))?, &filter)
         .into_iter()
-        .find(|g| g.key == key)
-        .ok_or_else(not_found)
+        .next()
+        .ok_or_else(|| StoreError::NotFound(format!("alert group {id}")))
 }
 
-/// Ids of the alerts of group `key` (withdrawn ones included), for triage.
-pub fn alert_ids(conn: &mut dyn Connection, key: &str) -> Result<Vec<i64>, StoreError> {
-    let parsed =
-        parse_key(key).ok_or_else(|| StoreError::NotFound(format!("alert group {key:?}")))?;
-    Ok(alerts(conn, Some(&parsed), MAX_ALERTS)?
-        .into_iter()
-        .filter(|a| a.group_key() == key)
-        .map(|a| a.id)
-        .collect())
+/// One group by id or key (see [`resolve`]).
+pub fn get_named(conn: &mut dyn Connection, name: &str) -> Result<Group, StoreError> {
+    let id = resolve(conn, name)?.id();
+    get(conn, id)
 }
 
 /// Values the filters can take: adapters (id, name), suites and measures that have alerts.
@@ -588,7 +503,7 @@ pub fn list_with_facets(
     limit: usize,
 ) -> Result<(Vec<Group>, Facets), StoreError> {
     filter.validate()?;
-    let all = alerts(conn, None, MAX_ALERTS)?;
+    let all = read_all(conn, None)?;
     let mut adapters = BTreeSet::new();
     let mut suites = BTreeSet::new();
     let mut measures = BTreeSet::new();
@@ -614,31 +529,15 @@ fn sort_groups(groups: &mut [Group], sort: Sort) {
             y.started_at
                 .cmp(&x.started_at)
                 .then(y.detected_at.cmp(&x.detected_at))
-                .then(x.key.cmp(&y.key))
+                .then(y.id.cmp(&x.id))
         }),
-        Sort::Size => groups.sort_by(|x, y| y.size.total_cmp(&x.size).then(x.key.cmp(&y.key))),
+        Sort::Size => groups.sort_by(|x, y| y.size.total_cmp(&x.size).then(y.id.cmp(&x.id))),
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn keys_round_trip_and_refuse_junk() {
-        let k = key(Some("abc123"), 1, Some("def456"), 2);
-        assert_eq!(k, "abc123..def456");
-        assert_eq!(
-            parse_key(&k),
-            Some((Side::Commit("abc123".into()), Side::Commit("def456".into())))
-        );
-        let k = key(None, 7, Some("bad sha/../x"), 9);
-        assert_eq!(k, "~7..~9");
-        assert_eq!(parse_key(&k), Some((Side::Run(7), Side::Run(9))));
-        for junk in ["", "abc", "a..b..c", "~x..a", "a b..c", "../..x"] {
-            assert_eq!(parse_key(junk), None, "{junk:?}");
-        }
-    }
 
     #[test]
     fn measure_labels() {

@@ -26,7 +26,7 @@ pub enum Ingested {
         results: usize,
         series: Vec<i64>,
     },
-    /// A run with this id was stored before; nothing changed.
+    /// A run with this id and the same content was stored before; nothing changed.
     AlreadyStored { run_pk: i64 },
 }
 
@@ -105,15 +105,96 @@ pub fn digest(bytes: &[u8]) -> String {
         .collect()
 }
 
+/// Whether stored run `run_pk` holds what `bundle` holds: the same `run.json`, the same
+/// scenario records and the same images. A repeated upload of one run is idempotent; the same run
+/// id with different content is a [`StoreError::Conflict`] (409), never silently ignored.
+fn same_content(
+    conn: &mut dyn Connection,
+    run_pk: i64,
+    bundle: &RunBundle,
+) -> Result<(), StoreError> {
+    let id = &bundle.run.run_id;
+    let conflict = |what: &str| {
+        StoreError::Conflict(format!(
+            "run {id} is already stored with a different {what}; a run id names one run: give this run a new run_id, or delete the stored one first (DELETE /api/runs/{id})"
+        ))
+    };
+    let stored = conn.query(
+        "SELECT run_json FROM runs WHERE id = $1",
+        &[Value::Int(run_pk)],
+    )?;
+    let run_json = serde_json::to_string(&bundle.run).expect("records serialise");
+    if stored.first().map(|r| r.string(0)).transpose()?.as_deref() != Some(run_json.as_str()) {
+        return Err(conflict("run.json"));
+    }
+    let stored: BTreeMap<String, String> = conn
+        .query(
+            "SELECT scenario, record_json FROM scenario_results WHERE run_pk = $1",
+            &[Value::Int(run_pk)],
+        )?
+        .iter()
+        .map(|r| Ok((r.string(0)?, r.string(1)?)))
+        .collect::<Result<_, DbError>>()?;
+    let incoming: BTreeMap<String, String> = bundle
+        .scenarios
+        .iter()
+        .map(|s| {
+            (
+                s.scenario.clone(),
+                serde_json::to_string(s).expect("records serialise"),
+            )
+        })
+        .collect();
+    if stored != incoming {
+        return Err(conflict("set of scenario results"));
+    }
+    let stored: std::collections::BTreeSet<(String, String, String, i64, String)> = conn
+        .query(
+            "SELECT scenario, variant, kind, frame, digest FROM images WHERE run_pk = $1",
+            &[Value::Int(run_pk)],
+        )?
+        .iter()
+        .map(|r| {
+            Ok((
+                r.string(0)?,
+                r.string(1)?,
+                r.string(2)?,
+                r.i64(3)?,
+                r.string(4)?,
+            ))
+        })
+        .collect::<Result<_, DbError>>()?;
+    let mut incoming = std::collections::BTreeSet::new();
+    for s in &bundle.scenarios {
+        for v in &s.results {
+            for img in &v.images {
+                if let Some(bytes) = bundle.images.get(&img.path) {
+                    incoming.insert((
+                        s.scenario.clone(),
+                        v.variant.clone(),
+                        img.kind.clone(),
+                        i64::from(img.frame),
+                        digest(bytes),
+                    ));
+                }
+            }
+        }
+    }
+    if stored != incoming {
+        return Err(conflict("set of images"));
+    }
+    Ok(())
+}
+
 fn ingest_once(conn: &mut dyn Connection, bundle: &RunBundle) -> Result<Ingested, StoreError> {
     let run = &bundle.run;
     if let Some(row) = conn.query_opt(
         "SELECT id FROM runs WHERE run_id = $1",
         &[run.run_id.as_str().into()],
     )? {
-        return Ok(Ingested::AlreadyStored {
-            run_pk: row.i64(0)?,
-        });
+        let run_pk = row.i64(0)?;
+        same_content(conn, run_pk, bundle)?;
+        return Ok(Ingested::AlreadyStored { run_pk });
     }
     let adapter = adapter_id(conn, run)?;
     let mut counts = [0i64; 3];
@@ -157,9 +238,9 @@ fn ingest_once(conn: &mut dyn Connection, bundle: &RunBundle) -> Result<Ingested
             "SELECT id FROM runs WHERE run_id = $1",
             &[run.run_id.as_str().into()],
         )?;
-        return Ok(Ingested::AlreadyStored {
-            run_pk: row[0].i64(0)?,
-        });
+        let run_pk = row[0].i64(0)?;
+        same_content(conn, run_pk, bundle)?;
+        return Ok(Ingested::AlreadyStored { run_pk });
     };
     let run_pk = row.i64(0)?;
 

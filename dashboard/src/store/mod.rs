@@ -3,6 +3,7 @@
 //!
 //! Not for: SQL dialect details (see [`crate::db`]), HTTP or HTML.
 
+pub mod alerts;
 pub mod browse;
 pub mod delete;
 pub mod extras;
@@ -26,4 +27,7 @@ pub enum StoreError {
     NotFound(String),
     #[error("{0}")]
     Invalid(String),
+    /// The request contradicts what is stored (a run id stored with different content).
+    #[error("{0}")]
+    Conflict(String),
 }

@@ -354,30 +354,9 @@ pub fn series(conn: &mut dyn Connection, id: i64) -> Result<SeriesDetail, StoreE
     })
 }
 
-/// A detected change with its triage.
-#[derive(Clone, Debug, Serialize, PartialEq)]
-pub struct RegressionRow {
-    pub id: i64,
-    pub series: SeriesKey,
-    pub run_before: String,
-    pub commit_before: Option<String>,
-    pub run_after: String,
-    pub commit_after: Option<String>,
-    pub started_at: String,
-    pub value_before: f64,
-    pub value_after: f64,
-    pub relative_change: f64,
-    /// `true` when the change makes the measure worse.
-    pub is_regression: bool,
-    pub confidence: f64,
-    pub state: String,
-    pub note: String,
-    pub detected_at: String,
-    pub updated_at: String,
-    /// `pending` (too few runs after it yet; not notified) or `confirmed`; withdrawn alerts are
-    /// not listed.
-    pub status: String,
-}
+/// A stored change as the series page and `GET /api/regressions` show it: the alert row, read by
+/// its one owner.
+pub type RegressionRow = super::alerts::Alert;
 
 /// Stored changes that the data still supports (pending or confirmed), newest first, optionally
 /// of one triage state or one series.
@@ -387,44 +366,21 @@ pub fn regressions(
     series: Option<i64>,
     limit: i64,
 ) -> Result<Vec<RegressionRow>, StoreError> {
-    conn.query(
-        &format!(
-            "SELECT {SERIES_COLUMNS}, g.id, rb.run_id, rb.commit_sha, ra.run_id, ra.commit_sha, ra.started_at,
-                g.value_before, g.value_after, g.relative_change, g.confidence, g.state, g.note, g.detected_at,
-                g.updated_at, g.status
-             FROM regressions g JOIN series s ON s.id = g.series_id JOIN adapters a ON a.id = s.adapter_id
-             JOIN runs rb ON rb.id = g.run_pk_before JOIN runs ra ON ra.id = g.run_pk_after
-             WHERE (CAST($1 AS TEXT) IS NULL OR g.state = $1) AND (CAST($2 AS BIGINT) IS NULL OR g.series_id = $2)
-                 AND g.status <> 'withdrawn'
-             ORDER BY ra.started_at DESC, g.id DESC LIMIT $3"
-        ),
-        &[state.map(str::to_string).into(), series.into(), Value::Int(limit)],
-    )?
-    .iter()
-    .map(|r| {
-        let series = series_key(r)?;
-        let relative_change = r.opt_f64(15)?.unwrap_or(f64::INFINITY);
-        Ok(RegressionRow {
-            id: r.i64(7)?,
-            is_regression: (relative_change > 0.0) != series.higher_is_better,
+    let state: Option<super::alerts::TriageState> = state.map(str::parse).transpose()?;
+    let mut rows = super::alerts::read(
+        conn,
+        super::alerts::Select {
             series,
-            run_before: r.string(8)?,
-            commit_before: r.opt_string(9)?,
-            run_after: r.string(10)?,
-            commit_after: r.opt_string(11)?,
-            started_at: r.string(12)?,
-            value_before: r.f64(13)?,
-            value_after: r.f64(14)?,
-            relative_change,
-            confidence: r.f64(16)?,
-            state: r.string(17)?,
-            note: r.string(18)?,
-            detected_at: r.string(19)?,
-            updated_at: r.string(20)?,
-            status: r.string(21)?,
-        })
-    })
-    .collect()
+            live_only: true,
+            limit: if state.is_some() { i64::MAX } else { limit },
+            ..Default::default()
+        },
+    )?;
+    if let Some(st) = state {
+        rows.retain(|r| r.state == st);
+    }
+    rows.truncate(limit.max(0) as usize);
+    Ok(rows)
 }
 
 /// The newest run on an adapter that has `scenario` (any scenario when `None`), and the one before.

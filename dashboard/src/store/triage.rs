@@ -1,11 +1,15 @@
-//! Triage of detected regressions: a state (`new`, `acknowledged`, `invalid`, `fixed`,
-//! `ignored`), a note, a bug link, who changed it and when, kept in the store so that everyone
-//! sees the same. Set per alert, or per alert group ([`set_group`]: every alert of the group in
-//! one transaction). Not for: detection, grouping (see [`super::groups`]).
+//! Triage of detected changes: a state ([`TriageState`]), a note, a bug link, who changed it and
+//! when, kept in the store so that everyone sees the same. Set per alert, or per alert group
+//! ([`set_group`]: every alert of the group in one statement). The rows are
+//! [`super::alerts`]'s; this module checks what a person asks for and names the group.
+//!
+//! Not for: detection, grouping (see [`super::groups`]).
 
+use super::alerts::{self, TriageSet, TriageState};
 use super::{groups, StoreError};
-use crate::db::{transaction, Connection, Value};
+use crate::db::{transaction, Connection};
 
+/// The triage states, as words (pickers, messages).
 pub const STATES: [&str; 5] = ["new", "acknowledged", "invalid", "fixed", "ignored"];
 
 /// Longest note and bug link accepted, in bytes.
@@ -25,14 +29,8 @@ pub struct Triage {
 
 impl Triage {
     /// Checks state, note and bug link, with a message that says what is allowed.
-    pub fn validate(&self) -> Result<(), StoreError> {
-        if !STATES.contains(&self.state.as_str()) {
-            return Err(StoreError::Invalid(format!(
-                "state {:?} is not one of {}",
-                self.state,
-                STATES.join(", ")
-            )));
-        }
+    pub fn validate(&self) -> Result<TriageState, StoreError> {
+        let state: TriageState = self.state.parse()?;
         if self.note.len() > MAX_NOTE {
             return Err(StoreError::Invalid(format!(
                 "note is longer than {MAX_NOTE} bytes"
@@ -48,7 +46,7 @@ impl Triage {
                 "bug_url must be an http:// or https:// link without spaces, at most {MAX_BUG_URL} bytes"
             )));
         }
-        Ok(())
+        Ok(state)
     }
 }
 
@@ -65,59 +63,47 @@ pub fn set_alert(
     note: &str,
     who: &str,
 ) -> Result<(), StoreError> {
-    Triage {
+    let state = Triage {
         state: state.into(),
         note: note.into(),
         bug_url: String::new(),
     }
     .validate()?;
-    let n = conn.execute(
-        "UPDATE regressions SET state = $1, note = $2, updated_at = $3, updated_by = $4 WHERE id = $5",
-        &[
-            state.into(),
-            note.into(),
-            crate::now_rfc3339().into(),
-            who.into(),
-            Value::Int(id),
-        ],
-    )?;
-    if n == 0 {
+    let t = TriageSet {
+        state,
+        note,
+        bug_url: None,
+        who,
+    };
+    if !alerts::set_triage(conn, id, &t)? {
         return Err(StoreError::NotFound(format!("regression {id}")));
     }
     Ok(())
 }
 
-/// Sets state, note and bug link on every alert of group `key` in one transaction, recording who
-/// did it; returns how many alerts it set.
+/// Sets state, note and bug link on every alert of group `name` (its id, or a commit range it
+/// is or was shown under) in one transaction, recording who did it; returns the group's id and
+/// how many alerts it set.
 pub fn set_group(
     conn: &mut dyn Connection,
-    key: &str,
+    name: &str,
     t: &Triage,
     who: &str,
-) -> Result<usize, StoreError> {
-    t.validate()?;
-    let now = crate::now_rfc3339();
+) -> Result<(i64, usize), StoreError> {
+    let state = t.validate()?;
     transaction(conn, |c| {
-        let ids = groups::alert_ids(c, key)?;
-        if ids.is_empty() {
-            return Err(StoreError::NotFound(format!("alert group {key:?}")));
+        let id = groups::resolve(c, name)?.id();
+        let set = TriageSet {
+            state,
+            note: &t.note,
+            bug_url: Some(t.bug_url.trim()),
+            who,
+        };
+        let n = alerts::set_group_triage(c, id, &set)?;
+        if n == 0 {
+            return Err(StoreError::NotFound(format!("alert group {name:?}")));
         }
-        let mut n = 0;
-        for id in &ids {
-            n += c.execute(
-                "UPDATE regressions SET state = $1, note = $2, bug_url = $3, updated_by = $4, updated_at = $5
-                 WHERE id = $6",
-                &[
-                    t.state.as_str().into(),
-                    t.note.as_str().into(),
-                    t.bug_url.trim().into(),
-                    who.into(),
-                    now.as_str().into(),
-                    Value::Int(*id),
-                ],
-            )? as usize;
-        }
-        Ok::<_, StoreError>(n)
+        Ok::<_, StoreError>((id, n))
     })
 }
 
@@ -139,6 +125,11 @@ mod tests {
         }
         let mut s = t("");
         s.state = "closed".into();
-        assert!(s.validate().unwrap_err().to_string().contains("invalid"));
+        assert!(s.validate().unwrap_err().to_string().contains("not one of"));
+    }
+
+    #[test]
+    fn the_words_are_the_enums() {
+        assert_eq!(STATES.to_vec(), TriageState::names());
     }
 }

@@ -1,205 +1,24 @@
-//! Regressions, triaged by change: the page `/regressions` lists alert groups (the alerts that
-//! blame one commit range, see [`crate::store::groups`]) with their series, filters (adapter,
-//! suite, measure, state, direction, status) and sorting (date, size), and one triage form per
-//! group. `/regressions/groups/{key}` shows one group with a chart per series, `{key}.md` is its
-//! Markdown. JSON: `GET /api/regressions/groups`, `GET /api/regressions/groups/{key}`, triage
-//! `POST /api/regressions/groups/{key}` (`{"state", "note", "bug_url"}`, bearer token).
-//!
-//! The write token is entered once per browser session: a small script keeps it in
-//! `sessionStorage` and sends it as `Authorization: Bearer`. Without JavaScript the pages still
-//! show everything, and each form takes the token as a field instead (`POST
-//! /regressions/groups/{key}`). The flat per-alert API (`/api/regressions`, `POST
-//! /api/regressions/{id}`, `POST /regressions/{id}`) is kept.
+//! The regressions pages: the list of alert groups with filters and one triage form per group,
+//! and one group's page with its charts and the history of its alerts; their form posts for
+//! browsers without JavaScript.
+//! Not for: JSON (see [`super::api`]), the feed or Markdown.
 
 use std::fmt::Write;
 
 use axum::extract::{Path, Query, State};
-use axum::http::{header, HeaderMap};
+use axum::http::HeaderMap;
 use axum::response::{Html, IntoResponse, Redirect, Response};
-use axum::{Form, Json};
+use axum::Form;
 use serde::Deserialize;
 
-use super::{auth, AppError, AppState};
+use super::api::{apply, apply_group, AlertTriage};
+use super::{load_groups, GroupsQuery};
 use crate::html::{commit, enc, esc, num, page as layout, pct};
-use crate::notify;
-use crate::store::groups::{self, Alert, Facets, Filter, Group, Sort, DIRECTIONS};
-use crate::store::read::{self, RegressionRow};
-use crate::store::triage::{self, Triage, STATES};
+use crate::server::{auth, AppError, AppState};
+use crate::store::alerts::{self, Alert, DetectionStatus, Event, TriageState};
+use crate::store::groups::{self, Facets, Group, Named, DIRECTIONS};
+use crate::store::read;
 use crate::svg::{series_chart, SeriesMark};
-
-#[derive(Debug, Deserialize, Default)]
-pub struct RegressionsQuery {
-    pub state: Option<String>,
-    pub limit: Option<i64>,
-}
-
-async fn load(state: &AppState, q: RegressionsQuery) -> Result<Vec<RegressionRow>, AppError> {
-    let limit = q.limit.unwrap_or(200).clamp(1, 2000);
-    let st = q.state.filter(|s| !s.is_empty());
-    if let Some(s) = &st {
-        if !STATES.contains(&s.as_str()) {
-            return Err(AppError::BadRequest(format!(
-                "state must be one of {}",
-                STATES.join(", ")
-            )));
-        }
-    }
-    state
-        .db(move |c| Ok(read::regressions(c, st.as_deref(), None, limit)?))
-        .await
-}
-
-/// `GET /api/regressions`: every alert, one per series change, newest first.
-pub async fn api(
-    State(state): State<AppState>,
-    Query(q): Query<RegressionsQuery>,
-) -> Result<Json<Vec<RegressionRow>>, AppError> {
-    Ok(Json(load(&state, q).await?))
-}
-
-/// A one-line summary of a change, e.g.
-/// `tiny · upscale[scale=0.5] · llvmpipe · gpu_ms.median: 3.476 → 3.824 (+10.0%, worse), 99.9% confidence`.
-pub fn summary(r: &RegressionRow) -> String {
-    format!(
-        "{} · {} · {} · {}: {} → {} ({}, {}), {:.1}% confidence",
-        r.series.scenario,
-        r.series.variant,
-        r.series.adapter,
-        r.series.measure,
-        num(r.value_before),
-        num(r.value_after),
-        pct(r.relative_change),
-        if r.is_regression { "worse" } else { "better" },
-        r.confidence * 100.0
-    )
-}
-
-// ---------------------------------------------------------------------------------------------
-// Groups: query, loading.
-
-/// Filters and sorting of the page and `GET /api/regressions/groups`; empty values mean "all".
-#[derive(Debug, Deserialize, Default, Clone)]
-pub struct GroupsQuery {
-    pub adapter: Option<String>,
-    pub suite: Option<String>,
-    pub measure: Option<String>,
-    pub state: Option<String>,
-    pub direction: Option<String>,
-    pub status: Option<String>,
-    pub sort: Option<String>,
-    pub limit: Option<usize>,
-}
-
-fn non_empty(s: &Option<String>) -> Option<String> {
-    s.as_ref()
-        .map(|s| s.trim())
-        .filter(|s| !s.is_empty())
-        .map(str::to_string)
-}
-
-impl GroupsQuery {
-    fn parse(&self) -> Result<(Filter, Sort, usize), AppError> {
-        let adapter = match non_empty(&self.adapter) {
-            Some(a) => Some(a.parse::<i64>().map_err(|_| {
-                AppError::BadRequest(format!("adapter must be an adapter id, not {a:?}"))
-            })?),
-            None => None,
-        };
-        let filter = Filter {
-            adapter,
-            suite: non_empty(&self.suite),
-            measure: non_empty(&self.measure),
-            state: non_empty(&self.state),
-            direction: non_empty(&self.direction),
-            status: non_empty(&self.status),
-        };
-        filter
-            .validate()
-            .map_err(|e| AppError::BadRequest(e.to_string()))?;
-        let sort = Sort::parse(non_empty(&self.sort).as_deref())
-            .map_err(|e| AppError::BadRequest(e.to_string()))?;
-        Ok((filter, sort, self.limit.unwrap_or(200).clamp(1, 2000)))
-    }
-}
-
-async fn load_groups(state: &AppState, q: &GroupsQuery) -> Result<(Vec<Group>, Facets), AppError> {
-    let (filter, sort, limit) = q.parse()?;
-    state
-        .db(move |c| Ok(groups::list_with_facets(c, &filter, sort, limit)?))
-        .await
-}
-
-async fn load_group(state: &AppState, key: String) -> Result<Group, AppError> {
-    state.db(move |c| Ok(groups::get(c, &key)?)).await
-}
-
-/// The dashboard's public URL: `--public-url`, else `http://` and the request's `Host`.
-pub fn base_url(state: &AppState, headers: &HeaderMap) -> String {
-    if let Some(u) = &state.public_url {
-        return u.trim_end_matches('/').to_string();
-    }
-    let host = headers
-        .get(header::HOST)
-        .and_then(|h| h.to_str().ok())
-        .filter(|h| {
-            h.bytes()
-                .all(|b| b.is_ascii_alphanumeric() || b"-.:[]".contains(&b))
-        })
-        .unwrap_or("localhost");
-    format!("http://{host}")
-}
-
-/// Who is changing triage, as recorded in `updated_by`: the write token's name (`legacy` for
-/// `--token`).
-pub fn writer(state: &AppState, headers: &HeaderMap) -> Result<String, AppError> {
-    Ok(auth::require(state, headers, auth::Scope::Write)?.name)
-}
-
-// ---------------------------------------------------------------------------------------------
-// JSON API.
-
-/// `GET /api/regressions/groups`: groups with their matching alerts.
-pub async fn groups_api(
-    State(state): State<AppState>,
-    Query(q): Query<GroupsQuery>,
-) -> Result<Json<Vec<Group>>, AppError> {
-    Ok(Json(load_groups(&state, &q).await?.0))
-}
-
-/// `GET /api/regressions/groups/{key}`: one group with all its alerts.
-pub async fn group_api(
-    State(state): State<AppState>,
-    Path(key): Path<String>,
-) -> Result<Json<Group>, AppError> {
-    Ok(Json(load_group(&state, key).await?))
-}
-
-async fn apply_group(
-    state: &AppState,
-    key: String,
-    t: Triage,
-    who: String,
-) -> Result<usize, AppError> {
-    state
-        .db(move |c| Ok(triage::set_group(c, &key, &t, &who)?))
-        .await
-}
-
-/// `POST /api/regressions/groups/{key}`: sets state, note and bug link on every alert of the
-/// group in one transaction.
-pub async fn group_triage_api(
-    State(state): State<AppState>,
-    headers: HeaderMap,
-    Path(key): Path<String>,
-    body: Result<Json<Triage>, axum::extract::rejection::JsonRejection>,
-) -> Result<Json<serde_json::Value>, AppError> {
-    let who = writer(&state, &headers)?;
-    let Json(t) = body.map_err(|e| AppError::BadRequest(e.body_text()))?;
-    let n = apply_group(&state, key.clone(), t.clone(), who.clone()).await?;
-    Ok(Json(serde_json::json!({
-        "key": key, "updated": n, "state": t.state, "updated_by": who
-    })))
-}
 
 /// The form of a group without JavaScript: the token comes as a field.
 #[derive(Debug, Deserialize)]
@@ -220,17 +39,14 @@ pub async fn group_form(
     Form(f): Form<GroupForm>,
 ) -> Result<Redirect, AppError> {
     let who = auth::form_writer(&state, &f.token)?.name;
-    let t = Triage {
+    let t = crate::store::triage::Triage {
         state: f.state,
         note: f.note,
         bug_url: f.bug_url,
     };
-    apply_group(&state, key.clone(), t, who).await?;
-    Ok(Redirect::to(&format!("/regressions#g-{}", enc(&key))))
+    let (id, _) = apply_group(&state, key, t, who).await?;
+    Ok(Redirect::to(&format!("/regressions#g-{id}")))
 }
-
-// ---------------------------------------------------------------------------------------------
-// HTML.
 
 /// The page's own style and script: kept here so the page does not depend on the shared sheet.
 const STYLE: &str = "<style>
@@ -252,59 +68,8 @@ tr.series-row td{font-size:13px}tr.series-row.stat-withdrawn td{color:#888}
 .charts h3{font-size:14px;margin:16px 0 2px}
 </style>";
 
-const SCRIPT: &str = r#"<script>
-(() => {
-  const KEY = 'tessera-write-token';
-  const box = document.getElementById('token');
-  const save = document.getElementById('token-save');
-  const forget = document.getElementById('token-forget');
-  const said = document.getElementById('token-state');
-  const show = () => {
-    const t = sessionStorage.getItem(KEY);
-    said.textContent = t ? 'write token set for this browser session' : 'enter the write token once to triage in this browser session';
-    box.hidden = save.hidden = !!t;
-    forget.hidden = !t;
-  };
-  save.addEventListener('click', () => {
-    const t = box.value.trim();
-    if (t) { sessionStorage.setItem(KEY, t); box.value = ''; }
-    show();
-  });
-  box.addEventListener('keydown', e => { if (e.key === 'Enter') { e.preventDefault(); save.click(); } });
-  forget.addEventListener('click', () => { sessionStorage.removeItem(KEY); show(); });
-  for (const f of document.querySelectorAll('form.triage')) {
-    f.addEventListener('submit', async e => {
-      e.preventDefault();
-      const out = f.querySelector('.result');
-      const t = sessionStorage.getItem(KEY);
-      if (!t) { out.className = 'result failed'; out.textContent = 'enter the write token above first'; box.focus(); return; }
-      const body = { state: f.elements.state.value, note: f.elements.note.value, bug_url: f.elements.bug_url.value };
-      out.className = 'result'; out.textContent = 'saving…';
-      try {
-        const r = await fetch('/api/regressions/groups/' + encodeURIComponent(f.dataset.key), {
-          method: 'POST',
-          headers: { 'Content-Type': 'application/json', 'Authorization': 'Bearer ' + t },
-          body: JSON.stringify(body),
-        });
-        const j = await r.json().catch(() => ({}));
-        if (r.ok) {
-          out.className = 'result ok';
-          out.textContent = 'saved for ' + j.updated + ' series by ' + j.updated_by;
-          const badge = document.querySelector('[data-state-of="' + CSS.escape(f.dataset.key) + '"]');
-          if (badge) { badge.textContent = body.state; badge.className = 'badge st-' + body.state; }
-        } else {
-          out.className = 'result failed';
-          out.textContent = (j.error || ('HTTP ' + r.status));
-          if (r.status === 401) { sessionStorage.removeItem(KEY); show(); }
-        }
-      } catch (err) {
-        out.className = 'result failed'; out.textContent = 'not saved: ' + err;
-      }
-    });
-  }
-  show();
-})();
-</script>"#;
+/// The pages' script: triage with the token kept for the browser session.
+const SCRIPT: &str = "<script src=\"/assets/regressions.js\" defer></script>";
 
 const TOKEN_BAR: &str = "<div id=tokenbar><span id=token-state>write token: needs JavaScript, or give it in each form</span><input id=token type=password size=18 placeholder=\"write token\" autocomplete=off hidden><button type=button id=token-save hidden>use for this session</button><button type=button id=token-forget hidden>forget token</button></div>";
 
@@ -358,7 +123,12 @@ fn filters_form(q: &GroupsQuery, f: &Facets) -> String {
         q.measure.as_deref(),
         &same(&f.measures),
     ));
-    b.push_str(&select("state", "state", q.state.as_deref(), &own(&STATES)));
+    b.push_str(&select(
+        "state",
+        "state",
+        q.state.as_deref(),
+        &own(&TriageState::names()),
+    ));
     b.push_str(&select(
         "direction",
         "direction",
@@ -409,7 +179,7 @@ fn change_cell(a: &Alert) -> String {
 
 /// The header row of a group: title, triage, commits, and its form.
 fn group_head(g: &Group, b: &mut String, title_link: bool) {
-    let key = enc(&g.key);
+    let key = g.id;
     let title = if title_link {
         format!(
             "<a href=\"/regressions/groups/{key}\">{}</a>",
@@ -421,12 +191,12 @@ fn group_head(g: &Group, b: &mut String, title_link: bool) {
     let _ = write!(
         b,
         "<h2>{title}</h2><p class=meta><span class=\"badge st-{}\" data-state-of=\"{}\">{}</span>{} <span class=\"badge stat-{}\">{}</span> · commits <code>{}</code> → <code>{}</code> · <span class=\"count worse\">{} worse</span>, <span class=\"count better\">{} better</span> on {} · newest run {} · <a href=\"/regressions/groups/{key}.md\">Markdown</a>",
-        esc(&g.state),
+        esc(g.state.as_str()),
         esc(&g.key),
-        esc(&g.state),
+        esc(g.state.as_str()),
         if g.mixed_state { " <span class=muted>(alerts differ)</span>" } else { "" },
-        esc(&g.status),
-        esc(&g.status),
+        esc(g.status.as_str()),
+        esc(g.status.as_str()),
         esc(&commit(g.commit_before.as_deref())),
         esc(&commit(g.commit_after.as_deref())),
         g.worse,
@@ -455,10 +225,10 @@ fn group_head(g: &Group, b: &mut String, title_link: bool) {
     }
     let _ = write!(
         b,
-        "</p><form class=triage method=post action=\"/regressions/groups/{key}\" data-key=\"{}\"><select name=state aria-label=state>",
+        "</p><form class=triage method=post action=\"/regressions/groups/{key}\" data-group={key} data-key=\"{}\"><select name=state aria-label=state>",
         esc(&g.key)
     );
-    for s in STATES {
+    for s in TriageState::ALL {
         let sel = if s == g.state { " selected" } else { "" };
         let _ = write!(b, "<option{sel}>{s}</option>");
     }
@@ -476,7 +246,7 @@ fn alert_row(a: &Alert, b: &mut String) {
         b,
         "<tr id=r{} class=\"series-row stat-{}\"><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td><a href=\"/series/{}\">{}</a></td><td class=n>{}</td><td class=n>{}</td><td class=n>{}</td><td class=n>{:.1}%</td><td>{}</td></tr>",
         a.id,
-        esc(&a.status),
+        esc(a.status.as_str()),
         esc(&a.series.adapter),
         esc(&a.suite),
         esc(&a.series.scenario),
@@ -487,7 +257,7 @@ fn alert_row(a: &Alert, b: &mut String) {
         num(a.value_after),
         change_cell(a),
         a.confidence * 100.0,
-        esc(&a.status)
+        esc(a.status.as_str())
     );
 }
 
@@ -515,7 +285,8 @@ pub fn render(groups: &[Group], facets: &Facets, q: &GroupsQuery) -> String {
     for g in groups {
         let _ = write!(
             b,
-            "<tbody class=group id=\"g-{}\"><tr class=head><td colspan=10>",
+            "<tbody class=group id=\"g-{}\" data-key=\"{}\"><tr class=head><td colspan=10>",
+            g.id,
             esc(&g.key)
         );
         group_head(g, &mut b, true);
@@ -568,7 +339,8 @@ pub fn render_group(g: &Group, charts: &[(Alert, read::SeriesDetail)]) -> String
     b.push_str(TOKEN_BAR);
     let _ = write!(
         b,
-        "<table id=regressions><tbody class=group id=\"g-{}\"><tr class=head><td colspan=10>",
+        "<table id=regressions><tbody class=group id=\"g-{}\" data-key=\"{}\"><tr class=head><td colspan=10>",
+        g.id,
         esc(&g.key)
     );
     group_head(g, &mut b, false);
@@ -619,7 +391,12 @@ pub fn render_group(g: &Group, charts: &[(Alert, read::SeriesDetail)]) -> String
             esc(&a.series.measure),
             change_cell(a)
         );
-        b.push_str(&series_chart(&marks, &cps, &[], &a.series.measure));
+        b.push_str(&series_chart(
+            &marks,
+            &cps,
+            &[],
+            &crate::html::axis_label(&a.series.measure),
+        ));
     }
     if g.alerts.len() > charts.len() {
         let _ = write!(
@@ -633,107 +410,101 @@ pub fn render_group(g: &Group, charts: &[(Alert, read::SeriesDetail)]) -> String
     b
 }
 
-/// `GET /regressions/groups/{key}` (HTML) and `GET /regressions/groups/{key}.md` (Markdown).
+/// `GET /regressions/groups/{id}` (HTML) and `GET /regressions/groups/{id}.md` (Markdown); a
+/// commit-range key the group is or was shown under answers 308 to the id's URL.
 pub async fn group_page(
     State(state): State<AppState>,
     headers: HeaderMap,
     Path(file): Path<String>,
 ) -> Result<Response, AppError> {
-    if let Some(key) = file
-        .strip_suffix(".md")
-        .filter(|k| groups::parse_key(k).is_some())
-    {
-        let g = load_group(&state, key.to_string()).await?;
-        let md = notify::markdown::render(&g, &base_url(&state, &headers));
-        return Ok(([(header::CONTENT_TYPE, "text/markdown; charset=utf-8")], md).into_response());
+    let (name, md) = match file.strip_suffix(".md") {
+        Some(n) => (n.to_string(), ".md"),
+        None => (file, ""),
+    };
+    let id = match super::resolve(&state, name).await? {
+        Named::Key(id) => {
+            return Ok(
+                Redirect::permanent(&format!("/regressions/groups/{id}{md}")).into_response(),
+            )
+        }
+        Named::Id(id) => id,
+    };
+    if !md.is_empty() {
+        return super::formats::markdown(&state, &headers, id).await;
     }
-    let (g, charts) = state
+    let (g, charts, history, keys) = state
         .db(move |c| {
-            let g = groups::get(c, &file)?;
+            let g = groups::get(c, id)?;
             let mut charts = Vec::new();
             for a in g
                 .alerts
                 .iter()
-                .filter(|a| a.status != "withdrawn")
+                .filter(|a| a.status != DetectionStatus::Withdrawn)
                 .take(MAX_CHARTS)
             {
                 charts.push((a.clone(), read::series(c, a.series.id)?));
             }
-            Ok((g, charts))
+            let history = alerts::events_of_group(c, id)?;
+            let keys = alerts::keys_of_group(c, id)?;
+            Ok((g, charts, history, keys))
         })
         .await?;
     let title = format!(
-        "Alert group {}..{}",
+        "Alert group {}: {}..{}",
+        g.id,
         commit(g.commit_before.as_deref()),
         commit(g.commit_after.as_deref())
     );
-    Ok(Html(layout(&title, "regressions", &render_group(&g, &charts))).into_response())
+    let mut body = render_group(&g, &charts);
+    body.push_str(&render_history(&g, &history, &keys));
+    Ok(Html(layout(&title, "regressions", &body)).into_response())
 }
 
-#[derive(Debug, Deserialize, Default)]
-pub struct FeedQuery {
-    /// Only groups in this triage state (e.g. `new`).
-    pub state: Option<String>,
-}
-
-/// `GET /regressions/feed.atom`: the 50 most recently detected confirmed groups.
-pub async fn feed(
-    State(state): State<AppState>,
-    headers: HeaderMap,
-    Query(q): Query<FeedQuery>,
-) -> Result<Response, AppError> {
-    let filter = Filter {
-        status: Some("confirmed".into()),
-        state: non_empty(&q.state),
-        ..Filter::default()
-    };
-    filter
-        .validate()
-        .map_err(|e| AppError::BadRequest(e.to_string()))?;
-    let mut groups = state
-        .db(move |c| Ok(groups::list(c, &filter, Sort::Date, usize::MAX)?))
-        .await?;
-    groups.sort_by(|x, y| {
-        (y.detected_at.cmp(&x.detected_at))
-            .then(y.started_at.cmp(&x.started_at))
-            .then(x.key.cmp(&y.key))
-    });
-    groups.truncate(50);
-    let xml = notify::atom::feed(&groups, &base_url(&state, &headers), &crate::now_rfc3339());
-    Ok((
-        [(header::CONTENT_TYPE, "application/atom+xml; charset=utf-8")],
-        xml,
-    )
-        .into_response())
-}
-
-// ---------------------------------------------------------------------------------------------
-// Per-alert triage (kept for scripts written against it).
-
-#[derive(Debug, Deserialize)]
-pub struct AlertTriage {
-    pub state: String,
-    #[serde(default)]
-    pub note: String,
-}
-
-async fn apply(state: &AppState, id: i64, t: AlertTriage, who: String) -> Result<(), AppError> {
-    state
-        .db(move |c| Ok(triage::set_alert(c, id, &t.state, &t.note, &who)?))
-        .await
-}
-
-/// `POST /api/regressions/{id}`: one alert's state and note.
-pub async fn triage_api(
-    State(state): State<AppState>,
-    headers: HeaderMap,
-    Path(id): Path<i64>,
-    body: Result<Json<AlertTriage>, axum::extract::rejection::JsonRejection>,
-) -> Result<Json<serde_json::Value>, AppError> {
-    let who = writer(&state, &headers)?;
-    let Json(t) = body.map_err(|e| AppError::BadRequest(e.body_text()))?;
-    apply(&state, id, t, who).await?;
-    Ok(Json(serde_json::json!({ "id": id, "updated": true })))
+/// The group's history: every move with its reason, confirmations, withdrawals, and the commit
+/// ranges it was shown under (each still links here).
+fn render_history(g: &Group, events: &[Event], keys: &[String]) -> String {
+    let mut b = String::from("<h2 id=history>History</h2>");
+    let moves = events.iter().filter(|e| e.kind == "moved").count();
+    let _ = write!(
+        b,
+        "<p>{} event{}, {} move{} · shown under {}</p>",
+        events.len(),
+        if events.len() == 1 { "" } else { "s" },
+        moves,
+        if moves == 1 { "" } else { "s" },
+        keys.iter()
+            .map(|k| format!("<code>{}</code>", esc(k)))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    let series: std::collections::BTreeMap<i64, String> = g
+        .alerts
+        .iter()
+        .map(|a| {
+            (
+                a.id,
+                format!(
+                    "{} · {} · {}",
+                    a.series.scenario, a.series.variant, a.series.measure
+                ),
+            )
+        })
+        .collect();
+    b.push_str("<table id=events><tr><th>at</th><th>alert</th><th>event</th><th>detail</th></tr>");
+    for e in events.iter().rev().take(200) {
+        let _ = write!(
+            b,
+            "<tr class=\"ev-{}\"><td>{}</td><td><a href=\"#r{}\">{}</a></td><td>{}</td><td>{}</td></tr>",
+            esc(&e.kind),
+            esc(&e.at),
+            e.alert,
+            esc(series.get(&e.alert).map_or("", |s| s.as_str())),
+            esc(&e.kind),
+            esc(&e.detail)
+        );
+    }
+    b.push_str("</table>");
+    b
 }
 
 #[derive(Debug, Deserialize)]

@@ -1,0 +1,211 @@
+//! Per-frame charts of a variant: one small SVG per metric (and the frame's GPU time) over the
+//! measured frames, each with a marker at the frame the image viewer shows; the viewer's script
+//! moves every marker when its frame slider moves (`data-f0`, `data-x0`, `data-dx` place frame
+//! `f` at `x0 + (f - f0) * dx`). The worst frame of each metric is marked and named, so "find the
+//! frames where this technique is worst and look at them" is one glance. Server-drawn, so the
+//! numbers are there without JavaScript.
+//!
+//! Not for: series over commits (see [`crate::svg`], [`crate::chart`]).
+
+use std::fmt::Write;
+
+use tessera_results::measure::{Direction, Measure};
+use tessera_results::VariantResult;
+
+use crate::html::{esc, num};
+
+const W: f64 = 360.0;
+const H: f64 = 96.0;
+const LEFT: f64 = 52.0;
+const RIGHT: f64 = 8.0;
+const TOP: f64 = 18.0;
+const BOTTOM: f64 = 18.0;
+
+/// One chart: a title with its unit, the frames and their values (non-finite values are gaps),
+/// and whether higher is worse (to name the worst frame).
+pub struct FrameSeries {
+    pub title: String,
+    pub frames: Vec<u32>,
+    pub values: Vec<f64>,
+    pub higher_is_worse: bool,
+}
+
+/// The per-frame series of a variant: its frame GPU time (the sum of its passes per frame) and
+/// every metric with per-frame values.
+pub fn series_of(v: &VariantResult) -> Vec<FrameSeries> {
+    let mut out = Vec::new();
+    let n = v
+        .passes
+        .iter()
+        .map(|p| p.samples_ms.len())
+        .max()
+        .unwrap_or(0);
+    if n > 0 && v.passes.iter().all(|p| p.samples_ms.len() == n) {
+        out.push(FrameSeries {
+            title: "GPU time per frame (ms)".into(),
+            frames: (0..n as u32).collect(),
+            values: (0..n)
+                .map(|i| v.passes.iter().map(|p| p.samples_ms[i]).sum())
+                .collect(),
+            higher_is_worse: true,
+        });
+    }
+    for m in &v.metrics {
+        if m.per_frame.len() < 2
+            || m.per_frame.len() != m.frames.len()
+            || !m.per_frame.iter().any(|v| v.is_finite())
+        {
+            continue;
+        }
+        let unit = Measure::from_name(&m.name).map_or("", |x| x.unit());
+        let title = if unit.is_empty() {
+            format!("{} per frame", m.name)
+        } else {
+            format!("{} per frame ({unit})", m.name)
+        };
+        let higher_is_worse = match Measure::from_name(&m.name).map(|x| x.direction()) {
+            Some(Direction::HigherIsBetter) => false,
+            Some(_) => true,
+            None => !m.higher_is_better,
+        };
+        out.push(FrameSeries {
+            title,
+            frames: m.frames.clone(),
+            values: m.per_frame.clone(),
+            higher_is_worse,
+        });
+    }
+    out
+}
+
+/// The charts of `series` side by side (they wrap on a narrow screen).
+pub fn render(series: &[FrameSeries]) -> String {
+    if series.is_empty() {
+        return String::new();
+    }
+    let mut b = String::from("<div class=frame-charts id=frame-charts>");
+    for s in series {
+        b.push_str(&chart(s));
+    }
+    b.push_str("</div>");
+    b
+}
+
+fn chart(s: &FrameSeries) -> String {
+    let f0 = s.frames.iter().copied().min().unwrap_or(0);
+    let f1 = s.frames.iter().copied().max().unwrap_or(0).max(f0 + 1);
+    let dx = (W - LEFT - RIGHT) / f64::from(f1 - f0);
+    let finite: Vec<f64> = s.values.iter().copied().filter(|v| v.is_finite()).collect();
+    let (lo, hi) = finite
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    let (lo, hi) = if !lo.is_finite() {
+        (0.0, 1.0)
+    } else if hi - lo < 1e-12 {
+        (lo - 0.5, hi + 0.5)
+    } else {
+        (lo, hi)
+    };
+    let x = |f: u32| LEFT + f64::from(f - f0) * dx;
+    let y = |v: f64| TOP + (H - TOP - BOTTOM) * (1.0 - (v - lo) / (hi - lo));
+    let worst = s
+        .values
+        .iter()
+        .enumerate()
+        .filter(|(_, v)| v.is_finite())
+        .max_by(|a, b| {
+            let (a, b) = (*a.1, *b.1);
+            if s.higher_is_worse {
+                a.total_cmp(&b)
+            } else {
+                b.total_cmp(&a)
+            }
+        })
+        .map(|(i, v)| (s.frames[i], *v));
+    let mut out = format!(
+        "<figure class=frame-chart><svg viewBox=\"0 0 {W} {H}\" width={W} height={H} role=img aria-label=\"{}\" data-f0={f0} data-x0={LEFT} data-dx={dx:.4}>",
+        esc(&s.title)
+    );
+    let _ = write!(
+        out,
+        "<text x={LEFT} y=12 font-size=11>{}</text><text x={} y=12 font-size=10 text-anchor=end fill=#555>{}</text>",
+        esc(&s.title),
+        W - RIGHT,
+        worst.map_or(String::new(), |(f, v)| format!("worst: frame {f} ({})", num(v)))
+    );
+    for (v, yy) in [(hi, y(hi)), (lo, y(lo))] {
+        let _ = write!(
+            out,
+            "<text x={} y={:.1} font-size=10 text-anchor=end fill=#555>{}</text><line x1={LEFT} x2={} y1={yy:.1} y2={yy:.1} stroke=#eee />",
+            LEFT - 4.0,
+            yy + 3.0,
+            num(v),
+            W - RIGHT
+        );
+    }
+    let _ = write!(
+        out,
+        "<text x={LEFT} y={} font-size=10 fill=#555>frame {f0}</text><text x={} y={} font-size=10 text-anchor=end fill=#555>{f1}</text>",
+        H - 4.0,
+        W - RIGHT,
+        H - 4.0
+    );
+    // One polyline per run of finite values (an infinite PSNR is a gap).
+    let mut runs: Vec<String> = vec![String::new()];
+    for (f, v) in s.frames.iter().zip(&s.values) {
+        if !v.is_finite() {
+            runs.push(String::new());
+            continue;
+        }
+        let last = runs.last_mut().expect("one run");
+        let _ = write!(last, "{:.1},{:.1} ", x(*f), y(*v));
+    }
+    for pts in runs.iter().filter(|p| !p.is_empty()) {
+        let _ = write!(
+            out,
+            "<polyline points=\"{}\" fill=none stroke=#1f5fa8 stroke-width=1.5 />",
+            pts.trim()
+        );
+    }
+    if let Some((f, v)) = worst {
+        let _ = write!(
+            out,
+            "<circle cx={:.1} cy={:.1} r=3 fill=#b3261e><title>worst: frame {f}, {}</title></circle>",
+            x(f),
+            y(v),
+            num(v)
+        );
+    }
+    let _ = write!(
+        out,
+        "<line class=frame-marker x1={x0:.1} x2={x0:.1} y1={TOP} y2={} stroke=#e08a00 stroke-width=2 /></svg></figure>",
+        H - BOTTOM,
+        x0 = x(f0)
+    );
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_worst_frame_is_named_and_the_marker_starts_at_the_first() {
+        let s = FrameSeries {
+            title: "flip per frame".into(),
+            frames: vec![0, 1, 2, 3],
+            values: vec![0.1, 0.4, 0.2, f64::INFINITY],
+            higher_is_worse: true,
+        };
+        let svg = chart(&s);
+        assert!(svg.contains("worst: frame 1 (0.4000)"), "{svg}");
+        assert!(svg.contains("class=frame-marker x1=52.0"), "{svg}");
+        let psnr = FrameSeries {
+            higher_is_worse: false,
+            ..s
+        };
+        assert!(chart(&psnr).contains("worst: frame 0"));
+    }
+}
