@@ -653,6 +653,7 @@ fn the_depth_test_rejects_half_the_samples_native_shades() {
         ndc_offset: glam::Vec2::ZERO,
         ndc_scale: glam::Vec2::ONE,
         gradient_scale: 1.0,
+        lod_bias: 0.0,
     };
     scene.write_view(&gpu.queue, 0, &view);
     let query = gpu.device.create_query_set(&wgpu::QuerySetDescriptor {

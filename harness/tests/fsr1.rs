@@ -73,7 +73,7 @@ technique = "native"
 /// Renders `frames` frames of `v`, comparing EASU and RCAS with the model every frame.
 fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) {
     let gpu = common::gpu();
-    let mut scene = SceneGpu::new(&gpu.device, s).unwrap();
+    let mut scene = SceneGpu::new(&gpu.device, &gpu.queue, s).unwrap();
     let options = Options::from_variant(v);
     let mut t = Fsr1Gpu::new(&gpu, options, s.width, s.height);
     let mut timers = Timers::new(&gpu.device, &[]).unwrap();

@@ -246,7 +246,7 @@ fn an_alpha_tested_card_shows_the_background_through_its_cut_out() {
         dir.path(),
         "mask",
         4.0,
-        &[img.clone()],
+        std::slice::from_ref(&img),
         &mat("MASK"),
         TRILINEAR,
     );

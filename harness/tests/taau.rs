@@ -148,7 +148,7 @@ fn render_pixels_sample_at_the_claimed_jitter_positions() {
         STILL,
     ]);
     let gpu = common::gpu();
-    let mut scene = SceneGpu::new(&gpu.device, &s).unwrap();
+    let mut scene = SceneGpu::new(&gpu.device, &gpu.queue, &s).unwrap();
     let (w, h) = (s.width, s.height);
     // 4x per axis, unjittered: hi-res pixel k's centre is at (k + 0.5) / 4 render pixels.
     let hi = render_view(&gpu, &mut scene, (4 * w, 4 * h), View::whole(0.0, 0.0));
@@ -189,7 +189,7 @@ fn render_pixels_sample_at_the_claimed_jitter_positions() {
 fn a_still_camera_accumulates_the_mean_of_the_claimed_samples() {
     let s = scenario(&[SCENE, STILL]);
     let gpu = common::gpu();
-    let mut scene = SceneGpu::new(&gpu.device, &s).unwrap();
+    let mut scene = SceneGpu::new(&gpu.device, &gpu.queue, &s).unwrap();
     let v = common::variant("taau", &[]);
     let options = Options::from_variant(&v);
     assert_eq!(options.phases, 32);
@@ -248,7 +248,7 @@ fn a_still_camera_accumulates_the_mean_of_the_claimed_samples() {
 /// each frame's sources.
 fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) -> Vec<Vec<Source>> {
     let gpu = common::gpu();
-    let mut scene = SceneGpu::new(&gpu.device, s).unwrap();
+    let mut scene = SceneGpu::new(&gpu.device, &gpu.queue, s).unwrap();
     let options = Options::from_variant(v);
     let dynamic = s.scene.has_dynamic_objects();
     let mut t = TaauGpu::new(&gpu, options, s.width, s.height, dynamic);

@@ -82,6 +82,7 @@ fn variant(name: &str, samples: &[f64], psnr: f64) -> VariantResult {
             value: psnr,
             higher_is_better: true,
             frame_stats: None,
+            metrics_device: None,
         }],
         non_finite_values: 0,
         stability: None,

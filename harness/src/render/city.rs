@@ -545,7 +545,7 @@ fn textures(size: u32, detail: f32, seed: u64) -> Vec<(Image, Encoding)> {
         };
         [255, unorm8(rough), unorm8(metal), 255]
     });
-    let mut rng = Rng(seed ^ 0x0a5f_a17);
+    let mut rng = Rng(seed ^ 0x00a5_fa17);
     let speckle: Vec<f32> = (0..n * n).map(|_| rng.unit()).collect();
     let road = img(&mut |x, y| {
         let (i, j) = ((x * n as f32) as usize, (y * n as f32) as usize);
@@ -556,7 +556,7 @@ fn textures(size: u32, detail: f32, seed: u64) -> Vec<(Image, Encoding)> {
     let road_mr = img(&mut |x, y| [255, unorm8(0.75 + 0.2 * grain(x, y, cycles)), 0, 255]);
     // Foliage: discs on an 8x8 jittered grid inside an ellipse; alpha is the cut-out.
     let cells = 8usize;
-    let mut rng = Rng(seed ^ 0xf011_a6e);
+    let mut rng = Rng(seed ^ 0x0f01_1a6e);
     let centres: Vec<Vec2> = (0..cells * cells)
         .map(|_| Vec2::new(rng.unit(), rng.unit()) * 0.6 + 0.2)
         .collect();

@@ -166,7 +166,7 @@ fn read_primitive(
             "index {bad} is out of range (the primitive has {n} vertices)"
         ));
     }
-    if indices.len() % 3 != 0 {
+    if !indices.len().is_multiple_of(3) {
         return Err(format!(
             "{} indices do not make whole triangles",
             indices.len()
@@ -289,10 +289,12 @@ fn read_material(
         let image = match image_index.get(&key) {
             Some(&i) => i,
             None => {
-                if !decoded.contains_key(&source.index()) {
+                if let std::collections::hash_map::Entry::Vacant(slot) =
+                    decoded.entry(source.index())
+                {
                     let data = gltf::image::Data::from_source(source.source(), Some(base), buffers)
                         .map_err(|e| format!("image {}: {e}", source.index()))?;
-                    decoded.insert(source.index(), to_rgba8(&data));
+                    slot.insert(to_rgba8(&data));
                 }
                 images.push((decoded[&source.index()].clone(), encoding));
                 image_index.insert(key, images.len() - 1);
