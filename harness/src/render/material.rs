@@ -19,15 +19,15 @@ use std::sync::Mutex;
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat3, Vec2, Vec3, Vec4};
 
+use super::formats::{ScenePipeline, COLOR_FORMAT, DEPTH_FORMAT};
 use super::mips::MipGenerator;
-use super::scene::{ScenePipeline, COLOR_FORMAT, DEPTH_FORMAT};
 use super::texture::{self, Encoding, Image, SamplerDesc};
 
 pub static MATERIAL_WGSL: &str = include_str!("../../../shaders/material/material.wgsl");
 
 /// `scene.wgsl` with the textured-material entry points appended, as the GPU compiles it.
 pub fn material_wgsl() -> String {
-    format!("{}\n{MATERIAL_WGSL}", super::scene::SCENE_WGSL)
+    format!("{}\n{MATERIAL_WGSL}", super::formats::SCENE_WGSL)
 }
 
 #[repr(C)]

@@ -4,6 +4,7 @@
 //! drives, and a kit of GPU helpers techniques build with. Techniques are in `techniques/`.
 
 pub mod city;
+pub mod formats;
 pub mod gltf_model;
 pub mod graph;
 pub mod kit;

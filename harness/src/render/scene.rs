@@ -20,14 +20,11 @@ use super::mesh::{self, Mesh, MeshError, Vertex};
 use super::{city, gltf_model};
 use crate::scenario::scene::{CameraPose, GroundFilter, Light, Stage};
 
-pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
-pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+pub use super::formats::{ScenePipeline, COLOR_FORMAT, DEPTH_FORMAT, SCENE_WGSL};
 pub const MAX_LIGHTS: usize = 8;
 /// Views (camera + jitter combinations) a technique may render per frame.
 pub const VIEW_SLOTS: u64 = 4;
 const SLOT_STRIDE: u64 = 1024;
-
-pub static SCENE_WGSL: &str = include_str!("../../../shaders/scene.wgsl");
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -94,17 +91,6 @@ impl View {
             lod_bias: 0.0,
         }
     }
-}
-
-/// The scene shader's pipelines.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum ScenePipeline {
-    /// `fs_main`, shaded once per pixel.
-    Forward { samples: u32 },
-    /// `fs_main_sample`, shaded once per sample (checkerboard's 2x MSAA sampling).
-    PerSample { samples: u32 },
-    /// `fs_velocity`: screen motion in pixels, z = 1 on dynamic objects.
-    Velocity,
 }
 
 /// A draw: one object's index range.
