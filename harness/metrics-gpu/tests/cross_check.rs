@@ -544,7 +544,9 @@ fn bad_input_gives_the_cpu_errors() {
     };
     let v = gpu.pair(pair(&a, &a), &req).unwrap();
     assert_eq!(v.mse_rgb, Some(0.0));
-    assert_eq!(v.flip.unwrap().mean, 0.0);
+    // Identical images: 0 exactly on lavapipe; the H200 gives 2.8e-9 (fused arithmetic), inside
+    // issue 25's FLIP tolerance of 1e-5.
+    assert!(v.flip.unwrap().mean.abs() < 1e-5);
     // Invalid viewing condition.
     let bad = PairRequest {
         flip: Some(FlipRequest {
