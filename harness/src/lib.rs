@@ -8,6 +8,7 @@ pub mod conditions;
 pub mod gpu;
 pub mod metrics_device;
 pub mod params;
+pub mod regimes;
 pub mod render;
 pub mod run;
 pub mod scenario;

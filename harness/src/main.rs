@@ -88,6 +88,14 @@ enum Command {
         #[arg(long, default_value_t = 5.0)]
         threshold_pct: f64,
     },
+    /// Where each scenario's frame time goes and every technique's speed-up against it, ordered
+    /// from vertex-bound to shading-bound (the pixel-bound fraction of `native`, measured with
+    /// `upscale` at scale 0.7071): a Markdown table.
+    Regimes {
+        /// Run folders (e.g. of `scenarios/content/regimes.toml`).
+        #[arg(required = true)]
+        runs: Vec<PathBuf>,
+    },
     /// Send a run folder to a dashboard (`POST /api/runs`, token from TESSERA_DASHBOARD_TOKEN).
     Upload {
         run: PathBuf,
@@ -160,6 +168,7 @@ fn main() -> ExitCode {
             threshold_pct,
         } => compare_command(&run_a, &run_b, threshold_pct),
         Command::Upload { run, url } => upload_command(&run, &url),
+        Command::Regimes { runs } => regimes_command(&runs),
         Command::Diff {
             reference,
             test,
@@ -211,8 +220,8 @@ fn load_all(paths: &[PathBuf]) -> Option<Vec<Scenario>> {
     let mut ok = Vec::new();
     let mut bad = 0;
     for f in &files {
-        match scenario::load(f) {
-            Ok(s) => ok.push(s),
+        match scenario::load_all(f) {
+            Ok(s) => ok.extend(s),
             Err(errors) => {
                 bad += 1;
                 for e in errors.0 {
@@ -410,6 +419,26 @@ fn compare_command(a: &std::path::Path, b: &std::path::Path, threshold_pct: f64)
     } else {
         0
     }
+}
+
+fn regimes_command(dirs: &[PathBuf]) -> u8 {
+    let mut runs = Vec::new();
+    for d in dirs {
+        match tessera::compare::load_run(d) {
+            Ok(r) => runs.push(r),
+            Err(e) => {
+                eprintln!("error: {e}");
+                return EXIT_INPUT;
+            }
+        }
+    }
+    let rows = tessera::regimes::rows(&runs);
+    if rows.is_empty() {
+        eprintln!("error: no scenario in these runs has a timed `native` variant");
+        return EXIT_INPUT;
+    }
+    print!("{}", tessera::regimes::markdown(&rows));
+    0
 }
 
 fn adapters_command(json: bool) -> u8 {

@@ -269,3 +269,52 @@ fn validate_prints_the_skip_reasons_of_hardware_only_variants() {
         "{out}"
     );
 }
+
+#[test]
+fn a_sweep_runs_every_combination_and_regimes_tabulates_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let body = SCENE.replace("scale = 0.5", "scale = 0.7071").replacen(
+        "[frames]",
+        "[reference]\nkind = \"none\"\n[sweep]\n\"scene.shading_cost\" = [0, 8]\nresolution = [[32, 24], [48, 32]]\n[frames]",
+        1,
+    );
+    let file = write(dir.path(), "swept.toml", &body);
+    let (code, out, err) = tessera(&["validate", &file]);
+    assert_eq!(code, 0, "{out}{err}");
+    assert_eq!(out.trim(), "4 scenarios valid (8 variants)");
+    let out_dir = dir.path().join("out");
+    let (code, out, err) = tessera(&["run", &file, "--out", out_dir.to_str().unwrap(), "--quiet"]);
+    assert_eq!(code, 0, "{out}{err}");
+    let run = std::fs::read_dir(&out_dir)
+        .unwrap()
+        .next()
+        .unwrap()
+        .unwrap()
+        .path();
+    let (code, table, err) = tessera(&["regimes", run.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    for name in [
+        "swept[shading_cost=0,resolution=32x24]",
+        "swept[shading_cost=8,resolution=48x32]",
+    ] {
+        let row = table
+            .lines()
+            .find(|l| l.contains(name))
+            .unwrap_or_else(|| panic!("{name}: {table}"));
+        // A measured fraction (a percentage) and the speed-up of the half-pixel render.
+        assert!(row.contains('%'), "{row}");
+        assert!(row.trim_end().ends_with("x |"), "{row}");
+    }
+    // A bad swept value is reported at its key with the combination it came from.
+    let bad = write(dir.path(), "bad.toml", &body.replace("[0, 8]", "[0, -3]"));
+    let (code, _, err) = tessera(&["validate", &bad]);
+    assert_eq!(code, 2);
+    assert!(
+        err.contains("`scene.shading_cost`")
+            && err.contains("(with sweep scene.shading_cost = -3)"),
+        "{err}"
+    );
+    // Not a run folder: a clear error, exit 2.
+    let (code, _, err) = tessera(&["regimes", dir.path().to_str().unwrap()]);
+    assert_eq!(code, 2, "{err}");
+}

@@ -8,6 +8,7 @@
 mod raw;
 pub mod scene;
 pub mod span;
+pub mod sweep;
 mod validate;
 
 use std::fmt;
@@ -57,6 +58,9 @@ pub struct Scenario {
     pub camera: CameraTrack,
     pub variants: Vec<Variant>,
     pub gates: Vec<Gate>,
+    /// The values of a `[sweep]` this scenario was expanded with (label, value), in the file's
+    /// order; empty for a file without one. They are also in the name.
+    pub sweep: Vec<(String, String)>,
 }
 
 impl From<&Scenario> for Stage {
@@ -274,6 +278,56 @@ pub fn load(path: &Path) -> Result<Scenario, ScenarioErrors> {
         }])
     })?;
     parse(path, &source)
+}
+
+/// Reads one scenario file and expands its `[sweep]` (`sweep.rs`): one scenario per combination
+/// of the swept values, each named `name[key=value,...]`; the file's one scenario without one.
+pub fn load_all(path: &Path) -> Result<Vec<Scenario>, ScenarioErrors> {
+    let source = std::fs::read_to_string(path).map_err(|e| {
+        ScenarioErrors(vec![ScenarioError {
+            file: path.to_path_buf(),
+            line: 0,
+            column: 0,
+            key: String::new(),
+            message: format!("cannot read the file: {e}"),
+        }])
+    })?;
+    let mut scenarios = Vec::new();
+    let mut errors = Vec::new();
+    for e in sweep::expand(path, &source)? {
+        match parse(path, &e.source) {
+            Ok(mut s) if !e.values.is_empty() => {
+                let values: Vec<String> =
+                    e.values.iter().map(|(k, v)| format!("{k}={v}")).collect();
+                s.name = format!("{}[{}]", s.name, values.join(","));
+                s.sweep = e.values;
+                scenarios.push(s);
+            }
+            Ok(s) => scenarios.push(s),
+            Err(ScenarioErrors(found)) => {
+                for mut f in found {
+                    // A fault in a swept value says which one; others are the file's own.
+                    let swept = e.keys.iter().zip(&e.values).find(|(k, _)| {
+                        f.key == **k
+                            || f.key.starts_with(&format!("{k}["))
+                            || f.key.starts_with(&format!("{k}."))
+                    });
+                    if let Some((k, (_, v))) = swept {
+                        f.message = format!("{} (with sweep {k} = {v})", f.message);
+                    }
+                    // One report per fault, not one per combination that meets it.
+                    if !errors.contains(&f) {
+                        errors.push(f);
+                    }
+                }
+            }
+        }
+    }
+    if errors.is_empty() {
+        Ok(scenarios)
+    } else {
+        Err(ScenarioErrors(errors))
+    }
 }
 
 /// Parses and validates scenario `source` as if read from `path`.

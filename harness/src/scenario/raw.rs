@@ -39,6 +39,10 @@ pub struct RawScenario {
     pub techniques: Vec<RawTechnique>,
     #[serde(default)]
     pub gates: Vec<RawGate>,
+    /// `[sweep]`: dotted keys and the values to run each at (`sweep.rs` expands the file before
+    /// it is parsed here; the values the file itself holds are the first scenario's defaults).
+    #[allow(dead_code)]
+    pub sweep: Option<toml::Value>,
 }
 
 #[derive(Debug, Default, Deserialize)]

@@ -323,6 +323,7 @@ fn build(ctx: &mut Ctx, path: &Path, raw: RawScenario) -> Scenario {
         camera,
         variants,
         gates,
+        sweep: Vec::new(),
     }
 }
 

@@ -9,7 +9,8 @@
 //! a rank-1 lattice built on the plastic number, not the Halton (2, 3) points `taau` jitters with,
 //! so a temporal technique is compared with an independent estimate of the same box-filtered
 //! pixel. The ground's analytic filter width is scaled by 1/sqrt(N) (the samples' spacing), as
-//! the NxN ground truth's renders are by 1/N.
+//! the NxN ground truth's renders are by 1/N;
+//! texture gradients too (`material.wgsl`), so textures are sampled at the samples' spacing.
 
 use glam::Vec2;
 
@@ -182,9 +183,8 @@ impl Renderer for Converged {
         frame: FrameInfo,
     ) {
         let groups = (self.width.div_ceil(8), self.height.div_ceil(8));
-        let pipeline = scene
-            .pipeline(&gpu.device, ScenePipeline::Forward { samples: 1 })
-            .clone();
+        let kind = ScenePipeline::Forward { samples: 1 };
+        scene.pipeline(&gpu.device, kind);
         // Each sample's view is written into slot 0 and its render submitted before the next
         // write (queue writes are ordered before later submissions): a frame has more samples
         // than the scene has view slots. Untimed: the reference's cost is not a measure.
@@ -229,7 +229,8 @@ impl Renderer for Converged {
                     occlusion_query_set: None,
                     multiview_mask: None,
                 });
-                scene.draw(&mut rp, &pipeline, 0);
+                // Every object, the textured models (glTF materials, the city) included.
+                scene.draw_kind(&mut rp, kind, 0);
             }
             {
                 let mut cp = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
