@@ -131,6 +131,14 @@ enum Command {
 
 fn main() -> ExitCode {
     quiet_headless_probing();
+    // `tessera validate ... | head`: a closed pipe ends the process quietly, as for any Unix tool,
+    // instead of a panic in `println!` (Rust ignores SIGPIPE by default).
+    #[cfg(unix)]
+    // SAFETY: called first thing on the main thread, before any other thread exists; restores
+    // the default disposition of one signal.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     let cli = match Cli::try_parse() {
         Ok(c) => c,
         Err(e) => {
