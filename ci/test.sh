@@ -14,5 +14,7 @@ cargo test --workspace
 # stability finding the suites gate on fails the run. JUnit and results stay under target/.
 out=target/ci-suites
 rm -rf "$out"
-cargo build -p tessera
+# The workspace's feature set, as `cargo test --workspace` built it: `-p tessera` alone would
+# unify other features and rebuild most dependencies.
+cargo build --workspace --bins
 target/debug/tessera run scenarios/quality scenarios/stress --out "$out" --junit "$out/junit.xml" --quiet

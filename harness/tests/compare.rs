@@ -131,6 +131,7 @@ fn scenario(run_id: &str, name: &str, results: Vec<VariantResult>) -> ScenarioRe
         reference: "native".into(),
         results,
         wall_ms: 100.0,
+        peak_rss_bytes: None,
     }
 }
 

@@ -163,6 +163,11 @@ pub struct ScenarioResult {
     pub results: Vec<VariantResult>,
     /// CPU wall time of the whole scenario, including readback and metrics.
     pub wall_ms: f64,
+    /// Peak resident memory of the harness process during the scenario (Linux `VmHWM`, reset at
+    /// its start): host memory, the driver's host-side allocations included; absent where the
+    /// system does not report it and in files written before it was recorded.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub peak_rss_bytes: Option<u64>,
 }
 
 /// One (run, scenario, variant) record.

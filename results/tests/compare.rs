@@ -108,6 +108,7 @@ fn scenario(run_id: &str, results: Vec<VariantResult>) -> ScenarioResult {
         reference: "native".into(),
         results,
         wall_ms: 100.0,
+        peak_rss_bytes: None,
     }
 }
 

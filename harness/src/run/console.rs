@@ -120,6 +120,14 @@ pub fn scenario_table(s: &ScenarioResult) -> String {
             let _ = writeln!(out, "  conditions: {}: {line}", r.variant);
         }
     }
+    if let Some(b) = s.peak_rss_bytes {
+        let _ = writeln!(
+            out,
+            "  memory: {:.0} MiB peak resident (the harness process on the host, {:.1} s wall)",
+            b as f64 / (1024.0 * 1024.0),
+            s.wall_ms / 1000.0
+        );
+    }
     out
 }
 

@@ -12,6 +12,7 @@ pub mod frames;
 pub mod gates;
 pub mod gpu_evaluate;
 pub mod images;
+pub mod memory;
 pub mod metrics;
 pub mod motion;
 pub mod output;

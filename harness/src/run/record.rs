@@ -33,6 +33,7 @@ pub fn finish(
         reference: scenario.reference.name().to_string(),
         results,
         wall_ms: start.elapsed().as_secs_f64() * 1000.0,
+        peak_rss_bytes: super::memory::peak_bytes(),
     }
 }
 

@@ -37,6 +37,7 @@ pub fn run(
     on_frame: &mut dyn FnMut(),
 ) -> ScenarioResult {
     let start = Instant::now();
+    super::memory::reset_peak();
     let mut results: Vec<VariantResult> = Vec::new();
     let scene = SceneGpu::new(&gpu.device, &gpu.queue, scenario);
     let mut scene = match scene {
