@@ -15,6 +15,7 @@ pub mod docs;
 pub mod fsr1;
 pub mod interlace;
 pub mod native;
+pub mod options;
 pub mod registry;
 pub mod taau;
 pub mod upscale;
@@ -22,6 +23,7 @@ pub mod upscale;
 pub use definition::{
     variant_name, BuildContext, Definition, FramePattern, Shader, Target, Technique, Variant,
 };
+pub use options::DeclaredOptions;
 pub use registry::{by_name, names, ALL};
 
 use crate::gpu::{Gpu, Requirements};
