@@ -30,7 +30,7 @@ pub fn graph(options: &Options, width: u32, height: u32) -> Plan {
         .resource("depth_low", tex(DEPTH_FORMAT, lw, lh))
         .resource("color", tex(COLOR_FORMAT, width, height))
         .pass("scene", PassKind::Render, &[], &["color_low", "depth_low"]);
-    if options.sharpness.is_some() {
+    if options.rcas {
         g.resource("easu", tex(COLOR_FORMAT, width, height))
             .pass("easu", PassKind::Compute, &["color_low"], &["easu"])
             .pass("rcas", PassKind::Compute, &["easu"], &["color"]);
@@ -145,7 +145,7 @@ impl Fsr1Gpu {
             size: [lw, lh, width, height],
             rcas: [0.0, f32::from(u8::from(rcas)), 0.0, 0.0],
         };
-        let passes = match options.sharpness {
+        let passes = match options.rcas_sharpness() {
             Some(sharpness) => vec![
                 FsrPass::new(
                     gpu,
@@ -206,7 +206,7 @@ impl Renderer for Fsr1Gpu {
         frame: FrameInfo,
     ) {
         let view = View {
-            gradient_scale: self.options.gradient_scale,
+            gradient_scale: self.options.gradient_scale(),
             ..View::whole(frame.time, frame.prev_time)
         };
         scene.write_view(&gpu.queue, 0, &view);
