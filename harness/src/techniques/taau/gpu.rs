@@ -43,7 +43,7 @@ pub fn graph(options: &Options, width: u32, height: u32, dynamic_scene: bool) ->
         layers: 1,
     };
     // Without RCAS the resolved colour is the output.
-    let resolved = if options.sharpness.is_some() {
+    let resolved = if options.rcas {
         RESOLVED
     } else {
         ["color", "color_history"]
@@ -75,7 +75,7 @@ pub fn graph(options: &Options, width: u32, height: u32, dynamic_scene: bool) ->
         &reads,
         &[resolved[0], DEPTHS[0]],
     );
-    if options.sharpness.is_some() {
+    if options.rcas {
         g.resource("color", tex(COLOR_FORMAT, width, height)).pass(
             "rcas",
             PassKind::Compute,
@@ -148,7 +148,7 @@ impl TaauGpu {
         let (plan, use_velocity) = graph(&options, width, height, dynamic_scene);
         let textures = allocate(device, &plan);
         let view = |name: &str| textures[name].create_view(&Default::default());
-        let resolved = if options.sharpness.is_some() {
+        let resolved = if options.rcas {
             RESOLVED
         } else {
             ["color", "color_history"]
@@ -185,7 +185,7 @@ impl TaauGpu {
                 ],
             )
         });
-        let rcas = options.sharpness.map(|s| {
+        let rcas = options.rcas_sharpness().map(|s| {
             [0, 1].map(|k| {
                 rcas_pass(
                     gpu,
@@ -266,14 +266,14 @@ impl Renderer for TaauGpu {
         encoder: &mut wgpu::CommandEncoder,
         frame: FrameInfo,
     ) {
-        let j = jitter(frame.index, self.options.phases);
+        let j = jitter(frame.index, self.options.phases());
         let base = View::whole(frame.time, frame.prev_time);
         scene.write_view(
             &gpu.queue,
             0,
             &View {
                 ndc_offset: ndc_offset(j, self.low.0, self.low.1),
-                gradient_scale: self.options.gradient_scale,
+                gradient_scale: self.options.gradient_scale(),
                 ..base
             },
         );
