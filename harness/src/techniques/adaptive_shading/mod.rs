@@ -216,15 +216,6 @@ pub struct AdaptiveShading;
 impl Definition for AdaptiveShading {
     type Options = Options;
 
-    fn params(&self) -> &'static [&'static crate::params::ParamSpec] {
-        <Options as crate::techniques::options::DeclaredOptions>::params()
-    }
-
-    #[allow(clippy::unused_unit)]
-    fn options(&self, variant: &crate::techniques::Variant) -> Options {
-        <Options as crate::techniques::options::DeclaredOptions>::from_variant(variant)
-    }
-
     fn name(&self) -> &'static str {
         "adaptive-shading"
     }
@@ -296,15 +287,6 @@ pub struct NativeVrs;
 impl Definition for NativeVrs {
     type Options = FixedOptions;
 
-    fn params(&self) -> &'static [&'static crate::params::ParamSpec] {
-        <FixedOptions as crate::techniques::options::DeclaredOptions>::params()
-    }
-
-    #[allow(clippy::unused_unit)]
-    fn options(&self, variant: &crate::techniques::Variant) -> FixedOptions {
-        <FixedOptions as crate::techniques::options::DeclaredOptions>::from_variant(variant)
-    }
-
     fn name(&self) -> &'static str {
         "native-vrs"
     }
@@ -347,15 +329,6 @@ pub struct NativeDeferred;
 impl Definition for NativeDeferred {
     /// `native-deferred` has no parameters.
     type Options = ();
-
-    fn params(&self) -> &'static [&'static crate::params::ParamSpec] {
-        <() as crate::techniques::options::DeclaredOptions>::params()
-    }
-
-    #[allow(clippy::unused_unit)]
-    fn options(&self, variant: &crate::techniques::Variant) -> () {
-        <() as crate::techniques::options::DeclaredOptions>::from_variant(variant)
-    }
 
     fn name(&self) -> &'static str {
         "native-deferred"

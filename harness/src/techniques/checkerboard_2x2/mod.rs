@@ -96,15 +96,6 @@ pub struct Checkerboard2x2;
 impl Definition for Checkerboard2x2 {
     type Options = Options;
 
-    fn params(&self) -> &'static [&'static crate::params::ParamSpec] {
-        <Options as crate::techniques::options::DeclaredOptions>::params()
-    }
-
-    #[allow(clippy::unused_unit)]
-    fn options(&self, variant: &crate::techniques::Variant) -> Options {
-        <Options as crate::techniques::options::DeclaredOptions>::from_variant(variant)
-    }
-
     fn name(&self) -> &'static str {
         "checkerboard-2x2"
     }

@@ -128,15 +128,6 @@ pub struct Fsr1;
 impl Definition for Fsr1 {
     type Options = Options;
 
-    fn params(&self) -> &'static [&'static crate::params::ParamSpec] {
-        <Options as crate::techniques::options::DeclaredOptions>::params()
-    }
-
-    #[allow(clippy::unused_unit)]
-    fn options(&self, variant: &crate::techniques::Variant) -> Options {
-        <Options as crate::techniques::options::DeclaredOptions>::from_variant(variant)
-    }
-
     fn name(&self) -> &'static str {
         "fsr1"
     }

@@ -117,15 +117,6 @@ pub struct Taau;
 impl Definition for Taau {
     type Options = Options;
 
-    fn params(&self) -> &'static [&'static crate::params::ParamSpec] {
-        <Options as crate::techniques::options::DeclaredOptions>::params()
-    }
-
-    #[allow(clippy::unused_unit)]
-    fn options(&self, variant: &crate::techniques::Variant) -> Options {
-        <Options as crate::techniques::options::DeclaredOptions>::from_variant(variant)
-    }
-
     fn name(&self) -> &'static str {
         "taau"
     }

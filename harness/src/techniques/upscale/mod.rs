@@ -54,15 +54,6 @@ fn setup(options: &Options, target: Target) -> (u32, u32, Resample, Filter) {
 impl Definition for Upscale {
     type Options = Options;
 
-    fn params(&self) -> &'static [&'static crate::params::ParamSpec] {
-        <Options as crate::techniques::options::DeclaredOptions>::params()
-    }
-
-    #[allow(clippy::unused_unit)]
-    fn options(&self, variant: &crate::techniques::Variant) -> Options {
-        <Options as crate::techniques::options::DeclaredOptions>::from_variant(variant)
-    }
-
     fn name(&self) -> &'static str {
         "upscale"
     }
