@@ -69,6 +69,13 @@ pub fn is_reference(variant: &Variant) -> bool {
     variant.technique.name() == native::NAME
 }
 
+/// Whether `name`, a recorded result's technique or variant name, is the reference technique's
+/// (`native` has no parameters: its one variant carries its name). What `run/` asks of results
+/// by role, so it names no technique.
+pub fn is_reference_name(name: &str) -> bool {
+    name == native::NAME
+}
+
 /// The reference renderer: native at the target, or with `supersample` the ground truth (native
 /// at `supersample`x per axis, box-downsampled).
 pub fn reference(
