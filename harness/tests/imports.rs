@@ -545,7 +545,10 @@ fn render_and_run_spell_no_technique_name() {
     }
     let mut offenders = Vec::new();
     for (module, path) in module_files(&src) {
-        if !matches!(module.first().map(String::as_str), Some("render") | Some("run")) {
+        if !matches!(
+            module.first().map(String::as_str),
+            Some("render") | Some("run")
+        ) {
             continue;
         }
         let (_, literals) = split_code(&fs::read_to_string(&path).unwrap());

@@ -55,7 +55,8 @@ fn velocity_runs_only_where_objects_move() {
                 .filter(|v| v.technique.name() == "checkerboard")
             {
                 let p = plan(v, Target::new(s.width, s.height, dynamic));
-                let wanted = dynamic && tessera::techniques::checkerboard::Options::from_variant(v).velocity;
+                let wanted =
+                    dynamic && tessera::techniques::checkerboard::Options::from_variant(v).velocity;
                 let ran = p.passes.iter().any(|x| x.name == "velocity");
                 assert_eq!(ran, wanted, "{}: {}", s.name, v.name);
                 assert_eq!(p.culled.contains(&"velocity"), !wanted, "{}", s.name);

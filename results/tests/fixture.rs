@@ -170,8 +170,9 @@ fn every_csv_measure_is_in_the_table_with_its_unit() {
             // A technique's own check (`shading-rate`): not a measure of the table; its unit is
             // its record's.
             None => {
-                let m = metric(s, variant, name)
-                    .unwrap_or_else(|| panic!("{variant}: {name} is neither a measure nor a metric"));
+                let m = metric(s, variant, name).unwrap_or_else(|| {
+                    panic!("{variant}: {name} is neither a measure nor a metric")
+                });
                 assert_eq!(measure::metric_unit(m), unit, "{name}: the CSV's unit");
                 own += 1;
             }

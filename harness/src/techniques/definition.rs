@@ -14,10 +14,10 @@ use std::fmt;
 
 use crate::gpu::{Gpu, Requirements};
 use crate::params::{FromParam, Param, ParamSpec, ParamValue};
-use crate::techniques::options::DeclaredOptions;
 use crate::render::graph::Plan;
 use crate::render::renderer::{Renderer, Unsupported};
 use crate::render::scene::SceneGpu;
+use crate::techniques::options::DeclaredOptions;
 
 /// Where a variant renders: the output size and what the scene does (techniques that need motion
 /// add passes only when something moves by itself).

@@ -54,7 +54,6 @@ impl FixedRate {
     }
 }
 
-
 /// Rate-selection parameters of an `adaptive-shading` variant.
 pub fn rate_params(v: &Variant) -> RateParams {
     Options::from_variant(v).rates()

@@ -16,8 +16,7 @@ use super::Options;
 use crate::gpu::Gpu;
 use crate::render::graph::{Graph, PassKind, Plan, Res, TextureDesc};
 use crate::render::kit::{
-    allocate, bind_group, compute_pipeline, record_scene_pass, timed_dispatch, PingPong,
-    TextureMap,
+    allocate, bind_group, compute_pipeline, record_scene_pass, timed_dispatch, PingPong, TextureMap,
 };
 use crate::render::renderer::{FrameInfo, Renderer};
 use crate::render::scene::{SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FORMAT};
