@@ -72,6 +72,7 @@ fn metric(name: &str, value: f64, higher_is_better: bool) -> MetricRecord {
         higher_is_better,
         frame_stats: None,
         metrics_device: None,
+        check: None,
     }
 }
 

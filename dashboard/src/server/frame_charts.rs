@@ -9,7 +9,7 @@
 
 use std::fmt::Write;
 
-use tessera_results::measure::{Direction, Measure};
+use tessera_results::measure::{metric_direction, metric_unit, Direction};
 use tessera_results::VariantResult;
 
 use crate::html::{esc, num};
@@ -57,17 +57,14 @@ pub fn series_of(v: &VariantResult) -> Vec<FrameSeries> {
         {
             continue;
         }
-        let unit = Measure::from_name(&m.name).map_or("", |x| x.unit());
+        // The measure table's unit, or the one a technique's own check carries.
+        let unit = metric_unit(m);
         let title = if unit.is_empty() {
             format!("{} per frame", m.name)
         } else {
             format!("{} per frame ({unit})", m.name)
         };
-        let higher_is_worse = match Measure::from_name(&m.name).map(|x| x.direction()) {
-            Some(Direction::HigherIsBetter) => false,
-            Some(_) => true,
-            None => !m.higher_is_better,
-        };
+        let higher_is_worse = metric_direction(m) != Direction::HigherIsBetter;
         out.push(FrameSeries {
             title,
             frames: m.frames.clone(),

@@ -86,6 +86,7 @@ pub fn records(
         value,
         higher_is_better: m.direction().higher_is_better(),
         metrics_device: Some("cpu".into()),
+        check: None,
     };
     let mut out = vec![record(Measure::Cvvdp, r.frame_jod.clone(), r.jod)];
     if let (Some(flicker), Some(share)) = (r.flicker_jod, r.transient_share) {

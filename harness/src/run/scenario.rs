@@ -213,7 +213,7 @@ pub fn run(
     if let Some(Ok(r)) = &reference {
         if let Some(first) = results
             .iter_mut()
-            .find(|r| r.status == Status::Ok && r.technique != "native")
+            .find(|r| r.status == Status::Ok && !techniques::is_reference_name(&r.technique))
         {
             images::save_frames(
                 first,

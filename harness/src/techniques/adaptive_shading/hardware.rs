@@ -30,7 +30,7 @@ use super::raw_pass::{RawVrsPass, Shaders, Targets};
 use crate::gpu::vrs::VrsCaps;
 use crate::gpu::Gpu;
 use crate::render::graph::{Graph, PassKind, Plan, TextureDesc};
-use crate::render::kit::{allocate, bind_group, compute_pipeline, timed_dispatch};
+use crate::render::kit::{allocate, bind_group, compute_pipeline, timed_dispatch, PingPong};
 use crate::render::readback::read_texture_raw;
 use crate::render::renderer::{FrameExtras, FrameInfo, FrameValue, Renderer};
 use crate::render::scene::{SceneGpu, COLOR_FORMAT, DEPTH_FORMAT};
@@ -153,8 +153,10 @@ pub struct HardwareGpu {
     /// Built with the renderer, from the scene in the build context (a failure is the build's
     /// error, before any frame is rendered); `None` only while [`HardwareGpu::new`] runs.
     raw: Option<RawVrsPass>,
-    parities: usize,
-    parity: usize,
+    /// The output pair, as indices into `COLORS` / `DEPTHS` and the raw pass's target sets: frame
+    /// parity k writes side k, the rate pass reads the other's colour and depth as history. With
+    /// fixed rates nothing is read back and both sides are the first target set.
+    sides: PingPong<usize>,
     last: Option<LastFrame>,
 }
 
@@ -244,8 +246,7 @@ impl HardwareGpu {
             staging,
             staging_readback,
             raw: None,
-            parities,
-            parity: 0,
+            sides: PingPong::new([0, parities - 1]),
             last: None,
         };
         hw.raw = Some(
@@ -335,7 +336,9 @@ impl HardwareGpu {
 
     fn make_raw(&mut self, gpu: &Gpu, scene: &SceneGpu) -> Result<RawVrsPass, String> {
         let source = vrs_source();
-        let targets: Vec<Targets> = (0..self.parities)
+        // One target set per distinct side (one with fixed rates).
+        let sets = if self.rate.is_some() { 2 } else { 1 };
+        let targets: Vec<Targets> = (0..sets)
             .map(|p| Targets {
                 color: &self.textures[COLORS[p]],
                 motion: &self.textures["motion"],
@@ -360,9 +363,10 @@ impl HardwareGpu {
     }
 
     fn clear_pass(&self, encoder: &mut wgpu::CommandEncoder, scene: &SceneGpu, timers: &Timers) {
-        let color = self.textures[COLORS[self.parity]].create_view(&Default::default());
+        let side = *self.sides.current();
+        let color = self.textures[COLORS[side]].create_view(&Default::default());
         let motion = self.textures["motion"].create_view(&Default::default());
-        let depth = self.textures[DEPTHS[self.parity]].create_view(&Default::default());
+        let depth = self.textures[DEPTHS[side]].create_view(&Default::default());
         let target = |view, clear| {
             Some(wgpu::RenderPassColorAttachment {
                 view,
@@ -414,7 +418,7 @@ impl Renderer for HardwareGpu {
     }
 
     fn output(&self) -> &wgpu::Texture {
-        &self.textures[COLORS[self.parity]]
+        &self.textures[COLORS[*self.sides.current()]]
     }
 
     fn record(
@@ -425,7 +429,8 @@ impl Renderer for HardwareGpu {
         encoder: &mut wgpu::CommandEncoder,
         frame: FrameInfo,
     ) {
-        self.parity = (frame.index as usize) % self.parities;
+        self.sides.select(frame.index);
+        let side = *self.sides.current();
         scene.write_view(
             &gpu.queue,
             0,
@@ -437,7 +442,7 @@ impl Renderer for HardwareGpu {
                 scene,
                 timers,
                 encoder,
-                self.parity,
+                side,
                 frame.history_valid,
                 self.width,
                 self.height,
@@ -462,7 +467,7 @@ impl Renderer for HardwareGpu {
             label: Some(SCENE_PASS),
         });
         if let Some(r) = self.raw.as_mut() {
-            r.record(&mut raw, self.parity);
+            r.record(&mut raw, side);
         }
         let mut after = device.create_command_encoder(&Default::default());
         timers.end(&mut after, q);

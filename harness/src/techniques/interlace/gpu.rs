@@ -14,12 +14,12 @@ use super::Options;
 use crate::gpu::Gpu;
 use crate::render::graph::{Graph, PassKind, Plan, TextureDesc};
 use crate::render::kit::{
-    allocate, bind_group, compute_pipeline, placeholder_texture, record_scene_pass, timed_dispatch,
-    PingPong,
+    allocate, bind_group, compute_pipeline, record_scene_pass, timed_dispatch, PingPong,
 };
 use crate::render::renderer::{FrameInfo, Renderer};
 use crate::render::scene::{SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::render::timers::Timers;
+use crate::render::velocity::{self, VelocityPass, VELOCITY};
 
 pub static RECONSTRUCT_WGSL: &str = include_str!("reconstruct.wgsl");
 
@@ -40,26 +40,19 @@ pub fn graph(options: &Options, width: u32, height: u32, dynamic_scene: bool) ->
     let mut g = Graph::default();
     g.resource("half_color", tex(COLOR_FORMAT, hw))
         .resource("half_depth", tex(DEPTH_FORMAT, hw))
-        .resource("velocity", tex(COLOR_FORMAT, width))
-        .resource("velocity_depth", tex(DEPTH_FORMAT, width))
-        .resource(OUTPUTS[0], tex(COLOR_FORMAT, width))
-        .resource(OUTPUTS[1], tex(COLOR_FORMAT, width))
         .pass(
             "scene",
             PassKind::Render,
             &[],
             &["half_color", "half_depth"],
-        )
-        .pass(
-            "velocity",
-            PassKind::Render,
-            &[],
-            &["velocity", "velocity_depth"],
         );
+    velocity::declare(&mut g, width, height);
+    g.resource(OUTPUTS[0], tex(COLOR_FORMAT, width))
+        .resource(OUTPUTS[1], tex(COLOR_FORMAT, width));
     let use_velocity = options.velocity && dynamic_scene;
     let mut reads = vec!["half_color", "half_depth", OUTPUTS[1]];
     if use_velocity {
-        reads.push("velocity");
+        reads.push(VELOCITY.name());
     }
     g.pass("reconstruct", PassKind::Compute, &reads, &[OUTPUTS[0]])
         .output(OUTPUTS[0]);
@@ -109,8 +102,7 @@ pub struct InterlaceGpu {
     /// By parity: parity k writes `OUTPUTS[k]` and reads the other as history.
     bind_groups: PingPong<wgpu::BindGroup>,
     scene_views: (wgpu::TextureView, wgpu::TextureView),
-    velocity_views: Option<(wgpu::TextureView, wgpu::TextureView)>,
-    _dummy_velocity: Option<wgpu::Texture>,
+    velocity: VelocityPass,
     last: Option<LastFrame>,
 }
 
@@ -133,12 +125,8 @@ impl InterlaceGpu {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let dummy =
-            (!use_velocity).then(|| placeholder_texture(device, "no velocity", COLOR_FORMAT));
-        let velocity_view = match &dummy {
-            Some(t) => t.create_view(&Default::default()),
-            None => view("velocity"),
-        };
+        let velocity = VelocityPass::new(device, &plan, &textures);
+        debug_assert_eq!(velocity.runs(), use_velocity);
         let layout = pipeline.get_bind_group_layout(0);
         let (half_color, half_depth) = (view("half_color"), view("half_depth"));
         let bind_groups = [0, 1].map(|k| {
@@ -152,13 +140,12 @@ impl InterlaceGpu {
                     (1, &half_color),
                     (2, &half_depth),
                     (3, &history),
-                    (4, &velocity_view),
+                    (4, velocity.binding()),
                     (5, &out),
                 ],
             )
         });
         let scene_views = (view("half_color"), view("half_depth"));
-        let velocity_views = use_velocity.then(|| (view("velocity"), view("velocity_depth")));
         InterlaceGpu {
             plan,
             textures,
@@ -169,8 +156,7 @@ impl InterlaceGpu {
             params,
             bind_groups: PingPong::new(bind_groups),
             scene_views,
-            velocity_views,
-            _dummy_velocity: dummy,
+            velocity,
             last: None,
         }
     }
@@ -230,21 +216,9 @@ impl Renderer for InterlaceGpu {
             0,
             ScenePipeline::Forward { samples: 1 },
         );
-        let use_velocity = self.velocity_views.is_some();
-        if let Some((c, d)) = &self.velocity_views {
-            scene.write_view(&gpu.queue, 1, &base);
-            record_scene_pass(
-                gpu,
-                scene,
-                timers,
-                encoder,
-                "velocity",
-                c,
-                d,
-                1,
-                ScenePipeline::Velocity,
-            );
-        }
+        let use_velocity =
+            self.velocity
+                .record(gpu, scene, timers, encoder, 1, frame.time, frame.prev_time);
         let (cur, prev) = scene.view_projections(frame.time, frame.prev_time);
         let params = Params {
             prev_from_cur: (prev * cur.inverse()).as_mat4().to_cols_array_2d(),

@@ -13,46 +13,28 @@ pub mod model;
 
 use super::definition::{BuildContext, Definition, FramePattern, Shader, Target};
 use crate::gpu::Unsupported;
-use crate::params::{Param, ParamSpec};
 use crate::render::graph::Plan;
 use crate::render::renderer::Renderer;
-use crate::techniques::Variant;
 
 pub use gpu::{half_view, InterlaceGpu, LastFrame};
 
-pub static CLAMP: Param<bool> = Param::flag(
-    "clamp",
-    true,
-    "clamp the reprojected colour to the min/max of the six shaded neighbours (left and right columns, rows y-1 to y+1), as Siege clamps to its neighbours; off: the history unclamped",
-);
-pub static VELOCITY: Param<bool> = Param::flag(
-    "velocity",
-    true,
-    "full-resolution velocity pass for animated objects; recorded only when the scene has some (otherwise culled: the camera reprojects by depth)",
-);
-pub static GRADIENT_SCALE: Param<f64> = Param::float(
-    "gradient_scale",
-    (0.0, false, 1.0),
-    1.0,
-    "multiplies screen-space derivatives of the half-width render (the ground filter's width): 1 uncorrected (x derivatives twice native's: blurs horizontally), 0.5 matches native in x and halves y",
-);
-static PARAMS: [&ParamSpec; 3] = [&CLAMP.spec, &VELOCITY.spec, &GRADIENT_SCALE.spec];
-
-/// A variant's options, typed.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Options {
-    pub clamp: bool,
-    pub velocity: bool,
-    pub gradient_scale: f32,
-}
-
-impl Options {
-    pub fn from_variant(v: &Variant) -> Options {
-        Options {
-            clamp: v.get(&CLAMP),
-            velocity: v.get(&VELOCITY),
-            gradient_scale: v.get(&GRADIENT_SCALE) as f32,
-        }
+crate::options! {
+    /// A variant's options, typed.
+    #[derive(Clone, Copy, Debug, PartialEq)]
+    pub struct Options {
+        clamp: bool = flag(
+            true,
+            "clamp the reprojected colour to the min/max of the six shaded neighbours (left and right columns, rows y-1 to y+1), as Siege clamps to its neighbours; off: the history unclamped",
+        ),
+        velocity: bool = flag(
+            true,
+            "full-resolution velocity pass for animated objects; recorded only when the scene has some (otherwise culled: the camera reprojects by depth)",
+        ),
+        gradient_scale: f32 = float(
+            (0.0, false, 1.0),
+            1.0,
+            "multiplies screen-space derivatives of the half-width render (the ground filter's width): 1 uncorrected (x derivatives twice native's: blurs horizontally), 0.5 matches native in x and halves y",
+        ),
     }
 }
 
@@ -65,10 +47,6 @@ impl Definition for Interlace {
         "interlace"
     }
 
-    fn options(&self, variant: &Variant) -> Options {
-        Options::from_variant(variant)
-    }
-
     /// Even and odd frames shade the even and odd pixel columns.
     fn frames(&self, _options: &Options) -> FramePattern {
         FramePattern::Alternating
@@ -76,10 +54,6 @@ impl Definition for Interlace {
 
     fn summary(&self) -> &'static str {
         "temporal interlaced rendering: alternate pixel columns shaded at half width each frame, the others reprojected from the previous output and clamped to their shaded neighbours"
-    }
-
-    fn params(&self) -> &'static [&'static ParamSpec] {
-        &PARAMS
     }
 
     fn plan(&self, options: &Options, target: Target) -> Plan {

@@ -8,7 +8,6 @@ pub mod gpu;
 use super::definition::{BuildContext, Definition, Shader, Target};
 use crate::render::graph::Plan;
 use crate::render::renderer::{Renderer, Unsupported};
-use crate::techniques::Variant;
 
 pub use gpu::{ground_truth, Forward};
 
@@ -28,8 +27,6 @@ impl Definition for Native {
     fn summary(&self) -> &'static str {
         "full-resolution forward rendering: the reference and the baseline"
     }
-
-    fn options(&self, _variant: &Variant) {}
 
     fn plan(&self, _options: &(), target: Target) -> Plan {
         gpu::forward_graph(target.width, target.height, None)
