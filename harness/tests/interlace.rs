@@ -8,7 +8,7 @@ mod common;
 
 use glam::Vec4;
 use tessera::params::ParamValue;
-use tessera::render::readback::read_texture;
+use tessera::render::readback::{read_texture, read_texture_layer};
 use tessera::render::renderer::Renderer;
 use tessera::render::scene::SceneGpu;
 use tessera::render::timers::Timers;
@@ -42,8 +42,12 @@ fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) -> Vec<Vec<Source>
     );
     let mut timers = Timers::new(&gpu.device, &[]).unwrap();
     let mut all = Vec::new();
+    // Every array layer (the quarter-resolution renders are two), layer 0 first.
     let read = |t: &InterlaceGpu, name: &str| {
-        read_texture(&gpu.device, &gpu.queue, t.texture(name).unwrap())
+        let texture = t.texture(name).unwrap();
+        (0..texture.depth_or_array_layers())
+            .flat_map(|l| read_texture_layer(&gpu.device, &gpu.queue, texture, l))
+            .collect::<Vec<f32>>()
     };
     for index in 0..frames {
         tessera::run::frames::submit_frame(&gpu, &mut scene, s, &mut t, &mut timers, index);
