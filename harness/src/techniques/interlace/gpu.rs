@@ -122,6 +122,7 @@ struct Params {
 pub struct LastFrame {
     pub parity: u32,
     pub history_valid: bool,
+    pub still: bool,
     pub prev_from_cur: glam::Mat4,
     pub velocity: bool,
     pub near: f32,
@@ -141,6 +142,8 @@ pub struct InterlaceGpu {
     /// Render views of the two layers (colour, depth).
     row_views: [(wgpu::TextureView, wgpu::TextureView); 2],
     velocity_views: Option<(wgpu::TextureView, wgpu::TextureView)>,
+    /// The scene has animated objects (so something may move with the camera still).
+    dynamic_scene: bool,
     _dummy_velocity: Option<wgpu::Texture>,
     last: Option<LastFrame>,
 }
@@ -216,6 +219,7 @@ impl InterlaceGpu {
             bind_groups: PingPong::new(bind_groups),
             row_views,
             velocity_views,
+            dynamic_scene,
             _dummy_velocity: dummy,
             last: None,
         }
@@ -299,6 +303,8 @@ impl Renderer for InterlaceGpu {
             );
         }
         let (cur, prev) = scene.view_projections(frame.time, frame.prev_time);
+        // Nothing can have moved: the camera is where it was and nothing is animated.
+        let still = cur == prev && !self.dynamic_scene;
         let (near, far) = scene.near_far();
         let o = &self.options;
         let params = Params {
@@ -313,7 +319,7 @@ impl Renderer for InterlaceGpu {
                 u32::from(frame.history_valid),
                 u32::from(use_velocity),
                 u32::from(o.clamp),
-                0,
+                u32::from(still),
             ],
             depth: [near, far, o.depth_tolerance, 0.0],
             weights: [o.coherency_scale, o.velocity_scale, 0.0, 0.0],
@@ -324,6 +330,7 @@ impl Renderer for InterlaceGpu {
         self.last = Some(LastFrame {
             parity,
             history_valid: frame.history_valid,
+            still,
             prev_from_cur: glam::Mat4::from_cols_array_2d(&params.prev_from_cur),
             velocity: use_velocity,
             near,

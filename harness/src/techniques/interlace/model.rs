@@ -26,6 +26,9 @@ pub struct Inputs<'a> {
     pub velocity: Option<&'a [Vec4]>,
     pub prev_from_cur: Mat4,
     pub history_valid: bool,
+    /// Nothing can have moved since the previous frame (camera still, no animated objects): the
+    /// history at each pixel is its own last shade, confidence 1.
+    pub still: bool,
     pub clamp: bool,
     pub near: f32,
     pub far: f32,
@@ -186,7 +189,7 @@ pub fn reconstruct(inp: &Inputs, x: u32, y: u32) -> (Vec4, f32, Source) {
         .unwrap_or(Vec4::ZERO);
     if v.z > 0.5 {
         prev_pos = centre - Vec2::new(v.x, v.y);
-    } else if d_near > 0.0 {
+    } else if d_near > 0.0 && !inp.still {
         let ndc = Vec4::new(
             centre.x / size.x * 2.0 - 1.0,
             1.0 - centre.y / size.y * 2.0,
@@ -215,7 +218,11 @@ pub fn reconstruct(inp: &Inputs, x: u32, y: u32) -> (Vec4, f32, Source) {
             inp.history_depth[(hp.y as i32 * w + hp.x as i32) as usize],
         );
         let outside = (z_lo + dz - z_prev).max(z_prev - (z_hi + dz)).max(0.0);
-        let confidence = (1.0 - outside / (inp.depth_tolerance * z_prev)).clamp(0.0, 1.0);
+        let confidence = if inp.still {
+            1.0
+        } else {
+            (1.0 - outside / (inp.depth_tolerance * z_prev)).clamp(0.0, 1.0)
+        };
         blended = mix(clamped, raw, confidence);
     }
     // 5. Colour coherency and velocity weights.
@@ -274,6 +281,7 @@ mod tests {
             velocity: None,
             prev_from_cur: Mat4::IDENTITY,
             history_valid: true,
+            still: false,
             clamp: true,
             near: 0.1,
             far: 100.0,
@@ -311,22 +319,33 @@ mod tests {
     #[test]
     fn a_static_camera_rebuilds_the_previous_frame_exactly_even_where_the_clamp_would_not() {
         let (w, h) = (7u32, 5u32);
-        // A one-pixel bright dot at (3, 2): a clamp to its neighbours alone would erase it.
+        // A one-pixel bright dot at (3, 2), nearer than everything around it (a thin feature alone
+        // in its neighbourhood): a clamp to its neighbours would erase it, and its previous depth
+        // lies outside their range.
+        let dot = |x: u32, y: u32| (x, y) == (3, 2);
         let truth = |x: u32, y: u32| {
-            if (x, y) == (3, 2) {
+            if dot(x, y) {
                 Vec4::splat(4.0)
             } else {
                 Vec4::new(x as f32 / 8.0, y as f32 / 4.0, 0.5, 1.0)
             }
         };
+        let depth_of = |x: u32, y: u32| if dot(x, y) { 0.9 } else { 0.5 };
         let history: Vec<Vec4> = (0..h)
             .flat_map(|y| (0..w).map(move |x| truth(x, y)))
             .collect();
-        let history_depth = vec![0.5; (w * h) as usize];
+        let history_depth: Vec<f32> = (0..h)
+            .flat_map(|y| (0..w).map(move |x| depth_of(x, y)))
+            .collect();
         for parity in [0, 1] {
             let rows = layers(w, h, parity, truth);
-            let depth = vec![0.5; rows.len()];
-            let inp = inputs(w, h, parity, &rows, &depth, &history, &history_depth);
+            let depth: Vec<f32> = layers(w, h, parity, |x, y| Vec4::splat(depth_of(x, y)))
+                .iter()
+                .map(|d| d.x)
+                .collect();
+            let mut inp = inputs(w, h, parity, &rows, &depth, &history, &history_depth);
+            // Nothing moved (camera still, no animated objects): every pixel exact.
+            inp.still = true;
             for (i, (c, _, source)) in reconstruct_all(&inp).into_iter().enumerate() {
                 let (x, y) = (i as u32 % w, i as u32 / w);
                 assert!(
@@ -340,6 +359,16 @@ mod tests {
                 };
                 assert_eq!(source, want);
             }
+            // Not known to be still (the same frames from a camera that might have moved): the
+            // dot's depth is outside its neighbours' range, so where it is missing it is clamped
+            // to them.
+            inp.still = false;
+            let (c, _, _) = reconstruct(&inp, 3, 2);
+            assert_eq!(
+                (c - truth(3, 2)).abs().max_element() < 1e-5,
+                shaded(parity, 3, 2),
+                "parity {parity}: {c}"
+            );
         }
     }
 

@@ -10,9 +10,14 @@
 //   2. motion from the neighbour closest to the camera: its velocity where it covers an animated
 //      object, else the camera reprojection of the pixel centre at that neighbour's depth;
 //   3. the previous output at that position (bilinear), clamped to the neighbours' min/max;
-//   4. confidence from the previous depth there: 1 when it lies within the neighbours' view-depth
-//      range (shifted by the neighbour's own change of depth), falling to 0 at `depth_tolerance`
-//      (relative) outside; the result blended back towards the unclamped history by it;
+//   4. confidence from the previous depth there against the best estimate of the pixel's depth
+//      now: 1 when it lies within the neighbours' view-depth range (shifted by the neighbour's own
+//      change of depth), falling to 0 at `depth_tolerance` (relative) outside; the result blended
+//      back towards the unclamped history by it. Where nothing can have moved (camera still, no
+//      animated objects: `mode.w`), the pixel's depth now is its previous depth exactly, so the
+//      disparity is 0 and the confidence 1: the history, the pixel's own shade of last frame, is
+//      taken as it is (a still scene rebuilds native, thin features alone in their neighbourhood
+//      included, which any clamp to the neighbours would erase);
 //   5. weighted against the spatial fill (the mean of the more coherent opposite pair) by the
 //      colour coherency (the smaller relative luma difference of the two pairs) and the velocity
 //      magnitude: history weight 1 - w_vel * (1 - w_coh). At rest, or across incoherent
@@ -28,7 +33,8 @@ struct Params {
     prev_from_cur: mat4x4<f32>,
     // x, y: output size; z: quarter-resolution width; w: parity p.
     size: vec4<u32>,
-    // x: history valid; y: velocity buffer bound; z: clamp on.
+    // x: history valid; y: velocity buffer bound; z: clamp on; w: nothing moved (camera still, no
+    // animated objects).
     mode: vec4<u32>,
     // x: near; y: far; z: depth_tolerance (relative); w: unused.
     depth: vec4<f32>,
@@ -173,9 +179,10 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         if params.mode.y != 0u {
             v = textureLoad(velocity, vec2<i32>(nx[closest], ny[closest]), 0);
         }
+        let still = params.mode.w != 0u;
         if v.z > 0.5 {
             prev_pos = centre - v.xy;
-        } else if d_near > 0.0 {
+        } else if d_near > 0.0 && !still {
             let ndc = vec4<f32>(centre.x / size.x * 2.0 - 1.0, 1.0 - centre.y / size.y * 2.0, d_near, 1.0);
             let prev = params.prev_from_cur * ndc;
             prev_pos = vec2<f32>((prev.x / prev.w * 0.5 + 0.5) * size.x, (0.5 - prev.y / prev.w * 0.5) * size.y);
@@ -193,7 +200,10 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
                 let hp = vec2<i32>(floor(prev_pos));
                 let z_prev = linear_depth(textureLoad(history_depth, hp, 0).x);
                 let outside = max(max(z_lo + dz - z_prev, z_prev - (z_hi + dz)), 0.0);
-                let confidence = clamp(1.0 - outside / (params.depth.z * z_prev), 0.0, 1.0);
+                var confidence = clamp(1.0 - outside / (params.depth.z * z_prev), 0.0, 1.0);
+                if still {
+                    confidence = 1.0;
+                }
                 blended = mix(clamped, raw, confidence);
             }
             // 5. Colour coherency and velocity weights.
