@@ -105,7 +105,11 @@ fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) -> Vec<Vec<Source>
 
 /// Renders `frames` frames, comparing the GPU output of each with the model's; returns every
 /// frame's sources.
-fn compare_columns_with_model(s: &Scenario, v: &Variant, frames: u32) -> Vec<Vec<columns_model::Source>> {
+fn compare_columns_with_model(
+    s: &Scenario,
+    v: &Variant,
+    frames: u32,
+) -> Vec<Vec<columns_model::Source>> {
     let gpu = common::gpu();
     let mut scene = SceneGpu::new(&gpu.device, &gpu.queue, s).unwrap();
     let mut t = ColumnsGpu::new(
@@ -323,7 +327,12 @@ fn still_against_native(v: &Variant, point_sampled: bool, camera: &str) -> Vec<(
             } else {
                 10.0 * (255.0f64 * 255.0 / mse).log10()
             };
-            let max = n.data.iter().zip(&c.data).map(|(a, b)| a.abs_diff(*b)).max();
+            let max = n
+                .data
+                .iter()
+                .zip(&c.data)
+                .map(|(a, b)| a.abs_diff(*b))
+                .max();
             (psnr, max.unwrap())
         })
         .collect()
@@ -349,7 +358,10 @@ fn still_scene_default_pattern_reproduces_native() {
         .into_iter()
         .enumerate()
     {
-        assert!(psnr >= 35.0, "filtered, frame {f}: {psnr:.2} dB, max {max}/255");
+        assert!(
+            psnr >= 35.0,
+            "filtered, frame {f}: {psnr:.2} dB, max {max}/255"
+        );
     }
 }
 
@@ -357,7 +369,10 @@ fn still_scene_default_pattern_reproduces_native() {
 fn columns_static_point_sampled_unclamped_scene_rebuilds_native_within_one_level() {
     // Unclamped: the pole is thinner than a column, and a clamp to its neighbours would erase it.
     let v = variant(&[columns(), ("clamp", ParamValue::Bool(false))]);
-    for (f, (_, max)) in still_against_native(&v, true, STILL).into_iter().enumerate() {
+    for (f, (_, max)) in still_against_native(&v, true, STILL)
+        .into_iter()
+        .enumerate()
+    {
         assert!(max <= 1, "frame {f}: max error {max}/255");
     }
 }

@@ -89,8 +89,13 @@ pub fn graph(rates: &Rates, width: u32, height: u32, texel: [u32; 2]) -> Plan {
                     .resource(STATES[i], tex(STATE_FORMAT, tw, th));
             }
             g.resource("rates", tex(RATE_FORMAT, tw, th));
-            g.pass(PREPASS, PassKind::Render, &[], &["motion", DEPTHS[0], DEPTHS[1]])
-                .self_counted();
+            g.pass(
+                PREPASS,
+                PassKind::Render,
+                &[],
+                &["motion", DEPTHS[0], DEPTHS[1]],
+            )
+            .self_counted();
             let reads = [
                 COLORS[0], COLORS[1], "motion", DEPTHS[0], DEPTHS[1], STATES[0], STATES[1],
             ];

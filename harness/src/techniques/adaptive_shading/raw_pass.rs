@@ -355,8 +355,8 @@ impl RawVrsPass {
                 .subpasses(&subpasses);
             // SAFETY: the create-info chain (attachments, subpass, shading-rate attachment info)
             // lives across the call; the extension is enabled on this device (`open`).
-            pass.shade_pass = unsafe { d.create_render_pass2(&rp_info, None) }
-                .map_err(vk_err("render pass"))?;
+            pass.shade_pass =
+                unsafe { d.create_render_pass2(&rp_info, None) }.map_err(vk_err("render pass"))?;
         }
         if split {
             // The motion pre-pass: motion (not cleared: read only where depth is drawn), depth
@@ -407,7 +407,12 @@ impl RawVrsPass {
             let fb = framebuffer(pass.shade_pass, &[c, z, rate_view])?;
             pass.shade_framebuffers.push(fb);
             if let (true, Some(m)) = (split, t.motion) {
-                let m = view(&mut pass, image_of(m)?, formats[2], vk::ImageAspectFlags::COLOR)?;
+                let m = view(
+                    &mut pass,
+                    image_of(m)?,
+                    formats[2],
+                    vk::ImageAspectFlags::COLOR,
+                )?;
                 let fb = framebuffer(pass.motion_pass, &[m, z])?;
                 pass.motion_framebuffers.push(fb);
             }
@@ -527,7 +532,11 @@ impl RawVrsPass {
         ];
         let motion_stages = [
             vertex_stage,
-            stage(vk::ShaderStageFlags::FRAGMENT, pass.modules[2], &motion_name),
+            stage(
+                vk::ShaderStageFlags::FRAGMENT,
+                pass.modules[2],
+                &motion_name,
+            ),
         ];
         let vertex_bindings = [vk::VertexInputBindingDescription {
             binding: 0,
@@ -952,7 +961,11 @@ impl Drop for RawVrsPass {
             d.destroy_pipeline_layout(self.layout, None);
             d.destroy_descriptor_pool(self.pool, None);
             d.destroy_descriptor_set_layout(self.set_layout, None);
-            for &fb in self.shade_framebuffers.iter().chain(&self.motion_framebuffers) {
+            for &fb in self
+                .shade_framebuffers
+                .iter()
+                .chain(&self.motion_framebuffers)
+            {
                 d.destroy_framebuffer(fb, None);
             }
             d.destroy_render_pass(self.shade_pass, None);

@@ -214,9 +214,7 @@ pub fn reconstruct(inp: &Inputs, x: u32, y: u32) -> (Vec4, f32, Source) {
     if inp.clamp {
         let clamped = raw.max(lo).min(hi);
         let hp = prev_pos.floor();
-        let z_prev = inp.linear_depth(
-            inp.history_depth[(hp.y as i32 * w + hp.x as i32) as usize],
-        );
+        let z_prev = inp.linear_depth(inp.history_depth[(hp.y as i32 * w + hp.x as i32) as usize]);
         let outside = (z_lo + dz - z_prev).max(z_prev - (z_hi + dz)).max(0.0);
         let confidence = if inp.still {
             1.0
@@ -390,7 +388,10 @@ mod tests {
         let mut inp = inputs(w, h, 0, &rows, &depth, &history, &same);
         let near = |a: Vec4, b: f32| (a - Vec4::splat(b)).abs().max_element() < 1e-5;
         let (c, d, s) = reconstruct(&inp, 1, 1);
-        assert!(near(c, 1.0) && d == 0.5 && s == Source::History, "{c} {d} {s:?}");
+        assert!(
+            near(c, 1.0) && d == 0.5 && s == Source::History,
+            "{c} {d} {s:?}"
+        );
         // History far behind: no confidence, clamped to the neighbours' max.
         let far = vec![0.01; 9];
         inp.history_depth = &far;

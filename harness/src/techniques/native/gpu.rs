@@ -130,7 +130,10 @@ impl Forward {
 
     /// The same with the motion pass (a forward render at output resolution only).
     pub fn with_motion_pass(self, gpu: &Gpu) -> Forward {
-        let (w, h) = (self.textures["color"].width(), self.textures["color"].height());
+        let (w, h) = (
+            self.textures["color"].width(),
+            self.textures["color"].height(),
+        );
         let plan = forward_graph_with_motion(w, h);
         let textures = allocate(&gpu.device, &plan);
         let view = |name: &str| textures[name].create_view(&Default::default());
