@@ -409,11 +409,16 @@ pub fn direction_of(key: &str) -> Option<Direction> {
 }
 
 /// The first ok variant of technique `baseline` among `results` (one scenario on one adapter).
-/// Found by technique, never by variant name, so a `label` on the baseline changes nothing.
+/// Found by technique, so a `label` on the baseline changes nothing; a baseline that names a
+/// variant (`native[motion_pass=true]`, checkerboard-2x2's) is found by that name first, as the
+/// comparison engine finds it (`compare::baseline`).
 pub fn baseline_of<'a>(results: &'a [VariantResult], baseline: &str) -> Option<&'a VariantResult> {
+    let ok = |v: &&VariantResult| v.status == Status::Ok;
     results
         .iter()
-        .find(|v| v.technique == baseline && v.status == Status::Ok)
+        .filter(ok)
+        .find(|v| v.variant == baseline)
+        .or_else(|| results.iter().filter(ok).find(|v| v.technique == baseline))
 }
 
 /// Median GPU frame time; `None` without timestamps.
@@ -586,6 +591,22 @@ pub fn points(results: &[VariantResult], r: &VariantResult) -> Vec<Point> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_baseline_naming_a_variant_is_found_by_name_else_by_technique() {
+        use crate::compare::time::tests::result;
+        let (plain, motion, twox2) = (
+            result("native", &[2.0]),
+            result("native[motion_pass=true]", &[2.5]),
+            result("checkerboard-2x2", &[2.0]),
+        );
+        let results = vec![twox2, plain, motion];
+        let by_name = baseline_of(&results, "native[motion_pass=true]").unwrap();
+        assert_eq!(by_name.variant, "native[motion_pass=true]");
+        assert_eq!(baseline_of(&results, "native").unwrap().variant, "native");
+        // Without that variant the named baseline is missing, not silently plain native.
+        assert!(baseline_of(&results[..2], "native[motion_pass=true]").is_none());
+    }
 
     #[test]
     fn names_are_unique_and_round_trip() {

@@ -131,7 +131,8 @@ pub(super) struct RatePass {
 
 impl RatePass {
     /// The rate pass (and filter) reading the resources `view` names: `color0`/`color1`,
-    /// `depth0`/`depth1` (the previous frame's by parity), `motion`, `rate_state0`/`1`, and
+    /// `depth0`/`depth1` (the previous frame's by parity, and this frame's for coverage), `motion`,
+    /// `rate_state0`/`1`, and
     /// writing `rates` (through `rates_raw` with the filter).
     pub(super) fn new(
         device: &wgpu::Device,
@@ -164,6 +165,7 @@ impl RatePass {
                 (4, view(states.at(side).1)),
                 (5, view(states.at(side).0)),
                 (6, view(raw)),
+                (9, view(DEPTHS[cur])),
             ];
             let views: Vec<(u32, &wgpu::TextureView)> =
                 views.iter().map(|(b, v)| (*b, v)).collect();

@@ -72,7 +72,7 @@ crate::options! {
     pub struct Options {
         vrs: Vrs = choice(
             Vrs::Software,
-            "`software`: a G-buffer pass, then a compute pass shading once per coarse pixel and object (runs everywhere; never faster than `native`); `hardware`: the forward pass drawn with a fragment-shading-rate attachment filled from the rates (VK_KHR_fragment_shading_rate through raw Vulkan beside wgpu; the rates of frame N + 1 from frame N's output and motion, section 5); skipped on adapters without the extension and its attachment feature. Compare with `native-vrs`, the same pipeline at 1x1",
+            "`software`: a G-buffer pass, then a compute pass shading once per coarse pixel and object (runs everywhere; never faster than `native`); `hardware`: the forward pass drawn with a fragment-shading-rate attachment filled from the rates (VK_KHR_fragment_shading_rate through raw Vulkan beside wgpu; in the paper's order, section 5: a depth pre-pass writes this frame's motion, the rate pass reprojects the previous output by it, then the frame is shaded at those rates); skipped on adapters without the extension and its attachment feature. Compare with `native-vrs`, the same pipeline at 1x1",
         ),
         threshold: f32 = float(
             (0.0, false, 100.0),

@@ -2,7 +2,8 @@
 //! mosaiikki's refinements: its parameters and options here, the GPU part in `gpu.rs`, the CPU
 //! model of the reconstruction in `model.rs`, its shaders beside them (`*.wgsl`).
 //!
-//! Defaults trace to the sources: sampling portable; gradients as Intel's code (DDXY_BIAS 0.5);
+//! Defaults trace to the sources: sampling portable; gradients at -0.5 LOD as Intel's white paper
+//! and mosaiikki say (issue 26; Intel's sample code's -1 LOD, DDXY_BIAS 0.5, is `gradient_scale = 0.5`);
 //! CSO with mosaiikki's tolerance (view units); mosaiikki's differential fill; Intel's unclamped
 //! history (mosaiikki's clamps are options); mosaiikki's velocity buffer.
 
@@ -87,8 +88,8 @@ crate::options! {
         ),
         gradient_scale: f32 = float(
             (0.0, false, 1.0),
-            0.5,
-            "multiplies screen-space derivatives at quarter resolution (the ground filter's width): 0.5 as Intel's code (`DDXY_BIAS`, -1 LOD), 0.7071 as mosaiikki's -0.5 LOD bias",
+            0.7071,
+            "multiplies screen-space derivatives at quarter resolution (the ground filter's width): 0.7071 (the default) is -0.5 LOD, as Intel's white paper (\"Forward Rendering Algorithm\", step 1a: `MipLODBias` of -0.5f) and mosaiikki (\"log2(sqrt(2)) = 0.5\": the checkerboard samples sqrt 2 more densely per axis than its quarter-resolution derivatives say); 0.5 is -1 LOD, Intel's sample code (`DDXY_BIAS`); 1 uncorrected",
         ),
         occlusion: Occlusion = choice(
             Occlusion::Cso,

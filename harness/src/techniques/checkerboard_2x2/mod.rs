@@ -119,6 +119,12 @@ impl Definition for Checkerboard2x2 {
         Ok(())
     }
 
+    /// The report's baseline renders the same motion pass (section 6: "both have a motion
+    /// pass"): `native` with `motion_pass = true`, where the scenario has it.
+    fn baseline(&self, _options: &Options) -> Option<&'static str> {
+        Some(super::native::WITH_MOTION_PASS)
+    }
+
     fn plan(&self, options: &Options, target: Target) -> Plan {
         graph(target.width, target.height, options)
             .plan()
