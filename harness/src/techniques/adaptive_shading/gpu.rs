@@ -165,7 +165,7 @@ impl RatePass {
                 (4, view(states.at(side).1)),
                 (5, view(states.at(side).0)),
                 (6, view(raw)),
-                (9, view(DEPTHS[cur])),
+                (9, view(depths.at(side).0)),
             ];
             let views: Vec<(u32, &wgpu::TextureView)> =
                 views.iter().map(|(b, v)| (*b, v)).collect();
