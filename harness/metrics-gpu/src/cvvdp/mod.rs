@@ -280,7 +280,7 @@ impl ShotPredictor for Predictor<'_> {
             pending += 1;
             if let (true, Some(ms)) = (wants_map, &map_staging) {
                 let bytes = read_buffer(&device, ms, width as u64 * height as u64 * 4)?;
-                maps.push((f, bytemuck::cast_slice::<u8, f32>(&bytes).to_vec()));
+                maps.push((f, bytemuck::pod_collect_to_vec::<u8, f32>(&bytes)));
             }
             if !last_of_batch {
                 continue;
@@ -288,7 +288,7 @@ impl ShotPredictor for Predictor<'_> {
             let bytes = read_buffer(&device, &staging, stamps_offset + 16 * pending as u64)?;
             for s in 0..pending {
                 let frame = k + 1 - pending + s;
-                let partials: &[f32] = bytemuck::cast_slice(
+                let partials: Vec<f32> = bytemuck::pod_collect_to_vec(
                     &bytes[s * frame_bytes as usize..(s + 1) * frame_bytes as usize],
                 );
                 for r in &plan.partials {
@@ -302,8 +302,8 @@ impl ShotPredictor for Predictor<'_> {
                 }
             }
             if queries.is_some() {
-                let stamps: &[u64] =
-                    bytemuck::cast_slice(&bytes[stamps_offset as usize..][..16 * pending]);
+                let stamps: Vec<u64> =
+                    bytemuck::pod_collect_to_vec(&bytes[stamps_offset as usize..][..16 * pending]);
                 for s in 0..pending {
                     let ticks = stamps[2 * s + 1].wrapping_sub(stamps[2 * s]);
                     state.frame_ms.push(ticks as f64 * period_ns / 1e6);

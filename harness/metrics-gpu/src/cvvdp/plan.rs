@@ -360,7 +360,7 @@ impl Plan {
         let partials_id = id(&partials_buffer);
         let mut steps: Vec<Pending> = Vec::new();
         let mut map_steps: Vec<Pending> = Vec::new();
-        let mut push = |list: &mut Vec<Pending>,
+        let push = |list: &mut Vec<Pending>,
                         layout: &mut Layout,
                         pipeline: &wgpu::ComputePipeline,
                         params: &[u8],
