@@ -164,7 +164,29 @@ fn size(frames: &Frames<'_>) -> (u32, u32) {
 impl ShotPredictor for Predictor<'_> {
     type Error = GpuMetricsError;
 
+    /// One shot, inside error scopes: a device that runs out of memory or refuses the work makes
+    /// the shot `Unsupported` (the caller falls back to the CPU) instead of a panic.
     fn predict(&mut self, shot: &Shot<'_>) -> Result<ShotPrediction, GpuMetricsError> {
+        let device = self.gpu.device.clone();
+        let oom = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let validation = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let result = self.predict_on_device(shot);
+        let errors = [
+            pollster::block_on(validation.pop()),
+            pollster::block_on(oom.pop()),
+        ];
+        if let Some(e) = errors.into_iter().flatten().next() {
+            if let Some(s) = &mut self.gpu.cvvdp {
+                s.plan = None;
+            }
+            return Err(unsupported(&format!("the device failed the work: {e}")));
+        }
+        result
+    }
+}
+
+impl Predictor<'_> {
+    fn predict_on_device(&mut self, shot: &Shot<'_>) -> Result<ShotPrediction, GpuMetricsError> {
         let gpu = &mut *self.gpu;
         if gpu.cvvdp.is_none() {
             gpu.cvvdp = Some(Box::new(CvvdpState {

@@ -59,12 +59,6 @@ pub(crate) struct TapsUniform {
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct Lut {
-    v: [f32; 256],
-}
-
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct Size4 {
     v: [u32; 4],
 }
@@ -165,6 +159,7 @@ pub(crate) struct Plan {
     map_steps: Vec<Step>,
     // Kept alive for the bind groups.
     _buffers: Vec<wgpu::Buffer>,
+    _lut: wgpu::Texture,
 }
 
 fn storage(device: &wgpu::Device, label: &str, floats: usize) -> wgpu::Buffer {
@@ -280,12 +275,11 @@ impl Plan {
         }
         let partials_buffer = storage(device, "cvvdp partials", frame_partials);
 
-        let (format, texel) = if key.linear {
-            (wgpu::TextureFormat::Rgba32Float, 16)
+        let format = if key.linear {
+            wgpu::TextureFormat::Rgba32Float
         } else {
-            (wgpu::TextureFormat::R32Uint, 4)
+            wgpu::TextureFormat::R32Uint
         };
-        let _ = texel;
         let ring = [0, 1].map(|_| {
             device.create_texture(&wgpu::TextureDescriptor {
                 label: Some("cvvdp frame ring"),
@@ -333,7 +327,6 @@ impl Plan {
             linear: decode.linear,
             white: [white, 0.0, 0.0, 0.0],
         });
-        let lut_slot = layout.param(&Lut { v: decode.srgb });
 
         struct Pending {
             pipeline: wgpu::ComputePipeline,
@@ -655,8 +648,29 @@ impl Plan {
             (3, wgpu::BindingResource::TextureView(&ring_views[0])),
             (4, wgpu::BindingResource::TextureView(&ring_views[1])),
         ];
+        use wgpu::util::DeviceExt as _;
+        let lut = device.create_texture_with_data(
+            queue,
+            &wgpu::TextureDescriptor {
+                label: Some("cvvdp srgb decode"),
+                size: wgpu::Extent3d {
+                    width: 256,
+                    height: 1,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D1,
+                format: wgpu::TextureFormat::R32Float,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            },
+            wgpu::util::TextureDataOrder::LayerMajor,
+            bytemuck::cast_slice(&decode.srgb),
+        );
+        let lut_view = lut.create_view(&Default::default());
         if !key.linear {
-            input_entries.push((2, slot(lut_slot, size_of::<Lut>() as u64)));
+            input_entries.push((2, wgpu::BindingResource::TextureView(&lut_view)));
         }
         for (i, b) in level[0].iter().enumerate() {
             input_entries.push((5 + i as u32, whole(b)));
@@ -668,7 +682,6 @@ impl Plan {
         }];
         frame_steps.extend(make(steps));
         let map_steps = make(map_steps);
-        let _ = queue;
         Ok(Plan {
             key,
             channels,
@@ -684,6 +697,7 @@ impl Plan {
             frame_steps,
             map_steps,
             _buffers: all,
+            _lut: lut,
         })
     }
 
