@@ -102,7 +102,9 @@ fn parse_args() -> Result<Args, String> {
                     .parse()
                     .ok()
                     .filter(|&f: &f64| f > 0.0 && f <= 16384.0)
-                    .ok_or(format!("--fps {v}: expected frames per second in (0, 16384]"))?;
+                    .ok_or(format!(
+                        "--fps {v}: expected frames per second in (0, 16384]"
+                    ))?;
             }
             "-h" | "--help" => {
                 println!(

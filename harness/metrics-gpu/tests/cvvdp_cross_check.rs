@@ -155,7 +155,11 @@ fn settings(c: &Case) -> CvvdpSettings {
 fn run(c: &Case, gpu: &mut GpuMetrics) -> (CvvdpResult, CvvdpResult) {
     let s = settings(c);
     if c.hdr {
-        let r: Vec<HdrImage> = c.reference.iter().map(|f| linear(f, c.w, c.h, 4.0)).collect();
+        let r: Vec<HdrImage> = c
+            .reference
+            .iter()
+            .map(|f| linear(f, c.w, c.h, 4.0))
+            .collect();
         let t: Vec<HdrImage> = c.test.iter().map(|f| linear(f, c.w, c.h, 4.0)).collect();
         let white = 203.0;
         let fr = || Frames::Linear { frames: &r, white };
@@ -197,11 +201,11 @@ fn compare(c: &Case, cpu: &CvvdpResult, g: &CvvdpResult, worst: &mut Worst) {
     for (a, b) in cpu.frame_flicker_jod.iter().zip(&g.frame_flicker_jod) {
         jod("frame flicker jod", *a, *b);
     }
-    let shares = cpu
-        .transient_share
-        .iter()
-        .zip(&g.transient_share)
-        .chain(cpu.frame_transient_share.iter().zip(&g.frame_transient_share));
+    let shares = cpu.transient_share.iter().zip(&g.transient_share).chain(
+        cpu.frame_transient_share
+            .iter()
+            .zip(&g.frame_transient_share),
+    );
     for (a, b) in shares {
         let d = (a - b).abs();
         assert!(d <= SHARE_ABS, "{n}: transient share: cpu {a} gpu {b}");
@@ -210,7 +214,11 @@ fn compare(c: &Case, cpu: &CvvdpResult, g: &CvvdpResult, worst: &mut Worst) {
     assert_eq!(cpu.maps.len(), c.map_frames.len(), "{n}: cpu maps");
     assert_eq!(g.maps.len(), cpu.maps.len(), "{n}: gpu maps");
     for (a, b) in cpu.maps.iter().zip(&g.maps) {
-        assert_eq!((a.frame, a.width, a.height), (b.frame, b.width, b.height), "{n}");
+        assert_eq!(
+            (a.frame, a.width, a.height),
+            (b.frame, b.width, b.height),
+            "{n}"
+        );
         for (i, (x, y)) in a.values.iter().zip(&b.values).enumerate() {
             let d = (x - y).abs();
             assert!(
@@ -263,7 +271,12 @@ fn image_pairs_agree() {
     ];
     for c in &cases {
         let (cpu, gpu) = run(c, &mut g);
-        assert!(cpu.jod < 9.95, "{}: the pair must differ visibly: {}", c.name, cpu.jod);
+        assert!(
+            cpu.jod < 9.95,
+            "{}: the pair must differ visibly: {}",
+            c.name,
+            cpu.jod
+        );
         compare(c, &cpu, &gpu, &mut worst);
     }
     eprintln!(
@@ -329,12 +342,24 @@ fn sequences_agree() {
     cut.map_frames = vec![1, 4];
     cases.push(cut);
     // Linear HDR frames on an HDR display.
-    let mut hdr = sequence_case("f", (40, 24, 4), "standard_hdr_linear", 30.0, true, "flicker");
+    let mut hdr = sequence_case(
+        "f",
+        (40, 24, 4),
+        "standard_hdr_linear",
+        30.0,
+        true,
+        "flicker",
+    );
     hdr.hdr = true;
     cases.push(hdr);
     for c in &cases {
         let (cpu, gpu) = run(c, &mut g);
-        assert!(cpu.jod < 9.95, "{}: the sequences must differ visibly: {}", c.name, cpu.jod);
+        assert!(
+            cpu.jod < 9.95,
+            "{}: the sequences must differ visibly: {}",
+            c.name,
+            cpu.jod
+        );
         compare(c, &cpu, &gpu, &mut worst);
     }
     eprintln!(
@@ -369,7 +394,10 @@ fn bad_input_gives_the_cpu_errors() {
     let s = CvvdpSettings::default();
     let cpu = tessera_metrics::cvvdp(Frames::Srgb(&a), Frames::Srgb(&b), &s).unwrap_err();
     let gpu = g.cvvdp(Frames::Srgb(&a), Frames::Srgb(&b), &s).unwrap_err();
-    assert!(matches!(gpu, GpuMetricsError::Metrics(MetricsError::SequenceLength { .. })));
+    assert!(matches!(
+        gpu,
+        GpuMetricsError::Metrics(MetricsError::SequenceLength { .. })
+    ));
     assert_eq!(cpu.to_string(), gpu.to_string());
     let tiny = vec![srgb8(&scene(3, 3, 0.0), 3, 3)];
     let e = g

@@ -95,7 +95,9 @@ pub fn records_on(
             Ok(r) => (r, "gpu"),
             Err(GpuMetricsError::Metrics(e)) => return Err(e),
             Err(e) => {
-                eprintln!("note: ColorVideoVDP on the GPU unavailable ({e}); computing it on the CPU");
+                eprintln!(
+                    "note: ColorVideoVDP on the GPU unavailable ({e}); computing it on the CPU"
+                );
                 (tessera_metrics::cvvdp(rf, tf, &settings)?, "cpu")
             }
         },

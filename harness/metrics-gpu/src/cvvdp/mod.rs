@@ -197,7 +197,10 @@ impl Predictor<'_> {
             }));
         }
         let (device, queue) = (gpu.device.clone(), gpu.queue.clone());
-        let timer = gpu.device.features().contains(wgpu::Features::TIMESTAMP_QUERY);
+        let timer = gpu
+            .device
+            .features()
+            .contains(wgpu::Features::TIMESTAMP_QUERY);
         let period_ns = queue.get_timestamp_period() as f64;
         let state = gpu.cvvdp.as_mut().ok_or_else(|| unsupported("no state"))?;
         let (width, height) = size(&shot.test);
@@ -279,7 +282,12 @@ impl Predictor<'_> {
         let mut pending = 0;
         for k in 0..frames {
             let f = shot.frames.start + k;
-            plan.upload_frame(&queue, k, &texels(&shot.test, f), &texels(&shot.reference, f));
+            plan.upload_frame(
+                &queue,
+                k,
+                &texels(&shot.test, f),
+                &texels(&shot.reference, f),
+            );
             let slot = k % batch;
             let wants_map = shot.map_frames.contains(&f);
             let mut encoder = device.create_command_encoder(&Default::default());

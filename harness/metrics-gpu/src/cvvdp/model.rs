@@ -278,12 +278,7 @@ impl Decode {
         );
         Decode {
             srgb,
-            linear: [
-                exposure,
-                (black as f32).max(0.005),
-                peak,
-                reflected as f32,
-            ],
+            linear: [exposure, (black as f32).max(0.005), peak, reflected as f32],
             dkl,
         }
     }

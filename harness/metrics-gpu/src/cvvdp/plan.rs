@@ -354,11 +354,11 @@ impl Plan {
         let mut steps: Vec<Pending> = Vec::new();
         let mut map_steps: Vec<Pending> = Vec::new();
         let push = |list: &mut Vec<Pending>,
-                        layout: &mut Layout,
-                        pipeline: &wgpu::ComputePipeline,
-                        params: &[u8],
-                        buffers: Vec<usize>,
-                        groups: [u32; 2]| {
+                    layout: &mut Layout,
+                    pipeline: &wgpu::ComputePipeline,
+                    params: &[u8],
+                    buffers: Vec<usize>,
+                    groups: [u32; 2]| {
             let slot = layout.params.len() as u64;
             layout.params.extend_from_slice(params);
             let aligned = (params.len() as u64).div_ceil(256) * 256;
@@ -524,13 +524,7 @@ impl Plan {
             let weights = p.channel_weights();
             let integration = if key.video { 1.0 } else { p.image_int };
             let map_weights: [f32; 4] = std::array::from_fn(|c| {
-                weights[c]
-                    * integration
-                    * if b == base {
-                        p.baseband_weight[c]
-                    } else {
-                        1.0
-                    }
+                weights[c] * integration * if b == base { p.baseband_weight[c] } else { 1.0 }
             });
             let gain = if b == 0 || b == base { 1.0 } else { 2.0 };
             let d3 = if channels > 3 { g[6] } else { g[0] };
