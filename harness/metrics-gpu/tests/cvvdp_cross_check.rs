@@ -82,8 +82,8 @@ fn blur(img: &[[f32; 3]], w: u32, h: u32) -> Vec<[f32; 3]> {
             let mut s = [0.0; 3];
             for (dx, dy) in [(0, 0), (1, 0), (-1, 0), (0, 1), (0, -1)] {
                 let p = at(x + dx, y + dy);
-                for c in 0..3 {
-                    s[c] += p[c] / 5.0;
+                for (a, v) in s.iter_mut().zip(p) {
+                    *a += v / 5.0;
                 }
             }
             out.push(s);

@@ -183,8 +183,9 @@ fn whole(b: &wgpu::Buffer) -> wgpu::BindingResource<'_> {
 }
 
 impl Plan {
-    /// Everything for `key`, with the uniforms of `decode` and the calibration.
-    #[allow(clippy::too_many_arguments)]
+    /// Everything for `key`, with the uniforms of `decode` and the calibration. The loops index
+    /// planes, channels and bands as the CPU's do.
+    #[allow(clippy::too_many_arguments, clippy::needless_range_loop)]
     pub fn new(
         device: &wgpu::Device,
         queue: &wgpu::Queue,
