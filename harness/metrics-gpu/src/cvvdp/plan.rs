@@ -643,7 +643,6 @@ impl Plan {
             (3, wgpu::BindingResource::TextureView(&ring_views[0])),
             (4, wgpu::BindingResource::TextureView(&ring_views[1])),
         ];
-        use wgpu::util::DeviceExt as _;
         let lut = device.create_texture_with_data(
             queue,
             &wgpu::TextureDescriptor {
