@@ -146,7 +146,8 @@ mod tests {
             TDE.to_string(),
             ENCODE.to_string(),
         ];
-        for s in sources {
+        let cvvdp = crate::cvvdp::sources().into_iter().map(|(_, s)| s);
+        for s in sources.into_iter().chain(cvvdp) {
             let m = naga::front::wgsl::parse_str(&s)
                 .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&s)));
             naga::valid::Validator::new(

@@ -3,8 +3,8 @@
 //! `GpuMetrics` per device, kept on [`Gpu`]), and the saved frames' FLIP heat maps with them.
 //! Records are built as the CPU's (`metrics::record`) and say `metrics_device = "gpu"`.
 //!
-//! Not here: ColorVideoVDP (always the CPU's `cvvdp.rs`), choosing the back end
-//! (`metrics_device.rs`), saving images (`images.rs`). When the GPU cannot take a variant (a
+//! ColorVideoVDP runs on the same device (`cvvdp::records_on`). Not here: choosing the back
+//! end (`metrics_device.rs`), saving images (`images.rs`). When the GPU cannot take a variant (a
 //! buffer beyond the device's limits, a device error) the CPU evaluates it and its records say
 //! `"cpu"`.
 
@@ -38,10 +38,11 @@ impl Evaluator for GpuEvaluator<'_> {
                 };
                 if scenario.metrics.contains(&MetricKind::Cvvdp) {
                     let r = inputs.reference;
-                    match cvvdp::records(
+                    match cvvdp::records_on(
                         scenario,
                         (&r.frames, &r.hdr),
                         (inputs.test, inputs.test_hdr),
+                        Some(&mut self.gpu.metrics()),
                     ) {
                         Ok((records, maps)) => {
                             out.metrics.extend(records);
