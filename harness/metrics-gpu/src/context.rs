@@ -91,6 +91,8 @@ pub struct GpuMetrics {
     pub(crate) adapter_name: String,
     /// GPU milliseconds of the last request's metric groups (empty without timestamps).
     pub(crate) last_gpu_ms: Vec<(&'static str, f64)>,
+    /// FLIP's flip-evaluator means, summed on the device (`pool`), made on first use.
+    pub(crate) running: Option<crate::pool::RunningSums>,
 }
 
 /// Uniform slots and output regions of one request, laid out before anything is recorded.
@@ -186,6 +188,7 @@ impl GpuMetrics {
             timer,
             adapter_name: adapter_name.to_string(),
             last_gpu_ms: Vec::new(),
+            running: None,
             device: device.clone(),
             queue: queue.clone(),
         }

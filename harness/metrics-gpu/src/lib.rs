@@ -15,6 +15,7 @@ mod diff;
 mod error;
 mod frame;
 mod pair;
+mod pool;
 mod shaders;
 mod temporal;
 
