@@ -236,7 +236,11 @@ fn stability_records_agree_with_frames_on_the_device() {
     for (g, c) in gpu.results.iter().zip(&cpu.results) {
         assert_eq!(g.status, c.status, "{}", g.variant);
         assert_eq!(g.non_finite_values, c.non_finite_values, "{}", g.variant);
-        assert!(g.non_finite_values > 0, "{}: the scene injects NaN", g.variant);
+        assert!(
+            g.non_finite_values > 0,
+            "{}: the scene injects NaN",
+            g.variant
+        );
         let (gs, cs) = (g.stability.as_ref().unwrap(), c.stability.as_ref().unwrap());
         assert_eq!(gs.non_finite_pixels, cs.non_finite_pixels, "{}", g.variant);
         assert_eq!(gs.spread_pixels, cs.spread_pixels, "{}", g.variant);

@@ -541,8 +541,7 @@ impl GpuMetrics {
         let partials = layout.output(8 * grid.groups() as u64);
         let heatmap = heatmap.then(|| layout.output(4 * n as u64));
         let map = (pooling == FlipPooling::ErrorMap).then(|| layout.output(4 * n as u64));
-        let running =
-            (pooling == FlipPooling::FlipEvaluator).then(|| self.reserve_running_mean());
+        let running = (pooling == FlipPooling::FlipEvaluator).then(|| self.reserve_running_mean());
         Ok(FlipPlan {
             map,
             running,

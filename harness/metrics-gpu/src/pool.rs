@@ -84,7 +84,11 @@ impl GpuMetrics {
     /// Makes room in the batch for `maps` error maps of `count` values: sums the batch first
     /// when it is too full or holds maps of another size. Call before a request reserves its
     /// slots, so that nothing is summed between a reservation and its copy.
-    pub(crate) fn make_running_room(&mut self, count: u32, maps: u32) -> Result<(), GpuMetricsError> {
+    pub(crate) fn make_running_room(
+        &mut self,
+        count: u32,
+        maps: u32,
+    ) -> Result<(), GpuMetricsError> {
         let r = self.running();
         let full = r.queued.len() as u32 + maps > r.capacity;
         if !r.queued.is_empty() && (r.count != count || full) {
@@ -195,11 +199,10 @@ impl GpuMetrics {
     /// The mean of a summed map (`flush_running_means` first), as `flip_running_mean` divides:
     /// in f32, by the value count.
     pub(crate) fn take_running_mean(&mut self, ticket: Ticket) -> Result<f64, GpuMetricsError> {
-        let (sum, count) = self
-            .running()
-            .done
-            .remove(&ticket)
-            .ok_or_else(|| GpuMetricsError::Readback("a FLIP running mean went missing".into()))?;
+        let (sum, count) =
+            self.running().done.remove(&ticket).ok_or_else(|| {
+                GpuMetricsError::Readback("a FLIP running mean went missing".into())
+            })?;
         Ok((sum / count as f32) as f64)
     }
 

@@ -94,7 +94,11 @@ impl FrameCheck {
         };
         use wgpu::BufferUsages as U;
         let raw = buffer("frame check raw", frame_bytes, U::STORAGE | U::COPY_DST);
-        let snapshot = buffer("frame check snapshot", frame_bytes, U::STORAGE | U::COPY_DST);
+        let snapshot = buffer(
+            "frame check snapshot",
+            frame_bytes,
+            U::STORAGE | U::COPY_DST,
+        );
         let counters = buffer(
             "frame check counters",
             8,
@@ -157,7 +161,12 @@ impl FrameCheck {
         self.raw.size() + self.snapshot.size() + self.mask.size() + self.staging.size() + 8
     }
 
-    fn copy_into(&self, encoder: &mut wgpu::CommandEncoder, texture: &wgpu::Texture, to: &wgpu::Buffer) {
+    fn copy_into(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        texture: &wgpu::Texture,
+        to: &wgpu::Buffer,
+    ) {
         encoder.copy_texture_to_buffer(
             texture.as_image_copy(),
             wgpu::TexelCopyBufferInfo {

@@ -25,13 +25,13 @@ use tessera_results::conditions::StopReason;
 use tessera_metrics::{encode_srgb8, HdrImage, Rgb8Image};
 use tessera_metrics_gpu::GpuFrame;
 
+use super::phases;
 use crate::conditions::sampler::Sampler;
 use crate::conditions::{Sample, ENERGY_WINDOW_MS};
 use crate::gpu::Gpu;
 use crate::render::frame_check::FrameCheck;
 use crate::render::graph::PassKind;
 use crate::render::readback::Readback;
-use super::phases;
 use crate::render::renderer::{FrameExtras, FrameInfo, Renderer};
 use crate::render::scene::SceneGpu;
 use crate::render::timers::{FrameMeasurements, Timers, MAX_PENDING_FRAMES};
@@ -472,14 +472,22 @@ pub fn render_sampled(
                 rendered.gpu_frames.push(frame);
             }
             let results = if checked {
-                Some(check.read(gpu, compare).map_err(|_| RenderError::Readback)?)
+                Some(
+                    check
+                        .read(gpu, compare)
+                        .map_err(|_| RenderError::Readback)?,
+                )
             } else {
                 None
             };
             drop(checks_span);
             let frame = if on_cpu {
                 let _span = phases::span("capture: readback");
-                Some(readback.read(&gpu.device).map_err(|_| RenderError::Readback)?)
+                Some(
+                    readback
+                        .read(&gpu.device)
+                        .map_err(|_| RenderError::Readback)?,
+                )
             } else {
                 None
             };

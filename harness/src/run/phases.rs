@@ -168,7 +168,9 @@ mod tests {
         {
             let _outer = span("test-outer");
             std::thread::sleep(Duration::from_millis(5));
-            time("test-inner", || std::thread::sleep(Duration::from_millis(20)));
+            time("test-inner", || {
+                std::thread::sleep(Duration::from_millis(20))
+            });
         }
         let d = since(&before, &totals());
         let get = |n: &str| d.iter().find(|p| p.name == n).unwrap().clone();

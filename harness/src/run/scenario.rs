@@ -127,13 +127,7 @@ pub fn run(
         result.non_finite_values = rendered.non_finite;
         frames::append_hashes(&scenario.name, &variant.name, &rendered.hashes);
         phases::time("images", || {
-            images::save_frames(
-                &mut result,
-                &rendered.saved,
-                &image_dir,
-                run_dir,
-                "output",
-            )
+            images::save_frames(&mut result, &rendered.saved, &image_dir, run_dir, "output")
         });
         // The native reference's frames become the reference (moved, not copied); its metrics are
         // then computed against itself, the sanity values every other variant is read against.
