@@ -93,6 +93,8 @@ pub struct GpuMetrics {
     pub(crate) last_gpu_ms: Vec<(&'static str, f64)>,
     /// ColorVideoVDP's pipelines, calibration and last plan, made on its first request.
     pub(crate) cvvdp: Option<Box<crate::cvvdp::CvvdpState>>,
+    /// FLIP's flip-evaluator means, summed on the device (`pool`), made on first use.
+    pub(crate) running: Option<crate::pool::RunningSums>,
 }
 
 /// Uniform slots and output regions of one request, laid out before anything is recorded.
@@ -189,6 +191,7 @@ impl GpuMetrics {
             adapter_name: adapter_name.to_string(),
             last_gpu_ms: Vec::new(),
             cvvdp: None,
+            running: None,
             device: device.clone(),
             queue: queue.clone(),
         }

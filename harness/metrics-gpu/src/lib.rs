@@ -16,6 +16,7 @@ mod diff;
 mod error;
 mod frame;
 mod pair;
+mod pool;
 mod shaders;
 mod temporal;
 

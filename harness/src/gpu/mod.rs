@@ -49,6 +49,8 @@ pub struct Gpu {
     pub vrs: Result<vrs::VrsCaps, String>,
     /// The GPU metrics back end on this device, made on first use (`crate::metrics_device`).
     pub metrics: std::sync::OnceLock<std::sync::Mutex<tessera_metrics_gpu::GpuMetrics>>,
+    /// The frame-check pipelines (`render::frame_check`), made on first use.
+    pub frame_check: std::sync::OnceLock<crate::render::frame_check::FrameCheckPipelines>,
 }
 
 impl Gpu {
@@ -255,5 +257,6 @@ pub fn open(adapter: wgpu::Adapter) -> Result<Gpu, GpuError> {
         msaa2x_positions: std::sync::OnceLock::new(),
         vrs,
         metrics: std::sync::OnceLock::new(),
+        frame_check: std::sync::OnceLock::new(),
     })
 }

@@ -6,6 +6,7 @@
 
 pub mod city;
 pub mod formats;
+pub mod frame_check;
 pub mod gltf_model;
 pub mod graph;
 pub mod kit;

@@ -9,17 +9,17 @@ use tessera_results::{ImageRecord, VariantResult};
 use super::captured::MetricInputs;
 use crate::render::renderer::FrameExtras;
 
-/// Saves the frames at `save_frames` (measured-frame indices) as `<variant>-fNNN.png` (or
-/// `reference-fNNN.png`) under `dir`, recorded in `result` with `kind`.
+/// Saves the frames chosen to be saved (`saved`: measured-frame index and image, as the capture
+/// kept them) as `<variant>-fNNN.png` (or `reference-fNNN.png`) under `dir`, recorded in
+/// `result` with `kind`.
 pub fn save_frames(
     result: &mut VariantResult,
-    frames: &[Rgb8Image],
-    save_frames: &[u32],
+    saved: &[(u32, Rgb8Image)],
     dir: &Path,
     run_dir: &Path,
     kind: &str,
 ) {
-    if frames.is_empty() {
+    if saved.is_empty() {
         return;
     }
     let _ = std::fs::create_dir_all(dir);
@@ -28,12 +28,9 @@ pub fn save_frames(
     } else {
         sanitize(&result.variant)
     };
-    for &f in save_frames {
-        let Some(img) = frames.get(f as usize) else {
-            continue;
-        };
+    for (f, img) in saved {
         let path = dir.join(format!("{stem}-f{f:03}.png"));
-        save_image(result, img, &path, run_dir, f, kind);
+        save_image(result, img, &path, run_dir, *f, kind);
     }
 }
 

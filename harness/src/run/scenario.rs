@@ -12,12 +12,12 @@ use std::time::Instant;
 use tessera_results::{ScenarioResult, Status, VariantResult};
 
 use super::evaluate::{CpuMetrics, Evaluator};
-use super::frames::{self, Rendered};
+use super::frames::{self, Keep, Rendered};
 use super::gpu_evaluate::GpuEvaluator;
 use super::output::first_line;
 use super::record::{empty_result, fill_conditions, fill_timings, finish, plan_record, PlanRecord};
 use super::reference::{self, ReferenceFrames};
-use super::{gates, images, metrics, motion, stability};
+use super::{gates, images, metrics, motion, phases, stability};
 use crate::conditions::Sensors;
 use crate::gpu::Gpu;
 use crate::metrics_device::Backend;
@@ -39,7 +39,7 @@ pub fn run(
     let start = Instant::now();
     super::memory::reset_peak();
     let mut results: Vec<VariantResult> = Vec::new();
-    let scene = SceneGpu::new(&gpu.device, &gpu.queue, scenario);
+    let scene = phases::time("scene", || SceneGpu::new(&gpu.device, &gpu.queue, scenario));
     let mut scene = match scene {
         Ok(s) => s,
         Err(e) => {
@@ -56,17 +56,31 @@ pub fn run(
     };
 
     let needs_reference = scenario.needs_reference();
+    // Where the metrics run: `metrics_device` (the scenario's, `--metrics-device`), else by
+    // adapter. With the GPU's, frames stay on the device when they fit its buffers.
+    let backend = crate::metrics_device::chosen(scenario, gpu);
+    let on_gpu = backend == Backend::Gpu
+        && gpu
+            .metrics()
+            .frame_fits(
+                scenario.width,
+                scenario.height,
+                reference::keep_hdr(scenario),
+            )
+            .is_ok();
     let native_is_reference =
         |v: &Variant| techniques::is_reference(v) && scenario.reference == Reference::Native;
     // The reference renders first; when it is the native variant itself, that render is reused.
     let mut reference: Option<Result<ReferenceFrames, String>> = None;
     if scenario.needs_separate_reference() {
-        reference = Some(reference::render(gpu, &mut scene, scenario, on_frame));
+        reference = Some(phases::time("reference", || {
+            reference::render(gpu, &mut scene, scenario, on_gpu, on_frame)
+        }));
     }
     // The renderer's exact motion for `tde`, rendered once, outside any timed work.
     let motion: Result<Vec<Option<motion::MotionField>>, String> =
         if needs_reference && scenario.metrics.contains(&MetricKind::Tde) {
-            motion::capture(gpu, &mut scene, scenario)
+            phases::time("motion", || motion::capture(gpu, &mut scene, scenario))
         } else {
             Ok(Vec::new())
         };
@@ -78,18 +92,17 @@ pub fn run(
     order.extend(scenario.variants.iter().filter(|v| !native_is_reference(v)));
 
     let image_dir = run_dir.join("images").join(&scenario.name);
-    // Where the metrics run: `metrics_device` (the scenario's, `--metrics-device`), else by adapter.
     let gpu_evaluator = GpuEvaluator { gpu };
-    let evaluator: &dyn Evaluator = match crate::metrics_device::chosen(scenario, gpu) {
+    let evaluator: &dyn Evaluator = match backend {
         Backend::Gpu => &gpu_evaluator,
         Backend::Cpu => &CpuMetrics,
     };
     for variant in order {
         let is_reference = needs_reference && native_is_reference(variant) && reference.is_none();
-        let keep = needs_reference || !scenario.save_frames.is_empty();
+        let keep = reference::keep(scenario, on_gpu, is_reference);
         let mut result = empty_result(variant, Status::Ok);
         let outcome = render_variant(gpu, &mut scene, scenario, variant, keep, sensors, on_frame);
-        let rendered = match outcome {
+        let mut rendered = match outcome {
             Ok(Ok((r, plan_record))) => {
                 fill_timings(&mut result, &r, plan_record);
                 fill_conditions(&mut result, &r, scenario, variant, sensors);
@@ -114,50 +127,46 @@ pub fn run(
         };
         result.non_finite_values = rendered.non_finite;
         frames::append_hashes(&scenario.name, &variant.name, &rendered.hashes);
-        images::save_frames(
-            &mut result,
-            &rendered.frames,
-            &scenario.save_frames,
-            &image_dir,
-            run_dir,
-            "output",
-        );
+        phases::time("images", || {
+            images::save_frames(&mut result, &rendered.saved, &image_dir, run_dir, "output")
+        });
         // The native reference's frames become the reference (moved, not copied); its metrics are
         // then computed against itself, the sanity values every other variant is read against.
-        let (frames, hdr, masks) = if is_reference {
-            reference = Some(Ok(ReferenceFrames::new(
-                rendered.frames,
-                rendered.hdr_frames,
-                rendered.non_finite_masks,
-            )));
-            (None, None, None)
+        let own: Option<ReferenceFrames> = if is_reference {
+            reference = Some(Ok(ReferenceFrames::take(&mut rendered)));
+            None
         } else {
-            (
-                Some(rendered.frames),
-                Some(rendered.hdr_frames),
-                Some(rendered.non_finite_masks),
-            )
+            Some(ReferenceFrames::take(&mut rendered))
         };
+        // Per measured frame, the MSE against the reference (the GPU's, when it computed them),
+        // for the stability checks.
+        let mut reference_mse: Option<Vec<f64>> = None;
         if needs_reference {
             match reference.as_ref() {
                 Some(Ok(r)) => {
                     result.reference = Some(scenario.reference.name().to_string());
+                    let test = own.as_ref().unwrap_or(r);
                     let inputs = metrics::MetricInputs {
                         reference: r,
-                        test: frames.as_deref().unwrap_or(&r.frames),
-                        test_hdr: hdr.as_deref().unwrap_or(&r.hdr),
+                        test: &test.frames,
+                        test_hdr: &test.hdr,
+                        test_gpu: &test.gpu,
+                        test_non_finite: &test.non_finite,
                         motion: &motion,
                     };
-                    let evaluation = evaluator.evaluate(scenario, &inputs);
+                    let evaluation =
+                        phases::time("metrics", || evaluator.evaluate(scenario, &inputs));
+                    let _span = phases::span("images");
                     images::save_cvvdp_maps(&mut result, &evaluation.maps, &image_dir, run_dir);
                     result.metrics = evaluation.metrics;
+                    reference_mse = evaluation.mse_rgb;
                     if let Some(error) = evaluation.error {
                         result.status = Status::Failed { error };
                     }
                     // The reference against itself has no error to show.
-                    if let (true, Some(maps)) = (frames.is_some(), &evaluation.error_maps) {
+                    if let (true, Some(maps)) = (own.is_some(), &evaluation.error_maps) {
                         images::save_heatmaps(&mut result, maps, &image_dir, run_dir);
-                    } else if frames.is_some() {
+                    } else if own.is_some() {
                         images::save_error_maps(
                             &mut result,
                             &inputs,
@@ -175,27 +184,25 @@ pub fn run(
         result
             .metrics
             .extend(metrics::extra_values(&rendered.extras));
-        images::save_extras(
-            &mut result,
-            &rendered.extras,
-            &scenario.save_frames,
-            &image_dir,
-            run_dir,
-        );
+        phases::time("images", || {
+            images::save_extras(
+                &mut result,
+                &rendered.extras,
+                &scenario.save_frames,
+                &image_dir,
+                run_dir,
+            )
+        });
+        let _span = phases::span("stability");
         // The native reference's own frames and masks are the reference's.
         let reference_ok = match reference.as_ref() {
             Some(Ok(r)) if needs_reference => Some(r),
             _ => None,
         };
-        let own = stability::Frames {
-            frames: frames
-                .as_deref()
-                .or(reference_ok.map(|r| r.frames.as_slice()))
-                .unwrap_or(&[]),
-            masks: masks
-                .as_deref()
-                .or(reference_ok.map(|r| r.masks.as_slice()))
-                .unwrap_or(&[]),
+        let own_frames = own.as_ref().or(reference_ok);
+        let own_view = stability::Frames {
+            frames: own_frames.map_or(&[][..], |f| f.frames.as_slice()),
+            masks: own_frames.map_or(&[][..], |f| f.masks.as_slice()),
         };
         let reference_view = reference_ok.map(|r| stability::Frames {
             frames: &r.frames,
@@ -203,9 +210,10 @@ pub fn run(
         });
         result.stability = Some(stability::check(
             scenario,
-            own,
+            own_view,
             rendered.deterministic,
             reference_view,
+            reference_mse.as_deref(),
         ));
         results.push(result);
     }
@@ -215,14 +223,9 @@ pub fn run(
             .iter_mut()
             .find(|r| r.status == Status::Ok && !techniques::is_reference_name(&r.technique))
         {
-            images::save_frames(
-                first,
-                &r.frames,
-                &scenario.save_frames,
-                &image_dir,
-                run_dir,
-                "reference",
-            );
+            phases::time("images", || {
+                images::save_frames(first, &r.saved, &image_dir, run_dir, "reference")
+            });
         }
     }
     // Put results back in the scenario's declaration order.
@@ -245,7 +248,7 @@ fn render_variant(
     scene: &mut SceneGpu,
     scenario: &Scenario,
     variant: &Variant,
-    keep: bool,
+    keep: Keep,
     sensors: &Sensors,
     on_frame: &mut dyn FnMut(),
 ) -> VariantOutcome {
@@ -256,23 +259,16 @@ fn render_variant(
         scenario.height,
         scenario.scene.has_dynamic_objects(),
     );
-    let built = techniques::build(variant, &BuildContext::new(gpu, scene, target));
+    let built = phases::time("build", || {
+        techniques::build(variant, &BuildContext::new(gpu, scene, target))
+    });
     let result = match built {
         Err(u) => Ok(Err(u)),
         Ok(mut t) => {
             let plan = plan_record(t.as_ref());
-            let hdr = keep && reference::keep_hdr(scenario);
             let sampler = sensors.sampler();
-            match frames::render_sampled(
-                gpu,
-                scene,
-                scenario,
-                t.as_mut(),
-                keep,
-                hdr,
-                sampler,
-                on_frame,
-            ) {
+            match frames::render_sampled(gpu, scene, scenario, t.as_mut(), keep, sampler, on_frame)
+            {
                 Ok(r) => Ok(Ok((r, plan))),
                 Err(e) => Err(e.to_string()),
             }
