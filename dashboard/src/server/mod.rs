@@ -14,6 +14,7 @@ pub mod delete;
 pub mod error;
 pub mod export;
 pub mod frame_charts;
+pub mod run_frame_charts;
 pub mod headers;
 pub mod health;
 pub mod images;

@@ -83,6 +83,8 @@ pub fn run(
         Backend::Gpu => &gpu_evaluator,
         Backend::Cpu => &CpuMetrics,
     };
+    // Frames beyond `frames.save` that some variant saved as its worst: the reference's too.
+    let mut worst_frames: Vec<u32> = Vec::new();
     for variant in order {
         let is_reference = needs_reference && native_is_reference(variant) && reference.is_none();
         let keep = needs_reference || !scenario.save_frames.is_empty();
@@ -166,6 +168,29 @@ pub fn run(
                             run_dir,
                         );
                     }
+                    // Each metric's worst frame beside the saved ones (`frames.save_worst`): the
+                    // output, its error maps (on the CPU: a back end maps only `frames.save`) and,
+                    // once per scenario below, the reference's frame.
+                    if let (true, Some(own)) = (scenario.save_worst, frames.as_deref()) {
+                        let worst = images::worst_frames(&result.metrics, &scenario.save_frames);
+                        images::save_frames(
+                            &mut result,
+                            own,
+                            &worst,
+                            &image_dir,
+                            run_dir,
+                            "output",
+                        );
+                        images::save_error_maps(
+                            &mut result,
+                            &inputs,
+                            &worst,
+                            reference::keep_hdr(scenario),
+                            &image_dir,
+                            run_dir,
+                        );
+                        worst_frames.extend(worst);
+                    }
                 }
                 Some(Err(e)) => result.status = Status::Failed { error: e.clone() },
                 None => {}
@@ -214,14 +239,11 @@ pub fn run(
             .iter_mut()
             .find(|r| r.status == Status::Ok && r.technique != "native")
         {
-            images::save_frames(
-                first,
-                &r.frames,
-                &scenario.save_frames,
-                &image_dir,
-                run_dir,
-                "reference",
-            );
+            let mut saved = scenario.save_frames.clone();
+            saved.extend(worst_frames.iter().filter(|f| !scenario.save_frames.contains(f)));
+            saved.sort();
+            saved.dedup();
+            images::save_frames(first, &r.frames, &saved, &image_dir, run_dir, "reference");
         }
     }
     // Put results back in the scenario's declaration order.
