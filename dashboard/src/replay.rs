@@ -552,9 +552,9 @@ pub fn run(
     for (pi, s) in schedules.iter().enumerate() {
         let p = PROFILES[pi].name;
         if let Some(n) = s.outlier_before {
-            report
-                .cases
-                .push(format!("{p}: outlier at night {n}, the night before a step"));
+            report.cases.push(format!(
+                "{p}: outlier at night {n}, the night before a step"
+            ));
         }
         if let Some(n) = s.backfill_inside {
             report.cases.push(format!(

@@ -922,14 +922,18 @@ return {
          worst: a ? a.getAttribute('href') : null};",
     );
     std::fs::write(shots.join("run-frame-charts.png"), browser.screenshot()).unwrap();
-    assert!(r["charts"].as_u64() >= Some(8), "run page per-frame charts: {r}");
+    assert!(
+        r["charts"].as_u64() >= Some(8),
+        "run page per-frame charts: {r}"
+    );
     assert!(r["lines"].as_u64() >= r["charts"].as_u64(), "{r}");
-    let worst = r["worst"].as_str().expect("a worst frame links to the viewer");
+    let worst = r["worst"]
+        .as_str()
+        .expect("a worst frame links to the viewer");
     let frame = worst.rsplit_once("#f=").unwrap().1.to_string();
     browser.goto(&format!("{origin}{worst}"));
-    let opened = browser.wait_for(
-        "const n = document.querySelector('#frameno'); return n && n.textContent;",
-    );
+    let opened = browser
+        .wait_for("const n = document.querySelector('#frameno'); return n && n.textContent;");
     assert_eq!(opened.as_str(), Some(frame.as_str()), "{worst}");
     let natural = v["natural"].as_f64().unwrap_or(0.0);
     assert!(natural > 0.0, "viewer: {v}");

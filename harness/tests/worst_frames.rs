@@ -18,8 +18,12 @@ fn source(extra_frames: &str) -> String {
             &format!("measured = 6\nsave = [0]\n{extra_frames}"),
         )
         .replace(
+            "resolution = [48, 32]\n",
+            "resolution = [48, 32]\nmetrics = [\"psnr\", \"max-abs-error\", \"flip\"]\n",
+        )
+        .replace(
             "[[techniques]]\ntechnique = \"native\"\n",
-            "metrics = [\"psnr\", \"max-abs-error\", \"flip\"]\n[[techniques]]\ntechnique = \"native\"\n[[techniques]]\ntechnique = \"upscale\"\nscale = 0.5\n[[techniques]]\ntechnique = \"checkerboard\"\n",
+            "[[techniques]]\ntechnique = \"native\"\n[[techniques]]\ntechnique = \"upscale\"\nscale = 0.5\n[[techniques]]\ntechnique = \"checkerboard\"\n",
         )
 }
 
@@ -92,7 +96,8 @@ fn the_worst_frame_of_every_metric_is_among_the_saved_images() {
             let f = worst(v, metric);
             // The worst frame itself, or a saved frame with the same (worst) value.
             let m = v.metrics.iter().find(|m| m.name == metric).unwrap();
-            let value_at = |frame: u32| m.per_frame[m.frames.iter().position(|&x| x == frame).unwrap()];
+            let value_at =
+                |frame: u32| m.per_frame[m.frames.iter().position(|&x| x == frame).unwrap()];
             let shown = outputs.iter().find(|&&o| value_at(o) == value_at(f));
             let shown = *shown.unwrap_or_else(|| {
                 panic!(
@@ -100,7 +105,11 @@ fn the_worst_frame_of_every_metric_is_among_the_saved_images() {
                     v.variant
                 )
             });
-            assert!(heatmaps.contains(&shown), "{} {metric}: heat map of frame {shown}", v.variant);
+            assert!(
+                heatmaps.contains(&shown),
+                "{} {metric}: heat map of frame {shown}",
+                v.variant
+            );
             assert!(
                 reference_frames.contains(&shown),
                 "{} {metric}: reference frame {shown} (saved {reference_frames:?})",
@@ -113,9 +122,17 @@ fn the_worst_frame_of_every_metric_is_among_the_saved_images() {
         }
     }
     // The scene moves: some metric's worst frame is not frame 0, so frames were added.
-    assert!(added > 0, "no worst frame beside frame 0: {:?}", result.results);
+    assert!(
+        added > 0,
+        "no worst frame beside frame 0: {:?}",
+        result.results
+    );
     // The native reference has no error of its own: its save frame only.
-    let native = result.results.iter().find(|v| v.technique == "native").unwrap();
+    let native = result
+        .results
+        .iter()
+        .find(|v| v.technique == "native")
+        .unwrap();
     let own: Vec<&tessera_results::ImageRecord> = native.images.iter().collect();
     assert_eq!(frames_of(&own, "output"), [0]);
 }
@@ -146,7 +163,8 @@ fn save_worst_must_be_a_boolean() {
         .collect::<Vec<_>>();
     assert_eq!(err.len(), 1, "{err:?}");
     assert!(
-        err[0].starts_with("s.toml:7:14: `frames.save_worst`: ") && err[0].contains("bool"),
+        err[0].starts_with("s.toml:8:14: `frames.save_worst`: ")
+            && err[0].contains("expected true or false"),
         "{err:?}"
     );
 }

@@ -111,10 +111,10 @@ impl ChangePoint {
 pub const LOCATE_WITHIN: usize = 3;
 /// In [`locate`], a point further than this many σ from *both* levels is an outlier: it says
 /// nothing about where the change is and is left out of the fit; a residual beyond it counts as
-/// this many σ. Far enough that Student-t noise rarely reaches it (a 4.6σ night at the new level
-/// of a 50σ step is still the new level's), close enough that a whole-run outlier (1.5x: 25σ at
-/// 2% noise) always does.
-pub const LOCATE_CAP_SIGMAS: f64 = 6.0;
+/// this many σ. Far enough that noise does not reach it even when σ, estimated from a few dozen
+/// points, comes out at half the true value (a 4.6σ night at the new level of a 50σ step is still
+/// the new level's), close enough that a whole-run outlier (1.5x: 25σ at 2% noise) always does.
+pub const LOCATE_CAP_SIGMAS: f64 = 10.0;
 
 /// Where a change found near split `k` lies: the probability of each split `j` within
 /// [`LOCATE_WITHIN`] of `k` (keeping `lo <= j <= hi`), from the likelihood of a two-level model

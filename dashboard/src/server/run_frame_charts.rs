@@ -190,9 +190,16 @@ mod tests {
         let s = scenario();
         let html = render("r1", &s, &|v, f| v == "checkerboard-2x2" && f == 5);
         // GPU time plus the five metrics of the fixture.
-        assert_eq!(html.matches("<figure class=run-frame-chart>").count(), 6, "{html}");
+        assert_eq!(
+            html.matches("<figure class=run-frame-chart>").count(),
+            6,
+            "{html}"
+        );
         assert!(html.contains("<figcaption>GPU time per frame (ms)</figcaption>"));
-        assert!(html.contains("<figcaption>flip per frame</figcaption>"), "{html}");
+        assert!(
+            html.contains("<figcaption>flip per frame</figcaption>"),
+            "{html}"
+        );
         // Five ok variants (the msaa2x one is skipped), each in every legend.
         assert_eq!(html.matches("<li><span class=swatch").count(), 6 * 5);
         let flip = &html[html.find("flip per frame").unwrap()..];
@@ -216,7 +223,10 @@ mod tests {
                 "{flip}"
             );
         } else {
-            assert!(flip.contains(&format!("checkerboard-2x2 · worst frame {worst} (")), "{flip}");
+            assert!(
+                flip.contains(&format!("checkerboard-2x2 · worst frame {worst} (")),
+                "{flip}"
+            );
         }
     }
 

@@ -240,7 +240,11 @@ pub fn run(
             .find(|r| r.status == Status::Ok && r.technique != "native")
         {
             let mut saved = scenario.save_frames.clone();
-            saved.extend(worst_frames.iter().filter(|f| !scenario.save_frames.contains(f)));
+            saved.extend(
+                worst_frames
+                    .iter()
+                    .filter(|f| !scenario.save_frames.contains(f)),
+            );
             saved.sort();
             saved.dedup();
             images::save_frames(first, &r.frames, &saved, &image_dir, run_dir, "reference");
