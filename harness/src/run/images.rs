@@ -1,10 +1,11 @@
 //! Saved images of a variant: its output frames, the reference's, and a technique's extra images
-//! (e.g. adaptive shading's rate image), as PNG under the run folder, recorded in the result.
+//! (e.g. adaptive shading's rate image), as PNG under the run folder, recorded in the result; and
+//! which frames those are beyond `frames.save`: each metric's worst frame ([`worst_frames`]).
 
 use std::path::Path;
 
 use tessera_metrics::Rgb8Image;
-use tessera_results::{ImageRecord, VariantResult};
+use tessera_results::{ImageRecord, MetricRecord, VariantResult};
 
 use super::captured::MetricInputs;
 use crate::render::renderer::FrameExtras;
@@ -118,6 +119,55 @@ pub fn save_cvvdp_maps(
     }
 }
 
+/// The worst measured frame of each metric in `metrics` (the largest error; the lowest PSNR, SSIM
+/// or JOD, by the record's `higher_is_better`), without repeats, sorted, leaving out the frames in
+/// `saved` and every frame a saved frame ties with: when a metric's worst value is reached on a
+/// frame already saved (a still scene, where every frame is the same), no frame is added for it.
+/// Non-finite values (the infinite PSNR of identical frames) are never worst. `frames.save_worst`
+/// (on by default) saves these beside `frames.save`, so "the frames where this technique is worst"
+/// can be looked at (issue 22, item 6).
+pub fn worst_frames(metrics: &[MetricRecord], saved: &[u32]) -> Vec<u32> {
+    let mut out: Vec<u32> = Vec::new();
+    for m in metrics {
+        if m.per_frame.len() != m.frames.len() {
+            continue;
+        }
+        let worse = |a: f64, b: f64| {
+            if m.higher_is_better {
+                a < b
+            } else {
+                a > b
+            }
+        };
+        let mut worst: Option<f64> = None;
+        for &v in m.per_frame.iter().filter(|v| v.is_finite()) {
+            if worst.is_none_or(|w| worse(v, w)) {
+                worst = Some(v);
+            }
+        }
+        let Some(w) = worst else {
+            continue;
+        };
+        let at: Vec<u32> = m
+            .frames
+            .iter()
+            .zip(&m.per_frame)
+            .filter(|(_, &v)| v == w)
+            .map(|(&f, _)| f)
+            .collect();
+        if at.iter().any(|f| saved.contains(f)) {
+            continue;
+        }
+        if let Some(&f) = at.first() {
+            if !out.contains(&f) {
+                out.push(f);
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
 /// Writes one PNG and records it (path relative to the run folder); a failed write is left out.
 fn save_image(
     result: &mut VariantResult,
@@ -172,5 +222,41 @@ pub fn save_extras(
             let path = dir.join(format!("{stem}-{kind}-f{f:03}.png"));
             save_image(result, img, &path, run_dir, f, kind);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn metric(name: &str, higher_is_better: bool, per_frame: &[f64]) -> MetricRecord {
+        MetricRecord {
+            name: name.into(),
+            per_frame: per_frame.to_vec(),
+            frames: (0..per_frame.len() as u32).collect(),
+            value: 0.0,
+            higher_is_better,
+            frame_stats: None,
+            metrics_device: None,
+        }
+    }
+
+    #[test]
+    fn the_worst_frame_of_each_metric_by_its_direction() {
+        let m = [
+            metric("flip", false, &[0.1, 0.3, 0.2, 0.1]),
+            metric("psnr", true, &[f64::INFINITY, 30.0, 25.0, 40.0]),
+            metric("ssim", true, &[0.99, 0.98, 0.97, 0.99]),
+        ];
+        assert_eq!(worst_frames(&m, &[3]), [1, 2]);
+        // A saved frame already shows flip's worst: only psnr's and ssim's frame is added.
+        assert_eq!(worst_frames(&m, &[1]), [2]);
+        // A tie with a saved frame adds nothing; all non-finite adds nothing.
+        let still = [
+            metric("flip", false, &[0.2, 0.2, 0.2]),
+            metric("psnr", true, &[f64::INFINITY; 3]),
+        ];
+        assert_eq!(worst_frames(&still, &[2]), Vec::<u32>::new());
+        assert_eq!(worst_frames(&still, &[]), [0]);
     }
 }

@@ -9,6 +9,7 @@
 use std::path::Path;
 use std::time::Instant;
 
+use tessera_metrics::Rgb8Image;
 use tessera_results::{ScenarioResult, Status, VariantResult};
 
 use super::evaluate::{CpuMetrics, Evaluator};
@@ -97,6 +98,8 @@ pub fn run(
         Backend::Gpu => &gpu_evaluator,
         Backend::Cpu => &CpuMetrics,
     };
+    // Frames beyond `frames.save` that some variant saved as its worst: the reference's too.
+    let mut worst_frames: Vec<u32> = Vec::new();
     for variant in order {
         let is_reference = needs_reference && native_is_reference(variant) && reference.is_none();
         let keep = reference::keep(scenario, on_gpu, is_reference);
@@ -176,6 +179,28 @@ pub fn run(
                             run_dir,
                         );
                     }
+                    // Each metric's worst frame beside the saved ones (`frames.save_worst`): the
+                    // output, its error maps (on the CPU: a back end maps only `frames.save`) and,
+                    // once per scenario below, the reference's frame.
+                    // With GPU metrics the frames stay on the device: none is read back to save.
+                    let own_frames = own.as_ref().map(|o| &o.frames).filter(|f| !f.is_empty());
+                    if let (true, Some(own_frames)) = (scenario.save_worst, own_frames) {
+                        let worst = images::worst_frames(&result.metrics, &scenario.save_frames);
+                        let images: Vec<(u32, Rgb8Image)> = worst
+                            .iter()
+                            .filter_map(|&f| own_frames.get(f as usize).map(|i| (f, i.clone())))
+                            .collect();
+                        images::save_frames(&mut result, &images, &image_dir, run_dir, "output");
+                        images::save_error_maps(
+                            &mut result,
+                            &inputs,
+                            &worst,
+                            reference::keep_hdr(scenario),
+                            &image_dir,
+                            run_dir,
+                        );
+                        worst_frames.extend(worst);
+                    }
                 }
                 Some(Err(e)) => result.status = Status::Failed { error: e.clone() },
                 None => {}
@@ -223,8 +248,16 @@ pub fn run(
             .iter_mut()
             .find(|r| r.status == Status::Ok && !techniques::is_reference_name(&r.technique))
         {
+            // The frames `frames.save` names, then each worst frame some variant saved (where the
+            // reference's frames were read back: CPU metrics).
+            let worst: Vec<(u32, Rgb8Image)> = worst_frames
+                .iter()
+                .filter(|f| !r.saved.iter().any(|(i, _)| i == *f))
+                .filter_map(|&f| r.frames.get(f as usize).map(|img| (f, img.clone())))
+                .collect();
             phases::time("images", || {
-                images::save_frames(first, &r.saved, &image_dir, run_dir, "reference")
+                images::save_frames(first, &r.saved, &image_dir, run_dir, "reference");
+                images::save_frames(first, &worst, &image_dir, run_dir, "reference");
             });
         }
     }

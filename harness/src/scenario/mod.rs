@@ -46,6 +46,9 @@ pub struct Scenario {
     pub auto: Option<crate::timing::stop::AutoRule>,
     /// Measured-frame indices to save as PNG.
     pub save_frames: Vec<u32>,
+    /// `frames.save_worst`: also save, for each variant, the worst frame of each of its metrics
+    /// (with its heat map and the reference's frame), beside `save_frames`.
+    pub save_worst: bool,
     pub time_step: f64,
     pub reference: Reference,
     pub metrics: Vec<MetricKind>,

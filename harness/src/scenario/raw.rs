@@ -56,6 +56,8 @@ pub struct RawFrames {
     pub measured: Option<RawMeasured>,
     /// Measured-frame indices saved as PNG; negative counts from the end. Default `[-1]`.
     pub save: Option<Vec<i64>>,
+    /// Also save each metric's worst frame (beside `save`). Default `true`.
+    pub save_worst: Option<bool>,
 }
 
 /// `frames.measured`: a count, `"auto"`, or a table of the auto rule's bounds.

@@ -277,6 +277,7 @@ fn build(ctx: &mut Ctx, path: &Path, raw: RawScenario) -> Scenario {
         raw.frames.save.as_deref(),
         measured_frames,
     );
+    let save_worst = raw.frames.save_worst.unwrap_or(true);
 
     let time_step = raw.time_step.unwrap_or(1.0 / 60.0);
     ctx.positive(&root.key("time_step"), time_step);
@@ -314,6 +315,7 @@ fn build(ctx: &mut Ctx, path: &Path, raw: RawScenario) -> Scenario {
         measured_frames,
         auto,
         save_frames,
+        save_worst,
         time_step,
         reference,
         metrics,
