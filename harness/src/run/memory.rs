@@ -30,6 +30,9 @@ mod tests {
         let block = vec![1u8; 64 << 20];
         std::hint::black_box(&block);
         let after = super::peak_bytes().unwrap();
-        assert!(after >= 64 << 20, "peak {after} after touching 64 MiB (before {before})");
+        assert!(
+            after >= 64 << 20,
+            "peak {after} after touching 64 MiB (before {before})"
+        );
     }
 }

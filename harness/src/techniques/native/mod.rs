@@ -42,7 +42,7 @@ impl Definition for Native {
         "full-resolution forward rendering: the reference and the baseline"
     }
 
-fn plan(&self, options: &Options, target: Target) -> Plan {
+    fn plan(&self, options: &Options, target: Target) -> Plan {
         if options.motion_pass {
             gpu::forward_graph_with_motion(target.width, target.height)
         } else {
