@@ -238,6 +238,7 @@ mod tests {
             higher_is_better,
             frame_stats: None,
             metrics_device: None,
+            check: None,
         }
     }
 
