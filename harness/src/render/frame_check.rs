@@ -45,7 +45,9 @@ impl Gpu {
     /// The frame-check pipelines of this device, made on first use.
     pub fn frame_check(&self) -> &FrameCheckPipelines {
         self.frame_check
-            .get_or_init(|| FrameCheckPipelines::new(&self.device))
+            .get_or_init(|| Box::new(FrameCheckPipelines::new(&self.device)))
+            .downcast_ref::<FrameCheckPipelines>()
+            .expect("only this module fills the slot, with its pipelines")
     }
 }
 

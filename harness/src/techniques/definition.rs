@@ -17,7 +17,6 @@ use crate::params::{FromParam, Param, ParamSpec, ParamValue};
 use crate::render::graph::Plan;
 use crate::render::renderer::{Renderer, Unsupported};
 use crate::render::scene::SceneGpu;
-use crate::techniques::options::DeclaredOptions;
 
 /// Where a variant renders: the output size and what the scene does (techniques that need motion
 /// add passes only when something moves by itself).
@@ -260,4 +259,23 @@ pub fn variant_name(technique: &dyn Technique, explicit: &[(String, ParamValue)]
     }
     let parts: Vec<String> = explicit.iter().map(|(k, v)| format!("{k}={v}")).collect();
     format!("{}[{}]", technique.name(), parts.join(","))
+}
+
+/// Options read from a variant's parameters: the parameters declared, in docs order, and the
+/// reading of values that each passed their own [`ParamSpec`]. Written by
+/// [`options!`](crate::options) (`options.rs`) (or for `()`, a technique without parameters).
+pub trait DeclaredOptions: Sized {
+    /// The parameters, in the order the docs list them.
+    fn params() -> &'static [&'static ParamSpec];
+
+    /// The options of `variant` (validated against [`DeclaredOptions::params`]).
+    fn from_variant(variant: &Variant) -> Self;
+}
+
+impl DeclaredOptions for () {
+    fn params() -> &'static [&'static ParamSpec] {
+        &[]
+    }
+
+    fn from_variant(_variant: &Variant) {}
 }

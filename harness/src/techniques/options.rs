@@ -7,27 +7,9 @@
 //! Not for checks across parameters (those are `Definition::check`) nor for what a technique
 //! derives from its options (methods on the struct, in the technique's folder).
 
-use crate::params::ParamSpec;
-use crate::techniques::Variant;
-
-/// Options read from a variant's parameters: the parameters declared, in docs order, and the
-/// reading of values that each passed their own [`ParamSpec`]. Written by
-/// [`options!`](crate::options) (or for `()`, a technique without parameters).
-pub trait DeclaredOptions: Sized {
-    /// The parameters, in the order the docs list them.
-    fn params() -> &'static [&'static ParamSpec];
-
-    /// The options of `variant` (validated against [`DeclaredOptions::params`]).
-    fn from_variant(variant: &Variant) -> Self;
-}
-
-impl DeclaredOptions for () {
-    fn params() -> &'static [&'static ParamSpec] {
-        &[]
-    }
-
-    fn from_variant(_variant: &Variant) {}
-}
+// The trait lives with the seam that asks for it (`definition.rs`), so the two do not import
+// each other; the macro's paths name it here.
+pub use super::definition::DeclaredOptions;
 
 /// Declares a technique's options struct, its parameters and their reading, once:
 ///

@@ -373,19 +373,19 @@ mod tests {
     #[test]
     fn depth_disparity_clamps_motion_over_coherent_colour_fills_and_no_history_fills() {
         let (w, h) = (3u32, 3u32);
-        // Parity 1: the centre (1, 1) is shaded; take parity 0, where it is missing and its
+        // Parity 0: the centre (1, 1) is shaded; take parity 1, where it is missing and its
         // neighbours (1,0), (0,1), (2,1), (1,2) are shaded.
         let truth = |x: u32, y: u32| match (x, y) {
             (0, 1) => Vec4::splat(0.2),
             (2, 1) => Vec4::splat(0.4),
             _ => Vec4::splat(0.3),
         };
-        let rows = layers(w, h, 0, truth);
+        let rows = layers(w, h, 1, truth);
         let depth = vec![0.5; rows.len()];
         let history = vec![Vec4::splat(1.0); 9];
         // History depth at the same view depth: confident, the unclamped history.
         let same = vec![0.5; 9];
-        let mut inp = inputs(w, h, 0, &rows, &depth, &history, &same);
+        let mut inp = inputs(w, h, 1, &rows, &depth, &history, &same);
         let near = |a: Vec4, b: f32| (a - Vec4::splat(b)).abs().max_element() < 1e-5;
         let (c, d, s) = reconstruct(&inp, 1, 1);
         assert!(
