@@ -885,6 +885,12 @@ return {
     ] {
         browser.goto(&format!("{origin}{path}"));
         let n = browser.eval(NARROW);
+        // Saved first, so a failing check leaves the picture to look at.
+        std::fs::write(
+            shots.join(format!("narrow-390-{name}.png")),
+            browser.screenshot(),
+        )
+        .unwrap();
         // Nothing is cut off: no group heading, per-frame chart or alert table reaches past the
         // window or hides in a box that scrolls (the alert rows stack at this width).
         assert_eq!(n["clipped"], json!([]), "{name} at 390 px: {n}");
@@ -896,11 +902,6 @@ return {
             "compare" => assert!(n["names"].as_u64() >= Some(8), "{n}"),
             _ => {}
         }
-        std::fs::write(
-            shots.join(format!("narrow-390-{name}.png")),
-            browser.screenshot(),
-        )
-        .unwrap();
         assert_eq!(n["viewport"], true, "{name}: {n}");
         assert!(
             n["scroll"].as_f64().unwrap() <= n["inner"].as_f64().unwrap(),

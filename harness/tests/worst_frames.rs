@@ -155,8 +155,7 @@ fn save_worst_false_saves_the_save_frames_only() {
 fn save_worst_must_be_a_boolean() {
     let src = source("save_worst = \"yes\"");
     let err = tessera::scenario::parse(Path::new("s.toml"), &src)
-        .err()
-        .expect("a string is refused")
+        .expect_err("a string is refused")
         .0
         .iter()
         .map(|e| e.to_string())

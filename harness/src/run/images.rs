@@ -76,6 +76,47 @@ pub fn save_error_maps(
     }
 }
 
+/// Each metric's worst frame when the frames stayed on the device (GPU metrics): the output and
+/// the reference frame are read back, saved as [`save_frames`] saves them, with the FLIP map of
+/// the pair (computed on the CPU from the read-back pixels, as [`save_error_maps`] makes it).
+/// Returns the reference frames read back, for the reference's images once per scenario.
+pub fn save_worst_from_device(
+    result: &mut VariantResult,
+    backend: &tessera_metrics_gpu::GpuMetrics,
+    test: &[tessera_metrics_gpu::GpuFrame],
+    reference: &[tessera_metrics_gpu::GpuFrame],
+    worst: &[u32],
+    dir: &Path,
+    run_dir: &Path,
+) -> Vec<(u32, Rgb8Image)> {
+    let stem = sanitize(&result.variant);
+    let ppd = tessera_metrics::DEFAULT_PIXELS_PER_DEGREE;
+    let mut references = Vec::new();
+    for &f in worst {
+        let i = f as usize;
+        let (Some(t), Some(r)) = (test.get(i), reference.get(i)) else {
+            continue;
+        };
+        let (Ok(t), Ok(r)) = (backend.read_ldr(t), backend.read_ldr(r)) else {
+            continue;
+        };
+        save_frames(result, &[(f, t.clone())], dir, run_dir, "output");
+        if let Ok(map) = tessera_metrics::flip_ldr(&r, &t, ppd) {
+            let path = dir.join(format!("{stem}-flip-f{f:03}.png"));
+            save_image(
+                result,
+                &tessera_metrics::flip_heatmap(&map),
+                &path,
+                run_dir,
+                f,
+                "heatmap",
+            );
+        }
+        references.push((f, r));
+    }
+    references
+}
+
 /// FLIP heat maps a metrics back end already made (the GPU's), named and recorded as
 /// [`save_error_maps`] names and records its own.
 pub fn save_heatmaps(

@@ -100,6 +100,8 @@ pub fn run(
     };
     // Frames beyond `frames.save` that some variant saved as its worst: the reference's too.
     let mut worst_frames: Vec<u32> = Vec::new();
+    // The reference's worst frames read back from the device (GPU metrics).
+    let mut worst_reference: Vec<(u32, Rgb8Image)> = Vec::new();
     for variant in order {
         let is_reference = needs_reference && native_is_reference(variant) && reference.is_none();
         let keep = reference::keep(scenario, on_gpu, is_reference);
@@ -182,8 +184,30 @@ pub fn run(
                     // Each metric's worst frame beside the saved ones (`frames.save_worst`): the
                     // output, its error maps (on the CPU: a back end maps only `frames.save`) and,
                     // once per scenario below, the reference's frame.
-                    // With GPU metrics the frames stay on the device: none is read back to save.
+                    // With GPU metrics the frames stayed on the device: the worst are read back.
                     let own_frames = own.as_ref().map(|o| &o.frames).filter(|f| !f.is_empty());
+                    let own_gpu = own.as_ref().map(|o| &o.gpu).filter(|f| !f.is_empty());
+                    if let (true, None, Some(own_gpu)) = (scenario.save_worst, own_frames, own_gpu)
+                    {
+                        let worst = images::worst_frames(&result.metrics, &scenario.save_frames);
+                        let backend = gpu.metrics();
+                        let refs = phases::time("images", || {
+                            images::save_worst_from_device(
+                                &mut result,
+                                &backend,
+                                own_gpu,
+                                &r.gpu,
+                                &worst,
+                                &image_dir,
+                                run_dir,
+                            )
+                        });
+                        for (f, img) in refs {
+                            if !worst_reference.iter().any(|(g, _)| *g == f) {
+                                worst_reference.push((f, img));
+                            }
+                        }
+                    }
                     if let (true, Some(own_frames)) = (scenario.save_worst, own_frames) {
                         let worst = images::worst_frames(&result.metrics, &scenario.save_frames);
                         let images: Vec<(u32, Rgb8Image)> = worst
@@ -248,13 +272,22 @@ pub fn run(
             .iter_mut()
             .find(|r| r.status == Status::Ok && !techniques::is_reference_name(&r.technique))
         {
-            // The frames `frames.save` names, then each worst frame some variant saved (where the
-            // reference's frames were read back: CPU metrics).
-            let worst: Vec<(u32, Rgb8Image)> = worst_frames
+            // The frames `frames.save` names, then each worst frame some variant saved (read
+            // back from the device with GPU metrics).
+            worst_frames.sort_unstable();
+            worst_frames.dedup();
+            let mut worst: Vec<(u32, Rgb8Image)> = worst_frames
                 .iter()
                 .filter(|f| !r.saved.iter().any(|(i, _)| i == *f))
                 .filter_map(|&f| r.frames.get(f as usize).map(|img| (f, img.clone())))
                 .collect();
+            for (f, img) in std::mem::take(&mut worst_reference) {
+                let known = worst.iter().chain(&r.saved).any(|(g, _)| *g == f);
+                if !known {
+                    worst.push((f, img));
+                }
+            }
+            worst.sort_by_key(|(f, _)| *f);
             phases::time("images", || {
                 images::save_frames(first, &r.saved, &image_dir, run_dir, "reference");
                 images::save_frames(first, &worst, &image_dir, run_dir, "reference");

@@ -133,6 +133,11 @@ pub fn shaders() -> Vec<Shader> {
             files: vec!["scene.wgsl", "material/material.wgsl"],
         },
         Shader::file("material/mips.wgsl", crate::render::mips::MIPS_WGSL),
+        // The run loop's per-frame NaN / coverage check on frames kept on the GPU.
+        Shader::file(
+            "frame_check.wgsl",
+            crate::render::frame_check::FRAME_CHECK_WGSL,
+        ),
     ];
     for t in ALL {
         all.extend(t.shaders());
