@@ -8,12 +8,16 @@
 // `compare`: counts the pixels whose R, G or B bits differ between two frames.
 // Both add integers with atomics: the results do not depend on the order threads run in.
 
+// One row band of the frame (a frame beyond the device's storage-binding limit is checked in
+// bands): `frame` and `other` are bound from the band's first row.
 struct Params {
     width: u32,
+    // Rows of this band.
     height: u32,
     // u32 words per padded row.
     row_words: u32,
-    _p: u32,
+    // The band's first row in the frame (for the mask's pixel index).
+    row0: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
@@ -38,7 +42,7 @@ fn non_finite(@builtin(global_invocation_id) gid: vec3<u32>) {
     let n = bad(rg & 0xffffu) + bad(rg >> 16u) + bad(ba & 0xffffu);
     if (n > 0u) {
         atomicAdd(&counters[0], n);
-        let i = gid.y * params.width + gid.x;
+        let i = (params.row0 + gid.y) * params.width + gid.x;
         atomicOr(&mask[i / 32u], 1u << (i % 32u));
     }
 }

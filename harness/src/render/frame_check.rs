@@ -75,12 +75,27 @@ pub struct FrameCheck {
     counters: wgpu::Buffer,
     mask: wgpu::Buffer,
     staging: wgpu::Buffer,
-    non_finite_group: wgpu::BindGroup,
-    compare_group: wgpu::BindGroup,
+    /// Row bands of the frame, each bound within the device's storage-binding limit (an 8K
+    /// Rgba16Float frame is 253 MiB, twice wgpu's default 128 MiB): the non-finite and the
+    /// compare bind group of each band and its rows.
+    bands: Vec<Band>,
+}
+
+struct Band {
+    non_finite: wgpu::BindGroup,
+    compare: wgpu::BindGroup,
+    rows: u32,
 }
 
 impl FrameCheck {
     pub fn new(gpu: &Gpu, width: u32, height: u32) -> FrameCheck {
+        let limit = u64::from(gpu.device.limits().max_storage_buffer_binding_size);
+        FrameCheck::with_binding_limit(gpu, width, height, limit)
+    }
+
+    /// [`FrameCheck::new`] with the frame bound in bands of at most `limit` bytes (at least one
+    /// row each): the device's storage-binding limit, or less in tests.
+    pub fn with_binding_limit(gpu: &Gpu, width: u32, height: u32, limit: u64) -> FrameCheck {
         let pipelines = gpu.frame_check();
         let device = &gpu.device;
         let padded_row = (width * 8).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT)
@@ -117,33 +132,68 @@ impl FrameCheck {
             mask_bytes.max(8),
             U::MAP_READ | U::COPY_DST,
         );
-        let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("frame check params"),
-            contents: bytemuck::cast_slice(&[width, height, padded_row / 4, 0]),
-            usage: U::UNIFORM,
-        });
-        let group = |pipeline: &wgpu::ComputePipeline, entries: &[(u32, &wgpu::Buffer)]| {
-            let entries: Vec<wgpu::BindGroupEntry> = entries
-                .iter()
-                .map(|&(binding, b)| wgpu::BindGroupEntry {
-                    binding,
-                    resource: b.as_entire_binding(),
+        // Rows per band: whole padded rows (256-byte aligned, so every band's offset meets the
+        // storage offset alignment) within the binding limit.
+        let band_rows = ((limit / u64::from(padded_row)).max(1) as u32).min(height.max(1));
+        let mut bands = Vec::new();
+        let mut row0 = 0;
+        while row0 < height.max(1) {
+            let rows = band_rows.min(height.max(1) - row0);
+            let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("frame check params"),
+                contents: bytemuck::cast_slice(&[width, rows, padded_row / 4, row0]),
+                usage: U::UNIFORM,
+            });
+            let offset = u64::from(row0) * u64::from(padded_row);
+            let size = std::num::NonZeroU64::new(u64::from(rows) * u64::from(padded_row));
+            fn band(
+                b: &wgpu::Buffer,
+                offset: u64,
+                size: Option<std::num::NonZeroU64>,
+            ) -> wgpu::BindingResource<'_> {
+                wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    buffer: b,
+                    offset,
+                    size,
                 })
-                .collect();
-            device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("frame check"),
-                layout: &pipeline.get_bind_group_layout(0),
-                entries: &entries,
-            })
-        };
-        let non_finite_group = group(
-            &pipelines.non_finite,
-            &[(0, &params), (1, &raw), (2, &counters), (3, &mask)],
-        );
-        let compare_group = group(
-            &pipelines.compare,
-            &[(0, &params), (1, &raw), (2, &counters), (4, &snapshot)],
-        );
+            }
+            let group = |pipeline: &wgpu::ComputePipeline,
+                         entries: Vec<(u32, wgpu::BindingResource)>| {
+                let entries: Vec<wgpu::BindGroupEntry> = entries
+                    .into_iter()
+                    .map(|(binding, resource)| wgpu::BindGroupEntry { binding, resource })
+                    .collect();
+                device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("frame check"),
+                    layout: &pipeline.get_bind_group_layout(0),
+                    entries: &entries,
+                })
+            };
+            let non_finite = group(
+                &pipelines.non_finite,
+                vec![
+                    (0, params.as_entire_binding()),
+                    (1, band(&raw, offset, size)),
+                    (2, counters.as_entire_binding()),
+                    (3, mask.as_entire_binding()),
+                ],
+            );
+            let compare = group(
+                &pipelines.compare,
+                vec![
+                    (0, params.as_entire_binding()),
+                    (1, band(&raw, offset, size)),
+                    (2, counters.as_entire_binding()),
+                    (4, band(&snapshot, offset, size)),
+                ],
+            );
+            bands.push(Band {
+                non_finite,
+                compare,
+                rows,
+            });
+            row0 += rows;
+        }
         FrameCheck {
             width,
             height,
@@ -153,8 +203,7 @@ impl FrameCheck {
             counters,
             mask,
             staging,
-            non_finite_group,
-            compare_group,
+            bands,
         }
     }
 
@@ -210,14 +259,16 @@ impl FrameCheck {
             label: Some("frame check"),
             timestamp_writes: None,
         });
-        let groups = (self.width.div_ceil(16), self.height.div_ceil(16));
-        pass.set_pipeline(&pipelines.non_finite);
-        pass.set_bind_group(0, &self.non_finite_group, &[]);
-        pass.dispatch_workgroups(groups.0, groups.1, 1);
-        if compare {
-            pass.set_pipeline(&pipelines.compare);
-            pass.set_bind_group(0, &self.compare_group, &[]);
+        for band in &self.bands {
+            let groups = (self.width.div_ceil(16), band.rows.div_ceil(16));
+            pass.set_pipeline(&pipelines.non_finite);
+            pass.set_bind_group(0, &band.non_finite, &[]);
             pass.dispatch_workgroups(groups.0, groups.1, 1);
+            if compare {
+                pass.set_pipeline(&pipelines.compare);
+                pass.set_bind_group(0, &band.compare, &[]);
+                pass.dispatch_workgroups(groups.0, groups.1, 1);
+            }
         }
         drop(pass);
         encoder.copy_buffer_to_buffer(&self.counters, 0, &self.staging, 0, 8);
