@@ -176,6 +176,7 @@ fn with_energy(mut v: VariantResult, mj: f64, throttled: bool) -> VariantResult 
         } else {
             vec![]
         },
+        clock_warmup_ms: None,
     })));
     v
 }

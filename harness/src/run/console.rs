@@ -154,6 +154,9 @@ pub fn conditions_line(results: &[VariantResult], r: &VariantResult) -> Option<S
                 .unwrap_or_default();
             parts.push(format!("{:.3} mJ/frame{saving}", e.mj_per_frame));
         }
+        if let Some(ms) = c.clock_warmup_ms {
+            parts.push(format!("warm-up {ms:.0} ms"));
+        }
         if c.throttled {
             parts.push("THROTTLED".into());
         }

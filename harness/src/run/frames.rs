@@ -37,6 +37,11 @@ use crate::render::scene::SceneGpu;
 use crate::render::timers::{FrameMeasurements, Timers, MAX_PENDING_FRAMES};
 use crate::scenario::Scenario;
 
+/// The clock warm-up ends early once its load has run at the top graphics clock for this long...
+const CLOCK_SETTLED_MS: f64 = 50.0;
+/// ...and it has lasted at least this long.
+const MIN_CLOCK_WARMUP_MS: f64 = 100.0;
+
 /// What rendering a variant produced.
 pub struct Rendered {
     /// One entry per measured frame.
@@ -71,6 +76,8 @@ pub struct Rendered {
     pub conditions: Option<Vec<Sample>>,
     /// The sensor samples of the energy window and its frame count; `None` without a sampler.
     pub energy_window: Option<(Vec<Sample>, u32)>,
+    /// How long the clock warm-up lasted, in milliseconds.
+    pub clock_warmup_ms: f64,
     /// Per measured frame, a hash of its exact bits, when `TESSERA_FRAME_HASHES` is set (see
     /// [`frame_hash_file`]); empty otherwise.
     pub hashes: Vec<u64>,
@@ -293,16 +300,27 @@ pub fn render_sampled(
         ended_by: StopReason::Count,
         conditions: None,
         energy_window: None,
+        clock_warmup_ms: 0.0,
         hashes: Vec::new(),
     };
     let hash_frames = frame_hash_file().is_some();
 
     // Clock warm-up: frame 0 (which never reads history) repeated until the GPU has been busy for
-    // `warmup_ms`, so that it reaches its working clocks before the first timed frame.
+    // `warmup_ms`, so that it reaches its working clocks before the first timed frame. Where the
+    // sensors read the graphics clock and know its maximum, it ends sooner: once the load has run
+    // at the top clock throughout for CLOCK_SETTLED_MS (after at least MIN_CLOCK_WARMUP_MS), as on
+    // a GPU still at its top clock from the variant before. The clocks of the measured frames are
+    // recorded either way (`conditions`), and a low one is flagged.
     let warm_span = phases::span("clock warm-up");
     let warm_start = Instant::now();
     let warmup_ms = scenario.clock_warmup_ms(&gpu.info.device_type);
+    let top_clock = sampler.and_then(|s| Some((s, s.limits().max_graphics_clock_mhz?)));
+    let mut settled_since: Option<Instant> = None;
     while warm_start.elapsed().as_secs_f64() * 1000.0 < warmup_ms {
+        let chunk_start = Instant::now();
+        if let Some((s, _)) = top_clock {
+            s.begin();
+        }
         pipelined(
             gpu,
             scene,
@@ -313,7 +331,22 @@ pub fn render_sampled(
             None,
             &mut |_, _| {},
         );
+        if let Some((s, max)) = top_clock {
+            let at_top = crate::conditions::summary::at_top_clock(&s.end(), max);
+            settled_since = if at_top {
+                settled_since.or(Some(chunk_start))
+            } else {
+                None
+            };
+            let ms = |t: Instant| t.elapsed().as_secs_f64() * 1000.0;
+            if settled_since.is_some_and(|t| ms(t) >= CLOCK_SETTLED_MS)
+                && ms(warm_start) >= MIN_CLOCK_WARMUP_MS
+            {
+                break;
+            }
+        }
     }
+    rendered.clock_warmup_ms = warm_start.elapsed().as_secs_f64() * 1000.0;
 
     drop(warm_span);
 
@@ -392,10 +425,11 @@ pub fn render_sampled(
 
     // Energy window, with sensors only: the sequence goes on from the last timed frame, pipelined,
     // for at least ENERGY_WINDOW_MS, while the sampler reads the energy counter.
-    if let Some(s) = sampler {
+    let energy_ms = scenario.energy_window_ms.unwrap_or(ENERGY_WINDOW_MS);
+    if let Some(s) = sampler.filter(|_| energy_ms > 0.0) {
         let _span = phases::span("energy window");
         let first = last_done + 1;
-        let window = std::time::Duration::from_secs_f64(ENERGY_WINDOW_MS / 1000.0);
+        let window = std::time::Duration::from_secs_f64(energy_ms / 1000.0);
         let mut frames = 0u32;
         s.begin();
         let start = Instant::now();

@@ -29,10 +29,16 @@ pub fn save_frames(
     } else {
         sanitize(&result.variant)
     };
-    for (f, img) in saved {
-        let path = dir.join(format!("{stem}-f{f:03}.png"));
-        save_image(result, img, &path, run_dir, *f, kind);
-    }
+    let images: Vec<Pending<'_>> = saved
+        .iter()
+        .map(|(f, img)| Pending {
+            path: dir.join(format!("{stem}-f{f:03}.png")),
+            image: std::borrow::Cow::Borrowed(img),
+            frame: *f,
+            kind: kind.to_string(),
+        })
+        .collect();
+    write_all(result, images, run_dir);
 }
 
 /// The per-pixel error maps of each saved frame against the reference, as images of the result:
@@ -50,16 +56,19 @@ pub fn save_error_maps(
 ) {
     let stem = sanitize(&result.variant);
     let ppd = tessera_metrics::DEFAULT_PIXELS_PER_DEGREE;
-    for &f in save_frames {
+    let maps = par_map(save_frames, |&f| {
         let i = f as usize;
+        let mut out = Vec::new();
         let (Some(r), Some(t)) = (inputs.reference.frames.get(i), inputs.test.get(i)) else {
-            continue;
+            return out;
         };
-        let _ = std::fs::create_dir_all(dir);
         if let Ok(map) = tessera_metrics::flip_ldr(r, t, ppd) {
-            let path = dir.join(format!("{stem}-flip-f{f:03}.png"));
-            let img = tessera_metrics::flip_heatmap(&map);
-            save_image(result, &img, &path, run_dir, f, "heatmap");
+            out.push(Pending::owned(
+                dir.join(format!("{stem}-flip-f{f:03}.png")),
+                tessera_metrics::flip_heatmap(&map),
+                f,
+                "heatmap",
+            ));
         }
         let hdr_pair = (
             inputs.reference.hdr.get(i),
@@ -68,12 +77,18 @@ pub fn save_error_maps(
         );
         if let (true, (Some(rh), Some(th), Some(range))) = (hdr, hdr_pair) {
             if let Ok(map) = tessera_metrics::flip_hdr(rh, th, range, ppd) {
-                let path = dir.join(format!("{stem}-flip-hdr-f{f:03}.png"));
-                let img = tessera_metrics::flip_heatmap(&map);
-                save_image(result, &img, &path, run_dir, f, "heatmap-hdr");
+                out.push(Pending::owned(
+                    dir.join(format!("{stem}-flip-hdr-f{f:03}.png")),
+                    tessera_metrics::flip_heatmap(&map),
+                    f,
+                    "heatmap-hdr",
+                ));
             }
         }
-    }
+        out
+    });
+    let _ = std::fs::create_dir_all(dir);
+    write_all(result, maps.into_iter().flatten().collect(), run_dir);
 }
 
 /// Each metric's worst frame when the frames stayed on the device (GPU metrics): the output and
@@ -91,30 +106,39 @@ pub fn save_worst_from_device(
 ) -> Vec<(u32, Rgb8Image)> {
     let stem = sanitize(&result.variant);
     let ppd = tessera_metrics::DEFAULT_PIXELS_PER_DEGREE;
-    let mut references = Vec::new();
+    let mut pairs: Vec<(u32, Rgb8Image, Rgb8Image)> = Vec::new();
     for &f in worst {
         let i = f as usize;
         let (Some(t), Some(r)) = (test.get(i), reference.get(i)) else {
             continue;
         };
-        let (Ok(t), Ok(r)) = (backend.read_ldr(t), backend.read_ldr(r)) else {
-            continue;
-        };
-        save_frames(result, &[(f, t.clone())], dir, run_dir, "output");
-        if let Ok(map) = tessera_metrics::flip_ldr(&r, &t, ppd) {
-            let path = dir.join(format!("{stem}-flip-f{f:03}.png"));
-            save_image(
-                result,
-                &tessera_metrics::flip_heatmap(&map),
-                &path,
-                run_dir,
-                f,
-                "heatmap",
-            );
+        if let (Ok(t), Ok(r)) = (backend.read_ldr(t), backend.read_ldr(r)) {
+            pairs.push((f, t, r));
         }
-        references.push((f, r));
     }
-    references
+    let maps = par_map(&pairs, |(f, t, r)| {
+        tessera_metrics::flip_ldr(r, t, ppd).ok().map(|map| {
+            Pending::owned(
+                dir.join(format!("{stem}-flip-f{f:03}.png")),
+                tessera_metrics::flip_heatmap(&map),
+                *f,
+                "heatmap",
+            )
+        })
+    });
+    let _ = std::fs::create_dir_all(dir);
+    let mut images: Vec<Pending<'_>> = pairs
+        .iter()
+        .map(|(f, t, _)| Pending {
+            path: dir.join(format!("{stem}-f{f:03}.png")),
+            image: std::borrow::Cow::Borrowed(t),
+            frame: *f,
+            kind: "output".into(),
+        })
+        .collect();
+    images.extend(maps.into_iter().flatten());
+    write_all(result, images, run_dir);
+    pairs.into_iter().map(|(f, _, r)| (f, r)).collect()
 }
 
 /// FLIP heat maps a metrics back end already made (the GPU's), named and recorded as
@@ -210,6 +234,71 @@ pub fn worst_frames(metrics: &[MetricRecord], saved: &[u32]) -> Vec<u32> {
 }
 
 /// Writes one PNG and records it (path relative to the run folder); a failed write is left out.
+/// A PNG to write and record: [`write_all`] writes a list of them on all cores.
+struct Pending<'a> {
+    path: std::path::PathBuf,
+    image: std::borrow::Cow<'a, Rgb8Image>,
+    frame: u32,
+    kind: String,
+}
+
+impl Pending<'static> {
+    fn owned(path: std::path::PathBuf, image: Rgb8Image, frame: u32, kind: &str) -> Self {
+        Pending {
+            path,
+            image: std::borrow::Cow::Owned(image),
+            frame,
+            kind: kind.to_string(),
+        }
+    }
+}
+
+/// `f` of every item, on up to the machine's cores (scoped threads, items in contiguous chunks),
+/// results in the items' order. PNG encoding and the CPU FLIP maps of saved frames are
+/// independent per image: a 4K run saved 60 images one after the other in 9.7 s (H200 host).
+fn par_map<T: Sync, R: Send>(items: &[T], f: impl Fn(&T) -> R + Sync) -> Vec<R> {
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    if items.len() < 2 || threads < 2 {
+        return items.iter().map(&f).collect();
+    }
+    let chunk = items.len().div_ceil(threads);
+    std::thread::scope(|scope| {
+        let handles: Vec<_> = items
+            .chunks(chunk)
+            .map(|c| scope.spawn(|| c.iter().map(&f).collect::<Vec<R>>()))
+            .collect();
+        handles
+            .into_iter()
+            .flat_map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+            .collect()
+    })
+}
+
+/// Writes `images` (in parallel) and records each one written in `result`, in their order.
+fn write_all(result: &mut VariantResult, images: Vec<Pending<'_>>, run_dir: &Path) {
+    let written = par_map(&images, |p| {
+        tessera_metrics::save_png(&p.path, &p.image).is_ok()
+    });
+    for (p, ok) in images.iter().zip(written) {
+        if ok {
+            record(result, &p.path, run_dir, p.frame, &p.kind);
+        }
+    }
+}
+
+fn record(result: &mut VariantResult, path: &Path, run_dir: &Path, frame: u32, kind: &str) {
+    let rel = path
+        .strip_prefix(run_dir)
+        .unwrap_or(path)
+        .to_string_lossy()
+        .replace('\\', "/");
+    result.images.push(ImageRecord {
+        frame,
+        kind: kind.to_string(),
+        path: rel,
+    });
+}
+
 fn save_image(
     result: &mut VariantResult,
     img: &Rgb8Image,
@@ -219,16 +308,7 @@ fn save_image(
     kind: &str,
 ) {
     if tessera_metrics::save_png(path, img).is_ok() {
-        let rel = path
-            .strip_prefix(run_dir)
-            .unwrap_or(path)
-            .to_string_lossy()
-            .replace('\\', "/");
-        result.images.push(ImageRecord {
-            frame,
-            kind: kind.to_string(),
-            path: rel,
-        });
+        record(result, path, run_dir, frame, kind);
     }
 }
 

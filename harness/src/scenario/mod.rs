@@ -39,6 +39,9 @@ pub struct Scenario {
     /// Minimum GPU-busy time before the timed frames (frame 0 repeated), in milliseconds; `None`
     /// picks by adapter (see [`Scenario::clock_warmup_ms`]).
     pub warmup_ms: Option<f64>,
+    /// The energy window after the timed frames where sensors exist, in milliseconds (0: none);
+    /// `None` is [`crate::conditions::ENERGY_WINDOW_MS`].
+    pub energy_window_ms: Option<f64>,
     pub measured_frames: u32,
     /// `frames.measured = "auto"`: timed frames go on past `measured_frames` (then the rule's
     /// `min`) until the median GPU frame time is precise enough or the cap is reached; metrics

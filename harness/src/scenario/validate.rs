@@ -270,6 +270,15 @@ fn build(ctx: &mut Ctx, path: &Path, raw: RawScenario) -> Scenario {
             format!("{ms} is out of range: expected 0 to 60000 milliseconds"),
         );
     }
+    let energy_window_ms = raw.frames.energy_window_ms;
+    if let Some(ms) =
+        energy_window_ms.filter(|ms| !(ms.is_finite() && (0.0..=60_000.0).contains(ms)))
+    {
+        ctx.err(
+            &frames.key("energy_window_ms"),
+            format!("{ms} is out of range: expected 0 to 60000 milliseconds"),
+        );
+    }
     let (measured_frames, auto) = measured(ctx, &frames.key("measured"), &raw.frames.measured);
     let save_frames = save_frames(
         ctx,
@@ -312,6 +321,7 @@ fn build(ctx: &mut Ctx, path: &Path, raw: RawScenario) -> Scenario {
         height,
         warmup_frames,
         warmup_ms,
+        energy_window_ms,
         measured_frames,
         auto,
         save_frames,
