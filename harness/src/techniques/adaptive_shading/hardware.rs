@@ -33,7 +33,7 @@ use super::raw_pass::{RawVrsPass, Shaders, Targets};
 use crate::gpu::vrs::VrsCaps;
 use crate::gpu::Gpu;
 use crate::render::graph::{Graph, PassKind, Plan, TextureDesc};
-use crate::render::kit::{allocate, bind_group, compute_pipeline, timed_dispatch};
+use crate::render::kit::{allocate, bind_group, compute_pipeline, timed_dispatch, PingPong};
 use crate::render::readback::read_texture_raw;
 use crate::render::renderer::{FrameExtras, FrameInfo, FrameValue, Renderer};
 use crate::render::scene::{SceneGpu, COLOR_FORMAT, DEPTH_FORMAT};
@@ -172,7 +172,10 @@ pub struct HardwareGpu {
     /// error, before any frame is rendered); `None` only while [`HardwareGpu::new`] runs.
     raw: Option<RawVrsPass>,
     parities: usize,
-    parity: usize,
+    /// The side (colour and depth target pair, raw-pass targets) frame `i` writes: the kit's
+    /// ping-pong of the two sides when the rates read the previous frame, one side otherwise
+    /// (`native-vrs`: both entries 0).
+    sides: PingPong<usize>,
     last: Option<LastFrame>,
 }
 
@@ -263,7 +266,7 @@ impl HardwareGpu {
             staging_readback,
             raw: None,
             parities,
-            parity: 0,
+            sides: PingPong::new([0, parities - 1]),
             last: None,
         };
         hw.initialise(gpu);
@@ -342,7 +345,7 @@ impl HardwareGpu {
 
     /// Covered pixels of the last frame (its depth is not the clear value, 0).
     pub fn coverage(&self, gpu: &Gpu) -> Vec<bool> {
-        let raw = read_texture_raw(gpu, &self.textures[DEPTHS[self.parity]]);
+        let raw = read_texture_raw(gpu, &self.textures[DEPTHS[*self.sides.current()]]);
         let depth: &[f32] = bytemuck::cast_slice(&raw);
         depth.iter().map(|&d| d > 0.0).collect()
     }
@@ -437,12 +440,12 @@ impl HardwareGpu {
             state,
         };
         let mut t = vec![state(
-            &self.textures[DEPTHS[self.parity]],
+            &self.textures[DEPTHS[*self.sides.current()]],
             wgpu::TextureUses::DEPTH_STENCIL_WRITE,
         )];
         if color {
             t.push(state(
-                &self.textures[COLORS[self.parity]],
+                &self.textures[COLORS[*self.sides.current()]],
                 wgpu::TextureUses::COLOR_TARGET,
             ));
         }
@@ -466,7 +469,7 @@ impl Renderer for HardwareGpu {
     }
 
     fn output(&self) -> &wgpu::Texture {
-        &self.textures[COLORS[self.parity]]
+        &self.textures[COLORS[*self.sides.current()]]
     }
 
     fn record(
@@ -477,7 +480,8 @@ impl Renderer for HardwareGpu {
         encoder: &mut wgpu::CommandEncoder,
         frame: FrameInfo,
     ) {
-        self.parity = (frame.index as usize) % self.parities;
+        self.sides.select(frame.index);
+        let side = *self.sides.current();
         scene.write_view(
             &gpu.queue,
             0,
@@ -500,7 +504,7 @@ impl Renderer for HardwareGpu {
             submit.push(std::mem::replace(&mut wgpu_work, fresh()).finish());
             let mut raw = fresh();
             if let Some(raw_pass) = self.raw.as_mut() {
-                raw_pass.record_prepass(&mut raw, self.parity);
+                raw_pass.record_prepass(&mut raw, side);
             }
             submit.push(raw.finish());
             timers.end(&mut wgpu_work, q);
@@ -510,7 +514,7 @@ impl Renderer for HardwareGpu {
                 scene,
                 timers,
                 &mut wgpu_work,
-                self.parity,
+                side,
                 frame.history_valid,
                 self.width,
                 self.height,
@@ -530,7 +534,7 @@ impl Renderer for HardwareGpu {
         submit.push(wgpu_work.finish());
         let mut raw = fresh();
         if let Some(raw_pass) = self.raw.as_mut() {
-            raw_pass.record_shade(&mut raw, self.parity, background);
+            raw_pass.record_shade(&mut raw, side, background);
         }
         submit.push(raw.finish());
         let mut after = fresh();
