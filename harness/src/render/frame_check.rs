@@ -89,7 +89,7 @@ struct Band {
 
 impl FrameCheck {
     pub fn new(gpu: &Gpu, width: u32, height: u32) -> FrameCheck {
-        let limit = u64::from(gpu.device.limits().max_storage_buffer_binding_size);
+        let limit = gpu.device.limits().max_storage_buffer_binding_size;
         FrameCheck::with_binding_limit(gpu, width, height, limit)
     }
 
