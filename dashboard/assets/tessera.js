@@ -323,7 +323,10 @@
     root.querySelectorAll('img.px').forEach(i => i.addEventListener('load', () => setZoom(userZoom ? +zoom.value : fitZoom())));
     setZoom(fitZoom());
     setWipe(+wipe.value);
-    setFrame(0);
+    // `#f=N` (the run page's worst-frame links) opens at measured frame N when it was saved.
+    const asked = /^#f=(\d+)$/.exec(location.hash);
+    const at = asked ? spec.frames.indexOf(+asked[1]) : -1;
+    setFrame(at >= 0 ? at : 0);
   }
 
   // Two checked runs in the runs list open the compare page.

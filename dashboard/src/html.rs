@@ -61,6 +61,26 @@ pub fn pct(v: f64) -> String {
     }
 }
 
+/// A scenario, variant or measure name for a table cell or list, escaped, in a `name` span that
+/// wraps only at its separators: after `[`, `,`, `;` and `/`. Variant names are single tokens
+/// (`adaptive-shading[threshold=0.15,motion=on]`); a cell that may break anywhere is squeezed by
+/// the table to a few characters and breaks them mid-word, so name cells do not (the table
+/// scrolls in its box instead). Each part between separators is a `nowrap` span: a browser
+/// would otherwise also break after the hyphens of `adaptive-shading` or `checkerboard-2x2`.
+pub fn name(s: &str) -> String {
+    let mut out = String::with_capacity(s.len() + 48);
+    out.push_str("<span class=name><span>");
+    let mut chars = s.chars().peekable();
+    while let Some(c) = chars.next() {
+        out.push_str(&esc(c.encode_utf8(&mut [0; 4])));
+        if matches!(c, '[' | ',' | ';' | '/') && chars.peek().is_some() {
+            out.push_str("</span><wbr><span>");
+        }
+    }
+    out.push_str("</span></span>");
+    out
+}
+
 /// An axis title for a measure key from the measure table: its label and unit, e.g.
 /// `GPU time (ms)` for `gpu_ms.median`, `reconstruct (ms)` for a pass; the key itself when the
 /// table does not know it.
@@ -116,7 +136,9 @@ kbd{border:1px solid #aaa;border-radius:3px;padding:0 4px;font-size:12px}
 .pair{display:grid;grid-template-columns:1fr 1fr;gap:8px;width:100%}.pair figure{min-width:0}.pair .pane{max-width:100%}
 .flip-scale{display:flex;align-items:center;gap:4px;font-size:12px;margin:2px 0}.flip-scale .bar{display:inline-block;width:160px;height:10px;border:1px solid #999}
 .frame-charts{display:flex;flex-wrap:wrap;gap:8px;margin:8px 0}.frame-chart{margin:0}.frame-chart svg{border:1px solid #eee}
-main table{display:block;overflow-x:auto;max-width:100%}td{overflow-wrap:anywhere}
+.run-frames summary{cursor:pointer;color:#444;margin:6px 0}.run-frame-charts{display:flex;flex-wrap:wrap;gap:12px;margin:4px 0}.run-frame-chart{margin:0;max-width:100%;width:420px}
+.run-frame-chart figcaption{font-size:12px;color:#444}ul.legend{list-style:none;padding:0;margin:2px 0;font-size:12px}ul.legend li{overflow-wrap:anywhere}.swatch{display:inline-block;width:10px;height:10px;margin-right:4px}
+main table{display:block;overflow-x:auto;max-width:100%}td{overflow-wrap:anywhere}.name{overflow-wrap:normal;word-break:normal}.name>span{white-space:nowrap}
 @media (max-width:700px){nav{padding:6px 8px}nav a{display:inline-block;margin:2px 10px 2px 0}main{padding:8px}
 h1{font-size:17px}td,th{padding:3px 4px}select,input{max-width:100%}.pane{max-height:70vh}
 .chart{max-width:100%}form#filters label{display:inline-block;margin:2px 8px 2px 0}form.triage input{max-width:100%}}";
@@ -204,6 +226,10 @@ mod tests {
         );
         assert_eq!(enc("upscale[scale=0.5]"), "upscale%5Bscale%3D0.5%5D");
         assert_eq!(enc("../x"), "..%2Fx");
+        assert_eq!(
+            name("a[b=1,c<2]"),
+            "<span class=name><span>a[</span><wbr><span>b=1,</span><wbr><span>c&lt;2]</span></span>"
+        );
     }
 
     #[test]

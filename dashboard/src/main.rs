@@ -448,6 +448,12 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             for d in report.disagreements.iter().take(20) {
                 eprintln!("  {d}");
             }
+            for u in report.published.broken.iter().take(20) {
+                eprintln!("  not answering: {u}");
+            }
+            for t in report.published.triage_lost.iter().take(20) {
+                eprintln!("  triage lost: {t}");
+            }
             if verbose {
                 for m in &report.misses {
                     eprintln!("  not exact: {m}");

@@ -878,17 +878,30 @@ return {
         ("runs", "/".to_string()),
         ("run", format!("/runs/{}", smoke_runs[1])),
         ("regressions", "/regressions".to_string()),
+        (
+            "compare",
+            format!("/compare/runs?a={}&b={}", smoke_runs[0], smoke_runs[1]),
+        ),
     ] {
         browser.goto(&format!("{origin}{path}"));
-        let n = browser.eval(
-            "return {inner: window.innerWidth, scroll: document.documentElement.scrollWidth, \
-             viewport: !!document.querySelector('meta[name=viewport][content*=\"width=device-width\"]')};",
-        );
+        let n = browser.eval(NARROW);
+        // Saved first, so a failing check leaves the picture to look at.
         std::fs::write(
             shots.join(format!("narrow-390-{name}.png")),
             browser.screenshot(),
         )
         .unwrap();
+        // Nothing is cut off: no group heading, per-frame chart or alert table reaches past the
+        // window or hides in a box that scrolls (the alert rows stack at this width).
+        assert_eq!(n["clipped"], json!([]), "{name} at 390 px: {n}");
+        // Names wrap at their separators, never inside a word.
+        assert_eq!(n["broken_names"], json!([]), "{name} at 390 px: {n}");
+        match name {
+            "regressions" => assert!(n["groups"].as_u64() >= Some(1), "{n}"),
+            "run" => assert!(n["frame_charts"].as_u64() >= Some(6), "{n}"),
+            "compare" => assert!(n["names"].as_u64() >= Some(8), "{n}"),
+            _ => {}
+        }
         assert_eq!(n["viewport"], true, "{name}: {n}");
         assert!(
             n["scroll"].as_f64().unwrap() <= n["inner"].as_f64().unwrap(),
@@ -900,6 +913,29 @@ return {
         "window/rect",
         Some(json!({"width": 1400, "height": 1000})),
     );
+    // The run page's per-frame charts: a line per variant, and a worst frame that was saved
+    // (the harness saves each metric's worst frame) opens the viewer at that frame.
+    browser.goto(&format!("{origin}/runs/{}", smoke_runs[1]));
+    let r = browser.eval(
+        "const a = document.querySelector('.run-frame-chart ul.legend a[href*=\"#f=\"]'); \
+         return {charts: document.querySelectorAll('.run-frame-chart').length, \
+         lines: document.querySelectorAll('.run-frame-chart polyline').length, \
+         worst: a ? a.getAttribute('href') : null};",
+    );
+    std::fs::write(shots.join("run-frame-charts.png"), browser.screenshot()).unwrap();
+    assert!(
+        r["charts"].as_u64() >= Some(8),
+        "run page per-frame charts: {r}"
+    );
+    assert!(r["lines"].as_u64() >= r["charts"].as_u64(), "{r}");
+    let worst = r["worst"]
+        .as_str()
+        .expect("a worst frame links to the viewer");
+    let frame = worst.rsplit_once("#f=").unwrap().1.to_string();
+    browser.goto(&format!("{origin}{worst}"));
+    let opened = browser
+        .wait_for("const n = document.querySelector('#frameno'); return n && n.textContent;");
+    assert_eq!(opened.as_str(), Some(frame.as_str()), "{worst}");
     let natural = v["natural"].as_f64().unwrap_or(0.0);
     assert!(natural > 0.0, "viewer: {v}");
     assert_eq!(v["zoomed"].as_f64(), Some(natural * 8.0), "zoom 8x: {v}");
@@ -1054,6 +1090,39 @@ return {full, wheeled, left: r.left, top: r.top, width: r.width, height: r.heigh
 
 // ---------------------------------------------------------------------------------------------
 // The regressions page: alert groups, bulk triage with the token entered once, filters, feed.
+
+/// What a page shows at 390 px: its width and scroll width, the viewport tag; the elements cut
+/// off (group headings, alert tables, per-frame charts and their legends reaching past the window,
+/// or boxes that hide their content in a horizontal scroll, the run page's wide tables aside);
+/// and names broken inside a word: a `span.name` narrower than its widest unbreakable part
+/// (between the separators it may wrap after).
+const NARROW: &str = r#"
+const inner = window.innerWidth;
+const clipped = [];
+const right = el => el.getBoundingClientRect().right;
+for (const el of document.querySelectorAll('#regressions h2, #regressions .meta, #regressions tr.series-row, .run-frame-chart, .run-frame-chart ul.legend')) {
+  if (right(el) > inner + 0.5) clipped.push(el.tagName + '.' + el.className + ' right ' + right(el));
+}
+for (const el of document.querySelectorAll('#regressions')) {
+  if (el.scrollWidth > el.clientWidth + 1) clipped.push('#regressions scrolls: ' + el.scrollWidth + ' > ' + el.clientWidth);
+}
+const canvas = document.createElement('canvas').getContext('2d');
+const broken = [];
+const names = document.querySelectorAll('span.name');
+for (const n of names) {
+  const st = getComputedStyle(n);
+  canvas.font = st.fontWeight + ' ' + st.fontSize + ' ' + st.fontFamily;
+  const parts = n.textContent.split(/(?<=[\[,;\/])/);
+  const widest = Math.max(...parts.map(p => canvas.measureText(p).width));
+  const box = n.getBoundingClientRect();
+  if (box.width + 1 < widest) broken.push(n.textContent + ': ' + box.width.toFixed(1) + ' < ' + widest.toFixed(1));
+}
+return {inner, scroll: document.documentElement.scrollWidth,
+  viewport: !!document.querySelector('meta[name=viewport][content*="width=device-width"]'),
+  clipped, broken_names: broken, names: names.length,
+  groups: document.querySelectorAll('#regressions tbody.group').length,
+  frame_charts: document.querySelectorAll('.run-frame-chart svg polyline').length};
+"#;
 
 /// Where the screenshots of the browser tests are kept (under the workspace's `target/`).
 fn artefacts() -> PathBuf {

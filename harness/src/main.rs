@@ -57,6 +57,11 @@ enum Command {
         /// `metrics_device`, else the GPU unless the adapter is a CPU (lavapipe).
         #[arg(long, value_name = "gpu|cpu", value_parser = tessera::metrics_device::Backend::parse)]
         metrics_device: Option<tessera::metrics_device::Backend>,
+        /// Print where the run's wall time went (clock warm-up, timed frames, capture,
+        /// metrics, images, ...) per scenario and for the run, on stderr, and write it to
+        /// `<run>/timings.json`.
+        #[arg(long)]
+        timings: bool,
     },
     /// Check scenarios without a GPU.
     Validate {
@@ -157,6 +162,7 @@ fn main() -> ExitCode {
             upload,
             branch,
             metrics_device,
+            timings,
         } => run_command(
             &paths,
             adapter,
@@ -166,6 +172,7 @@ fn main() -> ExitCode {
             upload,
             branch,
             metrics_device,
+            timings,
         ),
         Command::Validate { paths } => validate_command(&paths),
         Command::Load { paths, adapter } => load_command(&paths, adapter),
@@ -321,7 +328,9 @@ fn run_command(
     upload: Option<String>,
     branch: Option<String>,
     metrics_device: Option<tessera::metrics_device::Backend>,
+    timings: bool,
 ) -> u8 {
+    let started = std::time::Instant::now();
     let Some(mut scenarios) = load_all(paths) else {
         return EXIT_INPUT;
     };
@@ -345,6 +354,7 @@ fn run_command(
         command_line: std::env::args().collect(),
         suite: run::suite_name(paths),
         branch,
+        timings,
     };
     let outcome = match run::run_suite(&scenarios, &opts) {
         Ok(o) => o,
@@ -357,6 +367,13 @@ fn run_command(
             return EXIT_INPUT;
         }
     };
+    if timings {
+        // From the command's start: loading scenarios, opening the adapter, the run.
+        eprintln!(
+            "wall time of the command: {:.2} s",
+            started.elapsed().as_secs_f64()
+        );
+    }
     let tally = console::tally(&outcome.scenarios);
     eprintln!("results: {}", outcome.run_dir.display());
     println!("{}", console::stability_summary(&outcome.scenarios));

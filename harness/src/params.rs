@@ -171,14 +171,19 @@ pub struct Param<T> {
     _type: PhantomData<fn() -> T>,
 }
 
-impl Param<f64> {
-    /// A finite number in `(min, max]`, or `[min, max]` when `min_inclusive`.
+/// The Rust types a float parameter reads as (`f64`, or `f32` as the shaders take it).
+pub trait FloatParam: FromParam {}
+impl FloatParam for f64 {}
+impl FloatParam for f32 {}
+
+impl<T: FloatParam> Param<T> {
+    /// A finite number in `(min, max]`, or `[min, max]` when `min_inclusive`, read as `T`.
     pub const fn float(
         name: &'static str,
         (min, min_inclusive, max): (f64, bool, f64),
         default: f64,
         doc: &'static str,
-    ) -> Param<f64> {
+    ) -> Param<T> {
         Param::new(ParamSpec {
             name,
             kind: ParamKind::Float {
@@ -221,6 +226,13 @@ pub trait FromParam: Sized {
 impl FromParam for f64 {
     fn from_param(value: &ParamValue) -> Option<f64> {
         value.as_f64()
+    }
+}
+
+/// Narrowed as the shaders take it (`v as f32`).
+impl FromParam for f32 {
+    fn from_param(value: &ParamValue) -> Option<f32> {
+        value.as_f64().map(|x| x as f32)
     }
 }
 

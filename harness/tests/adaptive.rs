@@ -264,6 +264,11 @@ fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) -> [usize; 5] {
             &gpu.queue,
             tex(format!("depth{prev}")),
         );
+        let depth = tessera::render::readback::read_texture(
+            &gpu.device,
+            &gpu.queue,
+            tex(format!("depth{cur}")),
+        );
         let prev_state: Vec<[f32; 2]> =
             f32s(read_texture_raw(&gpu, tex(format!("rate_state{prev}"))))
                 .chunks_exact(2)
@@ -286,6 +291,7 @@ fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) -> [usize; 5] {
             height: s.height,
             prev_color: &prev_color,
             motion: &motion,
+            depth: &depth,
             prev_depth: &prev_depth,
             prev_state: &prev_state,
             near: last.near,

@@ -72,6 +72,7 @@ fn metric(name: &str, value: f64, higher_is_better: bool) -> MetricRecord {
         higher_is_better,
         frame_stats: None,
         metrics_device: None,
+        check: None,
     }
 }
 
@@ -175,6 +176,7 @@ fn with_energy(mut v: VariantResult, mj: f64, throttled: bool) -> VariantResult 
         } else {
             vec![]
         },
+        clock_warmup_ms: None,
     })));
     v
 }

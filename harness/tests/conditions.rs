@@ -27,6 +27,7 @@ fn options(out: &std::path::Path, junit: bool) -> Options {
         command_line: vec!["tessera".into(), "test".into()],
         suite: None,
         branch: None,
+        timings: false,
     }
 }
 

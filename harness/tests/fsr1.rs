@@ -100,7 +100,7 @@ fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) {
             texels: &low,
         };
         let out = read(&t, "color");
-        let easu_gpu = options.sharpness.map(|_| read(&t, "easu"));
+        let easu_gpu = options.rcas_sharpness().map(|_| read(&t, "easu"));
         for y in 0..s.height {
             for x in 0..s.width {
                 let i = (y * s.width + x) as usize;
@@ -122,7 +122,7 @@ fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) {
                 );
             }
         }
-        if let (Some(g), Some(stops)) = (&easu_gpu, options.sharpness) {
+        if let (Some(g), Some(stops)) = (&easu_gpu, options.rcas_sharpness()) {
             let img = Image {
                 width: s.width,
                 height: s.height,
@@ -149,7 +149,7 @@ fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) {
     }
     // The frames exercised the decisions: edges found, pixels sharpened.
     assert!(edges > 0, "{}: no edges", v.name);
-    if options.sharpness.is_some() {
+    if options.rcas {
         assert!(sharpened > 0, "{}: nothing sharpened", v.name);
     }
 }
@@ -189,7 +189,7 @@ fn a_mode_and_a_scale_together_are_refused() {
     let ok = common::variant("fsr1", &[("mode", ParamValue::Str("quality".into()))]);
     assert!(ok.technique.check(&ok).is_ok());
     let o = Options::from_variant(&ok);
-    assert!((o.scale - 1.0 / 1.5).abs() < 1e-12);
+    assert!((o.render_scale() - 1.0 / 1.5).abs() < 1e-12);
     // AMD's -0.58 mip bias on the ground's filter width.
-    assert!((o.gradient_scale - (-0.58f32).exp2()).abs() < 1e-6);
+    assert!((o.gradient_scale() - (-0.58f32).exp2()).abs() < 1e-6);
 }

@@ -60,10 +60,17 @@ fn module_files(src: &Path) -> BTreeMap<ModPath, PathBuf> {
 
 /// The code of a file without comments, string literals and its unit tests.
 fn code_of(text: &str) -> String {
+    split_code(text).0
+}
+
+/// The code of a file without comments, string literals and its unit tests, and the contents of
+/// those string literals (escapes left as written).
+fn split_code(text: &str) -> (String, Vec<String>) {
     let text = match text.find("#[cfg(test)]") {
         Some(i) => &text[..i],
         None => text,
     };
+    let mut literals = Vec::new();
     let mut out = String::with_capacity(text.len());
     let b = text.as_bytes();
     let mut i = 0;
@@ -86,6 +93,8 @@ fn code_of(text: &str) -> String {
             }
             let raw = i > hashes && b[i - 1 - hashes] == b'r';
             i += 1;
+            let start = i;
+            let end;
             if raw {
                 let close: Vec<u8> = std::iter::once(b'"')
                     .chain(std::iter::repeat_n(b'#', hashes))
@@ -93,6 +102,7 @@ fn code_of(text: &str) -> String {
                 while i < b.len() && !b[i..].starts_with(&close) {
                     i += 1;
                 }
+                end = i;
                 i += hashes;
             } else {
                 while i < b.len() && b[i] != b'"' {
@@ -101,7 +111,9 @@ fn code_of(text: &str) -> String {
                     }
                     i += 1;
                 }
+                end = i;
             }
+            literals.push(text[start..end.min(b.len())].to_string());
             i += 1;
             out.push_str("\"\"");
         } else if b[i] == b'\'' && b.get(i + 2) == Some(&b'\'') {
@@ -119,7 +131,7 @@ fn code_of(text: &str) -> String {
             i += 1;
         }
     }
-    out
+    (out, literals)
 }
 
 /// Every path the code names, as segments, with `crate`/`super` resolved against `here`
@@ -491,7 +503,75 @@ fn render_and_run_name_no_technique() {
     );
 }
 
+/// Every technique's name as its folder declares it: the string literal its `fn name` returns,
+/// or the constant it returns (`NAME`), read from `techniques/<folder>/mod.rs`.
+fn technique_names(src: &Path) -> BTreeSet<String> {
+    let mut names = BTreeSet::new();
+    let dir = src.join("techniques");
+    for entry in fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path().join("mod.rs");
+        let Ok(text) = fs::read_to_string(&path) else {
+            continue;
+        };
+        let header = "fn name(&self) -> &'static str {";
+        for (at, _) in text.match_indices(header) {
+            let body = &text[at + header.len()..];
+            let body = body[..body.find('}').unwrap()].trim();
+            let name = match body.strip_prefix('"') {
+                Some(rest) => rest[..rest.find('"').unwrap()].to_string(),
+                None => {
+                    let decl = format!("const {body}: &str = \"");
+                    let from = text.find(&decl).unwrap_or_else(|| {
+                        panic!("{}: fn name returns {body}, not found", path.display())
+                    }) + decl.len();
+                    text[from..from + text[from..].find('"').unwrap()].to_string()
+                }
+            };
+            names.insert(name);
+        }
+    }
+    names
+}
+
+/// Issue 21: `render/` and `run/` ask `techniques::` by role (`is_reference`,
+/// `is_reference_name`), never compare with a technique's name: no string literal of their code
+/// (unit tests aside) is one.
+#[test]
+fn render_and_run_spell_no_technique_name() {
+    let src = src_dir();
+    let names = technique_names(&src);
+    for expected in ["native", "checkerboard", "adaptive-shading", "native-vrs"] {
+        assert!(names.contains(expected), "technique names read: {names:?}");
+    }
+    let mut offenders = Vec::new();
+    for (module, path) in module_files(&src) {
+        if !matches!(
+            module.first().map(String::as_str),
+            Some("render") | Some("run")
+        ) {
+            continue;
+        }
+        let (_, literals) = split_code(&fs::read_to_string(&path).unwrap());
+        for l in literals.iter().filter(|l| names.contains(l.as_str())) {
+            offenders.push(format!("{}: \"{l}\"", name(&module)));
+        }
+    }
+    assert!(
+        offenders.is_empty(),
+        "render/ and run/ spell technique names (ask techniques:: by role):\n{}",
+        offenders.join("\n")
+    );
+}
+
 /// The checker itself finds a circle it is shown.
+#[test]
+fn string_literals_are_read() {
+    let (code, literals) =
+        split_code("let a = \"native\"; // \"x\"\nlet b = r#\"q\"#;\n#[cfg(test)]\n\"t\"");
+    assert_eq!(literals, ["native", "q"]);
+    assert!(!code.contains("native"));
+}
+
 #[test]
 fn a_circle_is_found() {
     let dir = std::env::temp_dir().join(format!("tessera-imports-{}", std::process::id()));

@@ -1,18 +1,21 @@
-//! Interlace on the default adapter: the GPU reconstruction equals the CPU model on the same
-//! half-width frame, history and velocity, every frame, on a moving camera with an animated
-//! object and a cut; and a static point-sampled scene rebuilds native within one level.
+//! Interlace on the default adapter, both patterns: the GPU reconstruction equals the CPU model
+//! on the same reduced renders, history and velocity, every frame, on a moving camera with an
+//! animated object and a cut; a still scene rebuilds native (the default pattern exactly without
+//! derivative shading, at 35 dB and more with it; columns, point-sampled and unclamped, within one
+//! level).
 
 mod common;
 
 use glam::Vec4;
 use tessera::params::ParamValue;
-use tessera::render::readback::read_texture;
+use tessera::render::readback::{read_texture, read_texture_layer};
 use tessera::render::renderer::Renderer;
 use tessera::render::scene::SceneGpu;
 use tessera::render::timers::Timers;
 use tessera::scenario::Scenario;
-use tessera::techniques::interlace::model::{self, half_width, Inputs, Source};
-use tessera::techniques::interlace::{InterlaceGpu, Options};
+use tessera::techniques::interlace::columns_model::{self, half_width};
+use tessera::techniques::interlace::model::{self, quarter_size, Inputs, Source};
+use tessera::techniques::interlace::{ColumnsGpu, InterlaceGpu, Options};
 use tessera::techniques::Variant;
 use tessera::techniques::{self, BuildContext, Target};
 
@@ -24,12 +27,92 @@ fn vec4s(v: Vec<f32>) -> Vec<Vec4> {
     v.chunks_exact(4).map(Vec4::from_slice).collect()
 }
 
-/// Renders `frames` frames, comparing the GPU output of each with the model's; returns every
-/// frame's sources.
+/// Renders `frames` frames of the default pattern, comparing the GPU output (colour and depth)
+/// of each with the model's; returns every frame's sources.
 fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) -> Vec<Vec<Source>> {
     let gpu = common::gpu();
     let mut scene = SceneGpu::new(&gpu.device, &gpu.queue, s).unwrap();
+    let options = Options::from_variant(v);
     let mut t = InterlaceGpu::new(
+        &gpu,
+        options,
+        s.width,
+        s.height,
+        s.scene.has_dynamic_objects(),
+    );
+    let mut timers = Timers::new(&gpu.device, &[]).unwrap();
+    let mut all = Vec::new();
+    // Every array layer (the quarter-resolution renders are two), layer 0 first.
+    let read = |t: &InterlaceGpu, name: &str| {
+        let texture = t.texture(name).unwrap();
+        (0..texture.depth_or_array_layers())
+            .flat_map(|l| read_texture_layer(&gpu.device, &gpu.queue, texture, l))
+            .collect::<Vec<f32>>()
+    };
+    for index in 0..frames {
+        tessera::run::frames::submit_frame(&gpu, &mut scene, s, &mut t, &mut timers, index);
+        let _ = gpu.device.poll(wgpu::PollType::Wait {
+            submission_index: None,
+            timeout: None,
+        });
+        let _ = timers.try_collect(&gpu.queue);
+        let last = t.last_frame().unwrap();
+        let rows_color = vec4s(read(&t, "rows_color"));
+        let rows_depth = read(&t, "rows_depth");
+        let history = vec4s(read(&t, "history"));
+        let history_depth = read(&t, "history_depth");
+        let velocity = last.velocity.then(|| vec4s(read(&t, "velocity")));
+        let inputs = Inputs {
+            width: s.width,
+            height: s.height,
+            parity: last.parity,
+            quarter: quarter_size(s.width, s.height),
+            rows_color: &rows_color,
+            rows_depth: &rows_depth,
+            history: &history,
+            history_depth: &history_depth,
+            velocity: velocity.as_deref(),
+            prev_from_cur: last.prev_from_cur,
+            history_valid: last.history_valid,
+            still: last.still,
+            clamp: options.clamp,
+            near: last.near,
+            far: last.far,
+            depth_tolerance: options.depth_tolerance,
+            coherency_scale: options.coherency,
+            velocity_scale: options.velocity_scale,
+        };
+        let model = model::reconstruct_all(&inputs);
+        let gpu_out = vec4s(read_texture(&gpu.device, &gpu.queue, t.output()));
+        let gpu_depth = read(&t, "depth_out");
+        let mut worst = 0.0f32;
+        for (i, ((m, md, src), g)) in model.iter().zip(&gpu_out).enumerate() {
+            // The output is Rgba16Float: quantise the model the same way; the bilinear history
+            // fetch and the weights may round differently in the last f16 bits.
+            let m16 = Vec4::from_array(m.to_array().map(|x| half::f16::from_f32(x).to_f32()));
+            let d = (m16 - *g).abs().max_element();
+            worst = worst.max(d);
+            assert!(
+                d <= 2e-3 * m16.abs().max_element().max(1.0),
+                "frame {index} pixel {i}: model {m16} ({src:?}) gpu {g}"
+            );
+            assert_eq!(*md, gpu_depth[i], "frame {index} pixel {i}: depth");
+        }
+        all.push(model.iter().map(|(_, _, s)| *s).collect());
+    }
+    all
+}
+
+/// Renders `frames` frames, comparing the GPU output of each with the model's; returns every
+/// frame's sources.
+fn compare_columns_with_model(
+    s: &Scenario,
+    v: &Variant,
+    frames: u32,
+) -> Vec<Vec<columns_model::Source>> {
+    let gpu = common::gpu();
+    let mut scene = SceneGpu::new(&gpu.device, &gpu.queue, s).unwrap();
+    let mut t = ColumnsGpu::new(
         &gpu,
         Options::from_variant(v),
         s.width,
@@ -38,7 +121,7 @@ fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) -> Vec<Vec<Source>
     );
     let mut timers = Timers::new(&gpu.device, &[]).unwrap();
     let mut all = Vec::new();
-    let read = |t: &InterlaceGpu, name: &str| {
+    let read = |t: &ColumnsGpu, name: &str| {
         read_texture(&gpu.device, &gpu.queue, t.texture(name).unwrap())
     };
     for index in 0..frames {
@@ -53,7 +136,7 @@ fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) -> Vec<Vec<Source>
         let half_depth = read(&t, "half_depth");
         let history = vec4s(read(&t, "history"));
         let velocity = last.velocity.then(|| vec4s(read(&t, "velocity")));
-        let inputs = Inputs {
+        let inputs = columns_model::Inputs {
             width: s.width,
             height: s.height,
             parity: last.parity,
@@ -66,7 +149,7 @@ fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) -> Vec<Vec<Source>
             history_valid: last.history_valid,
             clamp: last.clamp,
         };
-        let model = model::reconstruct_all(&inputs);
+        let model = columns_model::reconstruct_all(&inputs);
         let gpu_out = vec4s(read_texture(&gpu.device, &gpu.queue, t.output()));
         for (i, ((m, src), g)) in model.iter().zip(&gpu_out).enumerate() {
             // The output is Rgba16Float: quantise the model the same way; the bilinear history
@@ -129,6 +212,7 @@ target = [0, 0.4, 0]
 cut = true
 "#;
 
+// On the scene's mirror plane (the columns test's camera, as before issue 26).
 const STILL: &str = r#"
 [camera]
 [[camera.keyframes]]
@@ -136,6 +220,22 @@ time = 0
 position = [0, 1.5, 4]
 target = [0, 0.4, 0]
 "#;
+
+// Slightly off the mirror plane: centred on x = 0, the box's silhouette vertices project exactly
+// onto the centre column's pixel centres (41 px wide), where coverage is a tie that the last bit
+// of the quarter-resolution projection remap decides either way (one pixel of 1230 then costs
+// 14 dB: 36.3 dB). Off it, every pixel centre is clear of the edges by more than rounding.
+const STILL_OFF_AXIS: &str = r#"
+[camera]
+[[camera.keyframes]]
+time = 0
+position = [0.0137, 1.5, 4]
+target = [0.0137, 0.4, 0]
+"#;
+
+fn columns() -> (&'static str, ParamValue) {
+    ("pattern", ParamValue::Str("columns".into()))
+}
 
 #[test]
 fn moving_camera_animated_object_and_cut_match_the_model() {
@@ -151,21 +251,48 @@ fn moving_camera_animated_object_and_cut_match_the_model() {
         assert!(frames[2].contains(&Source::History));
         // The cut (at 0.06 s: frame 4 at 60 Hz) drops the history again.
         assert!(!frames[4].contains(&Source::History), "clamp {clamp}");
-        // Every frame shades half the columns.
-        let shaded = frames[3].iter().filter(|s| **s == Source::Shaded).count();
-        assert_eq!(shaded, (s.width / 2 * s.height) as usize);
+        // Every frame shades half the pixels (41 x 30: 615), a checkerboard.
+        for f in &frames {
+            let shaded = f.iter().filter(|s| **s == Source::Shaded).count();
+            assert_eq!(shaded, (s.width * s.height / 2) as usize);
+        }
+        assert!(frames[3]
+            .iter()
+            .enumerate()
+            .all(|(i, src)| (*src == Source::Shaded)
+                == model::shaded(1, i as u32 % s.width, i as u32 / s.width)));
     }
 }
 
 #[test]
-fn static_point_sampled_scene_rebuilds_native_within_one_level() {
-    // Point-sampled ground: the half-width render's derivatives do not change its look.
+fn columns_moving_camera_animated_object_and_cut_match_the_model() {
     let s = common::scenario(&format!(
-        "{}{STILL}\n[[techniques]]\ntechnique = \"native\"\n",
-        SCENE.replace(
-            "checker_size = 0.5",
-            "checker_size = 0.5\nfilter = \"none\""
-        )
+        "{SCENE}{MOVING}\n[[techniques]]\ntechnique = \"native\"\n"
+    ));
+    for clamp in [true, false] {
+        let v = variant(&[columns(), ("clamp", ParamValue::Bool(clamp))]);
+        let frames = compare_columns_with_model(&s, &v, 6);
+        use columns_model::Source as S;
+        assert!(frames[0].contains(&S::Fill));
+        assert!(!frames[0].contains(&S::History));
+        assert!(frames[2].contains(&S::History));
+        assert!(!frames[4].contains(&S::History), "clamp {clamp}");
+        let shaded = frames[3].iter().filter(|s| **s == S::Shaded).count();
+        assert_eq!(shaded, (s.width / 2 * s.height) as usize);
+    }
+}
+
+/// Renders the still scene (point-sampled ground or not) with `v` and with native, 3 warm-up and
+/// 2 compared frames; returns each frame's PSNR (dB, RGBA8) and largest error (levels).
+fn still_against_native(v: &Variant, point_sampled: bool, camera: &str) -> Vec<(f64, u8)> {
+    let ground = if point_sampled {
+        "checker_size = 0.5\nfilter = \"none\""
+    } else {
+        "checker_size = 0.5"
+    };
+    let s = common::scenario(&format!(
+        "{}{camera}\n[[techniques]]\ntechnique = \"native\"\n",
+        SCENE.replace("checker_size = 0.5", ground)
     ));
     let gpu = common::gpu();
     let render = |v: &Variant| {
@@ -182,16 +309,70 @@ fn static_point_sampled_scene_rebuilds_native_within_one_level() {
             .unwrap()
     };
     let native = render(&common::variant("native", &[]));
+    let other = render(v);
+    native
+        .frames
+        .iter()
+        .zip(&other.frames)
+        .map(|(n, c)| {
+            let sq: f64 = n
+                .data
+                .iter()
+                .zip(&c.data)
+                .map(|(a, b)| (f64::from(*a) - f64::from(*b)).powi(2))
+                .sum();
+            let mse = sq / n.data.len() as f64;
+            let psnr = if mse == 0.0 {
+                f64::INFINITY
+            } else {
+                10.0 * (255.0f64 * 255.0 / mse).log10()
+            };
+            let max = n
+                .data
+                .iter()
+                .zip(&c.data)
+                .map(|(a, b)| a.abs_diff(*b))
+                .max();
+            (psnr, max.unwrap())
+        })
+        .collect()
+}
+
+#[test]
+fn still_scene_default_pattern_reproduces_native() {
+    // Issue 26's acceptance: at least 50 dB without derivative shading. Nothing moves, so the
+    // history at each missing pixel is its own shade of the last frame, taken with confidence 1:
+    // the output is native's exactly (inf dB on lavapipe).
+    for (f, (psnr, max)) in still_against_native(&variant(&[]), true, STILL_OFF_AXIS)
+        .into_iter()
+        .enumerate()
+    {
+        assert!(psnr >= 50.0, "frame {f}: {psnr:.2} dB, max {max}/255");
+    }
+    // With the filtered ground the shaded pixels themselves differ: the quarter-resolution
+    // derivatives (differences over 2 pixels, scaled by `gradient_scale = 0.5`, constant over 4x4
+    // pixel quads) are not native's (over 1 pixel, 2x2 quads) where the perspective is strong, and
+    // the box filter near the pattern's Nyquist limit turns that into up to 29 levels on the far
+    // ground: 36.0 dB on lavapipe, as the checkerboards' quarter-resolution renders do.
+    for (f, (psnr, max)) in still_against_native(&variant(&[]), false, STILL_OFF_AXIS)
+        .into_iter()
+        .enumerate()
+    {
+        assert!(
+            psnr >= 35.0,
+            "filtered, frame {f}: {psnr:.2} dB, max {max}/255"
+        );
+    }
+}
+
+#[test]
+fn columns_static_point_sampled_unclamped_scene_rebuilds_native_within_one_level() {
     // Unclamped: the pole is thinner than a column, and a clamp to its neighbours would erase it.
-    let interlace = render(&variant(&[("clamp", ParamValue::Bool(false))]));
-    for (f, (n, c)) in native.frames.iter().zip(&interlace.frames).enumerate() {
-        let max = n
-            .data
-            .iter()
-            .zip(&c.data)
-            .map(|(a, b)| a.abs_diff(*b))
-            .max()
-            .unwrap();
+    let v = variant(&[columns(), ("clamp", ParamValue::Bool(false))]);
+    for (f, (_, max)) in still_against_native(&v, true, STILL)
+        .into_iter()
+        .enumerate()
+    {
         assert!(max <= 1, "frame {f}: max error {max}/255");
     }
 }

@@ -116,6 +116,21 @@ fn values_are_range_checked() {
 }
 
 #[test]
+fn the_energy_window_is_range_checked_and_zero_turns_it_off() {
+    let src = VALID.replace("measured = 3", "measured = 3\nenergy_window_ms = -5");
+    let e = errors_of(&src);
+    assert_eq!(e.len(), 1, "{e:?}");
+    assert!(
+        e[0].contains("`frames.energy_window_ms`")
+            && e[0].contains("-5 is out of range: expected 0 to 60000 milliseconds"),
+        "{e:?}"
+    );
+    let src = VALID.replace("measured = 3", "measured = 3\nenergy_window_ms = 0");
+    let s = scenario::parse(Path::new("s.toml"), &src).unwrap();
+    assert_eq!(s.energy_window_ms, Some(0.0));
+}
+
+#[test]
 fn near_and_far_must_be_ordered() {
     let src = VALID.replace("[camera]\n", "[camera]\nnear = 10.0\nfar = 1.0\n");
     assert_eq!(

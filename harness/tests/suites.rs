@@ -55,7 +55,8 @@ fn velocity_runs_only_where_objects_move() {
                 .filter(|v| v.technique.name() == "checkerboard")
             {
                 let p = plan(v, Target::new(s.width, s.height, dynamic));
-                let wanted = dynamic && v.get(&tessera::techniques::checkerboard::VELOCITY);
+                let wanted =
+                    dynamic && tessera::techniques::checkerboard::Options::from_variant(v).velocity;
                 let ran = p.passes.iter().any(|x| x.name == "velocity");
                 assert_eq!(ran, wanted, "{}: {}", s.name, v.name);
                 assert_eq!(p.culled.contains(&"velocity"), !wanted, "{}", s.name);
@@ -67,7 +68,7 @@ fn velocity_runs_only_where_objects_move() {
                     assert_eq!(bytes_of(&p, "velocity") + bytes_of(&p, "velocity_depth"), 0);
                     // What the same variant would allocate with something moving.
                     let moving = plan(v, Target::new(s.width, s.height, true));
-                    if v.get(&tessera::techniques::checkerboard::VELOCITY) {
+                    if tessera::techniques::checkerboard::Options::from_variant(v).velocity {
                         let velocity =
                             bytes_of(&moving, "velocity") + bytes_of(&moving, "velocity_depth");
                         assert_eq!(total(&moving) - total(&p), velocity, "{}", s.name);

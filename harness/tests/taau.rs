@@ -192,7 +192,7 @@ fn a_still_camera_accumulates_the_mean_of_the_claimed_samples() {
     let mut scene = SceneGpu::new(&gpu.device, &gpu.queue, &s).unwrap();
     let v = common::variant("taau", &[]);
     let options = Options::from_variant(&v);
-    assert_eq!(options.phases, 32);
+    assert_eq!(options.phases(), 32);
     let mut t = TaauGpu::new(&gpu, options, s.width, s.height, false);
     let mut timers = Timers::new(&gpu.device, &[]).unwrap();
     for index in 0..32 {
@@ -211,7 +211,7 @@ fn a_still_camera_accumulates_the_mean_of_the_claimed_samples() {
             (s.width, s.height),
             View {
                 ndc_offset: ndc_offset(jitter(index, 32), s.width, s.height),
-                gradient_scale: options.gradient_scale,
+                gradient_scale: options.gradient_scale(),
                 ..View::whole(0.0, 0.0)
             },
         );
@@ -318,7 +318,7 @@ fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) -> Vec<Vec<Source>
             bad.len(),
             bad[..bad.len().min(6)].join("; ")
         );
-        if let Some(stops) = options.sharpness {
+        if let Some(stops) = options.rcas_sharpness() {
             let img = fsr1_model::Image {
                 width: s.width,
                 height: s.height,

@@ -10,7 +10,7 @@ mod common;
 use tessera::gpu::vrs::NEEDS;
 use tessera::params::ParamValue;
 use tessera::render::scene::SceneGpu;
-use tessera::techniques::adaptive_shading::hardware::{vrs_source, SCENE_PASS};
+use tessera::techniques::adaptive_shading::hardware::{vrs_source, PREPASS, SCENE_PASS};
 use tessera::techniques::adaptive_shading::raw_pass::spirv;
 use tessera::techniques::{self, BuildContext, Target};
 
@@ -32,8 +32,10 @@ fn the_vrs_pipelines_spirv_validates() {
     let source = vrs_source();
     let vs = spirv(&source, naga::ShaderStage::Vertex, "vs_vrs").unwrap();
     let fs = spirv(&source, naga::ShaderStage::Fragment, "fs_vrs").unwrap();
+    let motion = spirv(&source, naga::ShaderStage::Fragment, "fs_vrs_motion").unwrap();
     validate_spirv(&vs, "vs_vrs");
     validate_spirv(&fs, "fs_vrs");
+    validate_spirv(&motion, "fs_vrs_motion");
     // A missing entry point is an error, not a panic.
     assert!(spirv(&source, naga::ShaderStage::Fragment, "no_such_entry").is_err());
 }
@@ -50,13 +52,19 @@ fn hardware_plans_need_no_gpu() {
     assert_eq!(
         names,
         [
+            PREPASS,
             "rates",
             "rate_filter",
             "rate_attachment",
-            "clear",
             SCENE_PASS
         ]
     );
+    // The paper's order of work (section 5): this frame's motion first, then the rates, then the
+    // frame shaded at them; no pass only clears (the raw passes clear in their load ops).
+    let pass = |name: &str| plan.passes.iter().find(|p| p.name == name).unwrap();
+    assert!(pass(PREPASS).writes.contains(&"motion") && pass(PREPASS).self_counted);
+    assert!(pass("rates").reads.contains(&"motion"));
+    assert!(pass(SCENE_PASS).self_counted && !pass(SCENE_PASS).writes.contains(&"motion"));
     // 100x60 at 16x16 texels: a 7x4 attachment.
     let a = plan
         .resources
@@ -70,7 +78,10 @@ fn hardware_plans_need_no_gpu() {
         .iter()
         .map(|p| p.name)
         .collect();
-    assert_eq!(names, ["clear", SCENE_PASS]);
+    assert_eq!(names, [SCENE_PASS]);
+    // Fixed rates need no motion (`native` has none).
+    let fixed_plan = techniques::plan(&fixed, target);
+    assert!(fixed_plan.resources.iter().all(|r| r.name != "motion"));
 }
 
 #[test]

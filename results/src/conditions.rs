@@ -81,6 +81,10 @@ pub struct RecordedConditions {
     pub throttled: bool,
     /// Why `throttled` is true, one sentence each; empty otherwise.
     pub throttle_causes: Vec<String>,
+    /// How long the clock warm-up before the timed frames lasted, in milliseconds: `warmup_ms`,
+    /// or less where the sensors saw the top graphics clock sooner. Absent in older results.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub clock_warmup_ms: Option<f64>,
 }
 
 /// Minimum, median and maximum of one sensor over a result's samples.
@@ -257,6 +261,7 @@ mod tests {
             }),
             throttled: true,
             throttle_causes: vec!["power cap".into()],
+            clock_warmup_ms: None,
         }));
         let json = serde_json::to_string(&r).unwrap();
         assert!(

@@ -372,6 +372,22 @@ pub struct MetricRecord {
     /// reference implementations); absent in results written before the GPU back end (CPU).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub metrics_device: Option<String>,
+    /// A technique's own check of its frames (`shading-rate`, hardware VRS's `model-shades`), not
+    /// compared with the reference: its unit and direction, carried here because the shared
+    /// measure table ([`measure`]) names no technique's checks. Absent for the metrics against
+    /// the reference, whose unit and direction are their measure's
+    /// ([`measure::metric_unit`], [`measure::metric_direction`] read either).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub check: Option<Check>,
+}
+
+/// What a technique declares of one of its own per-frame checks ([`MetricRecord::check`]).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq, Eq)]
+pub struct Check {
+    /// The CSV unit (`count`, `x`; empty for a plain ratio).
+    pub unit: String,
+    /// `lower-is-better`, `higher-is-better` or `neither` (a fact, never judged).
+    pub direction: measure::Direction,
 }
 
 /// Statistics of a metric's per-frame values.
@@ -486,9 +502,11 @@ mod tests {
             higher_is_better: true,
             frame_stats: None,
             metrics_device: None,
+            check: None,
         };
         let json = serde_json::to_string(&m).unwrap();
         assert!(json.contains("\"per_frame\":[null,42.0]"), "{json}");
+        assert!(!json.contains("check"), "{json}");
         let back: MetricRecord = serde_json::from_str(&json).unwrap();
         assert_eq!(back, m);
     }

@@ -20,10 +20,13 @@
 //!
 //! Not for: formatting the CSV (the harness's `run/output.rs`) or storing series (the dashboard).
 
-use crate::{Status, VariantResult};
+use crate::{MetricRecord, Status, VariantResult};
 
 /// Which way a measure is better. `Neither` for facts that are not goals (clocks, frame counts).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// Written `lower-is-better`, `higher-is-better`, `neither` where a record carries it
+/// ([`crate::Check`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum Direction {
     LowerIsBetter,
     HigherIsBetter,
@@ -69,9 +72,9 @@ pub enum Source {
     /// A field of the result or its conditions, stability or pacing.
     Record,
     /// An image metric of the result (`VariantResult::metrics`), computed against the reference.
+    /// A technique's own checks of its frames are metrics too, but not measures of this table:
+    /// their records carry their unit and direction ([`MetricRecord::check`]).
     Metric,
-    /// A technique's own metric of its frames (`shading-rate`).
-    TechniqueMetric,
     /// Per pass (`pass.<pass>.<name>`).
     Pass,
 }
@@ -207,18 +210,6 @@ measures! {
     Cvvdp => metric("cvvdp", "JOD", Higher, "ColorVideoVDP JOD"),
     CvvdpFlicker => metric("cvvdp-flicker", "JOD", Higher, "ColorVideoVDP flicker JOD"),
     CvvdpTransientShare => metric("cvvdp-transient-share", "", Lower, "ColorVideoVDP transient share"),
-    ShadingRate => Info { source: Source::TechniqueMetric,
-        ..metric("shading-rate", "", Lower, "shading rate") },
-    // Hardware variable-rate shading's own checks (adaptive_shading/hardware.rs): the coarse-pixel
-    // shades the CPU model gives for the rate image, the ratio of the VRS pass's fragment-shader
-    // invocations (`pass.scene_vrs.fragment_invocations`) to them, and attachment texels that
-    // differ from the CPU mapping.
-    ModelShades => Info { source: Source::TechniqueMetric, gate: false, stored: false,
-        ..metric("model-shades", "count", Lower, "coarse-pixel shades (CPU model)") },
-    InvocationsOverModel => Info { source: Source::TechniqueMetric, stored: false,
-        ..metric("invocations-over-model", "x", Neither, "invocations / model shades") },
-    AttachmentTexelsDiffering => Info { source: Source::TechniqueMetric, stored: false,
-        ..metric("attachment-texels-differing", "count", Lower, "attachment texels off the CPU mapping") },
 }
 
 impl Measure {
@@ -250,9 +241,9 @@ impl Measure {
         Measure::ALL.iter().copied().filter(|m| m.info().gate)
     }
 
-    /// Whether this is an image metric against the reference or a technique's own metric.
+    /// Whether this is an image metric against the reference.
     pub fn is_metric(self) -> bool {
-        matches!(self.info().source, Source::Metric | Source::TechniqueMetric)
+        self.info().source == Source::Metric
     }
 
     /// The key of its series in the store and its row in the CSV when only one is kept: the median
@@ -391,17 +382,43 @@ impl std::fmt::Display for Key {
     }
 }
 
+/// The unit of a metric record: its measure's, else the one its technique's check carries
+/// ([`MetricRecord::check`]), else none.
+pub fn metric_unit(m: &MetricRecord) -> &str {
+    match (Measure::from_name(&m.name), &m.check) {
+        (Some(known), _) => known.unit(),
+        (None, Some(c)) => &c.unit,
+        (None, None) => "",
+    }
+}
+
+/// Which way a metric record is better: its measure's, else its check's, else the record's
+/// `higher_is_better` (a metric of a newer harness).
+pub fn metric_direction(m: &MetricRecord) -> Direction {
+    match (Measure::from_name(&m.name), &m.check) {
+        (Some(known), _) => known.direction(),
+        (None, Some(c)) => c.direction,
+        (None, None) if m.higher_is_better => Direction::HigherIsBetter,
+        (None, None) => Direction::LowerIsBetter,
+    }
+}
+
 /// Which way `key` (a CSV or store key) is better; `None` for a name that is not a measure.
 pub fn direction_of(key: &str) -> Option<Direction> {
     Key::parse(key).map(|k| k.measure.direction())
 }
 
 /// The first ok variant of technique `baseline` among `results` (one scenario on one adapter).
-/// Found by technique, never by variant name, so a `label` on the baseline changes nothing.
+/// Found by technique, so a `label` on the baseline changes nothing; a baseline that names a
+/// variant (`native[motion_pass=true]`, checkerboard-2x2's) is found by that name first, as the
+/// comparison engine finds it (`compare::baseline`).
 pub fn baseline_of<'a>(results: &'a [VariantResult], baseline: &str) -> Option<&'a VariantResult> {
+    let ok = |v: &&VariantResult| v.status == Status::Ok;
     results
         .iter()
-        .find(|v| v.technique == baseline && v.status == Status::Ok)
+        .filter(ok)
+        .find(|v| v.variant == baseline)
+        .or_else(|| results.iter().filter(ok).find(|v| v.technique == baseline))
 }
 
 /// Median GPU frame time; `None` without timestamps.
@@ -576,6 +593,22 @@ mod tests {
     use super::*;
 
     #[test]
+    fn a_baseline_naming_a_variant_is_found_by_name_else_by_technique() {
+        use crate::compare::time::tests::result;
+        let (plain, motion, twox2) = (
+            result("native", &[2.0]),
+            result("native[motion_pass=true]", &[2.5]),
+            result("checkerboard-2x2", &[2.0]),
+        );
+        let results = vec![twox2, plain, motion];
+        let by_name = baseline_of(&results, "native[motion_pass=true]").unwrap();
+        assert_eq!(by_name.variant, "native[motion_pass=true]");
+        assert_eq!(baseline_of(&results, "native").unwrap().variant, "native");
+        // Without that variant the named baseline is missing, not silently plain native.
+        assert!(baseline_of(&results[..2], "native[motion_pass=true]").is_none());
+    }
+
+    #[test]
     fn names_are_unique_and_round_trip() {
         let mut seen = std::collections::BTreeSet::new();
         for &m in Measure::ALL {
@@ -633,6 +666,41 @@ mod tests {
         ] {
             assert_eq!(Key::parse(bad), None, "{bad}");
         }
+    }
+
+    #[test]
+    fn technique_checks_carry_their_unit_and_direction() {
+        let record = |name: &str, check: Option<crate::Check>| MetricRecord {
+            name: name.into(),
+            per_frame: vec![1.0],
+            frames: vec![0],
+            value: 1.0,
+            higher_is_better: false,
+            frame_stats: None,
+            metrics_device: None,
+            check,
+        };
+        // No technique's check is a measure of the table.
+        assert_eq!(Measure::from_name("shading-rate"), None);
+        let own = record(
+            "invocations-over-model",
+            Some(crate::Check {
+                unit: "x".into(),
+                direction: Direction::Neither,
+            }),
+        );
+        assert_eq!(metric_unit(&own), "x");
+        assert_eq!(metric_direction(&own), Direction::Neither);
+        let psnr = record("psnr", None);
+        assert_eq!(metric_unit(&psnr), "dB");
+        assert_eq!(metric_direction(&psnr), Direction::HigherIsBetter);
+        assert_eq!(metric_unit(&record("a-new-metric", None)), "");
+        let json = serde_json::to_string(&own).unwrap();
+        assert!(
+            json.contains(r#""check":{"unit":"x","direction":"neither"}"#),
+            "{json}"
+        );
+        assert_eq!(serde_json::from_str::<MetricRecord>(&json).unwrap(), own);
     }
 
     #[test]

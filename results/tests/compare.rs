@@ -83,6 +83,7 @@ fn variant(name: &str, samples: &[f64], psnr: f64) -> VariantResult {
             higher_is_better: true,
             frame_stats: None,
             metrics_device: None,
+            check: None,
         }],
         non_finite_values: 0,
         stability: None,

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use tessera_results::folder;
 use tessera_results::measure::{self, Direction, Key, Measure, DEFAULT_BASELINE};
-use tessera_results::{ScenarioResult, SCHEMA_VERSION};
+use tessera_results::{MetricRecord, ScenarioResult, SCHEMA_VERSION};
 
 fn fixture() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/v1/20261201T103009Z")
@@ -141,18 +141,44 @@ fn the_raw_reader_upgrades_and_lists_the_images_the_folder_holds() {
     assert_eq!(body.scenarios[0]["schema_version"], SCHEMA_VERSION);
 }
 
+/// The metric record `name` of `variant`, if the scenario has one.
+fn metric<'a>(s: &'a ScenarioResult, variant: &str, name: &str) -> Option<&'a MetricRecord> {
+    s.results
+        .iter()
+        .find(|r| r.variant == variant)?
+        .metrics
+        .iter()
+        .find(|m| m.name == name)
+}
+
 #[test]
 fn every_csv_measure_is_in_the_table_with_its_unit() {
+    let run = folder::read(&fixture()).unwrap();
+    let s = scenario(&run);
     let rows = csv_rows();
     assert!(rows.len() > 100);
+    let mut own = 0;
     for ((variant, name), (_, unit)) in &rows {
         if name == "status" {
             continue;
         }
-        let key = Key::parse(name).unwrap_or_else(|| panic!("{variant}: {name} is not a measure"));
-        assert_eq!(&key.render(), name, "{name} round-trips");
-        assert_eq!(key.measure.unit(), unit, "{name}: the CSV's unit");
+        match Key::parse(name) {
+            Some(key) => {
+                assert_eq!(&key.render(), name, "{name} round-trips");
+                assert_eq!(key.measure.unit(), unit, "{name}: the CSV's unit");
+            }
+            // A technique's own check (`shading-rate`): not a measure of the table; its unit is
+            // its record's.
+            None => {
+                let m = metric(s, variant, name).unwrap_or_else(|| {
+                    panic!("{variant}: {name} is neither a measure nor a metric")
+                });
+                assert_eq!(measure::metric_unit(m), unit, "{name}: the CSV's unit");
+                own += 1;
+            }
+        }
     }
+    assert!(own > 0, "the fixture has adaptive shading's own check");
 }
 
 #[test]
@@ -176,19 +202,29 @@ fn stored_series_are_csv_rows_with_the_same_value_and_the_tables_direction() {
                 p.key,
                 p.value
             );
-            let key = Key::parse(&p.key).unwrap();
-            assert!(key.measure.info().stored, "{}", p.key);
+            let direction = match Key::parse(&p.key) {
+                Some(key) => {
+                    assert!(key.measure.info().stored, "{}", p.key);
+                    key.measure.direction()
+                }
+                // A technique's own check is stored under its name, with its record's direction.
+                None => measure::metric_direction(
+                    metric(s, &r.variant, &p.key)
+                        .unwrap_or_else(|| panic!("{}: stored, not a metric", p.key)),
+                ),
+            };
             assert_eq!(
                 p.higher_is_better,
-                key.measure.direction() == Direction::HigherIsBetter,
-                "{}: detection's direction is the table's",
+                direction == Direction::HigherIsBetter,
+                "{}: detection's direction is the table's (or the check's)",
                 p.key
             );
             n += 1;
         }
-        // The harness wrote each metric's direction into the record; the table agrees.
+        // The harness wrote each metric's direction into the record; the table (or, for a
+        // technique's own check, the record's reading) agrees.
         for m in &r.metrics {
-            let dir = Measure::from_name(&m.name).unwrap().direction();
+            let dir = measure::metric_direction(m);
             assert_eq!(m.higher_is_better, dir.higher_is_better(), "{}", m.name);
         }
     }

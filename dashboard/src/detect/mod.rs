@@ -20,8 +20,8 @@
 //!    smallest residual sum of squares; the change then has fewer than `min_segment` points after it,
 //!    which keeps it *pending* (see [`Params::confirm_after`]).
 //! 6. Location apart from certainty: near the statistic's split, each split's probability comes
-//!    from a two-level fit with capped residuals ([`locate`]), which an outlier next to the step
-//!    cannot capture; the most likely split is the change point, the shortest run of candidates
+//!    from a two-level fit that leaves outliers out ([`locate`]), so an outlier next to the step
+//!    cannot capture it; the most likely split is the change point, the shortest run of candidates
 //!    holding 95% is its commit range, and the size gets a 95% interval.
 //! 7. Binary segmentation: accepted change points split the segment and both halves are tested
 //!    again.
@@ -109,31 +109,54 @@ impl ChangePoint {
 
 /// Candidate splits tested on each side of the statistic's split by [`locate`].
 pub const LOCATE_WITHIN: usize = 3;
-/// Residuals beyond this many σ count as this many in [`locate`]: an outlier is one bad point
-/// whichever side it is put on, so it cannot pull the split onto itself.
-pub const LOCATE_CAP_SIGMAS: f64 = 3.0;
+/// In [`locate`], a point further than this many σ from *both* levels is an outlier: it says
+/// nothing about where the change is and is left out of the fit; a residual beyond it counts as
+/// this many σ. Far enough that noise does not reach it even when σ, estimated from a few dozen
+/// points, comes out at half the true value (a 4.6σ night at the new level of a 50σ step is still
+/// the new level's), close enough that a whole-run outlier (1.5x: 25σ at 2% noise) always does.
+pub const LOCATE_CAP_SIGMAS: f64 = 10.0;
 
 /// Where a change found near split `k` lies: the probability of each split `j` within
 /// [`LOCATE_WITHIN`] of `k` (keeping `lo <= j <= hi`), from the likelihood of a two-level model
-/// with Gaussian noise of σ `sigma` whose residuals are capped at [`LOCATE_CAP_SIGMAS`]
-/// (levels are the medians of the two sides). With uncapped squares, a one-night outlier two runs
-/// before a +10% step costs less on the "after" side and the step was blamed on the outlier;
-/// capped, the outlier costs the same on either side and the points between decide.
+/// with Gaussian noise of σ `sigma` (levels are the medians of the two sides). Outliers (see
+/// [`LOCATE_CAP_SIGMAS`]) are left out, other residuals capped there.
+///
+/// With plain squares, a one-night outlier two runs before a +10% step costs less on the "after"
+/// side and the step was blamed on the outlier; with squares capped at 3σ, a noisy night at the
+/// new level of a large step cost as much as on the old level's side and the step was blamed a
+/// night late. Left out, an outlier costs nothing on either side: splits that differ only by the
+/// side of outliers are equally likely, and of those the latest is the change point, the first run
+/// that shows the new level, so a step is never blamed on the outlier the night before it
+/// (issue 22: "outliers next to a step do not move the split onto them").
 pub fn locate(values: &[f64], k: usize, sigma: f64, lo: usize, hi: usize) -> Vec<(usize, f64)> {
     let from = k.saturating_sub(LOCATE_WITHIN).max(lo).max(1);
     let to = (k + LOCATE_WITHIN)
         .min(hi)
         .min(values.len().saturating_sub(1));
-    let cap = LOCATE_CAP_SIGMAS * LOCATE_CAP_SIGMAS;
-    let cost = |j: usize| {
-        let (l, r) = (&values[..j], &values[j..]);
-        let (ml, mr) = (level(l), level(r));
-        let c = |v: &f64, m: f64| ((v - m) / sigma).powi(2).min(cap);
-        l.iter().map(|v| c(v, ml)).sum::<f64>() + r.iter().map(|v| c(v, mr)).sum::<f64>()
-    };
     if from > to {
         return vec![(k, 1.0)];
     }
+    let cap = LOCATE_CAP_SIGMAS * sigma;
+    let (ml, mr) = (level(&values[..k.max(1)]), level(&values[k.max(1)..]));
+    let kept: Vec<bool> = values
+        .iter()
+        .map(|v| (v - ml).abs() <= cap || (v - mr).abs() <= cap)
+        .collect();
+    let side = |r: std::ops::Range<usize>| -> Vec<f64> {
+        let v: Vec<f64> = r.clone().filter(|&i| kept[i]).map(|i| values[i]).collect();
+        if v.is_empty() {
+            values[r].to_vec()
+        } else {
+            v
+        }
+    };
+    let c2 = LOCATE_CAP_SIGMAS * LOCATE_CAP_SIGMAS;
+    let cost = |j: usize| {
+        let (l, r) = (side(0..j), side(j..values.len()));
+        let (ml, mr) = (level(&l), level(&r));
+        let c = |v: &f64, m: f64| ((v - m) / sigma).powi(2).min(c2);
+        l.iter().map(|v| c(v, ml)).sum::<f64>() + r.iter().map(|v| c(v, mr)).sum::<f64>()
+    };
     let costs: Vec<(usize, f64)> = (from..=to).map(|j| (j, cost(j))).collect();
     let best = costs.iter().map(|c| c.1).fold(f64::INFINITY, f64::min);
     let weights: Vec<(usize, f64)> = costs
@@ -144,14 +167,19 @@ pub fn locate(values: &[f64], k: usize, sigma: f64, lo: usize, hi: usize) -> Vec
     weights.into_iter().map(|(j, w)| (j, w / total)).collect()
 }
 
-/// The shortest contiguous run of candidates around the most likely one holding `mass`.
-fn credible_range(candidates: &[(usize, f64)], mass: f64) -> (usize, usize) {
-    let Some(best) = (0..candidates.len()).max_by(|&a, &b| {
+/// The most likely of `candidates`, the latest of equals (see [`locate`]).
+fn most_likely(candidates: &[(usize, f64)]) -> Option<usize> {
+    (0..candidates.len()).max_by(|&a, &b| {
         candidates[a]
             .1
             .total_cmp(&candidates[b].1)
-            .then(candidates[b].0.cmp(&candidates[a].0))
-    }) else {
+            .then(candidates[a].0.cmp(&candidates[b].0))
+    })
+}
+
+/// The shortest contiguous run of candidates around the most likely one holding `mass`.
+fn credible_range(candidates: &[(usize, f64)], mass: f64) -> (usize, usize) {
+    let Some(best) = most_likely(candidates) else {
         return (0, 0);
     };
     let (mut a, mut b) = (best, best);
@@ -257,10 +285,7 @@ fn split(values: &[f64], offset: usize, params: &Params, found: &mut Vec<ChangeP
     // newest points unless the change already lies among them).
     let hi = if at_end || k > n - m { n - 1 } else { n - m };
     let candidates = locate(values, k, sigma, m.min(k), hi);
-    let k = candidates
-        .iter()
-        .max_by(|a, b| a.1.total_cmp(&b.1).then(b.0.cmp(&a.0)))
-        .map_or(k, |c| c.0);
+    let k = most_likely(&candidates).map_or(k, |i| candidates[i].0);
     let (first, last) = credible_range(&candidates, 0.95);
     // Levels are medians: an outlier on the short side must not cancel (or fake) the step's size.
     let before = level(&values[..k]);

@@ -9,7 +9,7 @@
 
 use std::fmt::Write;
 
-use tessera_results::measure::{Direction, Measure};
+use tessera_results::measure::{metric_direction, metric_unit, Direction};
 use tessera_results::VariantResult;
 
 use crate::html::{esc, num};
@@ -57,17 +57,14 @@ pub fn series_of(v: &VariantResult) -> Vec<FrameSeries> {
         {
             continue;
         }
-        let unit = Measure::from_name(&m.name).map_or("", |x| x.unit());
+        // The measure table's unit, or the one a technique's own check carries.
+        let unit = metric_unit(m);
         let title = if unit.is_empty() {
             format!("{} per frame", m.name)
         } else {
             format!("{} per frame ({unit})", m.name)
         };
-        let higher_is_worse = match Measure::from_name(&m.name).map(|x| x.direction()) {
-            Some(Direction::HigherIsBetter) => false,
-            Some(_) => true,
-            None => !m.higher_is_better,
-        };
+        let higher_is_worse = metric_direction(m) != Direction::HigherIsBetter;
         out.push(FrameSeries {
             title,
             frames: m.frames.clone(),
@@ -91,6 +88,20 @@ pub fn render(series: &[FrameSeries]) -> String {
     b
 }
 
+/// The worst frame of `s` and its value (the first of equals; non-finite values never), as the
+/// harness picks the worst frame it saves.
+pub fn worst_of(s: &FrameSeries) -> Option<(u32, f64)> {
+    let mut worst: Option<(u32, f64)> = None;
+    for (&f, &v) in s.frames.iter().zip(&s.values) {
+        let worse = v.is_finite()
+            && worst.is_none_or(|(_, w)| if s.higher_is_worse { v > w } else { v < w });
+        if worse {
+            worst = Some((f, v));
+        }
+    }
+    worst
+}
+
 fn chart(s: &FrameSeries) -> String {
     let f0 = s.frames.iter().copied().min().unwrap_or(0);
     let f1 = s.frames.iter().copied().max().unwrap_or(0).max(f0 + 1);
@@ -110,20 +121,7 @@ fn chart(s: &FrameSeries) -> String {
     };
     let x = |f: u32| LEFT + f64::from(f - f0) * dx;
     let y = |v: f64| TOP + (H - TOP - BOTTOM) * (1.0 - (v - lo) / (hi - lo));
-    let worst = s
-        .values
-        .iter()
-        .enumerate()
-        .filter(|(_, v)| v.is_finite())
-        .max_by(|a, b| {
-            let (a, b) = (*a.1, *b.1);
-            if s.higher_is_worse {
-                a.total_cmp(&b)
-            } else {
-                b.total_cmp(&a)
-            }
-        })
-        .map(|(i, v)| (s.frames[i], *v));
+    let worst = worst_of(s);
     let mut out = format!(
         "<figure class=frame-chart><svg viewBox=\"0 0 {W} {H}\" width={W} height={H} role=img aria-label=\"{}\" data-f0={f0} data-x0={LEFT} data-dx={dx:.4}>",
         esc(&s.title)

@@ -21,6 +21,7 @@ pub mod listen;
 pub mod pareto;
 pub mod regressions;
 pub mod run;
+pub mod run_frame_charts;
 pub mod runs;
 pub mod series;
 pub mod upload;

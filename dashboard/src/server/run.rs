@@ -1,8 +1,9 @@
 //! One run (`/runs/{run_id}`, `/api/runs/{run_id}?format=json|csv`): per scenario, every variant
 //! with its status or skip reason, per-pass GPU time (stacked), speedup against native on the same
 //! adapter, the change of GPU time against the previous run of the same suite on the same adapter
-//! (the significance test of `tessera compare`), metrics, allocated bytes, and links to its series and
-//! images. The CSV export has the columns of the harness's `results.csv`.
+//! (the significance test of `tessera compare`), metrics, allocated bytes, links to its series and
+//! images, and per-frame charts of each measure (`run_frame_charts.rs`). The CSV export has the
+//! columns of the harness's `results.csv`.
 
 use std::fmt::Write;
 
@@ -15,7 +16,7 @@ use tessera_results::{ScenarioResult, Status};
 
 use super::export::{csv, csv_response, no_markdown, Format, FormatQuery};
 use super::{AppError, AppState};
-use crate::html::{bytes, commit, enc, esc, ms, num, page as layout, pct};
+use crate::html::{bytes, commit, enc, esc, ms, name, num, page as layout, pct};
 use crate::store::browse;
 use crate::store::read::{self, RunDetail};
 use crate::svg::{stacked_bars, Bar};
@@ -206,7 +207,7 @@ fn scenario_section(d: &RunDetail, prev: Option<&Previous>, s: &ScenarioResult, 
         let _ = write!(
             out,
             "<tr><td>{}</td><td>{status}</td><td class=n>{}</td>{}<td class=n>{}</td><td class=n>{sp}</td>",
-            esc(&v.variant),
+            name(&v.variant),
             if ok { ms(v.gpu_frame_ms.map(|g| g.median)) } else { "–".into() },
             if ok { change_cell(prev, &s.scenario, v) } else { "<td class=n>–</td>".into() },
             if ok { ms(Some(v.cpu_frame_ms.median)) } else { "–".into() }
@@ -253,6 +254,16 @@ fn scenario_section(d: &RunDetail, prev: Option<&Previous>, s: &ScenarioResult, 
         );
     }
     out.push_str("</table></div>");
+    // Per-frame charts of every measure with per-frame values, a line per variant; the worst
+    // frame links to the viewer when its image was saved.
+    let outputs: std::collections::HashSet<(&str, i64)> = d
+        .images
+        .iter()
+        .filter(|i| i.scenario == s.scenario && i.kind == "output")
+        .map(|i| (i.variant.as_str(), i.frame))
+        .collect();
+    let saved = |variant: &str, frame: u32| outputs.contains(&(variant, i64::from(frame)));
+    out.push_str(&super::run_frame_charts::render(&d.run.run_id, s, &saved));
     let _ = write!(
         out,
         "<p><a href=\"/pareto?scenario={}&adapter={}&run={}\">error against time</a></p>",

@@ -5,15 +5,25 @@
 //! ```text
 //! cargo run --release -p tessera-metrics-gpu --example bench -- --adapter nvidia
 //! cargo run --release -p tessera-metrics-gpu --example bench -- --size 256x144 --iterations 3
+//! cargo run --release -p tessera-metrics-gpu --example bench -- --adapter nvidia --only cvvdp \
+//!     --size 1920x1080 --size 3840x2160 --display paper_27in_4k
 //! ```
 //!
 //! Options: `--adapter NAME` (substring of name, driver or backend; default: the first discrete
 //! GPU, else any), `--size WxH` (repeatable; default 1920x1080 and 3840x2160), `--iterations N`
-//! (default 10), `--cpu` (also time the CPU reference once per size, slow at 4K).
+//! (default 10), `--cpu` (also time the CPU reference once per size, slow at 4K), `--only
+//! cvvdp|pair` (one half of the table), and for ColorVideoVDP `--display NAME` (default
+//! `standard_4k`), `--frames N` (default 8) and `--fps F` (default 60). ColorVideoVDP's rows are
+//! per frame: the GPU ms of one frame's passes (timestamps, median over the frames of the
+//! iterations) and the wall ms of the whole call divided by its frames (packing and uploading
+//! the 8-bit frames, the passes, the readback of the partial sums, pooling).
 
 use std::time::Instant;
 
-use tessera_metrics::{hdr_exposure_range, HdrImage, Rgb8Image, DEFAULT_PIXELS_PER_DEGREE};
+use tessera_metrics::{
+    hdr_exposure_range, CvvdpSettings, DisplaySpec, Frames, HdrImage, Rgb8Image,
+    DEFAULT_PIXELS_PER_DEGREE,
+};
 use tessera_metrics_gpu::{
     CpuMetrics, FlipHdrRequest, FlipPooling, FlipRequest, GpuFrame, GpuMetrics, MetricsBackend,
     Pair, PairRequest,
@@ -24,6 +34,10 @@ struct Args {
     sizes: Vec<(u32, u32)>,
     iterations: usize,
     cpu: bool,
+    only: Option<String>,
+    display: String,
+    frames: usize,
+    fps: f64,
 }
 
 fn parse_args() -> Result<Args, String> {
@@ -32,6 +46,10 @@ fn parse_args() -> Result<Args, String> {
         sizes: Vec::new(),
         iterations: 10,
         cpu: false,
+        only: None,
+        display: tessera_metrics::DEFAULT_DISPLAY.into(),
+        frames: 8,
+        fps: 60.0,
     };
     let mut it = std::env::args().skip(1);
     while let Some(arg) = it.next() {
@@ -58,8 +76,41 @@ fn parse_args() -> Result<Args, String> {
                     .ok_or(format!("--iterations {v}: expected a positive integer"))?;
             }
             "--cpu" => a.cpu = true,
+            "--only" => {
+                let v = value("--only")?;
+                if v != "cvvdp" && v != "pair" {
+                    return Err(format!("--only {v}: expected cvvdp or pair"));
+                }
+                a.only = Some(v);
+            }
+            "--display" => {
+                let v = value("--display")?;
+                DisplaySpec::parse(&v).map_err(|e| format!("--display {v}: {e}"))?;
+                a.display = v;
+            }
+            "--frames" => {
+                let v = value("--frames")?;
+                a.frames = v
+                    .parse()
+                    .ok()
+                    .filter(|&n| n > 0)
+                    .ok_or(format!("--frames {v}: expected a positive integer"))?;
+            }
+            "--fps" => {
+                let v = value("--fps")?;
+                a.fps = v
+                    .parse()
+                    .ok()
+                    .filter(|&f: &f64| f > 0.0 && f <= 16384.0)
+                    .ok_or(format!(
+                        "--fps {v}: expected frames per second in (0, 16384]"
+                    ))?;
+            }
             "-h" | "--help" => {
-                println!("usage: bench [--adapter NAME] [--size WxH]... [--iterations N] [--cpu]");
+                println!(
+                    "usage: bench [--adapter NAME] [--size WxH]... [--iterations N] [--cpu] \
+                     [--only cvvdp|pair] [--display NAME] [--frames N] [--fps F]"
+                );
                 std::process::exit(0);
             }
             other => return Err(format!("unknown argument {other}; see --help")),
@@ -185,6 +236,12 @@ fn main() {
     println!("| size | request | GPU ms per group (median) | GPU ms total | wall ms |");
     println!("|---|---|---|---:|---:|");
     for &(w, h) in &args.sizes {
+        if args.only.as_deref() != Some("pair") {
+            cvvdp_rows(&mut gpu, &args, w, h);
+        }
+        if args.only.as_deref() == Some("cvvdp") {
+            continue;
+        }
         let (rl, tl, rh, th) = frames(w, h);
         let upload = |gpu: &GpuMetrics, l, h| gpu.upload(l, Some(h));
         let (r, t): (GpuFrame, GpuFrame) = match (upload(&gpu, &rl, &rh), upload(&gpu, &tl, &th)) {
@@ -369,6 +426,85 @@ fn main() {
                         "failed".into()
                     }
                 );
+            }
+        }
+    }
+}
+
+/// ColorVideoVDP rows: an image pair, and a video of `--frames` frames whose content moves and
+/// whose test has visible noise (+-12 codes) on top of the pair's.
+fn cvvdp_rows(gpu: &mut GpuMetrics, args: &Args, w: u32, h: u32) {
+    let (rl, mut tl, _, _) = frames(w, h);
+    let mut s = 777u32;
+    for v in &mut tl.data {
+        s = s.wrapping_mul(1664525).wrapping_add(1013904223);
+        *v = (*v as i32 + (s >> 24) as i32 % 25 - 12).clamp(0, 255) as u8;
+    }
+    let shift = |img: &Rgb8Image, dx: u32| {
+        let mut out = img.clone();
+        for y in 0..h {
+            for x in 0..w {
+                let s = ((y * w + (x + dx) % w) * 3) as usize;
+                let d = ((y * w + x) * 3) as usize;
+                out.data[d..d + 3].copy_from_slice(&img.data[s..s + 3]);
+            }
+        }
+        out
+    };
+    let reference: Vec<Rgb8Image> = (0..args.frames as u32).map(|f| shift(&rl, 2 * f)).collect();
+    let test: Vec<Rgb8Image> = (0..args.frames as u32).map(|f| shift(&tl, 2 * f)).collect();
+    let settings = CvvdpSettings {
+        display: DisplaySpec::parse(&args.display).unwrap_or_default(),
+        fps: args.fps,
+        ..CvvdpSettings::default()
+    };
+    let cases = [
+        ("image".to_string(), 1),
+        (
+            format!("video, {} frames at {} fps", args.frames, args.fps),
+            args.frames,
+        ),
+    ];
+    for (what, n) in cases {
+        let name = format!("cvvdp {what} ({}), per frame", args.display);
+        let (r, t) = (Frames::Srgb(&reference[..n]), Frames::Srgb(&test[..n]));
+        let mut wall = Vec::new();
+        let mut gpu_ms = Vec::new();
+        let mut jod = 0.0;
+        for i in 0..=args.iterations {
+            let start = Instant::now();
+            match gpu.cvvdp(r, t, &settings) {
+                Ok(result) => jod = result.jod,
+                Err(e) => {
+                    println!("| {w}x{h} | {name} | failed: {e} | | |");
+                    return;
+                }
+            }
+            let ms = start.elapsed().as_secs_f64() * 1e3 / n as f64;
+            if i > 0 {
+                wall.push(ms);
+                gpu_ms.extend_from_slice(gpu.last_cvvdp_frame_ms());
+            }
+        }
+        let g = if gpu_ms.is_empty() {
+            "-".into()
+        } else {
+            format!("{:.3}", median(gpu_ms))
+        };
+        println!(
+            "| {w}x{h} | {name}: {jod:.4} JOD | cvvdp {g} | {g} | {:.3} |",
+            median(wall)
+        );
+        if args.cpu {
+            let start = Instant::now();
+            let cpu = tessera_metrics::cvvdp(r, t, &settings);
+            let ms = start.elapsed().as_secs_f64() * 1e3 / n as f64;
+            match cpu {
+                Ok(c) => println!(
+                    "| {w}x{h} | cpu: {name}: {:.4} JOD | - | - | {ms:.1} |",
+                    c.jod
+                ),
+                Err(e) => println!("| {w}x{h} | cpu: {name} | failed: {e} | | |"),
             }
         }
     }

@@ -2,12 +2,12 @@
 // sRGB frame packed r | g << 8 | b << 16, encoded exactly as tessera-metrics' `encode_srgb8`
 // (NaN to 0, clamp, IEC 61966-2-1, round) by counting the 255 thresholds from
 // `port::srgb8_encode_thresholds` at or below each value, and the linear RGB as f32 (for
-// HDR-FLIP). Alpha is dropped.
+// HDR-FLIP, only when `with_hdr` is set). Alpha is dropped.
 
 struct Params {
     width: u32,
     height: u32,
-    _p0: u32,
+    with_hdr: u32,
     _p1: u32,
 }
 
@@ -40,6 +40,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let c = textureLoad(frame, vec2<i32>(gid.xy), 0).rgb;
     let i = gid.y * params.width + gid.x;
     ldr[i] = encode(c.r) | (encode(c.g) << 8u) | (encode(c.b) << 16u);
+    if (params.with_hdr == 0u) {
+        return;
+    }
     hdr[3u * i] = c.r;
     hdr[3u * i + 1u] = c.g;
     hdr[3u * i + 2u] = c.b;

@@ -3,7 +3,8 @@
 //! [`GpuMetrics`]. Every value they return carries the [`Backend`] that computed it.
 //!
 //! For: callers that should not care where a metric runs (a run's evaluate step, `tessera
-//! diff`). Not for: GPU-resident frames (use `GpuMetrics::evaluate` with `GpuFrame`s directly).
+//! diff`). Not for: GPU-resident frames (use `GpuMetrics::evaluate` or
+//! `GpuMetrics::sequence_frames` with `GpuFrame`s directly).
 
 use serde::{Deserialize, Serialize};
 use tessera_metrics::{HdrImage, Rgb8Image};
@@ -323,8 +324,26 @@ impl MetricsBackend for GpuMetrics {
         request: &dyn Fn(usize) -> PairRequest,
         flicker: bool,
     ) -> Result<SequenceValues, GpuMetricsError> {
+        self.defer_running_means(true);
+        let values = self.upload_sequence(seq, request, flicker);
+        self.defer_running_means(false);
+        values
+    }
+}
+
+/// A frame's deferred flip-evaluator means: (frame, ticket, HDR-FLIP).
+type Handed = Vec<(usize, crate::pool::Ticket, bool)>;
+
+impl GpuMetrics {
+    fn upload_sequence(
+        &mut self,
+        seq: Sequence<'_>,
+        request: &dyn Fn(usize) -> PairRequest,
+        flicker: bool,
+    ) -> Result<SequenceValues, GpuMetricsError> {
         let n = seq.reference.len().min(seq.test.len());
         let mut frames = Vec::with_capacity(n);
+        let mut handed: Handed = Vec::new();
         let mut flickers = Vec::new();
         let mut previous: Option<GpuFrame> = None;
         for i in 0..seq.test.len() {
@@ -345,6 +364,7 @@ impl MetricsBackend for GpuMetrics {
                 tessera_metrics::port::check_pair(p.reference, p.test)?;
                 let r = self.upload_pair_frame(p.reference, p.reference_hdr, &req)?;
                 frames.push(self.evaluate(&r, &t, &req)?);
+                handed.extend(self.take_handed_means().into_iter().map(|(k, h)| (i, k, h)));
             }
             if flicker {
                 if let Some(prev) = &previous {
@@ -353,6 +373,75 @@ impl MetricsBackend for GpuMetrics {
             }
             previous = Some(t);
         }
+        self.fill_running_means(&mut frames, handed)?;
+        Ok(SequenceValues {
+            backend: Backend::Gpu,
+            frames,
+            flicker: flicker.then_some(flickers),
+        })
+    }
+
+    /// Sums the deferred flip-evaluator means and writes them into their frames' values.
+    fn fill_running_means(
+        &mut self,
+        frames: &mut [PairValues],
+        handed: Handed,
+    ) -> Result<(), GpuMetricsError> {
+        self.flush_running_means()?;
+        for (i, ticket, hdr) in handed {
+            let mean = self.take_running_mean(ticket)?;
+            let v = if hdr {
+                frames[i].flip_hdr.as_mut()
+            } else {
+                frames[i].flip.as_mut()
+            };
+            if let Some(v) = v {
+                v.mean = mean;
+            }
+        }
+        Ok(())
+    }
+
+    /// [`MetricsBackend::sequence`] of frames already on the device (made by
+    /// [`GpuMetrics::frame_from_texture_with`]): the pair values of frame `i` of `reference`
+    /// and `test` for `request(i)`, and flicker of the test's frames 1.. when asked. Nothing
+    /// but the values comes back (and the heat maps requested); flip-evaluator means of the
+    /// whole sequence are summed together at its end. The caller checks what the CPU checks of
+    /// the images themselves (HDR-FLIP's finite values: the frames' non-finite counts).
+    pub fn sequence_frames(
+        &mut self,
+        reference: &[GpuFrame],
+        test: &[GpuFrame],
+        request: &dyn Fn(usize) -> PairRequest,
+        flicker: bool,
+    ) -> Result<SequenceValues, GpuMetricsError> {
+        self.defer_running_means(true);
+        let values = self.device_sequence(reference, test, request, flicker);
+        self.defer_running_means(false);
+        values
+    }
+
+    fn device_sequence(
+        &mut self,
+        reference: &[GpuFrame],
+        test: &[GpuFrame],
+        request: &dyn Fn(usize) -> PairRequest,
+        flicker: bool,
+    ) -> Result<SequenceValues, GpuMetricsError> {
+        let n = reference.len().min(test.len());
+        let mut frames = Vec::with_capacity(n);
+        let mut handed: Handed = Vec::new();
+        for i in 0..n {
+            frames.push(self.evaluate(&reference[i], &test[i], &request(i))?);
+            handed.extend(self.take_handed_means().into_iter().map(|(k, h)| (i, k, h)));
+        }
+        let mut flickers = Vec::new();
+        if flicker {
+            for w in test.windows(2) {
+                flickers.push(self.flicker_frames(&w[0], &w[1])?);
+            }
+        }
+        self.fill_running_means(&mut frames, handed)?;
         Ok(SequenceValues {
             backend: Backend::Gpu,
             frames,

@@ -91,6 +91,10 @@ pub struct GpuMetrics {
     pub(crate) adapter_name: String,
     /// GPU milliseconds of the last request's metric groups (empty without timestamps).
     pub(crate) last_gpu_ms: Vec<(&'static str, f64)>,
+    /// ColorVideoVDP's pipelines, calibration and last plan, made on its first request.
+    pub(crate) cvvdp: Option<Box<crate::cvvdp::CvvdpState>>,
+    /// FLIP's flip-evaluator means, summed on the device (`pool`), made on first use.
+    pub(crate) running: Option<crate::pool::RunningSums>,
 }
 
 /// Uniform slots and output regions of one request, laid out before anything is recorded.
@@ -186,6 +190,8 @@ impl GpuMetrics {
             timer,
             adapter_name: adapter_name.to_string(),
             last_gpu_ms: Vec::new(),
+            cvvdp: None,
+            running: None,
             device: device.clone(),
             queue: queue.clone(),
         }

@@ -59,13 +59,13 @@ fn diff_ldr(
         flip: Some(FlipRequest {
             pixels_per_degree: ppd,
             heatmap: false,
-            pooling: FlipPooling::FlipEvaluator,
+            pooling: FlipPooling::ErrorMap,
         }),
         flip_hdr: range.map(|range| FlipHdrRequest {
             range,
             pixels_per_degree: ppd,
             heatmap: false,
-            pooling: FlipPooling::FlipEvaluator,
+            pooling: FlipPooling::ErrorMap,
         }),
     };
     let rf = gpu.upload(r, hdr.map(|h| h.0))?;

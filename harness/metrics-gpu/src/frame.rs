@@ -59,7 +59,8 @@ pub(crate) fn unpack(words: &[u32], width: u32, height: u32) -> Rgb8Image {
 struct EncodeParams {
     width: u32,
     height: u32,
-    _p: [u32; 2],
+    with_hdr: u32,
+    _p: u32,
 }
 
 impl GpuMetrics {
@@ -121,6 +122,29 @@ impl GpuMetrics {
         &mut self,
         texture: &wgpu::Texture,
     ) -> Result<GpuFrame, GpuMetricsError> {
+        self.frame_from_texture_with(texture, true)
+    }
+
+    /// Whether frames of `width` x `height` (with their linear floats when `hdr`) fit this
+    /// device's buffer limits, with FLIP's intermediate images: `Err` says which buffer does
+    /// not (then the frames must be evaluated on the CPU).
+    pub fn frame_fits(&self, width: u32, height: u32, hdr: bool) -> Result<(), GpuMetricsError> {
+        let n = width as u64 * height as u64;
+        self.check_binding("an 8-bit frame", 4 * n)?;
+        if hdr {
+            self.check_binding("a float frame", 12 * n)?;
+        }
+        self.check_binding("FLIP's intermediate images", 16 * n)
+    }
+
+    /// [`GpuMetrics::frame_from_texture`], with the linear floats only when `hdr` (HDR-FLIP
+    /// needs them; an 8-bit frame takes a quarter of the memory).
+    pub fn frame_from_texture_with(
+        &mut self,
+        texture: &wgpu::Texture,
+        hdr: bool,
+    ) -> Result<GpuFrame, GpuMetricsError> {
+        let with_hdr = hdr;
         let format = texture.format();
         let sample = match format {
             wgpu::TextureFormat::Rgba16Float => wgpu::TextureSampleType::Float { filterable: true },
@@ -131,7 +155,10 @@ impl GpuMetrics {
         };
         let (width, height) = (texture.width(), texture.height());
         let n = width as u64 * height as u64;
-        self.check_binding("a float frame", 12 * n)?;
+        self.check_binding("an 8-bit frame", 4 * n)?;
+        if with_hdr {
+            self.check_binding("a float frame", 12 * n)?;
+        }
         let pipeline = self
             .pipelines
             .encode
@@ -147,12 +174,14 @@ impl GpuMetrics {
             })
         };
         let ldr = storage("metrics frame", 4 * n);
-        let hdr = storage("metrics frame hdr", 12 * n);
+        // Without floats the shader writes none; the binding still needs a buffer.
+        let hdr = storage("metrics frame hdr", if with_hdr { 12 * n } else { 16 });
         let mut layout = Layout::default();
         let slot = layout.param(&EncodeParams {
             width,
             height,
-            _p: [0; 2],
+            with_hdr: with_hdr as u32,
+            _p: 0,
         });
         // The encode pass has its own small uniform buffer: it is submitted on its own, before
         // the requests that read the frame, and must not share their slots.
@@ -202,7 +231,7 @@ impl GpuMetrics {
             width,
             height,
             ldr,
-            hdr: Some(hdr),
+            hdr: with_hdr.then_some(hdr),
         })
     }
 

@@ -1,6 +1,6 @@
 //! Tessera's image metrics as WGSL compute passes, on the device that rendered the frames:
 //! PSNR/MSE (RGB and luma), max-abs-error, SSIM (RGB and luma), LDR-FLIP and HDR-FLIP with heat
-//! maps, static-scene flicker and TDE, each computing the same definition as its CPU
+//! maps, static-scene flicker and TDE, and ColorVideoVDP (`GpuMetrics::cvvdp`), each computing the same definition as its CPU
 //! reference in `tessera-metrics` (which stays the fallback), within the tolerances the
 //! cross-check tests assert.
 //!
@@ -10,11 +10,13 @@
 
 mod backend;
 mod context;
+mod cvvdp;
 mod device;
 mod diff;
 mod error;
 mod frame;
 mod pair;
+mod pool;
 mod shaders;
 mod temporal;
 

@@ -63,11 +63,16 @@ pub enum FlipPooling {
     /// floats per workgroup come back.
     #[default]
     Exact,
-    /// The error map comes back and is pooled as flip-evaluator and the CPU back end pool it:
-    /// an f32 running sum in row-major order (`FlipResult::mean`). Costs a readback of 4 bytes
-    /// per pixel and a sequential pass on the CPU (about 2 ms at 1080p), and keeps the value
-    /// continuous with CPU results where FLIP's f32 drift is large (up to ~3e-3 at 1080p).
+    /// Pooled as flip-evaluator and the CPU back end pool it: an f32 running sum in row-major
+    /// order (`FlipResult::mean`), bit for bit, summed on the device (`pool.rs`: one workgroup
+    /// adds one map in order; a sequence's maps are summed side by side). Keeps the value
+    /// continuous with CPU results where FLIP's f32 drift is large (up to ~3e-3 at 1080p);
+    /// nothing but the sum comes back.
     FlipEvaluator,
+    /// As [`FlipPooling::FlipEvaluator`], pooled on the CPU from the error map, which comes back
+    /// (`FlipValues::error_map`): for callers that need the whole map (`tessera diff`'s
+    /// percentiles). Costs a readback of 4 bytes per pixel.
+    ErrorMap,
 }
 
 /// HDR-FLIP over an exposure range (from the reference: `tessera_metrics::hdr_exposure_range`).
@@ -92,7 +97,7 @@ pub struct FlipValues {
     pub max: f64,
     #[serde(skip)]
     pub heatmap: Option<Rgb8Image>,
-    /// The per-pixel errors, when they came back (GPU with `FlipPooling::FlipEvaluator`).
+    /// The per-pixel errors, when they came back (GPU with `FlipPooling::ErrorMap`).
     #[serde(skip)]
     pub error_map: Option<Vec<f32>>,
 }
@@ -230,8 +235,10 @@ struct FlipPlan {
     reduce: u64,
     partials: Region,
     heatmap: Option<Region>,
-    /// The error map's copy, for `FlipPooling::FlipEvaluator`.
+    /// The error map's copy, for `FlipPooling::ErrorMap`.
     map: Option<Region>,
+    /// The running sum's slot (ticket, byte offset), for `FlipPooling::FlipEvaluator`.
+    running: Option<(crate::pool::Ticket, u64)>,
     ppd_key: u32,
     multipliers: Vec<f32>,
 }
@@ -308,7 +315,17 @@ impl GpuMetrics {
             ssim.push((c, slot, out));
         }
 
-        // FLIP (LDR, then HDR).
+        // FLIP (LDR, then HDR); room for their running sums first (see `pool`).
+        let running_maps = [
+            request.flip.as_ref().map(|f| f.pooling),
+            request.flip_hdr.as_ref().map(|f| f.pooling),
+        ]
+        .iter()
+        .filter(|p| **p == Some(FlipPooling::FlipEvaluator))
+        .count() as u32;
+        if running_maps > 0 {
+            self.make_running_room(n, running_maps)?;
+        }
         let mut flips: Vec<(bool, FlipPlan)> = Vec::new();
         if let Some(f) = &request.flip {
             let ppd = tessera_metrics::port::flip_check_ppd(f.pixels_per_degree)?;
@@ -424,16 +441,30 @@ impl GpuMetrics {
         if request.ssim_rgb {
             values.ssim_rgb = Some(rgb / 3.0);
         }
+        let defer = self.running.as_ref().is_some_and(|r| r.defer);
+        if !defer && flips.iter().any(|(_, p)| p.running.is_some()) {
+            self.flush_running_means()?;
+        }
         for (hdr, plan) in &flips {
             let (exact_mean, max) = pooled(floats(&bytes, plan.partials), n as usize);
             let heatmap = plan.heatmap.map(|r| unpack(words(&bytes, r), w, h));
             let error_map = plan.map.map(|r| floats(&bytes, r)[..n as usize].to_vec());
-            let (mean, pooling) = match &error_map {
-                Some(m) => (
+            let (mean, pooling) = match (&error_map, plan.running) {
+                (Some(m), _) => (
                     tessera_metrics::port::flip_running_mean(m),
-                    FlipPooling::FlipEvaluator,
+                    FlipPooling::ErrorMap,
                 ),
-                None => (exact_mean, FlipPooling::Exact),
+                // Filled in by the caller that deferred it (`backend`'s sequence).
+                (None, Some((ticket, _))) if defer => {
+                    if let Some(r) = self.running.as_mut() {
+                        r.handed.push((ticket, *hdr));
+                    }
+                    (f64::NAN, FlipPooling::FlipEvaluator)
+                }
+                (None, Some((ticket, _))) => {
+                    (self.take_running_mean(ticket)?, FlipPooling::FlipEvaluator)
+                }
+                (None, None) => (exact_mean, FlipPooling::Exact),
             };
             let v = FlipValues {
                 error_map,
@@ -509,9 +540,11 @@ impl GpuMetrics {
         });
         let partials = layout.output(8 * grid.groups() as u64);
         let heatmap = heatmap.then(|| layout.output(4 * n as u64));
-        let map = (pooling == FlipPooling::FlipEvaluator).then(|| layout.output(4 * n as u64));
+        let map = (pooling == FlipPooling::ErrorMap).then(|| layout.output(4 * n as u64));
+        let running = (pooling == FlipPooling::FlipEvaluator).then(|| self.reserve_running_mean());
         Ok(FlipPlan {
             map,
+            running,
             planes,
             vertical,
             horizontal,
@@ -691,6 +724,9 @@ impl GpuMetrics {
         drop(pass);
         if let Some(r) = plan.map {
             encoder.copy_buffer_to_buffer(error, 0, &self.outputs, r.offset, 4 * n as u64);
+        }
+        if let Some((_, offset)) = plan.running {
+            encoder.copy_buffer_to_buffer(error, 0, self.running_maps(), offset, 4 * n as u64);
         }
     }
 }

@@ -30,6 +30,7 @@ pub(crate) const REDUCE: &str = include_str!("../shaders/reduce.wgsl");
 pub(crate) const HEATMAP: &str = include_str!("../shaders/heatmap.wgsl");
 pub(crate) const TDE: &str = include_str!("../shaders/tde.wgsl");
 pub(crate) const ENCODE: &str = include_str!("../shaders/encode.wgsl");
+pub(crate) const RUNNING_SUM: &str = include_str!("../shaders/running_sum.wgsl");
 
 /// An f32 as a WGSL literal that parses back to the same value.
 fn lit(v: f32) -> String {
@@ -145,8 +146,10 @@ mod tests {
             HEATMAP.to_string(),
             TDE.to_string(),
             ENCODE.to_string(),
+            RUNNING_SUM.to_string(),
         ];
-        for s in sources {
+        let cvvdp = crate::cvvdp::sources().into_iter().map(|(_, s)| s);
+        for s in sources.into_iter().chain(cvvdp) {
             let m = naga::front::wgsl::parse_str(&s)
                 .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&s)));
             naga::valid::Validator::new(

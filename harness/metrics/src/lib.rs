@@ -26,9 +26,9 @@ mod ssim;
 mod temporal;
 
 pub use cvvdp::{
-    cvvdp, cvvdp_heatmap, display_names, CustomDisplay, CvvdpResult, CvvdpSettings, DisplaySpec,
-    DistortionMap, Frames, ShotJod, DEFAULT_DISPLAY, DEFAULT_HDR_WHITE, PAPER_27IN_4K,
-    PAPER_27IN_4K_PPD,
+    cvvdp, cvvdp_heatmap, cvvdp_with, display_names, CpuPredictor, CustomDisplay, CvvdpResult,
+    CvvdpSettings, DisplaySpec, DistortionMap, Frames, Shot, ShotJod, ShotPrediction,
+    ShotPredictor, DEFAULT_DISPLAY, DEFAULT_HDR_WHITE, PAPER_27IN_4K, PAPER_27IN_4K_PPD,
 };
 pub use deep::{mse_luma16, mse_rgb16, ssim_luma16, ssim_rgb16, Rgb16Image, DATA_RANGE_16BIT};
 pub use error::MetricsError;

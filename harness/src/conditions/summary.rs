@@ -52,6 +52,7 @@ pub fn summarise(
         energy: energy_window.and_then(|(s, frames)| energy(s, frames)),
         throttled: !throttle_causes.is_empty(),
         throttle_causes,
+        clock_warmup_ms: None,
     }
 }
 
@@ -103,6 +104,22 @@ pub fn energy(samples: &[Sample], frames: u32) -> Option<Energy> {
     let span = power.last()?.0 - power.first()?.0;
     (span > 0.0).then(|| per_frame(joules, EnergyMethod::PowerTimesTime))
 }
+
+/// Whether a window of load ran at the device's top graphics clock throughout: at least one
+/// clock reading, every reading at least [`TOP_CLOCK_FRACTION`] of `max_mhz`. What ends the clock
+/// warm-up early (`run/frames.rs`). NVML's `gpu-idle` reason is no sign of a cold GPU here: the
+/// warm-up's chunks drain the queue, and the sample at a chunk's start reads idle (an H200 at
+/// 1980 MHz did in every chunk, so the warm-up never ended early).
+pub fn at_top_clock(samples: &[Sample], max_mhz: f64) -> bool {
+    let clocks: Vec<f64> = samples
+        .iter()
+        .filter_map(|s| s.graphics_clock_mhz)
+        .collect();
+    !clocks.is_empty() && clocks.iter().all(|c| *c >= TOP_CLOCK_FRACTION * max_mhz)
+}
+
+/// A clock within 1% of the maximum is the top clock (boost bins are 15 MHz apart).
+pub const TOP_CLOCK_FRACTION: f64 = 0.99;
 
 /// Why the window counts as throttled, one sentence per cause; empty when it does not.
 pub fn throttle_causes(samples: &[Sample], limits: &DeviceLimits, fraction: f64) -> Vec<String> {
@@ -167,6 +184,31 @@ mod tests {
             energy_mj: energy,
             throttle_reasons: Vec::new(),
         }
+    }
+
+    #[test]
+    fn the_top_clock_is_every_reading_within_a_percent_of_the_maximum() {
+        let at = |clocks: &[f64]| -> Vec<Sample> {
+            clocks
+                .iter()
+                .enumerate()
+                .map(|(i, c)| sample(i as f64 * 0.01, *c, 300.0, None))
+                .collect()
+        };
+        assert!(at_top_clock(&at(&[1980.0, 1995.0, 2000.0]), 2000.0));
+        // One reading still ramping: not yet.
+        assert!(!at_top_clock(&at(&[1410.0, 1980.0, 2000.0]), 2000.0));
+        // No clock sensor read: never settled (the warm-up runs its full length).
+        let mut none = at(&[2000.0]);
+        none[0].graphics_clock_mhz = None;
+        assert!(!at_top_clock(&none, 2000.0));
+        assert!(!at_top_clock(&[], 2000.0));
+        let mut idle = at(&[2000.0, 2000.0]);
+        idle[0].throttle_reasons.push(ThrottleReason::GpuIdle);
+        assert!(
+            at_top_clock(&idle, 2000.0),
+            "idle between chunks at the top clock"
+        );
     }
 
     #[test]

@@ -49,6 +49,9 @@ pub struct Gpu {
     pub vrs: Result<vrs::VrsCaps, String>,
     /// The GPU metrics back end on this device, made on first use (`crate::metrics_device`).
     pub metrics: std::sync::OnceLock<std::sync::Mutex<tessera_metrics_gpu::GpuMetrics>>,
+    /// The frame-check pipelines, made on first use by the module that owns them (the frame
+    /// checks of render/, `Gpu::frame_check`); type-erased so that gpu/ does not import render/.
+    pub frame_check: std::sync::OnceLock<Box<dyn std::any::Any + Send + Sync>>,
 }
 
 impl Gpu {
@@ -255,5 +258,6 @@ pub fn open(adapter: wgpu::Adapter) -> Result<Gpu, GpuError> {
         msaa2x_positions: std::sync::OnceLock::new(),
         vrs,
         metrics: std::sync::OnceLock::new(),
+        frame_check: std::sync::OnceLock::new(),
     })
 }

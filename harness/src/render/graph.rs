@@ -48,6 +48,41 @@ impl TextureDesc {
     }
 }
 
+/// A texture of a pass graph as a typed handle: declared once (`const COLOR: Res =
+/// Res::new("color")`), then named by the graph's passes, the allocation
+/// ([`kit::TextureMap`](super::kit::TextureMap)) and the recording, instead of the same string
+/// written in each. Its name is what plans, results and tests call the resource.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct Res(&'static str);
+
+impl Res {
+    pub const fn new(name: &'static str) -> Res {
+        Res(name)
+    }
+
+    pub const fn name(self) -> &'static str {
+        self.0
+    }
+}
+
+/// What names a resource of a [`Graph`]: a [`Res`] handle, or its name (graphs not yet written
+/// with handles).
+pub trait ResourceName: Copy {
+    fn resource_name(self) -> &'static str;
+}
+
+impl ResourceName for Res {
+    fn resource_name(self) -> &'static str {
+        self.0
+    }
+}
+
+impl ResourceName for &'static str {
+    fn resource_name(self) -> &'static str {
+        self
+    }
+}
+
 #[derive(Clone, Debug)]
 pub struct Resource {
     pub name: &'static str,
@@ -94,23 +129,27 @@ pub enum GraphError {
 }
 
 impl Graph {
-    pub fn resource(&mut self, name: &'static str, desc: TextureDesc) -> &mut Self {
-        self.resources.push(Resource { name, desc });
+    pub fn resource(&mut self, name: impl ResourceName, desc: TextureDesc) -> &mut Self {
+        self.resources.push(Resource {
+            name: name.resource_name(),
+            desc,
+        });
         self
     }
 
-    pub fn pass(
+    pub fn pass<R: ResourceName>(
         &mut self,
         name: &'static str,
         kind: PassKind,
-        reads: &[&'static str],
-        writes: &[&'static str],
+        reads: &[R],
+        writes: &[R],
     ) -> &mut Self {
+        let names = |rs: &[R]| rs.iter().map(|r| r.resource_name()).collect();
         self.passes.push(Pass {
             name,
             kind,
-            reads: reads.to_vec(),
-            writes: writes.to_vec(),
+            reads: names(reads),
+            writes: names(writes),
             self_counted: false,
         });
         self
@@ -124,8 +163,8 @@ impl Graph {
         self
     }
 
-    pub fn output(&mut self, name: &'static str) -> &mut Self {
-        self.outputs.push(name);
+    pub fn output(&mut self, name: impl ResourceName) -> &mut Self {
+        self.outputs.push(name.resource_name());
         self
     }
 
@@ -194,6 +233,12 @@ impl Plan {
         self.passes.iter().any(|p| p.name == pass)
     }
 
+    /// Whether the plan keeps `resource` (a culled pass's resources are not allocated).
+    pub fn keeps(&self, resource: impl ResourceName) -> bool {
+        let name = resource.resource_name();
+        self.resources.iter().any(|r| r.name == name)
+    }
+
     pub fn desc(&self, resource: &str) -> Option<&TextureDesc> {
         self.resources
             .iter()
@@ -260,7 +305,7 @@ mod tests {
                 &["resolved"],
             );
         for o in outputs {
-            g.output(o);
+            g.output(*o);
         }
         g
     }
@@ -309,6 +354,24 @@ mod tests {
         let mut g = Graph::default();
         g.resource("color", tex(1)).output("colour");
         assert_eq!(g.plan().unwrap_err(), GraphError::UnknownOutput("colour"));
+    }
+
+    #[test]
+    fn handles_name_the_same_resources_as_strings() {
+        const COLOR: Res = Res::new("color");
+        const OUT: Res = Res::new("out");
+        let mut g = Graph::default();
+        g.resource(COLOR, tex(2))
+            .resource(OUT, tex(2))
+            .resource("unused", tex(2))
+            .pass("scene", PassKind::Render, &[], &[COLOR])
+            .pass("copy", PassKind::Copy, &[COLOR], &[OUT])
+            .pass("spare", PassKind::Render, &[], &["unused"])
+            .output(OUT);
+        let plan = g.plan().unwrap();
+        assert_eq!(plan.passes[1].reads, ["color"]);
+        assert!(plan.keeps(COLOR) && plan.keeps("out") && !plan.keeps("unused"));
+        assert_eq!(plan.culled, ["spare"]);
     }
 
     #[test]

@@ -1,14 +1,39 @@
-//! A kit of GPU helpers techniques build with: allocating a plan's textures, the timed scene
-//! pass, bind groups, compute pipelines, placeholder textures.
+//! A kit of GPU helpers techniques build with: allocating a plan's textures (read back by
+//! [`Res`] handle, [`TextureMap`]), the timed scene pass, bind groups, compute pipelines,
+//! placeholder textures, the one timed compute dispatch, the one ping-pong pair. The optional
+//! velocity pass is `velocity.rs`.
 //!
 //! Infrastructure: it knows no technique.
 
 use std::collections::HashMap;
 
-use super::graph::Plan;
+use super::graph::{Plan, Res};
 use super::scene::{SceneGpu, ScenePipeline};
 use super::timers::Timers;
 use crate::gpu::Gpu;
+
+/// The textures of a plan by resource, as [`allocate`] makes them, read through a [`Res`]
+/// handle. A resource the plan culled was never allocated: asking for it is a bug in the
+/// technique (its recording reads what its graph says nobody reads), and panics saying so.
+pub trait TextureMap {
+    fn texture(&self, res: Res) -> &wgpu::Texture;
+
+    /// A default view of the whole texture.
+    fn view(&self, res: Res) -> wgpu::TextureView {
+        self.texture(res).create_view(&Default::default())
+    }
+}
+
+impl TextureMap for HashMap<&'static str, wgpu::Texture> {
+    fn texture(&self, res: Res) -> &wgpu::Texture {
+        self.get(res.name()).unwrap_or_else(|| {
+            panic!(
+                "resource `{}` is not in the plan (culled, or never declared)",
+                res.name()
+            )
+        })
+    }
+}
 
 /// Allocates every texture the plan keeps.
 pub fn allocate(device: &wgpu::Device, plan: &Plan) -> HashMap<&'static str, wgpu::Texture> {
@@ -237,6 +262,17 @@ impl<T> PingPong<T> {
     /// Side 0 is current until [`PingPong::select`].
     pub fn new(pair: [T; 2]) -> PingPong<T> {
         PingPong { pair, current: 0 }
+    }
+
+    /// Frame `index`'s side (0 or 1) without selecting it.
+    pub fn side_of(index: u32) -> usize {
+        (index & 1) as usize
+    }
+
+    /// What the frame writing `side` writes and reads as history, without selecting it (for
+    /// making per-side bind groups).
+    pub fn at(&self, side: usize) -> (&T, &T) {
+        (&self.pair[side & 1], &self.pair[1 - (side & 1)])
     }
 
     /// Makes frame `index`'s side current.

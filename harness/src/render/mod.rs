@@ -1,10 +1,12 @@
 //! Rendering infrastructure that knows no technique: the scene on the GPU (`scene.rs`, `mesh.rs`;
 //! textured models: `material.rs`, `texture.rs`, `mips.rs`, `gltf_model.rs`, `city.rs`),
 //! the pass graph, per-pass timers, readback, the [`renderer::Renderer`] interface the run loop
-//! drives, and a kit of GPU helpers techniques build with. Techniques are in `techniques/`.
+//! drives, and a kit of GPU helpers techniques build with (`kit.rs`; the optional velocity pass,
+//! `velocity.rs`). Techniques are in `techniques/`.
 
 pub mod city;
 pub mod formats;
+pub mod frame_check;
 pub mod gltf_model;
 pub mod graph;
 pub mod kit;
@@ -16,3 +18,4 @@ pub mod renderer;
 pub mod scene;
 pub mod texture;
 pub mod timers;
+pub mod velocity;

@@ -124,7 +124,8 @@ impl Readback {
 }
 
 /// Reads a whole single-sample texture back as f32 values, for tests and debugging:
-/// Rgba16Float gives 4 values per texel, Depth32Float 1. Blocks until done.
+/// Rgba16Float gives 4 values per texel, Depth32Float and R32Float 1. Blocks until done. Array
+/// layer 0 only: [`read_texture_layer`] reads the others.
 pub fn read_texture(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
@@ -141,7 +142,10 @@ pub fn read_texture_layer(
     layer: u32,
 ) -> Vec<f32> {
     let raw = read_raw(device, queue, texture, layer);
-    if texture.format() == wgpu::TextureFormat::Depth32Float {
+    if matches!(
+        texture.format(),
+        wgpu::TextureFormat::Depth32Float | wgpu::TextureFormat::R32Float
+    ) {
         bytemuck::pod_collect_to_vec::<u8, f32>(&raw)
     } else {
         bytemuck::pod_collect_to_vec::<u8, half::f16>(&raw)

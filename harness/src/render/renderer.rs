@@ -69,7 +69,7 @@ pub struct FrameExtras {
 
 /// One value a technique measures of its own frame (a check of its own, e.g. adaptive shading's
 /// `shading-rate`), with its unit and which way is better: both travel with it into the result
-/// (`MetricRecord::unit`, `higher_is_better`), so no shared table needs to know it.
+/// (`MetricRecord::check`), so no shared table needs to know it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FrameValue {
     pub name: &'static str,

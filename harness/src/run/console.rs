@@ -9,6 +9,7 @@ use tessera_results::measure::Measure;
 use tessera_results::{GateLevel, ScenarioResult, Status, VariantResult};
 
 use super::gates;
+use crate::techniques;
 
 fn ms(v: Option<f64>) -> String {
     v.map(|v| format!("{v:.3}"))
@@ -148,10 +149,13 @@ pub fn conditions_line(results: &[VariantResult], r: &VariantResult) -> Option<S
         }
         if let Some(e) = c.energy {
             let saving = gates::energy_saving(results, r)
-                .filter(|_| r.variant != "native")
+                .filter(|_| !techniques::is_reference_name(&r.variant))
                 .map(|x| format!(" (saving {x:.2}x against native)"))
                 .unwrap_or_default();
             parts.push(format!("{:.3} mJ/frame{saving}", e.mj_per_frame));
+        }
+        if let Some(ms) = c.clock_warmup_ms {
+            parts.push(format!("warm-up {ms:.0} ms"));
         }
         if c.throttled {
             parts.push("THROTTLED".into());

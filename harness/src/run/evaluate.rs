@@ -25,6 +25,10 @@ pub struct Evaluation {
     /// The saved frames' FLIP heat maps when the back end made them (the GPU's); `None` lets
     /// `images::save_error_maps` compute them on the CPU.
     pub error_maps: Option<Vec<ErrorMap>>,
+    /// Per measured frame, the RGB MSE against the reference, when the back end computed it
+    /// with the frames on the device (the stability checks' cut recovery reads it); `None`
+    /// lets `stability` compute it from the frames on the CPU.
+    pub mse_rgb: Option<Vec<f64>>,
     /// Why evaluation failed (the result is then `failed`); the metrics that were computed are
     /// kept.
     pub error: Option<String>,

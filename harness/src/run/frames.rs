@@ -1,6 +1,6 @@
 //! Renders one variant's frames: warm-up, then measured frames with per-pass GPU timings, CPU wall
-//! time and fragment-shader invocations; then the same sequence again to read back every measured
-//! frame.
+//! time and fragment-shader invocations; then the same sequence again to capture every measured
+//! frame: read back to the CPU, or, for the GPU metrics, kept on the device ([`Keep`]).
 //!
 //! One frame is encoded, submitted and waited for before the next. Timing and capture are separate
 //! passes over the sequence, so readback, image encoding and metrics never sit between timed frames
@@ -12,7 +12,8 @@
 //! measured frame does; under `measured = "auto"` the timed phase renders measured frames until
 //! the stop rule ends it ([`crate::timing::stop`]), and the last compared frame is copied aside as
 //! it completes, for the determinism check (a copy submitted between two frames, outside every
-//! timed pass). With sensors, an energy window follows: the sequence goes on, untimed, for at
+//! timed pass, compared bit for bit on the device with the capture phase's last frame:
+//! `render/frame_check.rs`). With sensors, an energy window follows: the sequence goes on, untimed, for at
 //! least [`ENERGY_WINDOW_MS`] while the sampler reads the energy counter.
 
 use std::cell::Cell;
@@ -22,16 +23,24 @@ use std::time::Instant;
 use tessera_results::conditions::StopReason;
 
 use tessera_metrics::{encode_srgb8, HdrImage, Rgb8Image};
+use tessera_metrics_gpu::GpuFrame;
 
+use super::phases;
 use crate::conditions::sampler::Sampler;
 use crate::conditions::{Sample, ENERGY_WINDOW_MS};
 use crate::gpu::Gpu;
+use crate::render::frame_check::FrameCheck;
 use crate::render::graph::PassKind;
 use crate::render::readback::Readback;
 use crate::render::renderer::{FrameExtras, FrameInfo, Renderer};
 use crate::render::scene::SceneGpu;
 use crate::render::timers::{FrameMeasurements, Timers, MAX_PENDING_FRAMES};
 use crate::scenario::Scenario;
+
+/// The clock warm-up ends early once its load has run at the top graphics clock for this long...
+const CLOCK_SETTLED_MS: f64 = 50.0;
+/// ...and it has lasted at least this long.
+const MIN_CLOCK_WARMUP_MS: f64 = 100.0;
 
 /// What rendering a variant produced.
 pub struct Rendered {
@@ -42,10 +51,16 @@ pub struct Rendered {
     pub frames: Vec<Rgb8Image>,
     /// Linear frames, when asked to keep them (HDR metrics).
     pub hdr_frames: Vec<HdrImage>,
+    /// Every measured frame on the device, for the GPU metrics, when asked to keep them.
+    pub gpu_frames: Vec<GpuFrame>,
+    /// The sRGB frames at `save_frames` (measured-frame index, image), whatever is kept.
+    pub saved: Vec<(u32, Rgb8Image)>,
     pub non_finite: u64,
     /// Per measured frame, the pixels with a non-finite channel (bit per pixel, row-major);
     /// `None` for a frame without any.
     pub non_finite_masks: Vec<Option<Vec<u64>>>,
+    /// Per measured frame, its non-finite channel values.
+    pub non_finite_counts: Vec<u64>,
     /// The capture phase's last frame equals the timed phase's bit for bit (`None`: no frames).
     pub deterministic: Option<bool>,
     pub timestamps: bool,
@@ -61,6 +76,8 @@ pub struct Rendered {
     pub conditions: Option<Vec<Sample>>,
     /// The sensor samples of the energy window and its frame count; `None` without a sampler.
     pub energy_window: Option<(Vec<Sample>, u32)>,
+    /// How long the clock warm-up lasted, in milliseconds.
+    pub clock_warmup_ms: f64,
     /// Per measured frame, a hash of its exact bits, when `TESSERA_FRAME_HASHES` is set (see
     /// [`frame_hash_file`]); empty otherwise.
     pub hashes: Vec<u64>,
@@ -79,6 +96,33 @@ pub enum RenderError {
     Timers(#[from] crate::render::timers::TimerError),
     #[error("reading the frame back failed (device lost?)")]
     Readback,
+    #[error("keeping the frame on the device for the metrics failed: {0}")]
+    Metrics(String),
+}
+
+/// What the capture phase keeps of each measured frame (the saved frames' images are always
+/// kept, in [`Rendered::saved`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Keep {
+    /// sRGB frames on the CPU (the CPU metrics, ColorVideoVDP).
+    pub frames: bool,
+    /// Linear frames on the CPU.
+    pub hdr: bool,
+    /// Frames on the device ([`GpuFrame`]s, for the GPU metrics); never read back.
+    pub gpu: bool,
+    /// The device frames' linear floats (HDR-FLIP).
+    pub gpu_hdr: bool,
+}
+
+impl Keep {
+    /// Frames on the CPU, linear ones too when `hdr`.
+    pub fn cpu(hdr: bool) -> Keep {
+        Keep {
+            frames: true,
+            hdr,
+            ..Keep::default()
+        }
+    }
 }
 
 /// Whether frame `index` continues the previous frame's shot: false on the first frame and at a
@@ -140,7 +184,7 @@ fn pipelined(
     technique: &mut dyn Renderer,
     timers: &mut Timers,
     frames: impl Iterator<Item = u32>,
-    snapshot: Option<(u32, &Readback)>,
+    snapshot: Option<(u32, &FrameCheck)>,
     done: &mut dyn FnMut(u32, BTreeMap<String, f64>),
 ) {
     let mut in_flight: VecDeque<(u32, wgpu::SubmissionIndex)> = VecDeque::new();
@@ -164,13 +208,13 @@ fn pipelined(
     };
     for index in frames {
         let mut submission = submit_frame(gpu, scene, scenario, technique, timers, index);
-        if let Some((_, readback)) = snapshot.filter(|(i, _)| *i == index) {
+        if let Some((_, check)) = snapshot.filter(|(i, _)| *i == index) {
             let mut encoder = gpu
                 .device
                 .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                     label: Some("snapshot"),
                 });
-            readback.copy(&mut encoder, technique.output());
+            check.snapshot(&mut encoder, technique.output());
             submission = gpu.queue.submit([encoder.finish()]);
         }
         in_flight.push_back((index, submission));
@@ -183,7 +227,8 @@ fn pipelined(
     }
 }
 
-/// Renders the scenario's frames twice: once timed, once captured; no sensors.
+/// Renders the scenario's frames twice: once timed, once captured; no sensors. Keeps every
+/// measured frame on the CPU when `keep_frames`, their linear floats when `keep_hdr`.
 pub fn render(
     gpu: &Gpu,
     scene: &mut SceneGpu,
@@ -193,27 +238,33 @@ pub fn render(
     keep_hdr: bool,
     on_frame: &mut dyn FnMut(),
 ) -> Result<Rendered, RenderError> {
-    render_sampled(
-        gpu,
-        scene,
-        scenario,
-        technique,
-        keep_frames,
-        keep_hdr,
-        None,
-        on_frame,
-    )
+    let keep = Keep {
+        frames: keep_frames,
+        hdr: keep_hdr,
+        ..Keep::default()
+    };
+    render_keeping(gpu, scene, scenario, technique, keep, on_frame)
+}
+
+/// [`render`], keeping what `keep` says.
+pub fn render_keeping(
+    gpu: &Gpu,
+    scene: &mut SceneGpu,
+    scenario: &Scenario,
+    technique: &mut dyn Renderer,
+    keep: Keep,
+    on_frame: &mut dyn FnMut(),
+) -> Result<Rendered, RenderError> {
+    render_sampled(gpu, scene, scenario, technique, keep, None, on_frame)
 }
 
 /// [`render`], with `sampler` reading the sensors during the measured frames.
-#[allow(clippy::too_many_arguments)]
 pub fn render_sampled(
     gpu: &Gpu,
     scene: &mut SceneGpu,
     scenario: &Scenario,
     technique: &mut dyn Renderer,
-    keep_frames: bool,
-    keep_hdr: bool,
+    keep: Keep,
     sampler: Option<&Sampler>,
     on_frame: &mut dyn FnMut(),
 ) -> Result<Rendered, RenderError> {
@@ -227,30 +278,49 @@ pub fn render_sampled(
     let mut timers = Timers::new(&gpu.device, &render_passes)?;
     let out = technique.output();
     let readback = Readback::new(&gpu.device, out.width(), out.height());
+    let check = FrameCheck::new(gpu, out.width(), out.height());
+    // The metrics' own copy of each captured frame (the output is the technique's and changes
+    // with the next frame), when frames stay on the device.
+    let metric_copy = keep.gpu.then(|| metric_texture(gpu, out));
     let mut rendered = Rendered {
         measurements: Vec::new(),
         cpu_ms: Vec::new(),
         frames: Vec::new(),
         hdr_frames: Vec::new(),
+        gpu_frames: Vec::new(),
+        saved: Vec::new(),
         non_finite: 0,
         non_finite_masks: Vec::new(),
+        non_finite_counts: Vec::new(),
         deterministic: None,
         timestamps: timers.has_timestamps(),
-        readback_bytes: readback.bytes(),
+        readback_bytes: readback.bytes() + check.bytes(),
         extras: Vec::new(),
         frame_ms: Vec::new(),
         ended_by: StopReason::Count,
         conditions: None,
         energy_window: None,
+        clock_warmup_ms: 0.0,
         hashes: Vec::new(),
     };
     let hash_frames = frame_hash_file().is_some();
 
     // Clock warm-up: frame 0 (which never reads history) repeated until the GPU has been busy for
-    // `warmup_ms`, so that it reaches its working clocks before the first timed frame.
+    // `warmup_ms`, so that it reaches its working clocks before the first timed frame. Where the
+    // sensors read the graphics clock and know its maximum, it ends sooner: once the load has run
+    // at the top clock throughout for CLOCK_SETTLED_MS (after at least MIN_CLOCK_WARMUP_MS), as on
+    // a GPU still at its top clock from the variant before. The clocks of the measured frames are
+    // recorded either way (`conditions`), and a low one is flagged.
+    let warm_span = phases::span("clock warm-up");
     let warm_start = Instant::now();
     let warmup_ms = scenario.clock_warmup_ms(&gpu.info.device_type);
+    let top_clock = sampler.and_then(|s| Some((s, s.limits().max_graphics_clock_mhz?)));
+    let mut settled_since: Option<Instant> = None;
     while warm_start.elapsed().as_secs_f64() * 1000.0 < warmup_ms {
+        let chunk_start = Instant::now();
+        if let Some((s, _)) = top_clock {
+            s.begin();
+        }
         pipelined(
             gpu,
             scene,
@@ -261,7 +331,24 @@ pub fn render_sampled(
             None,
             &mut |_, _| {},
         );
+        if let Some((s, max)) = top_clock {
+            let at_top = crate::conditions::summary::at_top_clock(&s.end(), max);
+            settled_since = if at_top {
+                settled_since.or(Some(chunk_start))
+            } else {
+                None
+            };
+            let ms = |t: Instant| t.elapsed().as_secs_f64() * 1000.0;
+            if settled_since.is_some_and(|t| ms(t) >= CLOCK_SETTLED_MS)
+                && ms(warm_start) >= MIN_CLOCK_WARMUP_MS
+            {
+                break;
+            }
+        }
     }
+    rendered.clock_warmup_ms = warm_start.elapsed().as_secs_f64() * 1000.0;
+
+    drop(warm_span);
 
     // Timed phase: warm-up then measured frames, pipelined, nothing else on the queue. CPU frame
     // time is the interval between consecutive frame completions. A fixed count ends after its
@@ -284,6 +371,7 @@ pub fn render_sampled(
             s.begin();
         }
     }
+    let timed_span = phases::span("timed frames");
     pipelined(
         gpu,
         scene,
@@ -291,7 +379,7 @@ pub fn render_sampled(
         technique,
         &mut timers,
         (0..timed_end).take_while(|_| stop.get().is_none()),
-        compared_last.map(|i| (i, &readback)),
+        compared_last.map(|i| (i, &check)),
         &mut |index, times| {
             last_done = index;
             if stop.get().is_some() {
@@ -330,24 +418,18 @@ pub fn render_sampled(
         },
     );
 
-    // The last compared frame of the timed phase, copied aside as it completed, kept as a hash:
-    // the capture phase renders the sequence again from frame 0 and must end on the same bits
-    // (determinism, histories included).
-    let timed_hash = match compared_last {
-        Some(_) => Some(image_hash(
-            &readback
-                .read(&gpu.device)
-                .map_err(|_| RenderError::Readback)?
-                .image,
-        )),
-        None => None,
-    };
+    drop(timed_span);
+    // The last compared frame of the timed phase was copied aside as it completed: the capture
+    // phase renders the sequence again from frame 0 and must end on the same bits (determinism,
+    // histories included), compared on the device.
 
     // Energy window, with sensors only: the sequence goes on from the last timed frame, pipelined,
     // for at least ENERGY_WINDOW_MS, while the sampler reads the energy counter.
-    if let Some(s) = sampler {
+    let energy_ms = scenario.energy_window_ms.unwrap_or(ENERGY_WINDOW_MS);
+    if let Some(s) = sampler.filter(|_| energy_ms > 0.0) {
+        let _span = phases::span("energy window");
         let first = last_done + 1;
-        let window = std::time::Duration::from_secs_f64(ENERGY_WINDOW_MS / 1000.0);
+        let window = std::time::Duration::from_secs_f64(energy_ms / 1000.0);
         let mut frames = 0u32;
         s.begin();
         let start = Instant::now();
@@ -365,10 +447,13 @@ pub fn render_sampled(
     }
 
     // Capture phase: the same frames again, one at a time (rendering is deterministic, histories
-    // included); each measured frame is counted (fragment invocations) and read back for
-    // non-finite checks, images and metrics. Not timed.
+    // included); each measured frame is counted (fragment invocations) and checked (non-finite
+    // values), then read back or kept on the device for images and metrics. Not timed. A frame
+    // comes back to the CPU only when something on the CPU needs it: CPU frames asked for, a
+    // saved frame, `TESSERA_FRAME_HASHES`.
     timers.enable_stats(true);
     for index in 0..scenario.total_frames() {
+        let render_span = phases::span("capture: render");
         submit_frame(gpu, scene, scenario, technique, &mut timers, index);
         let _ = gpu.device.poll(wgpu::PollType::Wait {
             submission_index: None,
@@ -379,33 +464,108 @@ pub fn render_sampled(
         if timers.stats_enabled() {
             stats.extend(technique.own_statistics(gpu));
         }
+        drop(render_span);
         if index >= scenario.warmup_frames {
-            if let Some(m) = rendered
-                .measurements
-                .get_mut((index - scenario.warmup_frames) as usize)
-            {
-                m.fragment_invocations = stats;
+            let m = index - scenario.warmup_frames;
+            if let Some(fm) = rendered.measurements.get_mut(m as usize) {
+                fm.fragment_invocations = stats;
             }
-            let frame = read_output(gpu, &readback, technique)?;
-            rendered.non_finite += frame.non_finite;
-            let saved = scenario
-                .save_frames
-                .contains(&(index - scenario.warmup_frames));
+            let saved = scenario.save_frames.contains(&m);
+            let on_cpu = keep.frames || keep.hdr || saved || hash_frames;
+            let last = index + 1 == scenario.total_frames();
+            let compare = last && compared_last.is_some();
+            let output = technique.output();
+            // The device's checks (every frame not read back; the determinism check on the
+            // last), the metrics' copy, and the readback's copy: one submission.
+            let checks_span = phases::span("capture: checks");
+            let mut encoder = gpu
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some("capture"),
+                });
+            let checked = !on_cpu || compare;
+            if checked {
+                check.record(gpu, &mut encoder, output, compare);
+            }
+            if let Some(copy) = &metric_copy {
+                encoder.copy_texture_to_texture(
+                    output.as_image_copy(),
+                    copy.as_image_copy(),
+                    output.size(),
+                );
+            }
+            if on_cpu {
+                readback.copy(&mut encoder, output);
+            }
+            gpu.queue.submit([encoder.finish()]);
+            if let Some(copy) = &metric_copy {
+                let frame = gpu
+                    .metrics()
+                    .frame_from_texture_with(copy, keep.gpu_hdr)
+                    .map_err(|e| RenderError::Metrics(e.to_string()))?;
+                rendered.gpu_frames.push(frame);
+            }
+            let results = if checked {
+                Some(
+                    check
+                        .read(gpu, compare)
+                        .map_err(|_| RenderError::Readback)?,
+                )
+            } else {
+                None
+            };
+            drop(checks_span);
+            let frame = if on_cpu {
+                let _span = phases::span("capture: readback");
+                Some(
+                    readback
+                        .read(&gpu.device)
+                        .map_err(|_| RenderError::Readback)?,
+                )
+            } else {
+                None
+            };
+            if compare {
+                rendered.deterministic = results.as_ref().and_then(|r| r.same_as_snapshot);
+            }
+            let (non_finite, mask) = match (&frame, results) {
+                (Some(f), _) => (f.non_finite, f.non_finite_mask.clone()),
+                (None, Some(r)) => (r.non_finite, r.non_finite_mask),
+                (None, None) => (0, None),
+            };
+            rendered.non_finite += non_finite;
+            rendered.non_finite_counts.push(non_finite);
+            rendered.non_finite_masks.push(mask);
+            let extras_span = phases::span("capture: technique extras");
+            // Techniques read the frame only for the images of saved frames.
+            let empty = HdrImage {
+                width: 0,
+                height: 0,
+                data: Vec::new(),
+            };
+            let image = frame.as_ref().map_or(&empty, |f| &f.image);
             rendered
                 .extras
-                .push(technique.frame_extras(gpu, &frame.image, saved));
-            rendered.non_finite_masks.push(frame.non_finite_mask);
-            if hash_frames {
-                rendered.hashes.push(image_hash(&frame.image));
-            }
-            if index + 1 == scenario.total_frames() {
-                rendered.deterministic = timed_hash.map(|h| h == image_hash(&frame.image));
-            }
-            if keep_frames {
-                rendered.frames.push(encode_srgb8(&frame.image));
-            }
-            if keep_hdr {
-                rendered.hdr_frames.push(frame.image);
+                .push(technique.frame_extras(gpu, image, saved));
+            drop(extras_span);
+            if let Some(frame) = frame {
+                if hash_frames {
+                    let _span = phases::span("capture: frame hashes");
+                    rendered.hashes.push(image_hash(&frame.image));
+                }
+                let _span = phases::span("capture: srgb encode");
+                if keep.frames || saved {
+                    let srgb = encode_srgb8(&frame.image);
+                    if saved {
+                        rendered.saved.push((m, srgb.clone()));
+                    }
+                    if keep.frames {
+                        rendered.frames.push(srgb);
+                    }
+                }
+                if keep.hdr {
+                    rendered.hdr_frames.push(frame.image);
+                }
             }
         }
         on_frame();
@@ -413,21 +573,19 @@ pub fn render_sampled(
     Ok(rendered)
 }
 
-fn read_output(
-    gpu: &Gpu,
-    readback: &Readback,
-    technique: &dyn Renderer,
-) -> Result<crate::render::readback::CpuFrame, RenderError> {
-    let mut encoder = gpu
-        .device
-        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("readback"),
-        });
-    readback.copy(&mut encoder, technique.output());
-    gpu.queue.submit([encoder.finish()]);
-    readback
-        .read(&gpu.device)
-        .map_err(|_| RenderError::Readback)
+/// The metrics' texture a captured frame is copied into: the output's size and format, readable
+/// by the metrics' encode pass.
+fn metric_texture(gpu: &Gpu, output: &wgpu::Texture) -> wgpu::Texture {
+    gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("metrics frame copy"),
+        size: output.size(),
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: output.format(),
+        usage: wgpu::TextureUsages::COPY_DST | wgpu::TextureUsages::TEXTURE_BINDING,
+        view_formats: &[],
+    })
 }
 
 /// A hash of the exact bits of a frame (NaN payloads included).

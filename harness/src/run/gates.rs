@@ -5,6 +5,7 @@ use tessera_results::measure::{self, Measure, DEFAULT_BASELINE};
 use tessera_results::{GateLevel, GateOutcome, Status, VariantResult};
 
 use crate::scenario::{Gate, Reference, Scenario};
+use crate::techniques;
 
 /// Median GPU frame time; `None` on adapters without timestamps.
 pub fn frame_ms(r: &VariantResult) -> Option<f64> {
@@ -68,7 +69,9 @@ pub fn matches(pattern: &str, name: &str) -> bool {
 fn applies(gate: &Gate, scenario: &Scenario, r: &VariantResult) -> bool {
     match &gate.variants {
         Some(p) => matches(p, &r.variant),
-        None => !(scenario.reference == Reference::Native && r.variant == "native"),
+        None => {
+            !(scenario.reference == Reference::Native && techniques::is_reference_name(&r.variant))
+        }
     }
 }
 

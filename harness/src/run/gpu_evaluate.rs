@@ -3,8 +3,12 @@
 //! `GpuMetrics` per device, kept on [`Gpu`]), and the saved frames' FLIP heat maps with them.
 //! Records are built as the CPU's (`metrics::record`) and say `metrics_device = "gpu"`.
 //!
-//! Not here: ColorVideoVDP (always the CPU's `cvvdp.rs`), choosing the back end
-//! (`metrics_device.rs`), saving images (`images.rs`). When the GPU cannot take a variant (a
+//! The frames are those the capture kept on the device (`MetricInputs::test_gpu`, the
+//! reference's `gpu`): nothing but values and the saved frames' heat maps comes back. Frames
+//! read back instead (they did not fit the device's buffers) are uploaded.
+//!
+//! ColorVideoVDP runs on the same device (`cvvdp::records_on`). Not here: choosing the back
+//! end (`metrics_device.rs`), saving images (`images.rs`). When the GPU cannot take a variant (a
 //! buffer beyond the device's limits, a device error) the CPU evaluates it and its records say
 //! `"cpu"`.
 
@@ -30,18 +34,20 @@ pub struct GpuEvaluator<'a> {
 impl Evaluator for GpuEvaluator<'_> {
     fn evaluate(&self, scenario: &Scenario, inputs: &MetricInputs<'_>) -> Evaluation {
         match self.metrics(scenario, inputs) {
-            Ok(Ok((records, error_maps))) => {
+            Ok(Ok((records, error_maps, mse))) => {
                 let mut out = Evaluation {
                     metrics: records,
                     error_maps: Some(error_maps),
+                    mse_rgb: mse,
                     ..Evaluation::default()
                 };
                 if scenario.metrics.contains(&MetricKind::Cvvdp) {
                     let r = inputs.reference;
-                    match cvvdp::records(
+                    match cvvdp::records_on(
                         scenario,
                         (&r.frames, &r.hdr),
                         (inputs.test, inputs.test_hdr),
+                        Some(&mut self.gpu.metrics()),
                     ) {
                         Ok((records, maps)) => {
                             out.metrics.extend(records);
@@ -65,7 +71,8 @@ impl Evaluator for GpuEvaluator<'_> {
     }
 }
 
-type Records = (Vec<MetricRecord>, Vec<ErrorMap>);
+/// Records, the saved frames' heat maps, and per-frame RGB MSE (frames on the device only).
+type Records = (Vec<MetricRecord>, Vec<ErrorMap>, Option<Vec<f64>>);
 
 impl GpuEvaluator<'_> {
     /// `Err` when the GPU back end cannot run (fall back to the CPU); `Ok(Err)` for input the
@@ -77,13 +84,26 @@ impl GpuEvaluator<'_> {
     ) -> Result<Result<Records, String>, GpuMetricsError> {
         let mut backend = self.gpu.metrics();
         let r = inputs.reference;
-        let n = inputs.test.len().min(r.frames.len());
+        // The frames on the device, when the capture kept them there.
+        let on_device = !inputs.test_gpu.is_empty() && r.gpu.len() >= inputs.test_gpu.len();
+        let (n, test_count) = if on_device {
+            (inputs.test_gpu.len(), inputs.test_gpu.len())
+        } else {
+            (inputs.test.len().min(r.frames.len()), inputs.test.len())
+        };
         let want = |k: MetricKind| scenario.metrics.contains(&k);
-        let hdr_maps =
-            reference::keep_hdr(scenario) && r.hdr.len() >= n && inputs.test_hdr.len() >= n;
+        let hdr_maps = reference::keep_hdr(scenario)
+            && r.exposures.len() >= n
+            && if on_device {
+                inputs.test_gpu.iter().all(|f| f.has_hdr()) && r.gpu.iter().all(|f| f.has_hdr())
+            } else {
+                r.hdr.len() >= n && inputs.test_hdr.len() >= n
+            };
         let saved = |i: usize| scenario.save_frames.contains(&(i as u32));
+        // The stability checks' cut recovery reads the MSE of every frame.
+        let cut_mse = on_device && !super::stability::cut_frames(scenario).is_empty();
         let request = |i: usize| PairRequest {
-            mse_rgb: want(MetricKind::Psnr),
+            mse_rgb: want(MetricKind::Psnr) || cut_mse,
             mse_luma: want(MetricKind::PsnrLuma),
             max_abs: want(MetricKind::MaxAbsError),
             ssim_rgb: want(MetricKind::Ssim),
@@ -103,13 +123,24 @@ impl GpuEvaluator<'_> {
                 pooling: FlipPooling::FlipEvaluator,
             }),
         };
-        let seq = Sequence {
-            reference: &r.frames[..n],
-            test: inputs.test,
-            reference_hdr: &r.hdr,
-            test_hdr: inputs.test_hdr,
+        let flicker = want(MetricKind::Flicker);
+        let values = if on_device {
+            // What the CPU checks of the images: HDR-FLIP takes finite values only (the
+            // capture counted them).
+            if let Some(e) = (0..n).find_map(|i| hdr_non_finite(&request(i), inputs, i)) {
+                return Ok(Err(format!("metrics: {e}")));
+            }
+            backend.sequence_frames(&r.gpu[..n], inputs.test_gpu, &request, flicker)
+        } else {
+            let seq = Sequence {
+                reference: &r.frames[..n],
+                test: inputs.test,
+                reference_hdr: &r.hdr,
+                test_hdr: inputs.test_hdr,
+            };
+            backend.sequence(seq, &request, flicker)
         };
-        let values = match backend.sequence(seq, &request, want(MetricKind::Flicker)) {
+        let values = match values {
             Ok(v) => v,
             Err(GpuMetricsError::Metrics(e)) => return Ok(Err(format!("metrics: {e}"))),
             Err(e) => return Err(e),
@@ -128,7 +159,7 @@ impl GpuEvaluator<'_> {
                 MetricKind::Cvvdp => continue,
                 MetricKind::Flicker => {
                     let v = values.flicker.clone().unwrap_or_default();
-                    let indices = (1..inputs.test.len() as u32).collect();
+                    let indices = (1..test_count as u32).collect();
                     records.push(metrics::record(kind, indices, v, Backend::Gpu));
                     continue;
                 }
@@ -142,9 +173,16 @@ impl GpuEvaluator<'_> {
                         let Some(Some(m)) = motion.get(t) else {
                             continue;
                         };
-                        let (tp, tt) = (&inputs.test[t - 1], &inputs.test[t]);
-                        let (rp, rt) = (&r.frames[t - 1], &r.frames[t]);
-                        match backend.tde(tp, tt, rp, rt, &m.motion, &m.valid) {
+                        let tde = if on_device {
+                            let (tp, tt) = (&inputs.test_gpu[t - 1], &inputs.test_gpu[t]);
+                            let (rp, rt) = (&r.gpu[t - 1], &r.gpu[t]);
+                            backend.tde_frames(tp, tt, rp, rt, &m.motion, &m.valid)
+                        } else {
+                            let (tp, tt) = (&inputs.test[t - 1], &inputs.test[t]);
+                            let (rp, rt) = (&r.frames[t - 1], &r.frames[t]);
+                            backend.tde(tp, tt, rp, rt, &m.motion, &m.valid)
+                        };
+                        match tde {
                             Ok(Some(x)) => {
                                 idx.push(t as u32);
                                 v.push(x);
@@ -174,6 +212,13 @@ impl GpuEvaluator<'_> {
                 Backend::Gpu,
             ));
         }
+        let mse = on_device.then(|| {
+            values
+                .frames
+                .iter()
+                .map(|v| v.mse_rgb.unwrap_or(f64::NAN))
+                .collect()
+        });
         let mut maps = Vec::new();
         for (i, v) in values.frames.into_iter().enumerate() {
             for (kind, f) in [("heatmap", v.flip), ("heatmap-hdr", v.flip_hdr)] {
@@ -186,6 +231,24 @@ impl GpuEvaluator<'_> {
                 }
             }
         }
-        Ok(Ok((records, maps)))
+        Ok(Ok((records, maps, mse)))
     }
+}
+
+/// The error HDR-FLIP gives on the CPU for frame `i` with non-finite values (the reference's
+/// first), when `request` asks for HDR-FLIP.
+fn hdr_non_finite(
+    request: &PairRequest,
+    inputs: &MetricInputs<'_>,
+    i: usize,
+) -> Option<tessera_metrics::MetricsError> {
+    request.flip_hdr.as_ref()?;
+    let counts = [
+        ("reference", inputs.reference.non_finite.get(i)),
+        ("test", inputs.test_non_finite.get(i)),
+    ];
+    counts.into_iter().find_map(|(image, count)| {
+        let count = *count? as usize;
+        (count > 0).then_some(tessera_metrics::MetricsError::NonFinite { image, count })
+    })
 }

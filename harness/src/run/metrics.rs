@@ -6,7 +6,7 @@
 //! `captured.rs`.
 
 use tessera_metrics::Rgb8Image;
-use tessera_results::MetricRecord;
+use tessera_results::{Check, MetricRecord};
 
 pub use super::captured::MetricInputs;
 use super::motion;
@@ -115,6 +115,7 @@ pub(super) fn record(
         name: kind.name().to_string(),
         frame_stats: frame_stats(&per_frame),
         metrics_device: Some(device.name().to_string()),
+        check: None,
         per_frame,
         frames,
         value,
@@ -198,10 +199,15 @@ pub fn extra_values(extras: &[FrameExtras]) -> Vec<MetricRecord> {
             name: name.to_string(),
             frame_stats: frame_stats(&per_frame),
             metrics_device: None,
+            // A technique's own values carry their unit and direction themselves: no shared
+            // table knows them.
+            check: Some(Check {
+                unit: kind.unit.to_string(),
+                direction: kind.direction,
+            }),
             per_frame,
             frames,
             value,
-            // A technique's own values carry their direction (and unit) themselves.
             higher_is_better: kind.direction.higher_is_better(),
         });
     }

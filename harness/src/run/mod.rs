@@ -2,7 +2,9 @@
 //!
 //! The run folder is `<out>/<run-id>/`. `run.json` is written first (status `running`) and again at
 //! the end; each scenario's JSON and the whole `results.csv` are rewritten atomically after every
-//! scenario, so an interrupted run keeps what it completed.
+//! scenario, so an interrupted run keeps what it completed. With `timings`, where the run's wall
+//! time went ([`phases`]) is printed per scenario and for the run, and written to
+//! `timings.json`.
 
 pub mod captured;
 pub mod console;
@@ -16,6 +18,7 @@ pub mod memory;
 pub mod metrics;
 pub mod motion;
 pub mod output;
+pub mod phases;
 pub mod record;
 pub mod reference;
 pub mod report;
@@ -47,6 +50,8 @@ pub struct Options {
     pub suite: Option<String>,
     /// Recorded as the run's branch; `None` asks git.
     pub branch: Option<String>,
+    /// Print where the wall time went and write `timings.json` (`tessera run --timings`).
+    pub timings: bool,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -157,17 +162,34 @@ pub fn run_with_sensors(
     }
 
     let mut results: Vec<ScenarioResult> = Vec::new();
+    let run_start = std::time::Instant::now();
+    let run_phases = phases::totals();
+    let mut breakdown = Vec::new();
     for s in scenarios {
         bar.set_message(s.name.clone());
+        let (start, before) = (std::time::Instant::now(), phases::totals());
         let result = if lost.load(Ordering::SeqCst) {
             device_lost_result(s, &run_id)
         } else {
             scenario::run(gpu, s, &run_id, &run_dir, sensors, &mut || bar.inc(1))
         };
         results.push(result);
-        for r in reports.iter_mut() {
-            r.scenario(&run, &results)?;
+        phases::time("result files", || -> Result<(), SuiteError> {
+            for r in reports.iter_mut() {
+                r.scenario(&run, &results)?;
+            }
+            Ok(())
+        })?;
+        let wall_s = start.elapsed().as_secs_f64();
+        let spent = phases::since(&before, &phases::totals());
+        if opts.timings {
+            bar.suspend(|| eprint!("{}", phases::table(&s.name, &spent, wall_s)));
         }
+        breakdown.push(timings::Scenario {
+            scenario: s.name.clone(),
+            wall_s,
+            phases: spent,
+        });
     }
     bar.finish_and_clear();
 
@@ -176,11 +198,54 @@ pub fn run_with_sensors(
     for r in reports.iter_mut() {
         r.finished(&run, &results)?;
     }
+    if opts.timings {
+        let wall_s = run_start.elapsed().as_secs_f64();
+        let spent = phases::since(&run_phases, &phases::totals());
+        eprint!("{}", phases::table("run (scenarios)", &spent, wall_s));
+        timings::write(&run_dir, wall_s, &spent, &breakdown)?;
+    }
     Ok(SuiteOutcome {
         run_dir,
         scenarios: results,
         device_lost: lost.load(Ordering::SeqCst),
     })
+}
+
+/// `timings.json`: where the run's wall time went (see [`phases`]).
+mod timings {
+    use super::output::WriteError;
+    use super::phases::Phase;
+    use std::path::Path;
+
+    #[derive(serde::Serialize)]
+    pub struct Scenario {
+        pub scenario: String,
+        pub wall_s: f64,
+        pub phases: Vec<Phase>,
+    }
+
+    #[derive(serde::Serialize)]
+    struct File<'a> {
+        /// The scenarios' wall time, from the first scenario's start to the last result file.
+        wall_s: f64,
+        phases: &'a [Phase],
+        scenarios: &'a [Scenario],
+    }
+
+    pub fn write(
+        run_dir: &Path,
+        wall_s: f64,
+        phases: &[Phase],
+        scenarios: &[Scenario],
+    ) -> Result<(), WriteError> {
+        let file = File {
+            wall_s,
+            phases,
+            scenarios,
+        };
+        let json = serde_json::to_string_pretty(&file).expect("plain data serialises");
+        super::output::write_atomic(&run_dir.join("timings.json"), json.as_bytes())
+    }
 }
 
 fn device_lost_result(s: &Scenario, run_id: &str) -> ScenarioResult {

@@ -93,11 +93,12 @@ pub fn results_csv(run: &RunInfo, scenarios: &[ScenarioResult]) -> Vec<u8> {
 }
 
 /// The (measure, value, unit) rows of one result, in `results.csv` order: names and units from
-/// the measure table (`tessera_results::measure`).
-fn csv_rows(
+/// the measure table (`tessera_results::measure`), a technique's own checks' units from their
+/// records.
+fn csv_rows<'r>(
     results: &[VariantResult],
-    r: &VariantResult,
-    rows: &mut Vec<(String, String, &'static str)>,
+    r: &'r VariantResult,
+    rows: &mut Vec<(String, String, &'r str)>,
 ) {
     let row = |key: Key, value: String| (key.render(), value, key.measure.unit());
     if r.status != Status::Ok {
@@ -188,8 +189,9 @@ fn csv_rows(
     for m in &r.metrics {
         match Measure::from_name(&m.name) {
             Some(known) => rows.push(row(Key::of(known), num(m.value))),
-            // A metric the table does not know: its own name, no unit.
-            None => rows.push((m.name.clone(), num(m.value), "")),
+            // A metric the table does not know (a technique's own check): its own name, and the
+            // unit its record carries.
+            None => rows.push((m.name.clone(), num(m.value), measure::metric_unit(m))),
         }
     }
 }

@@ -4,6 +4,7 @@
 
 use std::time::Instant;
 
+use tessera_results::conditions::Conditions;
 use tessera_results::{PassRecord, ScenarioResult, Status, Summary, VariantResult};
 
 use super::frames::Rendered;
@@ -180,8 +181,12 @@ pub fn fill_conditions(
             variant.technique.frames(variant) == FramePattern::Alternating,
         );
     }
-    result.conditions = Some(sensors.result_record(
+    let mut conditions = sensors.result_record(
         r.conditions.as_deref(),
         r.energy_window.as_ref().map(|(s, n)| (s.as_slice(), *n)),
-    ));
+    );
+    if let Conditions::Recorded(c) = &mut conditions {
+        c.clock_warmup_ms = Some(r.clock_warmup_ms);
+    }
+    result.conditions = Some(conditions);
 }

@@ -76,11 +76,14 @@ pub struct Frames<'a> {
 /// The stability record of one rendered variant. `reference` is `None` without a reference render
 /// (then spread and cut recovery are not measured).
 /// `deterministic`: whether the second render of the sequence ended on the same bits.
+/// `mse`: per measured frame, the MSE against the reference when the metrics computed it (the
+/// GPU's: the frames are then not on the CPU); else it is computed here from the frames.
 pub fn check(
     scenario: &Scenario,
     own: Frames<'_>,
     deterministic: Option<bool>,
     reference: Option<Frames<'_>>,
+    mse: Option<&[f64]>,
 ) -> Stability {
     let non_finite_pixels = own
         .masks
@@ -102,12 +105,15 @@ pub fn check(
             let cuts = if cut_list.is_empty() {
                 Vec::new()
             } else {
-                let mse: Vec<f64> = own
-                    .frames
-                    .iter()
-                    .zip(r.frames)
-                    .map(|(t, r)| tessera_metrics::mse_rgb(r, t).unwrap_or(f64::INFINITY))
-                    .collect();
+                let mse: Vec<f64> = match mse {
+                    Some(m) => m.to_vec(),
+                    None => own
+                        .frames
+                        .iter()
+                        .zip(r.frames)
+                        .map(|(t, r)| tessera_metrics::mse_rgb(r, t).unwrap_or(f64::INFINITY))
+                        .collect(),
+                };
                 cut_recovery(&mse, &cut_list)
             };
             (Some(spread), cuts)

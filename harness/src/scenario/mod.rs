@@ -39,6 +39,9 @@ pub struct Scenario {
     /// Minimum GPU-busy time before the timed frames (frame 0 repeated), in milliseconds; `None`
     /// picks by adapter (see [`Scenario::clock_warmup_ms`]).
     pub warmup_ms: Option<f64>,
+    /// The energy window after the timed frames where sensors exist, in milliseconds (0: none);
+    /// `None` is [`crate::conditions::ENERGY_WINDOW_MS`].
+    pub energy_window_ms: Option<f64>,
     pub measured_frames: u32,
     /// `frames.measured = "auto"`: timed frames go on past `measured_frames` (then the rule's
     /// `min`) until the median GPU frame time is precise enough or the cap is reached; metrics
@@ -46,6 +49,9 @@ pub struct Scenario {
     pub auto: Option<crate::timing::stop::AutoRule>,
     /// Measured-frame indices to save as PNG.
     pub save_frames: Vec<u32>,
+    /// `frames.save_worst`: also save, for each variant, the worst frame of each of its metrics
+    /// (with its heat map and the reference's frame), beside `save_frames`.
+    pub save_worst: bool,
     pub time_step: f64,
     pub reference: Reference,
     pub metrics: Vec<MetricKind>,

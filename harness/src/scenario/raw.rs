@@ -52,10 +52,14 @@ pub struct RawFrames {
     pub warmup: Option<i64>,
     /// Clock warm-up: frame 0 repeated for at least this long before timing. Default 100.
     pub warmup_ms: Option<f64>,
+    /// Energy window after the timed frames, where sensors exist; 0 turns it off.
+    pub energy_window_ms: Option<f64>,
     /// Frames timed and compared (an integer, default 8), or `"auto"` / `{ min, max, precision }`.
     pub measured: Option<RawMeasured>,
     /// Measured-frame indices saved as PNG; negative counts from the end. Default `[-1]`.
     pub save: Option<Vec<i64>>,
+    /// Also save each metric's worst frame (beside `save`). Default `true`.
+    pub save_worst: Option<bool>,
 }
 
 /// `frames.measured`: a count, `"auto"`, or a table of the auto rule's bounds.

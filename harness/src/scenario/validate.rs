@@ -270,6 +270,15 @@ fn build(ctx: &mut Ctx, path: &Path, raw: RawScenario) -> Scenario {
             format!("{ms} is out of range: expected 0 to 60000 milliseconds"),
         );
     }
+    let energy_window_ms = raw.frames.energy_window_ms;
+    if let Some(ms) =
+        energy_window_ms.filter(|ms| !(ms.is_finite() && (0.0..=60_000.0).contains(ms)))
+    {
+        ctx.err(
+            &frames.key("energy_window_ms"),
+            format!("{ms} is out of range: expected 0 to 60000 milliseconds"),
+        );
+    }
     let (measured_frames, auto) = measured(ctx, &frames.key("measured"), &raw.frames.measured);
     let save_frames = save_frames(
         ctx,
@@ -277,6 +286,7 @@ fn build(ctx: &mut Ctx, path: &Path, raw: RawScenario) -> Scenario {
         raw.frames.save.as_deref(),
         measured_frames,
     );
+    let save_worst = raw.frames.save_worst.unwrap_or(true);
 
     let time_step = raw.time_step.unwrap_or(1.0 / 60.0);
     ctx.positive(&root.key("time_step"), time_step);
@@ -311,9 +321,11 @@ fn build(ctx: &mut Ctx, path: &Path, raw: RawScenario) -> Scenario {
         height,
         warmup_frames,
         warmup_ms,
+        energy_window_ms,
         measured_frames,
         auto,
         save_frames,
+        save_worst,
         time_step,
         reference,
         metrics,

@@ -3,7 +3,7 @@
 //! hold (every `Definition` is one), [`Variant`], and the [`Shader`] modules it declares.
 //!
 //! A definition is static data plus pure functions of its options: its parameters and the one
-//! reader of them ([`Definition::options`]), the checks across them, what it needs of an adapter
+//! reader of them (its `Options`, declared with [`options!`](crate::options)), the checks across them, what it needs of an adapter
 //! ([`Requirements`]), the pass graph for an output size, construction on a device (with the scene
 //! and the target: [`BuildContext`]), its WGSL, the technique its speed-up is read against and its
 //! frame pattern, each per variant. It knows no other technique; the list of all of them is
@@ -64,25 +64,18 @@ pub enum FramePattern {
 
 /// A technique, written once per folder under `techniques/`, listed once in the registry.
 ///
-/// `Options` is the variant's parameters as a type, read from the declared [`Definition::params`]
-/// by [`Definition::options`] alone; every other method sees only the options.
+/// `Options` is the variant's parameters as a type, declared and read by
+/// [`options!`](crate::options) alone; every other method sees only the options.
 pub trait Definition: Sync + 'static {
-    type Options: Clone + fmt::Debug;
+    /// Its parameters and their reading, declared once with [`options!`](crate::options) (`()`
+    /// when it has none): the only place that reads parameter values ([`Variant::get`]).
+    type Options: Clone + fmt::Debug + DeclaredOptions;
 
     /// The name scenarios and results use (`checkerboard-2x2`).
     fn name(&self) -> &'static str;
 
     /// One sentence for the parameter table of `scenarios/README.md` and `tessera validate`.
     fn summary(&self) -> &'static str;
-
-    /// Its parameters, in the order the docs list them.
-    fn params(&self) -> &'static [&'static ParamSpec] {
-        &[]
-    }
-
-    /// The options of a variant whose values each passed their own [`ParamSpec`]: the only
-    /// place that reads parameter values ([`Variant::get`]).
-    fn options(&self, variant: &Variant) -> Self::Options;
 
     /// Checks across parameters (`blend_min < blend_max`): the reason, in words, when they do not
     /// fit together. Reported by validation with the variant's file and line.
@@ -152,32 +145,32 @@ impl<D: Definition> Technique for D {
         Definition::summary(self)
     }
     fn params(&self) -> &'static [&'static ParamSpec] {
-        Definition::params(self)
+        D::Options::params()
     }
     fn check(&self, variant: &Variant) -> Result<(), String> {
-        Definition::check(self, &self.options(variant))
+        Definition::check(self, &D::Options::from_variant(variant))
     }
     fn requirements(&self, variant: &Variant) -> Requirements {
-        Definition::requirements(self, &self.options(variant))
+        Definition::requirements(self, &D::Options::from_variant(variant))
     }
     fn plan(&self, variant: &Variant, target: Target) -> Plan {
-        Definition::plan(self, &self.options(variant), target)
+        Definition::plan(self, &D::Options::from_variant(variant), target)
     }
     fn build(
         &self,
         variant: &Variant,
         cx: &BuildContext<'_>,
     ) -> Result<Box<dyn Renderer>, Unsupported> {
-        Definition::build(self, &self.options(variant), cx)
+        Definition::build(self, &D::Options::from_variant(variant), cx)
     }
     fn shaders(&self) -> Vec<Shader> {
         Definition::shaders(self)
     }
     fn baseline(&self, variant: &Variant) -> Option<&'static str> {
-        Definition::baseline(self, &self.options(variant))
+        Definition::baseline(self, &D::Options::from_variant(variant))
     }
     fn frames(&self, variant: &Variant) -> FramePattern {
-        Definition::frames(self, &self.options(variant))
+        Definition::frames(self, &D::Options::from_variant(variant))
     }
 }
 
@@ -266,4 +259,23 @@ pub fn variant_name(technique: &dyn Technique, explicit: &[(String, ParamValue)]
     }
     let parts: Vec<String> = explicit.iter().map(|(k, v)| format!("{k}={v}")).collect();
     format!("{}[{}]", technique.name(), parts.join(","))
+}
+
+/// Options read from a variant's parameters: the parameters declared, in docs order, and the
+/// reading of values that each passed their own [`ParamSpec`]. Written by
+/// [`options!`](crate::options) (`options.rs`) (or for `()`, a technique without parameters).
+pub trait DeclaredOptions: Sized {
+    /// The parameters, in the order the docs list them.
+    fn params() -> &'static [&'static ParamSpec];
+
+    /// The options of `variant` (validated against [`DeclaredOptions::params`]).
+    fn from_variant(variant: &Variant) -> Self;
+}
+
+impl DeclaredOptions for () {
+    fn params() -> &'static [&'static ParamSpec] {
+        &[]
+    }
+
+    fn from_variant(_variant: &Variant) {}
 }

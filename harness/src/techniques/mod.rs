@@ -15,6 +15,7 @@ pub mod docs;
 pub mod fsr1;
 pub mod interlace;
 pub mod native;
+pub mod options;
 pub mod registry;
 pub mod taau;
 pub mod upscale;
@@ -22,6 +23,7 @@ pub mod upscale;
 pub use definition::{
     variant_name, BuildContext, Definition, FramePattern, Shader, Target, Technique, Variant,
 };
+pub use options::DeclaredOptions;
 pub use registry::{by_name, names, ALL};
 
 use crate::gpu::{Gpu, Requirements};
@@ -65,6 +67,13 @@ pub fn build(variant: &Variant, cx: &BuildContext<'_>) -> Result<Box<dyn Rendere
 /// Whether `variant` is the technique a `reference = "native"` scenario is diffed against.
 pub fn is_reference(variant: &Variant) -> bool {
     variant.technique.name() == native::NAME
+}
+
+/// Whether `name`, a recorded result's technique or variant name, is the reference technique's
+/// (`native` has no parameters: its one variant carries its name). What `run/` asks of results
+/// by role, so it names no technique.
+pub fn is_reference_name(name: &str) -> bool {
+    name == native::NAME
 }
 
 /// The reference renderer: native at the target, or with `supersample` the ground truth (native
@@ -124,6 +133,11 @@ pub fn shaders() -> Vec<Shader> {
             files: vec!["scene.wgsl", "material/material.wgsl"],
         },
         Shader::file("material/mips.wgsl", crate::render::mips::MIPS_WGSL),
+        // The run loop's per-frame NaN / coverage check on frames kept on the GPU.
+        Shader::file(
+            "frame_check.wgsl",
+            crate::render::frame_check::FRAME_CHECK_WGSL,
+        ),
     ];
     for t in ALL {
         all.extend(t.shaders());

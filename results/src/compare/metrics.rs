@@ -8,8 +8,8 @@
 
 use serde::Serialize;
 
-use crate::measure::{Direction, Measure};
-use crate::VariantResult;
+use crate::measure::{metric_direction, Direction, Measure};
+use crate::{MetricRecord, VariantResult};
 
 use super::{findings::Verdict, Pair};
 
@@ -43,12 +43,12 @@ pub struct MetricComparison {
     pub verdict: Verdict,
 }
 
-/// The direction of `name`: the measure table's, else the record's own.
-fn direction(name: &str, record_higher: bool) -> Option<bool> {
-    match Measure::from_name(name).map(|m| m.direction()) {
-        Some(Direction::Neither) => None,
-        Some(d) => Some(d.higher_is_better()),
-        None => Some(record_higher),
+/// The direction of a metric: the measure table's, else the record's own (a technique's check
+/// carries it; `None` for one without a direction).
+fn direction(m: &MetricRecord) -> Option<bool> {
+    match metric_direction(m) {
+        Direction::Neither => None,
+        d => Some(d.higher_is_better()),
     }
 }
 
@@ -90,7 +90,7 @@ pub(crate) fn compare(
                 .map(|x| x.value)
         };
         let values = Pair::new(value(a), value(b));
-        let higher_is_better = direction(&m.name, m.higher_is_better);
+        let higher_is_better = direction(m);
         let verdict = match (values.a, values.b, higher_is_better) {
             (Some(x), Some(y), Some(h)) => judge(&m.name, x, y, h),
             _ => Verdict::Same,
@@ -122,8 +122,25 @@ mod tests {
         // Relative tolerance for the rest: 0.1%.
         assert_eq!(judge("tde", 2.0, 2.001, false), Verdict::Same);
         assert_eq!(judge("tde", 2.0, 2.01, false), Verdict::Worse);
-        assert_eq!(direction("invocations-over-model", false), None);
-        assert_eq!(direction("ssim", false), Some(true));
-        assert_eq!(direction("a-new-metric", true), Some(true));
+        let record = |name: &str, higher: bool, check: Option<crate::Check>| MetricRecord {
+            name: name.into(),
+            per_frame: vec![],
+            frames: vec![],
+            value: 0.0,
+            higher_is_better: higher,
+            frame_stats: None,
+            metrics_device: None,
+            check,
+        };
+        let fact = crate::Check {
+            unit: "x".into(),
+            direction: Direction::Neither,
+        };
+        assert_eq!(
+            direction(&record("invocations-over-model", false, Some(fact))),
+            None
+        );
+        assert_eq!(direction(&record("ssim", false, None)), Some(true));
+        assert_eq!(direction(&record("a-new-metric", true, None)), Some(true));
     }
 }

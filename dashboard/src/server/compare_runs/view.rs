@@ -16,7 +16,7 @@ use tessera_results::compare::{
 use tessera_results::RunInfo;
 
 use super::query::CompareRunsQuery;
-use crate::html::{commit, enc, esc, num};
+use crate::html::{commit, enc, esc, name, num};
 
 fn plural(n: usize, word: &str) -> String {
     format!("{n} {word}{}", if n == 1 { "" } else { "s" })
@@ -82,8 +82,8 @@ fn finding_item(f: &Finding) -> String {
     let mut li = format!(
         "<li><a href=\"#s-{}\">{}</a> / {}: {} <span class={}>{}</span>",
         esc(&f.scenario),
-        esc(&f.scenario),
-        esc(&f.variant),
+        name(&f.scenario),
+        name(&f.variant),
         esc(&f.what),
         verdict_class(f.verdict),
         esc(&f.change)
@@ -116,7 +116,7 @@ fn findings(b: &mut String, c: &Comparison) {
     }
     let few: Vec<String> = c
         .too_few_frames()
-        .map(|(s, v)| format!("{} / {}", esc(&s.scenario), esc(&v.variant)))
+        .map(|(s, v)| format!("{} / {}", name(&s.scenario), name(&v.variant)))
         .collect();
     if !few.is_empty() {
         let _ = write!(
@@ -215,12 +215,12 @@ fn scenario_table(b: &mut String, c: &Comparison, s: &ScenarioComparison) {
         c.rule.confidence * 100.0
     );
     for v in &s.variants {
-        let name = match v.only_in {
+        let variant = match v.only_in {
             Some(side) => format!(
                 "{} <span class=muted>(only in {side:?})</span>",
-                esc(&v.variant)
+                name(&v.variant)
             ),
-            None => esc(&v.variant),
+            None => name(&v.variant),
         };
         let label = |x: &Option<String>| x.as_deref().unwrap_or("–").to_string();
         let status = if v.status.a == v.status.b {
@@ -236,7 +236,7 @@ fn scenario_table(b: &mut String, c: &Comparison, s: &ScenarioComparison) {
         let class = time_class(&v.time, c.timings_count);
         let _ = write!(
             b,
-            "<tr><td>{name}</td><td>{status}</td><td class=n>{}</td><td class=n>{}</td><td class=\"n {class}\">{}</td><td class={class}>{}</td><td class=n>{}</td><td class=wrap>{}</td><td class=wrap>{}</td><td>{}</td></tr>",
+            "<tr><td>{variant}</td><td>{status}</td><td class=n>{}</td><td class=n>{}</td><td class=\"n {class}\">{}</td><td class={class}>{}</td><td class=n>{}</td><td class=wrap>{}</td><td class=wrap>{}</td><td>{}</td></tr>",
             opt(v.gpu_ms.a),
             opt(v.gpu_ms.b),
             change_cell(&v.time),

@@ -13,7 +13,7 @@ use serde::Deserialize;
 
 use super::api::{apply, apply_group, AlertTriage};
 use super::{load_groups, GroupsQuery};
-use crate::html::{commit, enc, esc, num, page as layout, pct};
+use crate::html::{commit, enc, esc, name, num, page as layout, pct};
 use crate::server::{auth, AppError, AppState};
 use crate::store::alerts::{self, Alert, DetectionStatus, Event, TriageState};
 use crate::store::groups::{self, Facets, Group, Named, DIRECTIONS};
@@ -65,7 +65,12 @@ const STYLE: &str = "<style>
 form.triage{margin:4px 0 0}form.triage input[name=note]{width:260px}form.triage input[name=bug_url]{width:220px}
 .result{margin-left:8px}.result.ok{color:#17803d}.result.failed{color:#b3261e}
 tr.series-row td{font-size:13px}tr.series-row.stat-withdrawn td{color:#888}
-.charts h3{font-size:14px;margin:16px 0 2px}
+.charts h3{font-size:14px;margin:16px 0 2px}.group h2{overflow-wrap:anywhere}
+@media (max-width:700px){#regressions,#regressions tbody,#regressions tr,#regressions td{display:block;width:auto}
+#regressions{overflow-x:visible}#regressions tr.cols{display:none}#regressions tbody.group>tr.head>td{padding:8px 6px 6px}
+#regressions tr.series-row{border-bottom:1px solid #ddd;padding:4px 0}#regressions tr.series-row td{display:inline-block;border:0;padding:1px 8px 1px 0;text-align:left}
+#regressions tr.series-row td[data-label]::before{content:attr(data-label) \" \";color:#777;font-size:11px}
+form.triage input[name=note],form.triage input[name=bug_url]{width:100%;box-sizing:border-box;margin:2px 0}}
 </style>";
 
 /// The pages' script: triage with the token kept for the browser session.
@@ -244,15 +249,15 @@ fn group_head(g: &Group, b: &mut String, title_link: bool) {
 fn alert_row(a: &Alert, b: &mut String) {
     let _ = write!(
         b,
-        "<tr id=r{} class=\"series-row stat-{}\"><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td><a href=\"/series/{}\">{}</a></td><td class=n>{}</td><td class=n>{}</td><td class=n>{}</td><td class=n>{:.1}%</td><td>{}</td></tr>",
+        "<tr id=r{} class=\"series-row stat-{}\"><td data-label=adapter>{}</td><td data-label=suite>{}</td><td data-label=scenario>{}</td><td data-label=variant>{}</td><td data-label=measure><a href=\"/series/{}\">{}</a></td><td class=n data-label=before>{}</td><td class=n data-label=after>{}</td><td class=n data-label=change>{}</td><td class=n data-label=confidence>{:.1}%</td><td data-label=status>{}</td></tr>",
         a.id,
         esc(a.status.as_str()),
         esc(&a.series.adapter),
-        esc(&a.suite),
-        esc(&a.series.scenario),
-        esc(&a.series.variant),
+        name(&a.suite),
+        name(&a.series.scenario),
+        name(&a.series.variant),
         a.series.id,
-        esc(&a.series.measure),
+        name(&a.series.measure),
         num(a.value_before),
         num(a.value_after),
         change_cell(a),
@@ -261,7 +266,7 @@ fn alert_row(a: &Alert, b: &mut String) {
     );
 }
 
-const ALERT_HEADER: &str = "<tr><th>adapter</th><th>suite</th><th>scenario</th><th>variant</th><th>measure (series)</th><th class=n>before</th><th class=n>after</th><th class=n>change</th><th class=n>confidence</th><th>status</th></tr>";
+const ALERT_HEADER: &str = "<tr class=cols><th>adapter</th><th>suite</th><th>scenario</th><th>variant</th><th>measure (series)</th><th class=n>before</th><th class=n>after</th><th class=n>change</th><th class=n>confidence</th><th>status</th></tr>";
 
 /// Most series listed under a group on the list page (largest changes first); its own page
 /// lists them all, so a change that moved thousands of series keeps the list fast.

@@ -7,6 +7,10 @@
 //! JOD ("perceptual flicker"), and distortion maps of chosen frames. Not for: decoding files
 //! (see `sequence`), or deciding pass/fail.
 //!
+//! **Back ends.** A shot's pooled differences come from a [`ShotPredictor`]: [`CpuPredictor`]
+//! (the crate, the reference) or `tessera-metrics-gpu`'s compute passes ([`cvvdp_with`]); the
+//! shots, per-frame values, flicker and maps around it are computed here for both alike.
+//!
 //! **Shots.** Frames across a camera cut are not one video: each shot is predicted on its own
 //! (the temporal filters start again, replicating the shot's first frame, the reference's
 //! default padding), and the shots are pooled as the reference pools frames: JOD of the mean Lp
@@ -179,24 +183,116 @@ fn crate_error(e: colorvideovdp::Error) -> MetricsError {
     }
 }
 
-/// ColorVideoVDP of `test` against `reference` (same length, same size, same kind).
+/// ColorVideoVDP of `test` against `reference` (same length, same size, same kind), computed by
+/// the `colorvideovdp` crate on the CPU (the reference).
 pub fn cvvdp(
     reference: Frames<'_>,
     test: Frames<'_>,
     settings: &CvvdpSettings,
 ) -> Result<CvvdpResult, MetricsError> {
+    cvvdp_with(reference, test, settings, &mut CpuPredictor)
+}
+
+/// One shot of a sequence as a [`ShotPredictor`] gets it: the whole sequences, the shot's
+/// frames in them, the display model and the frame rate.
+pub struct Shot<'a> {
+    pub reference: Frames<'a>,
+    pub test: Frames<'a>,
+    /// The shot's frames (sequence indices).
+    pub frames: std::ops::Range<usize>,
+    pub model: &'a colorvideovdp::DisplayModel,
+    pub fps: f32,
+    /// Frames of this shot (sequence indices, ascending) whose distortion map is wanted.
+    pub map_frames: Vec<usize>,
+    pub memory_limit_bytes: usize,
+}
+
+/// What predicting one shot gives: the crate's `Prediction` in the parts the pooling reads.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ShotPrediction {
+    /// The shot's JOD as the predictor pooled it; `None` pools `quality_per_channel` here (the
+    /// crate's pooling, reproduced in `pool.rs`).
+    pub jod: Option<f32>,
+    /// Spatially pooled differences, `[(channel * frames + frame) * bands + band]`.
+    pub quality_per_channel: Vec<f32>,
+    /// 3 for a one-frame shot (an image), 4 for a video.
+    pub channels: usize,
+    /// Spatial bands, the baseband last.
+    pub bands: usize,
+    /// The distortion maps of `Shot::map_frames`: (sequence frame index, one value per pixel).
+    pub maps: Vec<(usize, Vec<f32>)>,
+}
+
+/// Predicts ColorVideoVDP's pooled differences of one shot: the crate on the CPU
+/// ([`CpuPredictor`]) or another back end (`tessera-metrics-gpu`'s compute passes).
+pub trait ShotPredictor {
+    type Error: From<MetricsError>;
+    fn predict(&mut self, shot: &Shot<'_>) -> Result<ShotPrediction, Self::Error>;
+}
+
+/// The `colorvideovdp` crate on the CPU: the reference and the fallback.
+#[derive(Debug, Default, Clone, Copy)]
+pub struct CpuPredictor;
+
+impl ShotPredictor for CpuPredictor {
+    type Error = MetricsError;
+
+    fn predict(&mut self, shot: &Shot<'_>) -> Result<ShotPrediction, MetricsError> {
+        let metric = Cvvdp::new(
+            shot.model.clone(),
+            Options::default()
+                .with_distortion_map(!shot.map_frames.is_empty())
+                .with_memory_limit_bytes(shot.memory_limit_bytes),
+        )
+        .map_err(crate_error)?;
+        let load = |frames: &Frames<'_>| -> Result<Vec<Image>, MetricsError> {
+            shot.frames.clone().map(|i| frames.image(i)).collect()
+        };
+        let (t, r) = (load(&shot.test)?, load(&shot.reference)?);
+        let p = metric
+            .predict_video(&t, &r, shot.fps, shot.test.color())
+            .map_err(crate_error)?;
+        drop((t, r));
+        let mut maps = Vec::new();
+        if let Some(map) = &p.distortion_map {
+            let px = map.width * map.height;
+            for &f in &shot.map_frames {
+                let k = f - shot.frames.start;
+                maps.push((f, map.data[k * px..(k + 1) * px].to_vec()));
+            }
+        }
+        Ok(ShotPrediction {
+            jod: Some(p.jod),
+            quality_per_channel: p.quality_per_channel,
+            channels: p.channels,
+            bands: p.band_frequencies.len(),
+            maps,
+        })
+    }
+}
+
+/// [`cvvdp`] with the shots predicted by `predictor`; everything around the prediction (checks,
+/// shots, per-frame and transient pooling, maps) is the same for every back end.
+pub fn cvvdp_with<P: ShotPredictor>(
+    reference: Frames<'_>,
+    test: Frames<'_>,
+    settings: &CvvdpSettings,
+    predictor: &mut P,
+) -> Result<CvvdpResult, P::Error> {
     let n = reference.len();
     if n == 0 || test.len() != n {
         return Err(MetricsError::SequenceLength {
             reference: n,
             test: test.len(),
-        });
+        }
+        .into());
     }
     if std::mem::discriminant(&reference) != std::mem::discriminant(&test) {
         return Err(MetricsError::KindMismatch {
             reference: kind(&reference),
             test: kind(&test),
-        });
+        }
+        .into());
     }
     reference.validate()?;
     test.validate()?;
@@ -212,14 +308,16 @@ pub fn cvvdp(
             min: 4,
             width: w,
             height: h,
-        });
+        }
+        .into());
     }
     if !(settings.fps.is_finite() && settings.fps > 0.0 && settings.fps <= 16384.0) {
         return Err(MetricsError::InvalidParameter {
             name: "fps",
             value: settings.fps,
             expected: "frames per second in (0, 16384]",
-        });
+        }
+        .into());
     }
     let mut starts = vec![0];
     for &c in &settings.cuts {
@@ -228,7 +326,8 @@ pub fn cvvdp(
                 name: "camera cut frame",
                 value: c as f64,
                 expected: "ascending frame indices inside the sequence, after frame 0",
-            });
+            }
+            .into());
         }
         starts.push(c);
     }
@@ -245,36 +344,35 @@ pub fn cvvdp(
     let mut maps = Vec::new();
     for (s, &first) in starts.iter().enumerate() {
         let end = starts.get(s + 1).copied().unwrap_or(n);
-        let wants_map = settings
+        let mut map_frames: Vec<usize> = settings
             .map_frames
             .iter()
-            .any(|&f| (first..end).contains(&f));
-        let metric = Cvvdp::new(
-            model.clone(),
-            Options::default()
-                .with_distortion_map(wants_map)
-                .with_memory_limit_bytes(settings.memory_limit_bytes),
-        )
-        .map_err(crate_error)?;
-        let load = |frames: &Frames<'_>| -> Result<Vec<Image>, MetricsError> {
-            (first..end).map(|i| frames.image(i)).collect()
+            .copied()
+            .filter(|f| (first..end).contains(f))
+            .collect();
+        map_frames.sort_unstable();
+        map_frames.dedup();
+        let shot = Shot {
+            reference,
+            test,
+            frames: first..end,
+            model: &model,
+            fps: settings.fps as f32,
+            map_frames,
+            memory_limit_bytes: settings.memory_limit_bytes,
         };
-        let (t, r) = (load(&test)?, load(&reference)?);
-        let p = metric
-            .predict_video(&t, &r, settings.fps as f32, test.color())
-            .map_err(crate_error)?;
-        drop((t, r));
+        let p = predictor.predict(&shot)?;
         let features = Features {
             quality: &p.quality_per_channel,
             channels: p.channels,
-            frames: p.frames,
-            bands: p.band_frequencies.len(),
+            frames: end - first,
+            bands: p.bands,
         };
         let q = features.per_frame();
         shots.push(ShotJod {
             first_frame: first,
             frames: end - first,
-            jod: p.jod as f64,
+            jod: p.jod.unwrap_or_else(|| pool::pool_frames(&q)) as f64,
         });
         match features.transient() {
             Some(tr) => {
@@ -284,21 +382,13 @@ pub fn cvvdp(
             None => transient.extend(q.iter().map(|&v| (0.0, v.powi(4) as f64))),
         }
         per_frame.extend(q);
-        if let Some(map) = p.distortion_map {
-            let px = map.width * map.height;
-            for &f in settings
-                .map_frames
-                .iter()
-                .filter(|f| (first..end).contains(*f))
-            {
-                let k = f - first;
-                maps.push(DistortionMap {
-                    frame: f,
-                    width: w,
-                    height: h,
-                    values: map.data[k * px..(k + 1) * px].to_vec(),
-                });
-            }
+        for (f, values) in p.maps {
+            maps.push(DistortionMap {
+                frame: f,
+                width: w,
+                height: h,
+                values,
+            });
         }
     }
     let jod = if shots.len() == 1 {

@@ -20,7 +20,7 @@ use super::model::{self, CoarseSample, RateParams, TILE};
 use crate::gpu::Gpu;
 use crate::render::graph::{Graph, PassKind, Plan, TextureDesc};
 use crate::render::kit::{
-    allocate, bind_group, compute_pipeline, placeholder_texture, timed_dispatch,
+    allocate, bind_group, compute_pipeline, placeholder_texture, timed_dispatch, PingPong,
 };
 use crate::render::readback::read_texture_raw;
 use crate::render::renderer::{FrameExtras, FrameInfo, FrameValue, Renderer};
@@ -124,13 +124,15 @@ pub(super) struct RatePass {
     params: RateParams,
     uniforms: wgpu::Buffer,
     pipeline: wgpu::ComputePipeline,
-    bind_groups: [wgpu::BindGroup; 2],
+    /// One per side: the previous frame's colour, depth and rate state as history.
+    bind_groups: PingPong<wgpu::BindGroup>,
     filter: Option<(wgpu::ComputePipeline, wgpu::BindGroup)>,
 }
 
 impl RatePass {
     /// The rate pass (and filter) reading the resources `view` names: `color0`/`color1`,
-    /// `depth0`/`depth1` (the previous frame's by parity), `motion`, `rate_state0`/`1`, and
+    /// `depth0`/`depth1` (the previous frame's by parity, and this frame's for coverage), `motion`,
+    /// `rate_state0`/`1`, and
     /// writing `rates` (through `rates_raw` with the filter).
     pub(super) fn new(
         device: &wgpu::Device,
@@ -150,21 +152,26 @@ impl RatePass {
             "rates"
         };
         let layout = pipeline.get_bind_group_layout(0);
-        let bind_group = |cur: usize| {
-            let prev = 1 - cur;
+        let (colors, depths, states) = (
+            PingPong::new(COLORS),
+            PingPong::new(DEPTHS),
+            PingPong::new(STATES),
+        );
+        let bind_group = |side: usize| {
             let views = [
-                (1, view(COLORS[prev])),
+                (1, view(colors.at(side).1)),
                 (2, view("motion")),
-                (3, view(DEPTHS[prev])),
-                (4, view(STATES[prev])),
-                (5, view(STATES[cur])),
+                (3, view(depths.at(side).1)),
+                (4, view(states.at(side).1)),
+                (5, view(states.at(side).0)),
                 (6, view(raw)),
+                (9, view(depths.at(side).0)),
             ];
             let views: Vec<(u32, &wgpu::TextureView)> =
                 views.iter().map(|(b, v)| (*b, v)).collect();
             bind_group(device, "rates", &layout, &[(0, &uniforms)], &views)
         };
-        let bind_groups = [bind_group(0), bind_group(1)];
+        let bind_groups = PingPong::new([bind_group(0), bind_group(1)]);
         let filter = params.neighbour_filter.then(|| {
             let pipeline = compute_pipeline(device, "rate_filter", RATE_WGSL, "filter_rates");
             let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -225,7 +232,7 @@ impl RatePass {
             timers,
             "rates",
             &self.pipeline,
-            &[&self.bind_groups[parity]],
+            &[self.bind_groups.at(parity).0],
             [tw, th],
         );
         if let Some((pipeline, group)) = &self.filter {
@@ -267,18 +274,24 @@ pub struct AdaptiveGpu {
     module: wgpu::ShaderModule,
     shade_pipeline: wgpu::ComputePipeline,
     _shade_uniforms: wgpu::Buffer,
-    /// Group 1 of the shading pass per parity (output color0 or color1).
-    shade_groups: Vec<wgpu::BindGroup>,
+    /// Per side: group 1 of the shading pass (output color0 or color1), the G-buffer depth and
+    /// the output's name; without history both sides are side 0's.
+    sides: PingPong<Side>,
     /// Made on the first frame, when the scene is known: G-buffer pipeline, shading group 0.
     scene_objects: Option<(wgpu::RenderPipeline, wgpu::BindGroup)>,
-    /// G-buffer colour targets, and depth per parity.
+    /// G-buffer colour targets.
     gbuffer_views: Vec<wgpu::TextureView>,
-    depth_views: Vec<wgpu::TextureView>,
     counters: wgpu::Buffer,
     counters_readback: wgpu::Buffer,
     _dummy_rates: Option<wgpu::Texture>,
-    parity: usize,
     last: Option<LastFrame>,
+}
+
+/// What one side of [`AdaptiveGpu`]'s history pair writes.
+struct Side {
+    shade_group: wgpu::BindGroup,
+    depth_view: wgpu::TextureView,
+    color: &'static str,
 }
 
 impl AdaptiveGpu {
@@ -286,7 +299,6 @@ impl AdaptiveGpu {
     pub fn new(gpu: &Gpu, rates: Option<RateParams>, width: u32, height: u32) -> AdaptiveGpu {
         let params = rates;
         let history = params.is_some();
-        let parities = if history { 2 } else { 1 };
         let plan = graph(params.as_ref(), width, height);
         let textures = allocate(&gpu.device, &plan);
         let device = &gpu.device;
@@ -336,8 +348,8 @@ impl AdaptiveGpu {
             None => view("rates"),
         };
         let shade_layout = shade_pipeline.get_bind_group_layout(1);
-        let shade_groups = (0..parities)
-            .map(|p| {
+        let side = |p: usize| {
+            let shade_group = {
                 let views = [
                     (1, view(GBUFFER[0])),
                     (2, view(GBUFFER[1])),
@@ -354,8 +366,14 @@ impl AdaptiveGpu {
                     &[(0, &shade_uniforms), (6, &counters)],
                     &views,
                 )
-            })
-            .collect();
+            };
+            Side {
+                shade_group,
+                depth_view: view(DEPTHS[p]),
+                color: COLORS[p],
+            }
+        };
+        let sides = PingPong::new([side(0), side(usize::from(history))]);
 
         let rate = params.map(|params| RatePass::new(device, params, &view));
 
@@ -363,7 +381,6 @@ impl AdaptiveGpu {
         if history {
             gbuffer_views.push(view("motion"));
         }
-        let depth_views = (0..parities).map(|p| view(DEPTHS[p])).collect();
         AdaptiveGpu {
             plan,
             textures,
@@ -373,14 +390,12 @@ impl AdaptiveGpu {
             module,
             shade_pipeline,
             _shade_uniforms: shade_uniforms,
-            shade_groups,
+            sides,
             scene_objects: None,
             gbuffer_views,
-            depth_views,
             counters,
             counters_readback,
             _dummy_rates: dummy_rates,
-            parity: 0,
             last: None,
         }
     }
@@ -445,7 +460,7 @@ impl AdaptiveGpu {
                 label: Some("gbuffer"),
                 color_attachments: &attachments,
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &self.depth_views[self.parity],
+                    view: &self.sides.current().depth_view,
                     depth_ops: Some(wgpu::Operations {
                         load: wgpu::LoadOp::Clear(0.0),
                         store: wgpu::StoreOp::Store,
@@ -470,7 +485,7 @@ impl Renderer for AdaptiveGpu {
     }
 
     fn output(&self) -> &wgpu::Texture {
-        &self.textures[COLORS[self.parity]]
+        &self.textures[self.sides.current().color]
     }
 
     fn record(
@@ -516,11 +531,7 @@ impl Renderer for AdaptiveGpu {
             });
             self.scene_objects = Some((pipeline, group));
         }
-        self.parity = if self.rate.is_some() {
-            (frame.index & 1) as usize
-        } else {
-            0
-        };
+        self.sides.select(frame.index);
         scene.write_view(&gpu.queue, 0, &View::whole(frame.time, frame.prev_time));
         self.gbuffer_pass(encoder, scene, timers);
         let (tw, th) = model::tiles(self.width, self.height);
@@ -530,7 +541,7 @@ impl Renderer for AdaptiveGpu {
                 scene,
                 timers,
                 encoder,
-                self.parity,
+                self.sides.side(),
                 frame.history_valid,
                 self.width,
                 self.height,
@@ -543,7 +554,7 @@ impl Renderer for AdaptiveGpu {
             timers,
             "shade",
             &self.shade_pipeline,
-            &[scene_group, &self.shade_groups[self.parity]],
+            &[scene_group, &self.sides.current().shade_group],
             [tw, th],
         );
     }

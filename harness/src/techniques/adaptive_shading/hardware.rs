@@ -2,20 +2,23 @@
 //! driving VK_KHR_fragment_shading_rate, as in the paper (Yang et al. 2019, section 5), beside the
 //! software path of `gpu.rs`.
 //!
-//! Each frame N + 1 of `adaptive-shading`: the `rates` pass (and `rate_filter`, section 5.4) reads
-//! frame N's output, depth and motion, written by frame N's forward pass (the same rate shader as
-//! the software path, `rate.wgsl`; the motion is frame N's, taken as the estimate of N + 1's,
-//! section 5.1's reprojection with last frame's vectors); `rate_attachment` turns the per-tile
-//! codes into attachment texels (`attachment.wgsl`, CPU model in `attachment.rs`); `clear` clears
-//! this frame's colour, motion and depth in wgpu; `scene_vrs` is the forward pass, `fs_main`'s
-//! shading, drawn by raw Vulkan with the attachment (`raw_pass.rs`), writing colour and motion.
-//! `native-vrs` is the same `clear` and `scene_vrs` with a constant attachment (every tile 1x1,
-//! 2x2 or 4x4): one pipeline with and without rates.
+//! Each frame of `adaptive-shading`, in the paper's order of work (section 5: the rate pass runs
+//! right after the depth pre-pass, with this frame's motion, and the frame is shaded at the rates
+//! it computes): `motion_prepass` (raw Vulkan, `raw_pass.rs`) clears and draws this frame's depth
+//! and writes its motion (the software G-buffer's motion); `rates` (and `rate_filter`, section
+//! 5.4) reproject the previous output by that motion, with depth rejection against the previous
+//! depth (the same rate shader as the software path, `rate.wgsl`); `rate_attachment` turns the
+//! per-tile codes into attachment texels (`attachment.wgsl`, CPU model in `attachment.rs`);
+//! `scene_vrs` clears the colour and shades, `fs_main`'s shading, at those rates (depth test
+//! EQUAL against the pre-pass). `native-vrs` is one raw render pass with a constant attachment
+//! (every tile 1x1, 2x2 or 4x4): colour and depth cleared, a depth-only pre-pass, the same shading
+//! draw; it needs no motion, as `native` has none. No pass only clears: the clears are the render
+//! passes' load ops, as in `native`'s forward pass.
 //!
-//! Timing: `scene_vrs` is timed by wgpu-profiler timestamps written at the end of the encoder
-//! before it and at the start of one submitted right after it, in the same submission; its
-//! fragment-shader invocations come from the raw pass's own pipeline-statistics query
-//! (a `self_counted` pass of the plan, reported by [`Renderer::own_statistics`]).
+//! Timing: each raw pass is timed by wgpu-profiler timestamps written at the end of the encoder
+//! before it and at the start of the one submitted right after it, in the same submission; their
+//! fragment-shader invocations come from the raw passes' own pipeline-statistics queries
+//! (`self_counted` passes of the plan, reported by [`Renderer::own_statistics`]).
 
 use std::collections::{BTreeMap, HashMap};
 
@@ -30,7 +33,7 @@ use super::raw_pass::{RawVrsPass, Shaders, Targets};
 use crate::gpu::vrs::VrsCaps;
 use crate::gpu::Gpu;
 use crate::render::graph::{Graph, PassKind, Plan, TextureDesc};
-use crate::render::kit::{allocate, bind_group, compute_pipeline, timed_dispatch};
+use crate::render::kit::{allocate, bind_group, compute_pipeline, timed_dispatch, PingPong};
 use crate::render::readback::read_texture_raw;
 use crate::render::renderer::{FrameExtras, FrameInfo, FrameValue, Renderer};
 use crate::render::scene::{SceneGpu, COLOR_FORMAT, DEPTH_FORMAT};
@@ -46,6 +49,8 @@ pub fn vrs_source() -> String {
 
 /// The pass drawn with variable-rate shading (timed and counted like every pass).
 pub const SCENE_PASS: &str = "scene_vrs";
+/// `adaptive-shading`'s depth pre-pass writing this frame's motion, before the rate pass.
+pub const PREPASS: &str = "motion_prepass";
 
 /// What decides the rates of the hardware path.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -74,16 +79,23 @@ pub fn graph(rates: &Rates, width: u32, height: u32, texel: [u32; 2]) -> Plan {
     let (aw, ah) = att::attachment_size(width, height, texel);
     let mut g = Graph::default();
     // The attachment: an R8_UINT image made by raw_pass.rs (wgpu cannot give it the usage).
-    g.resource("attachment", tex(wgpu::TextureFormat::R8Uint, aw, ah))
-        .resource("motion", tex(MOTION_FORMAT, width, height));
+    g.resource("attachment", tex(wgpu::TextureFormat::R8Uint, aw, ah));
     match rates {
         Rates::Adaptive(p) => {
+            g.resource("motion", tex(MOTION_FORMAT, width, height));
             for i in 0..2 {
                 g.resource(COLORS[i], tex(COLOR_FORMAT, width, height))
                     .resource(DEPTHS[i], tex(DEPTH_FORMAT, width, height))
                     .resource(STATES[i], tex(STATE_FORMAT, tw, th));
             }
             g.resource("rates", tex(RATE_FORMAT, tw, th));
+            g.pass(
+                PREPASS,
+                PassKind::Render,
+                &[],
+                &["motion", DEPTHS[0], DEPTHS[1]],
+            )
+            .self_counted();
             let reads = [
                 COLORS[0], COLORS[1], "motion", DEPTHS[0], DEPTHS[1], STATES[0], STATES[1],
             ];
@@ -110,19 +122,25 @@ pub fn graph(rates: &Rates, width: u32, height: u32, texel: [u32; 2]) -> Plan {
                 &["rates"],
                 &["attachment"],
             );
-            let targets = [COLORS[0], COLORS[1], "motion", DEPTHS[0], DEPTHS[1]];
-            g.pass("clear", PassKind::Render, &[], &targets)
-                .pass(SCENE_PASS, PassKind::Render, &["attachment"], &targets)
-                .self_counted();
+            g.pass(
+                SCENE_PASS,
+                PassKind::Render,
+                &["attachment", DEPTHS[0], DEPTHS[1]],
+                &[COLORS[0], COLORS[1]],
+            )
+            .self_counted();
             g.output(COLORS[0]).output(COLORS[1]);
         }
         Rates::Fixed(..) => {
             g.resource(COLORS[0], tex(COLOR_FORMAT, width, height))
                 .resource(DEPTHS[0], tex(DEPTH_FORMAT, width, height));
-            let targets = [COLORS[0], "motion", DEPTHS[0]];
-            g.pass("clear", PassKind::Render, &[], &targets)
-                .pass(SCENE_PASS, PassKind::Render, &["attachment"], &targets)
-                .self_counted();
+            g.pass(
+                SCENE_PASS,
+                PassKind::Render,
+                &["attachment"],
+                &[COLORS[0], DEPTHS[0]],
+            )
+            .self_counted();
             g.output(COLORS[0]);
         }
     }
@@ -154,7 +172,10 @@ pub struct HardwareGpu {
     /// error, before any frame is rendered); `None` only while [`HardwareGpu::new`] runs.
     raw: Option<RawVrsPass>,
     parities: usize,
-    parity: usize,
+    /// The side (colour and depth target pair, raw-pass targets) frame `i` writes: the kit's
+    /// ping-pong of the two sides when the rates read the previous frame, one side otherwise
+    /// (`native-vrs`: both entries 0).
+    sides: PingPong<usize>,
     last: Option<LastFrame>,
 }
 
@@ -245,9 +266,10 @@ impl HardwareGpu {
             staging_readback,
             raw: None,
             parities,
-            parity: 0,
+            sides: PingPong::new([0, parities - 1]),
             last: None,
         };
+        hw.initialise(gpu);
         hw.raw = Some(
             hw.make_raw(gpu, scene)
                 .map_err(|e| format!("the hardware VRS pass could not be built: {e}"))?,
@@ -321,25 +343,26 @@ impl HardwareGpu {
         }
     }
 
-    /// Covered pixels of the last frame (motion's w is 1 where something was drawn).
+    /// Covered pixels of the last frame (its depth is not the clear value, 0).
     pub fn coverage(&self, gpu: &Gpu) -> Vec<bool> {
-        let raw = read_texture_raw(gpu, &self.textures["motion"]);
-        let halves: &[half::f16] = bytemuck::cast_slice(&raw);
-        halves.chunks(4).map(|p| p[3].to_f32() > 0.5).collect()
+        let raw = read_texture_raw(gpu, &self.textures[DEPTHS[*self.sides.current()]]);
+        let depth: &[f32] = bytemuck::cast_slice(&raw);
+        depth.iter().map(|&d| d > 0.0).collect()
     }
 
     /// Fragment-shader invocations of the last frame's `scene_vrs` pass (frame completed).
     pub fn invocations(&self) -> Option<u64> {
-        self.raw.as_ref()?.invocations()
+        self.raw.as_ref()?.invocations().0
     }
 
     fn make_raw(&mut self, gpu: &Gpu, scene: &SceneGpu) -> Result<RawVrsPass, String> {
         let source = vrs_source();
+        let adaptive = matches!(self.rates, Rates::Adaptive(_));
         let targets: Vec<Targets> = (0..self.parities)
             .map(|p| Targets {
                 color: &self.textures[COLORS[p]],
-                motion: &self.textures["motion"],
                 depth: &self.textures[DEPTHS[p]],
+                motion: adaptive.then(|| &self.textures["motion"]),
             })
             .collect();
         RawVrsPass::new(
@@ -349,6 +372,7 @@ impl HardwareGpu {
                 wgsl: &source,
                 vertex: "vs_vrs",
                 fragment: "fs_vrs",
+                motion_fragment: adaptive.then_some("fs_vrs_motion"),
             },
             &targets,
             [self.width, self.height],
@@ -359,29 +383,38 @@ impl HardwareGpu {
         )
     }
 
-    fn clear_pass(&self, encoder: &mut wgpu::CommandEncoder, scene: &SceneGpu, timers: &Timers) {
-        let color = self.textures[COLORS[self.parity]].create_view(&Default::default());
-        let motion = self.textures["motion"].create_view(&Default::default());
-        let depth = self.textures[DEPTHS[self.parity]].create_view(&Default::default());
-        let target = |view, clear| {
-            Some(wgpu::RenderPassColorAttachment {
-                view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(clear),
-                    store: wgpu::StoreOp::Store,
-                },
-            })
-        };
-        let q = timers.begin("clear", encoder);
-        {
-            let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("clear"),
-                color_attachments: &[
-                    target(&color, scene.clear_color()),
-                    target(&motion, wgpu::Color::TRANSPARENT),
-                ],
+    /// Clears every target once in wgpu, when the renderer is built: wgpu then counts them as
+    /// initialised and never clears them lazily before a read (which would wipe what the raw
+    /// passes wrote, unseen by wgpu), and tracks them in the attachment states the raw passes
+    /// begin and end in.
+    fn initialise(&self, gpu: &Gpu) {
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        for p in 0..self.parities {
+            let color = self.textures[COLORS[p]].create_view(&Default::default());
+            let depth = self.textures[DEPTHS[p]].create_view(&Default::default());
+            let motion = self
+                .textures
+                .get("motion")
+                .filter(|_| p == 0)
+                .map(|t| t.create_view(&Default::default()));
+            let target = |view| {
+                Some(wgpu::RenderPassColorAttachment {
+                    view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })
+            };
+            let mut colors = vec![target(&color)];
+            if let Some(m) = &motion {
+                colors.push(target(m));
+            }
+            encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("initialise vrs targets"),
+                color_attachments: &colors,
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                     view: &depth,
                     depth_ops: Some(wgpu::Operations {
@@ -390,14 +423,36 @@ impl HardwareGpu {
                     }),
                     stencil_ops: None,
                 }),
-                timestamp_writes: q.render_pass_timestamp_writes(),
+                timestamp_writes: None,
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            timers.begin_stats(&mut rp, "clear");
-            timers.end_stats(&mut rp, "clear");
         }
-        timers.end(encoder, q);
+        gpu.queue.submit([encoder.finish()]);
+    }
+
+    /// Moves this frame's `color` (if asked), `motion` (if asked and present) and depth into
+    /// the states the raw render passes begin and end in (COLOR_TARGET, DEPTH_STENCIL_WRITE).
+    fn transition(&self, encoder: &mut wgpu::CommandEncoder, color: bool, motion: bool) {
+        let state = |texture, state| wgpu::TextureTransition {
+            texture,
+            selector: None,
+            state,
+        };
+        let mut t = vec![state(
+            &self.textures[DEPTHS[*self.sides.current()]],
+            wgpu::TextureUses::DEPTH_STENCIL_WRITE,
+        )];
+        if color {
+            t.push(state(
+                &self.textures[COLORS[*self.sides.current()]],
+                wgpu::TextureUses::COLOR_TARGET,
+            ));
+        }
+        if let Some(m) = self.textures.get("motion").filter(|_| motion) {
+            t.push(state(m, wgpu::TextureUses::COLOR_TARGET));
+        }
+        encoder.transition_resources(std::iter::empty(), t.into_iter());
     }
 }
 
@@ -414,7 +469,7 @@ impl Renderer for HardwareGpu {
     }
 
     fn output(&self) -> &wgpu::Texture {
-        &self.textures[COLORS[self.parity]]
+        &self.textures[COLORS[*self.sides.current()]]
     }
 
     fn record(
@@ -425,25 +480,47 @@ impl Renderer for HardwareGpu {
         encoder: &mut wgpu::CommandEncoder,
         frame: FrameInfo,
     ) {
-        self.parity = (frame.index as usize) % self.parities;
+        self.sides.select(frame.index);
+        let side = *self.sides.current();
         scene.write_view(
             &gpu.queue,
             0,
             &crate::render::scene::View::whole(frame.time, frame.prev_time),
         );
+        let c = scene.clear_color();
+        let background = [c.r as f32, c.g as f32, c.b as f32, c.a as f32];
+        // wgpu forbids raw and wgpu commands in one encoder: what was recorded so far, each raw
+        // pass between the wgpu work around it, and the closing timestamp go out in one
+        // submission, in order; the caller's encoder is replaced by a fresh one for what follows
+        // (query resolution).
+        let device = &gpu.device;
+        let fresh = || device.create_command_encoder(&Default::default());
+        let mut submit = Vec::new();
+        let mut wgpu_work = std::mem::replace(encoder, fresh());
         if let (Some(r), Some(a)) = (&self.rate, &self.attachment_pass) {
+            // 1. This frame's depth and motion.
+            self.transition(&mut wgpu_work, false, true);
+            let q = timers.begin_encoder(PREPASS, &mut wgpu_work);
+            submit.push(std::mem::replace(&mut wgpu_work, fresh()).finish());
+            let mut raw = fresh();
+            if let Some(raw_pass) = self.raw.as_mut() {
+                raw_pass.record_prepass(&mut raw, side);
+            }
+            submit.push(raw.finish());
+            timers.end(&mut wgpu_work, q);
+            // 2. The rates from the previous output reprojected by that motion.
             self.last = Some(r.record(
                 gpu,
                 scene,
                 timers,
-                encoder,
-                self.parity,
+                &mut wgpu_work,
+                side,
                 frame.history_valid,
                 self.width,
                 self.height,
             ));
             timed_dispatch(
-                encoder,
+                &mut wgpu_work,
                 timers,
                 "rate_attachment",
                 &a.pipeline,
@@ -451,29 +528,34 @@ impl Renderer for HardwareGpu {
                 [a.words.div_ceil(64), 1],
             );
         }
-        self.clear_pass(encoder, scene, timers);
-        let q = timers.begin_encoder(SCENE_PASS, encoder);
-        // wgpu forbids raw and wgpu commands in one encoder: what was recorded so far, the raw
-        // pass and the closing timestamp go out in one submission, in order; the caller's
-        // encoder is replaced by a fresh one for what follows (query resolution).
-        let device = &gpu.device;
-        let before = std::mem::replace(encoder, device.create_command_encoder(&Default::default()));
-        let mut raw = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some(SCENE_PASS),
-        });
-        if let Some(r) = self.raw.as_mut() {
-            r.record(&mut raw, self.parity);
+        // 3. The frame shaded at the rates.
+        self.transition(&mut wgpu_work, true, false);
+        let q = timers.begin_encoder(SCENE_PASS, &mut wgpu_work);
+        submit.push(wgpu_work.finish());
+        let mut raw = fresh();
+        if let Some(raw_pass) = self.raw.as_mut() {
+            raw_pass.record_shade(&mut raw, side, background);
         }
-        let mut after = device.create_command_encoder(&Default::default());
+        submit.push(raw.finish());
+        let mut after = fresh();
         timers.end(&mut after, q);
-        gpu.queue
-            .submit([before.finish(), raw.finish(), after.finish()]);
+        submit.push(after.finish());
+        gpu.queue.submit(submit);
     }
 
     fn own_statistics(&mut self, _gpu: &Gpu) -> BTreeMap<String, u64> {
-        self.invocations()
-            .map(|n| BTreeMap::from([(SCENE_PASS.to_string(), n)]))
-            .unwrap_or_default()
+        let Some(raw) = self.raw.as_ref() else {
+            return BTreeMap::new();
+        };
+        let (shade, prepass) = raw.invocations();
+        let mut out = BTreeMap::new();
+        if let Some(n) = shade {
+            out.insert(SCENE_PASS.to_string(), n);
+        }
+        if let Some(n) = prepass {
+            out.insert(PREPASS.to_string(), n);
+        }
+        out
     }
 
     fn frame_extras(&mut self, gpu: &Gpu, frame: &HdrImage, image: bool) -> FrameExtras {

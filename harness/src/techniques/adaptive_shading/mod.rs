@@ -17,7 +17,6 @@ pub mod raw_pass;
 
 use super::definition::{BuildContext, Definition, Shader, Target, Technique};
 use crate::gpu::{Extension, Requirements, Unsupported};
-use crate::params::{Param, ParamSpec};
 use crate::render::graph::Plan;
 use crate::render::renderer::Renderer;
 use crate::techniques::Variant;
@@ -26,62 +25,6 @@ pub use gpu::{graph, rate_image, AdaptiveGpu, LastFrame};
 pub use hardware::{HardwareGpu, Rates};
 pub use model::{CoarseSample, Mode, RateParams};
 
-pub static THRESHOLD: Param<f64> = Param::float(
-    "threshold",
-    (0.0, false, 100.0),
-    0.15,
-    "sensitivity threshold t of the just-noticeable-difference threshold t (I_avg + l) (Eq. 15; the paper's value). Sweep it for the paper's Fig. 10 (error against average shading rate)",
-);
-pub static ENV_LUMA: Param<f64> = Param::float(
-    "env_luma",
-    (0.0, true, 100.0),
-    0.05,
-    "environment luminance l (Eq. 15; the paper's value)",
-);
-pub static K: Param<f64> = Param::float(
-    "k",
-    (0.0, false, 100.0),
-    2.13,
-    "quarter-rate error over half-rate error (Eq. 14); also the scale of the quarter-rate motion factor (Eq. 21)",
-);
-pub static MODE: Param<Mode> = Mode::param(
-    "mode",
-    Mode::ContentMotion,
-    "`content-motion`: Eq. 22, the error estimate scaled by the motion factors b_H, b_Q (Eq. 20, 21) of the tile's minimum motion per axis; `content`: Eq. 16, no motion factors; `motion`: standalone motion-adaptive shading (Eq. 24), no error estimate, the relative error taken as `max_error`",
-);
-pub static MAX_ERROR: Param<f64> = Param::float(
-    "max_error",
-    (0.0, false, 100.0),
-    0.1,
-    "`motion` mode only: the bound e on the relative error (Eq. 24); 0.1 as the paper's example (section 4.2: with t = 0.03, half rate from 2.86 px/frame, quarter from 9.49)",
-);
-pub static HYSTERESIS: Param<f64> = Param::float(
-    "hysteresis",
-    (0.0, true, 0.99),
-    0.2,
-    "epsilon of the thresholds t(1 + epsilon) and t(1 - epsilon) (section 5.4; the paper gives no value; 0 turns it off. A tile shaded coarsely shows about sqrt 2 more error estimate next frame than at full rate (replicated pixels step at coarse-pixel borders: the feedback loop of section 5.4), so without hysteresis rates oscillate frame to frame on a static scene: on a small `detailed.toml` flicker was 0.53 at epsilon 0, 0.19 at 0.1, 0.055 at 0.2 and above, native 0.052), a Schmitt trigger on each tile's previous rate per axis (before the neighbour filter): a rise of the predicted error to a finer rate must pass t(1 + epsilon), a fall to a coarser rate t(1 - epsilon)",
-);
-pub static NEIGHBOUR_FILTER: Param<bool> = Param::flag(
-    "neighbour_filter",
-    true,
-    "a `rate_filter` pass limiting neighbouring tiles (8-neighbourhood) to a 2x rate difference per axis, quarter raised to half (section 5.4)",
-);
-pub static ALLOW_4X4: Param<bool> = Param::flag(
-    "allow_4x4",
-    false,
-    "quarter rate on both axes at once; off in the paper (section 3.4): the axis with the larger error gets half rate",
-);
-pub static COARSE_SAMPLE: Param<CoarseSample> = CoarseSample::param(
-    "coarse_sample",
-    CoarseSample::Centre,
-    "where the shading pass shades a coarse pixel: `centre` as hardware VRS does (the paper's setting): at the mean of the G-buffer attributes of the object's pixels in it, with the ground filter's derivatives scaled across it (coarse pixels blur rather than alias); `pixel`: at the G-buffer sample of its shading pixel (the centre pixel, or the object's first pixel in it), replicated (a native sample: smaller error against a `native` reference where native itself aliases)",
-);
-pub static DISOCCLUSION_TOLERANCE: Param<f64> = Param::float(
-    "disocclusion_tolerance",
-    (0.0, false, 1.0e9),
-    0.05,
-    "depth-based rejection (section 5.1): a covered pixel whose reprojected position is off screen, or whose previous-frame view depth differs from its surface's by more than this fraction, is disoccluded, and its tile shaded at 1x1",
-);
 crate::choice! {
     /// Where `adaptive-shading` shades at its rates (parameter `vrs`).
     pub enum Vrs {
@@ -111,45 +54,9 @@ impl FixedRate {
     }
 }
 
-pub static VRS: Param<Vrs> = Vrs::param(
-    "vrs",
-    Vrs::Software,
-    "`software`: a G-buffer pass, then a compute pass shading once per coarse pixel and object (runs everywhere; never faster than `native`); `hardware`: the forward pass drawn with a fragment-shading-rate attachment filled from the rates (VK_KHR_fragment_shading_rate through raw Vulkan beside wgpu; the rates of frame N + 1 from frame N's output and motion, section 5); skipped on adapters without the extension and its attachment feature. Compare with `native-vrs`, the same pipeline at 1x1",
-);
-pub static RATE: Param<FixedRate> = FixedRate::param(
-    "rate",
-    FixedRate::R1x1,
-    "every tile's fragment size: `1x1` is the full-rate baseline of `adaptive-shading` with `vrs = \"hardware\"` (the same pipeline without rates), `2x2` and `4x4` the fixed-rate extremes",
-);
-
-static PARAMS: [&ParamSpec; 11] = [
-    &VRS.spec,
-    &THRESHOLD.spec,
-    &ENV_LUMA.spec,
-    &K.spec,
-    &MODE.spec,
-    &MAX_ERROR.spec,
-    &HYSTERESIS.spec,
-    &NEIGHBOUR_FILTER.spec,
-    &ALLOW_4X4.spec,
-    &COARSE_SAMPLE.spec,
-    &DISOCCLUSION_TOLERANCE.spec,
-];
-
 /// Rate-selection parameters of an `adaptive-shading` variant.
 pub fn rate_params(v: &Variant) -> RateParams {
-    RateParams {
-        threshold: v.get(&THRESHOLD) as f32,
-        env_luma: v.get(&ENV_LUMA) as f32,
-        k: v.get(&K) as f32,
-        mode: v.get(&MODE),
-        max_error: v.get(&MAX_ERROR) as f32,
-        hysteresis: v.get(&HYSTERESIS) as f32,
-        neighbour_filter: v.get(&NEIGHBOUR_FILTER),
-        allow_4x4: v.get(&ALLOW_4X4),
-        disocclusion_tolerance: v.get(&DISOCCLUSION_TOLERANCE) as f32,
-        coarse_sample: v.get(&COARSE_SAMPLE),
-    }
+    Options::from_variant(v).rates()
 }
 
 /// The rate selection a variant runs: its parameters for `adaptive-shading`, `None` (every tile at
@@ -158,11 +65,91 @@ pub fn rates_of(v: &Variant) -> Option<RateParams> {
     (v.technique.name() == Technique::name(&AdaptiveShading)).then(|| rate_params(v))
 }
 
-/// An `adaptive-shading` variant's options: where it shades at its rates, and the rates.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Options {
-    pub vrs: Vrs,
-    pub rates: RateParams,
+crate::options! {
+    /// An `adaptive-shading` variant's options: where it shades at its rates (`vrs`), and the rate
+    /// selection ([`Options::rates`]).
+    #[derive(Clone, Copy, Debug, PartialEq)]
+    pub struct Options {
+        vrs: Vrs = choice(
+            Vrs::Software,
+            "`software`: a G-buffer pass, then a compute pass shading once per coarse pixel and object (runs everywhere; never faster than `native`); `hardware`: the forward pass drawn with a fragment-shading-rate attachment filled from the rates (VK_KHR_fragment_shading_rate through raw Vulkan beside wgpu; in the paper's order, section 5: a depth pre-pass writes this frame's motion, the rate pass reprojects the previous output by it, then the frame is shaded at those rates); skipped on adapters without the extension and its attachment feature. Compare with `native-vrs`, the same pipeline at 1x1",
+        ),
+        threshold: f32 = float(
+            (0.0, false, 100.0),
+            0.15,
+            "sensitivity threshold t of the just-noticeable-difference threshold t (I_avg + l) (Eq. 15; the paper's value). Sweep it for the paper's Fig. 10 (error against average shading rate)",
+        ),
+        env_luma: f32 = float(
+            (0.0, true, 100.0),
+            0.05,
+            "environment luminance l (Eq. 15; the paper's value)",
+        ),
+        k: f32 = float(
+            (0.0, false, 100.0),
+            2.13,
+            "quarter-rate error over half-rate error (Eq. 14); also the scale of the quarter-rate motion factor (Eq. 21)",
+        ),
+        mode: Mode = choice(
+            Mode::ContentMotion,
+            "`content-motion`: Eq. 22, the error estimate scaled by the motion factors b_H, b_Q (Eq. 20, 21) of the tile's minimum motion per axis; `content`: Eq. 16, no motion factors; `motion`: standalone motion-adaptive shading (Eq. 24), no error estimate, the relative error taken as `max_error`",
+        ),
+        max_error: f32 = float(
+            (0.0, false, 100.0),
+            0.1,
+            "`motion` mode only: the bound e on the relative error (Eq. 24); 0.1 as the paper's example (section 4.2: with t = 0.03, half rate from 2.86 px/frame, quarter from 9.49)",
+        ),
+        hysteresis: f32 = float(
+            (0.0, true, 0.99),
+            0.2,
+            "epsilon of the thresholds t(1 + epsilon) and t(1 - epsilon) (section 5.4; the paper gives no value; 0 turns it off. A tile shaded coarsely shows about sqrt 2 more error estimate next frame than at full rate (replicated pixels step at coarse-pixel borders: the feedback loop of section 5.4), so without hysteresis rates oscillate frame to frame on a static scene: on a small `detailed.toml` flicker was 0.53 at epsilon 0, 0.19 at 0.1, 0.055 at 0.2 and above, native 0.052), a Schmitt trigger on each tile's previous rate per axis (before the neighbour filter): a rise of the predicted error to a finer rate must pass t(1 + epsilon), a fall to a coarser rate t(1 - epsilon)",
+        ),
+        neighbour_filter: bool = flag(
+            true,
+            "a `rate_filter` pass limiting neighbouring tiles (8-neighbourhood) to a 2x rate difference per axis, quarter raised to half (section 5.4)",
+        ),
+        allow_4x4: bool = flag(
+            false,
+            "quarter rate on both axes at once; off in the paper (section 3.4): the axis with the larger error gets half rate",
+        ),
+        coarse_sample: CoarseSample = choice(
+            CoarseSample::Centre,
+            "where the shading pass shades a coarse pixel: `centre` as hardware VRS does (the paper's setting): at the mean of the G-buffer attributes of the object's pixels in it, with the ground filter's derivatives scaled across it (coarse pixels blur rather than alias); `pixel`: at the G-buffer sample of its shading pixel (the centre pixel, or the object's first pixel in it), replicated (a native sample: smaller error against a `native` reference where native itself aliases)",
+        ),
+        disocclusion_tolerance: f32 = float(
+            (0.0, false, 1.0e9),
+            0.05,
+            "depth-based rejection (section 5.1): a covered pixel whose reprojected position is off screen, or whose previous-frame view depth differs from its surface's by more than this fraction, is disoccluded, and its tile shaded at 1x1",
+        ),
+    }
+}
+
+impl Options {
+    /// The rate selection (everything but `vrs`), as the model and the shaders take it.
+    pub fn rates(&self) -> RateParams {
+        RateParams {
+            threshold: self.threshold,
+            env_luma: self.env_luma,
+            k: self.k,
+            mode: self.mode,
+            max_error: self.max_error,
+            hysteresis: self.hysteresis,
+            neighbour_filter: self.neighbour_filter,
+            allow_4x4: self.allow_4x4,
+            disocclusion_tolerance: self.disocclusion_tolerance,
+            coarse_sample: self.coarse_sample,
+        }
+    }
+}
+
+crate::options! {
+    /// A `native-vrs` variant's options: every tile's rate.
+    #[derive(Clone, Copy, Debug, PartialEq)]
+    pub struct FixedOptions {
+        rate: FixedRate = choice(
+            FixedRate::R1x1,
+            "every tile's fragment size: `1x1` is the full-rate baseline of `adaptive-shading` with `vrs = \"hardware\"` (the same pipeline without rates), `2x2` and `4x4` the fixed-rate extremes",
+        ),
+    }
 }
 
 /// What the hardware path needs: VK_KHR_fragment_shading_rate with attachment rates.
@@ -232,13 +219,6 @@ impl Definition for AdaptiveShading {
         "adaptive-shading"
     }
 
-    fn options(&self, variant: &Variant) -> Options {
-        Options {
-            vrs: variant.get(&VRS),
-            rates: rate_params(variant),
-        }
-    }
-
     fn requirements(&self, options: &Options) -> Requirements {
         match options.vrs {
             Vrs::Software => Requirements::none(),
@@ -259,19 +239,15 @@ impl Definition for AdaptiveShading {
         "NVIDIA's content and motion adaptive shading on software variable-rate shading: a rate per 16x16 tile from the previous frame"
     }
 
-    fn params(&self) -> &'static [&'static ParamSpec] {
-        &PARAMS
-    }
-
     fn check(&self, options: &Options) -> Result<(), String> {
-        if options.vrs == Vrs::Hardware && options.rates.coarse_sample == CoarseSample::Pixel {
+        if options.vrs == Vrs::Hardware && options.coarse_sample == CoarseSample::Pixel {
             return Err("`coarse_sample = \"pixel\"` needs `vrs = \"software\"`: hardware variable-rate shading shades each coarse pixel at its centre".into());
         }
         Ok(())
     }
 
     fn plan(&self, options: &Options, target: Target) -> Plan {
-        let p = options.rates;
+        let p = options.rates();
         match options.vrs {
             Vrs::Software => graph(Some(&p), target.width, target.height),
             Vrs::Hardware => {
@@ -288,11 +264,11 @@ impl Definition for AdaptiveShading {
         check_untextured("adaptive-shading", cx)?;
         let t = cx.target;
         if options.vrs == Vrs::Hardware {
-            return build_hardware(Rates::Adaptive(options.rates), cx);
+            return build_hardware(Rates::Adaptive(options.rates()), cx);
         }
         Ok(Box::new(AdaptiveGpu::new(
             cx.gpu,
-            Some(options.rates),
+            Some(options.rates()),
             t.width,
             t.height,
         )))
@@ -308,18 +284,13 @@ impl Definition for AdaptiveShading {
 pub struct NativeVrs;
 
 impl Definition for NativeVrs {
-    /// Every tile's rate.
-    type Options = FixedRate;
+    type Options = FixedOptions;
 
     fn name(&self) -> &'static str {
         "native-vrs"
     }
 
-    fn options(&self, variant: &Variant) -> FixedRate {
-        variant.get(&RATE)
-    }
-
-    fn requirements(&self, _rate: &FixedRate) -> Requirements {
+    fn requirements(&self, _options: &FixedOptions) -> Requirements {
         hardware_requirements()
     }
 
@@ -327,13 +298,8 @@ impl Definition for NativeVrs {
         "the hardware path of `adaptive-shading` (`vrs = \"hardware\"`) with every tile at one fixed rate: at `1x1` the same pipeline without rates (its full-rate baseline), at `2x2` and `4x4` the fixed-rate extremes; needs VK_KHR_fragment_shading_rate"
     }
 
-    fn params(&self) -> &'static [&'static ParamSpec] {
-        static P: [&ParamSpec; 1] = [&RATE.spec];
-        &P
-    }
-
-    fn plan(&self, rate: &FixedRate, target: Target) -> Plan {
-        let (rx, ry) = rate.size();
+    fn plan(&self, options: &FixedOptions, target: Target) -> Plan {
+        let (rx, ry) = options.rate.size();
         hardware::graph(
             &Rates::Fixed(rx, ry),
             target.width,
@@ -344,11 +310,11 @@ impl Definition for NativeVrs {
 
     fn build(
         &self,
-        rate: &FixedRate,
+        options: &FixedOptions,
         cx: &BuildContext<'_>,
     ) -> Result<Box<dyn Renderer>, Unsupported> {
         check_untextured("native-vrs", cx)?;
-        let (rx, ry) = rate.size();
+        let (rx, ry) = options.rate.size();
         build_hardware(Rates::Fixed(rx, ry), cx)
     }
 
@@ -366,8 +332,6 @@ impl Definition for NativeDeferred {
     fn name(&self) -> &'static str {
         "native-deferred"
     }
-
-    fn options(&self, _variant: &Variant) {}
 
     fn summary(&self) -> &'static str {
         "the deferred path of `adaptive-shading` with every tile at 1x1: a full-resolution G-buffer pass, then a compute pass shading every pixel with the forward path's shading function (bitwise the same image as `native` on lavapipe); the baseline of `adaptive-shading` in software (`speedup.native-deferred`; in hardware it is `native-vrs`)"

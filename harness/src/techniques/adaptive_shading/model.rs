@@ -161,8 +161,10 @@ pub struct Inputs<'a> {
     /// Previous frame's output, linear RGBA per pixel.
     pub prev_color: &'a [[f32; 4]],
     /// Per pixel: motion in pixels (current minus previous, y down), the surface's expected
-    /// previous reversed-Z depth, covered (1) or background (0).
+    /// previous reversed-Z depth, 1; read only where `depth` is covered.
     pub motion: &'a [[f32; 4]],
+    /// This frame's reversed-Z depth (G-buffer or depth pre-pass): covered where not 0.
+    pub depth: &'a [f32],
     /// Previous frame's reversed-Z depth.
     pub prev_depth: &'a [f32],
     /// Previous frame's per-tile state (decided log2 rate per axis; negative: none).
@@ -216,7 +218,12 @@ pub fn tile_stats(inp: &Inputs, tx: u32, ty: u32) -> TileStats {
                 continue;
             }
             let (px, py) = pixel(i);
-            let m = inp.motion[(py * w + px) as usize];
+            let covered = inp.depth[(py * w + px) as usize] > 0.0;
+            let m = if covered {
+                inp.motion[(py * w + px) as usize]
+            } else {
+                [0.0; 4]
+            };
             let qx = (px as f32 + 0.5 - m[0]).floor();
             let qy = (py as f32 + 0.5 - m[1]).floor();
             let on_screen = qx >= 0.0 && qy >= 0.0 && qx < w as f32 && qy < h as f32;
@@ -226,7 +233,7 @@ pub fn tile_stats(inp: &Inputs, tx: u32, ty: u32) -> TileStats {
             );
             let c = inp.prev_color[(cy * w + cx) as usize];
             lum[i] = luma([c[0].max(0.0), c[1].max(0.0), c[2].max(0.0)]);
-            if m[3] > 0.5 {
+            if covered {
                 mins[t] = [mins[t][0].min(m[0].abs()), mins[t][1].min(m[1].abs())];
                 let occluded = if on_screen {
                     let prev =

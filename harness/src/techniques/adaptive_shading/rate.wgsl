@@ -4,7 +4,7 @@
 // (section 5.1), take its luma (Eq. 25), reduce the error estimate of Eq. 2 (L2 form, x and y
 // apart), the average luma, the minimum motion (section 4.1) and the disoccluded pixels
 // (depth-based rejection, 5.1), then decide the tile's rate (Eq. 15, 20 to 22, 24, hysteresis of
-// 5.4). CPU model: harness/src/render/adaptive_model.rs.
+// 5.4). CPU model: model.rs in this folder.
 
 struct RateParams {
     // width, height, tiles across, tiles down
@@ -19,13 +19,17 @@ struct RateParams {
 
 @group(0) @binding(0) var<uniform> rp: RateParams;
 @group(0) @binding(1) var prev_color: texture_2d<f32>;
-// xy: motion in pixels (current - previous, y down); z: the surface's expected previous depth;
-// w: 1 where geometry covers the pixel.
+// This frame's motion: xy in pixels (current - previous, y down); z: the surface's expected
+// previous depth; w: 1. Read only where `depth` says something is drawn (the hardware path's
+// pre-pass does not clear it).
 @group(0) @binding(2) var motion: texture_2d<f32>;
 @group(0) @binding(3) var prev_depth: texture_depth_2d;
 @group(0) @binding(4) var prev_state: texture_2d<f32>;
 @group(0) @binding(5) var state_out: texture_storage_2d<rg32float, write>;
 @group(0) @binding(6) var rates_out: texture_storage_2d<r32uint, write>;
+// This frame's depth (G-buffer or depth pre-pass; reversed-Z, cleared to 0): a pixel is covered
+// where it is not 0.
+@group(0) @binding(9) var depth: texture_depth_2d;
 
 var<workgroup> lum: array<f32, 256>;
 var<workgroup> sums: array<vec4<f32>, 32>;
@@ -69,12 +73,16 @@ fn main(
         let p = vec2<i32>(tile.xy * 16u + vec2<u32>(lid.x, ly));
         l[k] = 0.0;
         if all(p < size) {
-            let m = textureLoad(motion, p, 0);
+            let covered = textureLoad(depth, p, 0) > 0.0;
+            var m = vec4<f32>(0.0);
+            if covered {
+                m = textureLoad(motion, p, 0);
+            }
             let q = floor(vec2<f32>(p) + 0.5 - m.xy);
             let on_screen = all(q >= vec2<f32>(0.0)) && all(q < vec2<f32>(size));
             let c = vec2<i32>(min(max(q, vec2<f32>(0.0)), vec2<f32>(size - 1)));
             l[k] = luma(max(textureLoad(prev_color, c, 0).rgb, vec3<f32>(0.0)));
-            if m.w > 0.5 {
+            if covered {
                 mn = min(mn, abs(m.xy));
                 var occluded = true;
                 if on_screen {

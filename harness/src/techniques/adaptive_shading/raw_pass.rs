@@ -1,58 +1,77 @@
-//! The raw Vulkan pass of `adaptive-shading`'s hardware path (VK_KHR_fragment_shading_rate beside
-//! wgpu: the only raw Vulkan pass in Tessera): one forward pass drawn with a fragment-shading-rate
-//! attachment. The device with the extension turned on is `gpu/vrs.rs`'s.
+//! The raw Vulkan passes of `adaptive-shading`'s hardware path and `native-vrs`
+//! (VK_KHR_fragment_shading_rate beside wgpu: the only raw Vulkan passes in Tessera): a depth
+//! pre-pass and a forward pass drawn with a fragment-shading-rate attachment. The device with the
+//! extension turned on is `gpu/vrs.rs`'s.
 //!
-//! How the pass fits into wgpu's frame (`hardware.rs` drives it):
-//! wgpu clears the pass's colour, motion and depth targets in an ordinary render pass, which leaves
-//! them, as wgpu tracks them, in COLOR_TARGET / DEPTH_STENCIL_WRITE (COLOR_ATTACHMENT_OPTIMAL /
-//! DEPTH_STENCIL_ATTACHMENT_OPTIMAL) and initialised. [`RawVrsPass::record`] then writes a command
-//! encoder of its own (wgpu forbids mixing raw and wgpu commands in one encoder): a full memory
-//! barrier; a copy of the attachment bytes (written by a wgpu compute pass into a wgpu buffer) into
-//! the R8_UINT attachment image this module owns; the render pass (load, store) in the same
-//! layouts it found the targets in; another full barrier. wgpu's own barriers before the next use
-//! of the targets then hold, since its tracked state is still true. The encoders are submitted
+//! Two shapes (`hardware.rs` drives them):
+//! - **split** (`adaptive-shading`, the paper's order of work, section 5): [`RawVrsPass::record_prepass`]
+//!   is a render pass of its own that clears this frame's depth and draws it with the motion
+//!   target (`fs_vrs_motion`); wgpu's rate passes then read that motion; [`RawVrsPass::record_shade`]
+//!   clears the colour, loads the depth and shades at the attachment's rates (depth test EQUAL,
+//!   no depth writes).
+//! - **single** (`native-vrs`): one render pass that clears colour and depth, draws the depth
+//!   pre-pass (vertex shader only), then shades (EQUAL): no motion, as `native` has none.
+//!
+//! The clears are the render passes' load ops (`native`'s forward pass clears the same way); no
+//! separate clear pass. How the passes fit into wgpu's frame: before each, `hardware.rs` moves
+//! the targets into COLOR_TARGET / DEPTH_STENCIL_WRITE with `CommandEncoder::transition_resources`
+//! (COLOR_ATTACHMENT_OPTIMAL / DEPTH_STENCIL_ATTACHMENT_OPTIMAL, what these render passes begin
+//! and end in), so wgpu's tracked state stays true; the targets were initialised once by a wgpu
+//! clear when the renderer was built, so wgpu never clears them lazily over what these passes
+//! wrote. Each pass records into a command encoder of its own (wgpu forbids mixing raw and wgpu
+//! commands in one encoder): a full memory barrier, its render pass, another full barrier; the
+//! shading pass also copies the attachment bytes (written by a wgpu compute pass into a wgpu
+//! buffer) into the R8_UINT attachment image this module owns. The encoders are submitted
 //! together, in order.
 //!
-//! The pass draws the scene twice in one render pass: a depth pre-pass (vertex shader only), then
-//! the shading draw with depth test EQUAL and no depth writes, so that every covered pixel is
-//! shaded once by its visible primitive (the engines of the paper's section 5 have one).
-//! The pipeline is the project's WGSL (`scene.wgsl` + `adaptive_shading/vrs.wgsl`) compiled to
+//! The pipelines are the project's WGSL (`scene.wgsl` + `adaptive_shading/vrs.wgsl`) compiled to
 //! SPIR-V by naga with the options wgpu uses (no coordinate flip in the shader; the viewport is
-//! flipped, as wgpu-hal does), with `VkPipelineFragmentShadingRateStateCreateInfoKHR` at 1x1 and
-//! combiner ops (KEEP, REPLACE): the attachment alone decides the rate. Fragment-shader invocations
-//! are counted by a pipeline-statistics query of this module's own.
+//! flipped, as wgpu-hal does); the shading pipeline has
+//! `VkPipelineFragmentShadingRateStateCreateInfoKHR` at 1x1 and combiner ops (KEEP, REPLACE): the
+//! attachment alone decides the rate. Fragment-shader invocations of the shading pass and of the
+//! motion pre-pass are counted by pipeline-statistics queries of this module's own.
 //!
-//! Not here: which rates (the rate pass and the CPU model, this folder's `gpu.rs` and `model.rs`), timing
-//! (wgpu-profiler timestamps around the encoder).
+//! Not here: which rates (the rate pass and the CPU model, this folder's `gpu.rs` and `model.rs`),
+//! timing (wgpu-profiler timestamps around the encoders).
 
 use ash::vk;
 use wgpu::hal::api::Vulkan;
 
 use crate::render::scene::RawDraw;
 
-/// The targets of one frame parity: colour (Rgba16Float), motion (Rgba16Float), depth
-/// (Depth32Float), all `width` x `height`, as wgpu allocated them.
+/// The targets of one frame parity: colour (Rgba16Float) and depth (Depth32Float), and the motion
+/// target (Rgba16Float) of the split shape, all `width` x `height`, as wgpu allocated them.
 pub struct Targets<'a> {
     pub color: &'a wgpu::Texture,
-    pub motion: &'a wgpu::Texture,
     pub depth: &'a wgpu::Texture,
+    pub motion: Option<&'a wgpu::Texture>,
 }
 
-/// Where the pass's SPIR-V comes from: one WGSL module and its two entry points.
+/// Where the passes' SPIR-V comes from: one WGSL module and its entry points; `motion_fragment`
+/// (the motion pre-pass) makes the shape split.
 pub struct Shaders<'a> {
     pub wgsl: &'a str,
     pub vertex: &'a str,
     pub fragment: &'a str,
+    pub motion_fragment: Option<&'a str>,
 }
 
-/// The raw objects of the pass: render pass and framebuffers (one per parity), the attachment
-/// image, the pipeline and its descriptor set, the statistics query.
+/// Query indices in the statistics pool.
+const SHADE_QUERY: u32 = 0;
+const PREPASS_QUERY: u32 = 1;
+
+/// The raw objects of the passes: render passes and framebuffers (one per parity), the
+/// attachment image, the pipelines and their descriptor set, the statistics queries.
 pub struct RawVrsPass {
     device: ash::Device,
     size: [u32; 2],
     attachment_size: [u32; 2],
-    render_pass: vk::RenderPass,
-    framebuffers: Vec<vk::Framebuffer>,
+    /// Colour, depth and rate attachment; depth loaded (split) or cleared (single).
+    shade_pass: vk::RenderPass,
+    /// Split shape only: motion and depth, depth cleared.
+    motion_pass: vk::RenderPass,
+    shade_framebuffers: Vec<vk::Framebuffer>,
+    motion_framebuffers: Vec<vk::Framebuffer>,
     views: Vec<vk::ImageView>,
     rate_image: vk::Image,
     rate_memory: vk::DeviceMemory,
@@ -60,11 +79,17 @@ pub struct RawVrsPass {
     pool: vk::DescriptorPool,
     set: vk::DescriptorSet,
     layout: vk::PipelineLayout,
+    /// The shading draw (EQUAL, rates from the attachment).
     pipeline: vk::Pipeline,
-    prepass: vk::Pipeline,
-    modules: [vk::ShaderModule; 2],
+    /// Single shape: the depth pre-pass in the shading render pass (vertex shader only).
+    depth_prepass: vk::Pipeline,
+    /// Split shape: the motion pre-pass (depth and motion) in its own render pass.
+    motion_prepass: vk::Pipeline,
+    /// Vertex, fragment, motion fragment (null in the single shape).
+    modules: [vk::ShaderModule; 3],
     stats: vk::QueryPool,
-    recorded: bool,
+    /// Whether a shading pass / a pre-pass query was ever recorded.
+    recorded: [bool; 2],
     /// wgpu objects the raw handles point into, kept alive as long as the pass.
     _keep_textures: Vec<wgpu::Texture>,
     _keep_buffers: Vec<wgpu::Buffer>,
@@ -101,9 +126,10 @@ fn vk_err(what: &'static str) -> impl Fn(vk::Result) -> String {
 }
 
 impl RawVrsPass {
-    /// Builds the pass for `targets` (one per frame parity) at `size`, with an attachment of
+    /// Builds the passes for `targets` (one per frame parity) at `size`, with an attachment of
     /// `attachment_size` texels of `texel` pixels filled each frame from `staging` (tightly packed
-    /// bytes), drawing `scene`.
+    /// bytes), drawing `scene`; split when `shaders.motion_fragment` is given (every target then
+    /// needs its motion).
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         device: &wgpu::Device,
@@ -116,8 +142,16 @@ impl RawVrsPass {
         staging: &wgpu::Buffer,
         scene: &RawDraw<'_>,
     ) -> Result<RawVrsPass, String> {
+        let split = shaders.motion_fragment.is_some();
+        if split && targets.iter().any(|t| t.motion.is_none()) {
+            return Err("the motion pre-pass needs a motion target for every parity".into());
+        }
         let vs = spirv(shaders.wgsl, naga::ShaderStage::Vertex, shaders.vertex)?;
         let fs = spirv(shaders.wgsl, naga::ShaderStage::Fragment, shaders.fragment)?;
+        let fs_motion = match shaders.motion_fragment {
+            Some(entry) => Some(spirv(shaders.wgsl, naga::ShaderStage::Fragment, entry)?),
+            None => None,
+        };
         // SAFETY: read-only access to the hal objects for their raw handles; wgpu keeps ownership
         // and the clones below keep every object alive as long as this pass.
         let (raw, memory_props, formats) = unsafe {
@@ -128,8 +162,13 @@ impl RawVrsPass {
                 instance.get_physical_device_memory_properties(hal_device.raw_physical_device());
             let formats = [
                 hal_adapter.texture_format_as_raw(targets[0].color.format()),
-                hal_adapter.texture_format_as_raw(targets[0].motion.format()),
                 hal_adapter.texture_format_as_raw(targets[0].depth.format()),
+                hal_adapter.texture_format_as_raw(
+                    targets[0]
+                        .motion
+                        .map(|m| m.format())
+                        .unwrap_or(targets[0].color.format()),
+                ),
             ];
             (hal_device.raw_device().clone(), memory, formats)
         };
@@ -147,8 +186,10 @@ impl RawVrsPass {
             device: raw,
             size,
             attachment_size,
-            render_pass: vk::RenderPass::null(),
-            framebuffers: Vec::new(),
+            shade_pass: vk::RenderPass::null(),
+            motion_pass: vk::RenderPass::null(),
+            shade_framebuffers: Vec::new(),
+            motion_framebuffers: Vec::new(),
             views: Vec::new(),
             rate_image: vk::Image::null(),
             rate_memory: vk::DeviceMemory::null(),
@@ -157,13 +198,16 @@ impl RawVrsPass {
             set: vk::DescriptorSet::null(),
             layout: vk::PipelineLayout::null(),
             pipeline: vk::Pipeline::null(),
-            prepass: vk::Pipeline::null(),
-            modules: [vk::ShaderModule::null(); 2],
+            depth_prepass: vk::Pipeline::null(),
+            motion_prepass: vk::Pipeline::null(),
+            modules: [vk::ShaderModule::null(); 3],
             stats: vk::QueryPool::null(),
-            recorded: false,
+            recorded: [false; 2],
             _keep_textures: targets
                 .iter()
-                .flat_map(|t| [t.color.clone(), t.motion.clone(), t.depth.clone()])
+                .flat_map(|t| [Some(t.color), Some(t.depth), t.motion])
+                .flatten()
+                .cloned()
                 .collect(),
             _keep_buffers: vec![
                 scene.vertex.clone(),
@@ -254,13 +298,15 @@ impl RawVrsPass {
             vk::ImageAspectFlags::COLOR,
         )?;
 
-        // Render pass: colour and motion (load, store), depth (load, store), the rate attachment.
-        let attachment = |format, layout, store| {
+        // Render passes. Colour targets begin and end in COLOR_ATTACHMENT_OPTIMAL, depth in
+        // DEPTH_STENCIL_ATTACHMENT_OPTIMAL (what wgpu's transitions left them in); a cleared
+        // target's old contents are not read.
+        let attachment = |format, layout, load| {
             vk::AttachmentDescription2::default()
                 .format(format)
                 .samples(vk::SampleCountFlags::TYPE_1)
-                .load_op(vk::AttachmentLoadOp::LOAD)
-                .store_op(store)
+                .load_op(load)
+                .store_op(vk::AttachmentStoreOp::STORE)
                 .stencil_load_op(vk::AttachmentLoadOp::DONT_CARE)
                 .stencil_store_op(vk::AttachmentStoreOp::DONT_CARE)
                 .initial_layout(layout)
@@ -269,44 +315,82 @@ impl RawVrsPass {
         let color_layout = vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL;
         let depth_layout = vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
         let rate_layout = vk::ImageLayout::FRAGMENT_SHADING_RATE_ATTACHMENT_OPTIMAL_KHR;
-        let attachments = [
-            attachment(formats[0], color_layout, vk::AttachmentStoreOp::STORE),
-            attachment(formats[1], color_layout, vk::AttachmentStoreOp::STORE),
-            attachment(formats[2], depth_layout, vk::AttachmentStoreOp::STORE),
-            attachment(
-                vk::Format::R8_UINT,
-                rate_layout,
-                vk::AttachmentStoreOp::DONT_CARE,
-            ),
-        ];
+        let clear = vk::AttachmentLoadOp::CLEAR;
         let reference = |i, layout| {
             vk::AttachmentReference2::default()
                 .attachment(i)
                 .layout(layout)
         };
-        let color_refs = [reference(0, color_layout), reference(1, color_layout)];
-        let depth_ref = reference(2, depth_layout);
-        let rate_ref = reference(3, rate_layout);
-        let mut rate_info = vk::FragmentShadingRateAttachmentInfoKHR::default()
-            .fragment_shading_rate_attachment(&rate_ref)
-            .shading_rate_attachment_texel_size(vk::Extent2D {
-                width: texel[0],
-                height: texel[1],
-            });
-        let subpass = vk::SubpassDescription2::default()
-            .pipeline_bind_point(vk::PipelineBindPoint::GRAPHICS)
-            .color_attachments(&color_refs)
-            .depth_stencil_attachment(&depth_ref)
-            .push_next(&mut rate_info);
-        let subpasses = [subpass];
-        let rp_info = vk::RenderPassCreateInfo2::default()
-            .attachments(&attachments)
-            .subpasses(&subpasses);
-        // SAFETY: the create-info chain (attachments, subpass, shading-rate attachment info)
-        // lives across the call; the extension is enabled on this device (`open`).
-        pass.render_pass =
-            unsafe { d.create_render_pass2(&rp_info, None) }.map_err(vk_err("render pass"))?;
+        {
+            // The shading pass: colour (cleared), depth (the pre-pass's in the split shape, else
+            // cleared), the rate attachment (read only).
+            let depth_load = if split {
+                vk::AttachmentLoadOp::LOAD
+            } else {
+                clear
+            };
+            let attachments = [
+                attachment(formats[0], color_layout, clear),
+                attachment(formats[1], depth_layout, depth_load),
+                attachment(vk::Format::R8_UINT, rate_layout, vk::AttachmentLoadOp::LOAD)
+                    .store_op(vk::AttachmentStoreOp::DONT_CARE),
+            ];
+            let color_refs = [reference(0, color_layout)];
+            let depth_ref = reference(1, depth_layout);
+            let rate_ref = reference(2, rate_layout);
+            let mut rate_info = vk::FragmentShadingRateAttachmentInfoKHR::default()
+                .fragment_shading_rate_attachment(&rate_ref)
+                .shading_rate_attachment_texel_size(vk::Extent2D {
+                    width: texel[0],
+                    height: texel[1],
+                });
+            let subpass = vk::SubpassDescription2::default()
+                .pipeline_bind_point(vk::PipelineBindPoint::GRAPHICS)
+                .color_attachments(&color_refs)
+                .depth_stencil_attachment(&depth_ref)
+                .push_next(&mut rate_info);
+            let subpasses = [subpass];
+            let rp_info = vk::RenderPassCreateInfo2::default()
+                .attachments(&attachments)
+                .subpasses(&subpasses);
+            // SAFETY: the create-info chain (attachments, subpass, shading-rate attachment info)
+            // lives across the call; the extension is enabled on this device (`open`).
+            pass.shade_pass =
+                unsafe { d.create_render_pass2(&rp_info, None) }.map_err(vk_err("render pass"))?;
+        }
+        if split {
+            // The motion pre-pass: motion (not cleared: read only where depth is drawn), depth
+            // (cleared).
+            let attachments = [
+                attachment(formats[2], color_layout, vk::AttachmentLoadOp::DONT_CARE),
+                attachment(formats[1], depth_layout, clear),
+            ];
+            let color_refs = [reference(0, color_layout)];
+            let depth_ref = reference(1, depth_layout);
+            let subpass = vk::SubpassDescription2::default()
+                .pipeline_bind_point(vk::PipelineBindPoint::GRAPHICS)
+                .color_attachments(&color_refs)
+                .depth_stencil_attachment(&depth_ref);
+            let subpasses = [subpass];
+            let rp_info = vk::RenderPassCreateInfo2::default()
+                .attachments(&attachments)
+                .subpasses(&subpasses);
+            // SAFETY: as above.
+            pass.motion_pass = unsafe { d.create_render_pass2(&rp_info, None) }
+                .map_err(vk_err("motion render pass"))?;
+        }
 
+        let framebuffer = |render_pass, views: &[vk::ImageView]| {
+            let info = vk::FramebufferCreateInfo::default()
+                .render_pass(render_pass)
+                .attachments(views)
+                .width(size[0])
+                .height(size[1])
+                .layers(1);
+            // SAFETY: the views are alive and match the render pass's attachments; the rate
+            // view covers ceil(size / texel) texels as the framebuffer size requires.
+            unsafe { d.create_framebuffer(&info, None) }.map_err(vk_err("framebuffer"))
+        };
         for t in targets {
             let c = view(
                 &mut pass,
@@ -314,29 +398,24 @@ impl RawVrsPass {
                 formats[0],
                 vk::ImageAspectFlags::COLOR,
             )?;
-            let m = view(
-                &mut pass,
-                image_of(t.motion)?,
-                formats[1],
-                vk::ImageAspectFlags::COLOR,
-            )?;
             let z = view(
                 &mut pass,
                 image_of(t.depth)?,
-                formats[2],
+                formats[1],
                 vk::ImageAspectFlags::DEPTH,
             )?;
-            let views = [c, m, z, rate_view];
-            let info = vk::FramebufferCreateInfo::default()
-                .render_pass(pass.render_pass)
-                .attachments(&views)
-                .width(size[0])
-                .height(size[1])
-                .layers(1);
-            // SAFETY: the views are alive and match the render pass's attachments; the rate
-            // view covers ceil(size / texel) texels as the framebuffer size requires.
-            let fb = unsafe { d.create_framebuffer(&info, None) }.map_err(vk_err("framebuffer"))?;
-            pass.framebuffers.push(fb);
+            let fb = framebuffer(pass.shade_pass, &[c, z, rate_view])?;
+            pass.shade_framebuffers.push(fb);
+            if let (true, Some(m)) = (split, t.motion) {
+                let m = view(
+                    &mut pass,
+                    image_of(m)?,
+                    formats[2],
+                    vk::ImageAspectFlags::COLOR,
+                )?;
+                let fb = framebuffer(pass.motion_pass, &[m, z])?;
+                pass.motion_framebuffers.push(fb);
+            }
         }
 
         // Descriptor set: group 0 of scene.wgsl (frame uniforms, objects).
@@ -423,21 +502,41 @@ impl RawVrsPass {
             pass.modules[1] = d
                 .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&fs), None)
                 .map_err(vk_err("fragment shader"))?;
+            if let Some(code) = &fs_motion {
+                pass.modules[2] = d
+                    .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(code), None)
+                    .map_err(vk_err("motion fragment shader"))?;
+            }
         }
 
-        // Pipeline: scene.wgsl's vertex layout, reversed-Z depth test (greater), no culling, two
-        // colour targets without blending, the attachment deciding the rate.
+        // Pipelines: scene.wgsl's vertex layout, reversed-Z depth, no culling, one colour target
+        // without blending.
         let vs_name = std::ffi::CString::new(shaders.vertex).map_err(|e| e.to_string())?;
         let fs_name = std::ffi::CString::new(shaders.fragment).map_err(|e| e.to_string())?;
-        let stage_infos = [
+        let motion_name = std::ffi::CString::new(shaders.motion_fragment.unwrap_or("none"))
+            .map_err(|e| e.to_string())?;
+        fn stage(
+            flags: vk::ShaderStageFlags,
+            module: vk::ShaderModule,
+            name: &std::ffi::CStr,
+        ) -> vk::PipelineShaderStageCreateInfo<'_> {
             vk::PipelineShaderStageCreateInfo::default()
-                .stage(vk::ShaderStageFlags::VERTEX)
-                .module(pass.modules[0])
-                .name(&vs_name),
-            vk::PipelineShaderStageCreateInfo::default()
-                .stage(vk::ShaderStageFlags::FRAGMENT)
-                .module(pass.modules[1])
-                .name(&fs_name),
+                .stage(flags)
+                .module(module)
+                .name(name)
+        }
+        let vertex_stage = stage(vk::ShaderStageFlags::VERTEX, pass.modules[0], &vs_name);
+        let shade_stages = [
+            vertex_stage,
+            stage(vk::ShaderStageFlags::FRAGMENT, pass.modules[1], &fs_name),
+        ];
+        let motion_stages = [
+            vertex_stage,
+            stage(
+                vk::ShaderStageFlags::FRAGMENT,
+                pass.modules[2],
+                &motion_name,
+            ),
         ];
         let vertex_bindings = [vk::VertexInputBindingDescription {
             binding: 0,
@@ -484,10 +583,10 @@ impl RawVrsPass {
             .depth_test_enable(true)
             .depth_write_enable(true)
             .depth_compare_op(vk::CompareOp::GREATER);
-        let no_color = [vk::PipelineColorBlendAttachmentState::default(); 2];
+        let no_color = [vk::PipelineColorBlendAttachmentState::default()];
         let prepass_blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&no_color);
         let blend_attachments = [vk::PipelineColorBlendAttachmentState::default()
-            .color_write_mask(vk::ColorComponentFlags::RGBA); 2];
+            .color_write_mask(vk::ColorComponentFlags::RGBA)];
         let blend =
             vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
         let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
@@ -502,7 +601,7 @@ impl RawVrsPass {
                 vk::FragmentShadingRateCombinerOpKHR::REPLACE,
             ]);
         let info = vk::GraphicsPipelineCreateInfo::default()
-            .stages(&stage_infos)
+            .stages(&shade_stages)
             .vertex_input_state(&vertex_input)
             .input_assembly_state(&assembly)
             .viewport_state(&viewport)
@@ -512,42 +611,70 @@ impl RawVrsPass {
             .color_blend_state(&blend)
             .dynamic_state(&dynamic)
             .layout(pass.layout)
-            .render_pass(pass.render_pass)
+            .render_pass(pass.shade_pass)
             .subpass(0)
             .push_next(&mut rate_state);
-        // The depth pre-pass: the same vertex shader (its position is `@invariant`), no
-        // fragment shader, no colour writes, depth test greater and write.
-        let prepass_info = vk::GraphicsPipelineCreateInfo::default()
-            .stages(&stage_infos[..1])
-            .vertex_input_state(&vertex_input)
-            .input_assembly_state(&assembly)
-            .viewport_state(&viewport)
-            .rasterization_state(&raster)
-            .multisample_state(&multisample)
-            .depth_stencil_state(&prepass_depth)
-            .color_blend_state(&prepass_blend)
-            .dynamic_state(&dynamic)
-            .layout(pass.layout)
-            .render_pass(pass.render_pass)
-            .subpass(0);
         // SAFETY: every state struct and the shading-rate chain live across the calls; the
-        // render pass and layout are alive; the pipeline features are enabled on this device
+        // render passes and layout are alive; the pipeline features are enabled on this device
         // (`open`).
         unsafe {
             pass.pipeline = d
                 .create_graphics_pipelines(vk::PipelineCache::null(), &[info], None)
                 .map_err(|(_, e)| format!("VRS pipeline: {e}"))?[0];
-            pass.prepass = d
-                .create_graphics_pipelines(vk::PipelineCache::null(), &[prepass_info], None)
-                .map_err(|(_, e)| format!("depth pre-pass pipeline: {e}"))?[0];
         }
-        // SAFETY: a one-query pool of fragment-shader invocations; pipelineStatisticsQuery is on
-        // when wgpu has PIPELINE_STATISTICS_QUERY (the caller checks).
+        if split {
+            // The motion pre-pass: the same vertex shader (its position is `@invariant`), depth
+            // test greater and write, the motion written where the depth test passes.
+            let motion_info = vk::GraphicsPipelineCreateInfo::default()
+                .stages(&motion_stages)
+                .vertex_input_state(&vertex_input)
+                .input_assembly_state(&assembly)
+                .viewport_state(&viewport)
+                .rasterization_state(&raster)
+                .multisample_state(&multisample)
+                .depth_stencil_state(&prepass_depth)
+                .color_blend_state(&blend)
+                .dynamic_state(&dynamic)
+                .layout(pass.layout)
+                .render_pass(pass.motion_pass)
+                .subpass(0);
+            // SAFETY: as above.
+            unsafe {
+                pass.motion_prepass = d
+                    .create_graphics_pipelines(vk::PipelineCache::null(), &[motion_info], None)
+                    .map_err(|(_, e)| format!("motion pre-pass pipeline: {e}"))?[0];
+            }
+        } else {
+            // The depth pre-pass of the single shape: the same vertex shader, no fragment
+            // shader, no colour writes, depth test greater and write.
+            let prepass_info = vk::GraphicsPipelineCreateInfo::default()
+                .stages(&shade_stages[..1])
+                .vertex_input_state(&vertex_input)
+                .input_assembly_state(&assembly)
+                .viewport_state(&viewport)
+                .rasterization_state(&raster)
+                .multisample_state(&multisample)
+                .depth_stencil_state(&prepass_depth)
+                .color_blend_state(&prepass_blend)
+                .dynamic_state(&dynamic)
+                .layout(pass.layout)
+                .render_pass(pass.shade_pass)
+                .subpass(0);
+            // SAFETY: as above.
+            unsafe {
+                pass.depth_prepass = d
+                    .create_graphics_pipelines(vk::PipelineCache::null(), &[prepass_info], None)
+                    .map_err(|(_, e)| format!("depth pre-pass pipeline: {e}"))?[0];
+            }
+        }
+        // SAFETY: a two-query pool of fragment-shader invocations (shading pass, motion pre-pass);
+        // pipelineStatisticsQuery is on when wgpu has PIPELINE_STATISTICS_QUERY (the caller
+        // checks).
         pass.stats = unsafe {
             d.create_query_pool(
                 &vk::QueryPoolCreateInfo::default()
                     .query_type(vk::QueryType::PIPELINE_STATISTICS)
-                    .query_count(1)
+                    .query_count(2)
                     .pipeline_statistics(
                         vk::QueryPipelineStatisticFlags::FRAGMENT_SHADER_INVOCATIONS,
                     ),
@@ -558,14 +685,138 @@ impl RawVrsPass {
         Ok(pass)
     }
 
-    /// Records the pass for frame `parity` into `encoder`, which must hold nothing else (wgpu
-    /// forbids mixing); submit it after the encoder that cleared the targets and filled the
-    /// staging buffer, before anything that reads the targets.
-    pub fn record(&mut self, encoder: &mut wgpu::CommandEncoder, parity: usize) {
+    /// The viewport (wgpu-hal's convention: flipped, negative height, so that clip space is
+    /// WebGPU's, y up) and the render area.
+    fn area(&self) -> (vk::Viewport, vk::Rect2D) {
+        let [w, h] = self.size;
+        let area = vk::Rect2D {
+            offset: vk::Offset2D { x: 0, y: 0 },
+            extent: vk::Extent2D {
+                width: w,
+                height: h,
+            },
+        };
+        let viewport = vk::Viewport {
+            x: 0.0,
+            y: h as f32,
+            width: w as f32,
+            height: -(h as f32),
+            min_depth: 0.0,
+            max_depth: 1.0,
+        };
+        (viewport, area)
+    }
+
+    /// Records `body` into `encoder` between two full memory barriers (everything submitted
+    /// before, then this, then everything after); false when the encoder is not Vulkan's.
+    ///
+    /// # Safety
+    /// `encoder` must hold no wgpu commands (wgpu forbids mixing), and every handle `body`
+    /// records must stay alive until the commands complete.
+    unsafe fn record_raw(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        body: impl FnOnce(&ash::Device, vk::CommandBuffer),
+    ) -> bool {
         let d = &self.device;
         let full_barrier = vk::MemoryBarrier::default()
             .src_access_mask(vk::AccessFlags::MEMORY_WRITE)
             .dst_access_mask(vk::AccessFlags::MEMORY_READ | vk::AccessFlags::MEMORY_WRITE);
+        let all = vk::PipelineStageFlags::ALL_COMMANDS;
+        // SAFETY: the caller's contract.
+        unsafe {
+            encoder.as_hal_mut::<Vulkan, _, _>(|e| {
+                let Some(e) = e else { return false };
+                let cb = e.raw_handle();
+                let flags = vk::DependencyFlags::empty();
+                d.cmd_pipeline_barrier(cb, all, all, flags, &[full_barrier], &[], &[]);
+                body(d, cb);
+                d.cmd_pipeline_barrier(cb, all, all, flags, &[full_barrier], &[], &[]);
+                true
+            })
+        }
+    }
+
+    /// Binds the descriptor set, vertex and index buffers and draws every object with
+    /// `pipeline`.
+    ///
+    /// # Safety
+    /// Inside a render pass compatible with `pipeline`, on a command buffer being recorded.
+    unsafe fn draw_scene(&self, d: &ash::Device, cb: vk::CommandBuffer, pipeline: vk::Pipeline) {
+        // SAFETY: the caller's contract; the set, buffers and pipeline are alive.
+        unsafe {
+            d.cmd_bind_descriptor_sets(
+                cb,
+                vk::PipelineBindPoint::GRAPHICS,
+                self.layout,
+                0,
+                &[self.set],
+                &[],
+            );
+            d.cmd_bind_vertex_buffers(cb, 0, &[self.vertex], &[0]);
+            d.cmd_bind_index_buffer(cb, self.index, 0, vk::IndexType::UINT32);
+            d.cmd_bind_pipeline(cb, vk::PipelineBindPoint::GRAPHICS, pipeline);
+            for (i, &(first, count, base)) in self.draws.iter().enumerate() {
+                d.cmd_draw_indexed(cb, count, 1, first, base, i as u32);
+            }
+        }
+    }
+
+    /// The split shape's motion pre-pass for frame `parity` into `encoder` (which must hold
+    /// nothing else): this frame's depth cleared and drawn, the motion written where it is
+    /// drawn. Submit it after the encoder that moved the motion and depth targets into
+    /// COLOR_TARGET / DEPTH_STENCIL_WRITE, before the rate pass. Does nothing in the single shape.
+    pub fn record_prepass(&mut self, encoder: &mut wgpu::CommandEncoder, parity: usize) {
+        if self.motion_framebuffers.is_empty() {
+            return;
+        }
+        let (viewport, area) = self.area();
+        let clears = [
+            vk::ClearValue::default(),
+            vk::ClearValue {
+                depth_stencil: vk::ClearDepthStencilValue {
+                    depth: 0.0,
+                    stencil: 0,
+                },
+            },
+        ];
+        let begin = vk::RenderPassBeginInfo::default()
+            .render_pass(self.motion_pass)
+            .framebuffer(self.motion_framebuffers[parity % self.motion_framebuffers.len()])
+            .render_area(area)
+            .clear_values(&clears);
+        let subpass = vk::SubpassBeginInfo::default().contents(vk::SubpassContents::INLINE);
+        let (stats, pipeline) = (self.stats, self.motion_prepass);
+        // SAFETY: `encoder` holds no wgpu commands (the caller's contract); every handle is alive
+        // while the pass is (kept clones of the wgpu objects, our own objects destroyed only in
+        // Drop after the device is idle); the targets end in the layouts they began in.
+        let ok = unsafe {
+            self.record_raw(encoder, |d, cb| {
+                d.cmd_reset_query_pool(cb, stats, PREPASS_QUERY, 1);
+                d.cmd_begin_query(cb, stats, PREPASS_QUERY, vk::QueryControlFlags::empty());
+                d.cmd_begin_render_pass2(cb, &begin, &subpass);
+                d.cmd_set_viewport(cb, 0, &[viewport]);
+                d.cmd_set_scissor(cb, 0, &[area]);
+                self.draw_scene(d, cb, pipeline);
+                d.cmd_end_render_pass2(cb, &vk::SubpassEndInfo::default());
+                d.cmd_end_query(cb, stats, PREPASS_QUERY);
+            })
+        };
+        self.recorded[PREPASS_QUERY as usize] |= ok;
+    }
+
+    /// The shading pass for frame `parity` into `encoder` (which must hold nothing else): the
+    /// attachment bytes copied into the rate image, the colour cleared to `background`, then (in
+    /// the single shape) the depth cleared and drawn by the depth pre-pass, and the shading draw
+    /// at the attachment's rates. Submit it after the encoder that filled the staging buffer and
+    /// moved the colour and depth targets into COLOR_TARGET / DEPTH_STENCIL_WRITE, before
+    /// anything that reads the targets.
+    pub fn record_shade(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        parity: usize,
+        background: [f32; 4],
+    ) {
         let range = vk::ImageSubresourceRange {
             aspect_mask: vk::ImageAspectFlags::COLOR,
             base_mip_level: 0,
@@ -599,59 +850,32 @@ impl RawVrsPass {
                 height: self.attachment_size[1],
                 depth: 1,
             });
-        let [w, h] = self.size;
-        let area = vk::Rect2D {
-            offset: vk::Offset2D { x: 0, y: 0 },
-            extent: vk::Extent2D {
-                width: w,
-                height: h,
+        let (viewport, area) = self.area();
+        let clears = [
+            vk::ClearValue {
+                color: vk::ClearColorValue {
+                    float32: background,
+                },
             },
-        };
-        // wgpu-hal's convention: the viewport is flipped (negative height) so that clip space is
-        // WebGPU's, y up.
-        let viewport = vk::Viewport {
-            x: 0.0,
-            y: h as f32,
-            width: w as f32,
-            height: -(h as f32),
-            min_depth: 0.0,
-            max_depth: 1.0,
-        };
+            vk::ClearValue {
+                depth_stencil: vk::ClearDepthStencilValue {
+                    depth: 0.0,
+                    stencil: 0,
+                },
+            },
+        ];
         let begin = vk::RenderPassBeginInfo::default()
-            .render_pass(self.render_pass)
-            .framebuffer(self.framebuffers[parity % self.framebuffers.len()])
-            .render_area(area);
+            .render_pass(self.shade_pass)
+            .framebuffer(self.shade_framebuffers[parity % self.shade_framebuffers.len()])
+            .render_area(area)
+            .clear_values(&clears);
         let subpass = vk::SubpassBeginInfo::default().contents(vk::SubpassContents::INLINE);
-        let (pipeline, prepass, layout, set, stats) = (
-            self.pipeline,
-            self.prepass,
-            self.layout,
-            self.set,
-            self.stats,
-        );
-        let (vertex, index, staging, rate_image) =
-            (self.vertex, self.index, self.staging, self.rate_image);
-        let draws = &self.draws;
-        // SAFETY: `encoder` is used only through this callback and holds no wgpu commands (the
-        // caller's contract); every handle recorded is alive while the pass is (kept clones of
-        // the wgpu objects, our own objects destroyed only in Drop after the device is idle). The
-        // leading full barrier orders everything submitted before (the clear, the staging
-        // writes) before this pass, the trailing one this pass before what follows; the targets
-        // end in the layouts they began in, which are the ones wgpu tracks.
+        let (stats, pipeline, depth_prepass) = (self.stats, self.pipeline, self.depth_prepass);
+        let (staging, rate_image) = (self.staging, self.rate_image);
+        // SAFETY: as in `record_prepass`; the rate image is ours and goes from UNDEFINED (its
+        // bytes are rewritten whole) through TRANSFER_DST to the attachment layout each frame.
         let ok = unsafe {
-            encoder.as_hal_mut::<Vulkan, _, _>(|e| {
-                let Some(e) = e else { return false };
-                let cb = e.raw_handle();
-                let all = vk::PipelineStageFlags::ALL_COMMANDS;
-                d.cmd_pipeline_barrier(
-                    cb,
-                    all,
-                    all,
-                    vk::DependencyFlags::empty(),
-                    &[full_barrier],
-                    &[],
-                    &[],
-                );
+            self.record_raw(encoder, |d, cb| {
                 d.cmd_pipeline_barrier(
                     cb,
                     vk::PipelineStageFlags::TOP_OF_PIPE,
@@ -677,63 +901,45 @@ impl RawVrsPass {
                     &[],
                     &[to_rate],
                 );
-                d.cmd_reset_query_pool(cb, stats, 0, 1);
-                d.cmd_begin_query(cb, stats, 0, vk::QueryControlFlags::empty());
+                d.cmd_reset_query_pool(cb, stats, SHADE_QUERY, 1);
+                d.cmd_begin_query(cb, stats, SHADE_QUERY, vk::QueryControlFlags::empty());
                 d.cmd_begin_render_pass2(cb, &begin, &subpass);
                 d.cmd_set_viewport(cb, 0, &[viewport]);
                 d.cmd_set_scissor(cb, 0, &[area]);
-                d.cmd_bind_descriptor_sets(
-                    cb,
-                    vk::PipelineBindPoint::GRAPHICS,
-                    layout,
-                    0,
-                    &[set],
-                    &[],
-                );
-                d.cmd_bind_vertex_buffers(cb, 0, &[vertex], &[0]);
-                d.cmd_bind_index_buffer(cb, index, 0, vk::IndexType::UINT32);
-                for p in [prepass, pipeline] {
-                    d.cmd_bind_pipeline(cb, vk::PipelineBindPoint::GRAPHICS, p);
-                    for (i, &(first, count, base)) in draws.iter().enumerate() {
-                        d.cmd_draw_indexed(cb, count, 1, first, base, i as u32);
-                    }
+                if depth_prepass != vk::Pipeline::null() {
+                    self.draw_scene(d, cb, depth_prepass);
                 }
+                self.draw_scene(d, cb, pipeline);
                 d.cmd_end_render_pass2(cb, &vk::SubpassEndInfo::default());
-                d.cmd_end_query(cb, stats, 0);
-                d.cmd_pipeline_barrier(
-                    cb,
-                    all,
-                    all,
-                    vk::DependencyFlags::empty(),
-                    &[full_barrier],
-                    &[],
-                    &[],
-                );
-                true
+                d.cmd_end_query(cb, stats, SHADE_QUERY);
             })
         };
-        self.recorded |= ok;
+        self.recorded[SHADE_QUERY as usize] |= ok;
     }
 
-    /// Fragment-shader invocations of the last recorded pass, once its frame has completed;
-    /// `None` before any pass or while the result is not available.
-    pub fn invocations(&self) -> Option<u64> {
-        if !self.recorded {
-            return None;
-        }
-        let mut out = [0u64; 1];
-        // SAFETY: the pool has one query, begun and ended in a recorded pass; no WAIT flag, so a
-        // query still in flight returns NOT_READY (an error here) rather than blocking.
-        unsafe {
-            self.device.get_query_pool_results(
-                self.stats,
-                0,
-                &mut out,
-                vk::QueryResultFlags::TYPE_64,
-            )
-        }
-        .ok()
-        .map(|_| out[0])
+    /// Fragment-shader invocations of the last recorded shading pass and motion pre-pass (`None`
+    /// in the single shape), once its frame has completed; `None` before any pass or while the
+    /// result is not available.
+    pub fn invocations(&self) -> (Option<u64>, Option<u64>) {
+        let read = |query: u32| {
+            if !self.recorded[query as usize] {
+                return None;
+            }
+            let mut out = [0u64; 1];
+            // SAFETY: the query was begun and ended in a recorded pass; no WAIT flag, so a query
+            // still in flight returns NOT_READY (an error here) rather than blocking.
+            unsafe {
+                self.device.get_query_pool_results(
+                    self.stats,
+                    query,
+                    &mut out,
+                    vk::QueryResultFlags::TYPE_64,
+                )
+            }
+            .ok()
+            .map(|_| out[0])
+        };
+        (read(SHADE_QUERY), read(PREPASS_QUERY))
     }
 }
 
@@ -742,22 +948,28 @@ impl Drop for RawVrsPass {
         let d = &self.device;
         // SAFETY: waiting for the device to be idle first means no submitted command buffer
         // still uses these objects; each was created on `d` by `new` (null handles, from a `new`
-        // that failed part-way, are ignored by the destroy calls).
+        // that failed part-way or of the other shape, are ignored by the destroy calls).
         unsafe {
             let _ = d.device_wait_idle();
             d.destroy_query_pool(self.stats, None);
-            d.destroy_pipeline(self.pipeline, None);
-            d.destroy_pipeline(self.prepass, None);
+            for p in [self.pipeline, self.depth_prepass, self.motion_prepass] {
+                d.destroy_pipeline(p, None);
+            }
             for m in self.modules {
                 d.destroy_shader_module(m, None);
             }
             d.destroy_pipeline_layout(self.layout, None);
             d.destroy_descriptor_pool(self.pool, None);
             d.destroy_descriptor_set_layout(self.set_layout, None);
-            for &fb in &self.framebuffers {
+            for &fb in self
+                .shade_framebuffers
+                .iter()
+                .chain(&self.motion_framebuffers)
+            {
                 d.destroy_framebuffer(fb, None);
             }
-            d.destroy_render_pass(self.render_pass, None);
+            d.destroy_render_pass(self.shade_pass, None);
+            d.destroy_render_pass(self.motion_pass, None);
             for &v in &self.views {
                 d.destroy_image_view(v, None);
             }

@@ -19,11 +19,12 @@ use super::{Occlusion, Options, Sampling};
 use crate::gpu::{Gpu, Unsupported, STANDARD_2X};
 use crate::render::graph::{Graph, PassKind, Plan, TextureDesc};
 use crate::render::kit::{
-    allocate, bind_group, compute_pipeline, placeholder_texture, record_scene_pass, timed_dispatch,
+    allocate, bind_group, compute_pipeline, record_scene_pass, timed_dispatch, PingPong,
 };
 use crate::render::renderer::{FrameInfo, Renderer};
 use crate::render::scene::{SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::render::timers::Timers;
+use crate::render::velocity::{self, VelocityPass, VELOCITY};
 
 pub static RESOLVE_WGSL: &str = include_str!("resolve.wgsl");
 pub static TWO_PASS_WGSL: &str = include_str!("two_pass.wgsl");
@@ -73,15 +74,14 @@ pub struct CheckerboardGpu {
     height: u32,
     pipeline: wgpu::ComputePipeline,
     params: wgpu::Buffer,
-    /// Bind groups by the parity of the current frame.
-    bind_groups: [wgpu::BindGroup; 2],
-    _dummy_velocity: Option<wgpu::Texture>,
+    /// The reconstruction's bind groups, one per side: the current parity's targets, the other
+    /// parity's as history.
+    bind_groups: PingPong<wgpu::BindGroup>,
     last: Option<LastFrame>,
     /// Render-target views (colour, depth), made once: two-pass per layer `parity * 2 + sample`,
     /// msaa2x per parity.
     target_views: Vec<(wgpu::TextureView, wgpu::TextureView)>,
-    /// The velocity pass's targets, when it runs.
-    velocity_views: Option<(wgpu::TextureView, wgpu::TextureView)>,
+    velocity: VelocityPass,
 }
 
 /// What the last recorded reconstruction was given (for the CPU model in tests).
@@ -149,7 +149,7 @@ pub fn graph(options: &Options, width: u32, height: u32, dynamic_scene: bool) ->
             ];
             for (i, w) in writes.iter().enumerate() {
                 g.resource(
-                    w,
+                    *w,
                     q(
                         if i % 2 == 0 {
                             COLOR_FORMAT
@@ -164,18 +164,11 @@ pub fn graph(options: &Options, width: u32, height: u32, dynamic_scene: bool) ->
             reads.extend(writes);
         }
     }
-    g.resource("velocity", full(COLOR_FORMAT))
-        .resource("velocity_depth", full(DEPTH_FORMAT));
-    g.pass(
-        "velocity",
-        PassKind::Render,
-        &[],
-        &["velocity", "velocity_depth"],
-    );
+    velocity::declare(&mut g, width, height);
     // Dynamic objects need the velocity buffer; without them, nothing reads it and it is culled.
     let use_velocity = options.velocity && dynamic_scene;
     if use_velocity {
-        reads.push("velocity");
+        reads.push(VELOCITY.name());
     }
     g.resource("color", full(COLOR_FORMAT));
     g.pass("reconstruct", PassKind::Compute, &reads, &["color"])
@@ -213,14 +206,11 @@ impl CheckerboardGpu {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let dummy =
-            (!use_velocity).then(|| placeholder_texture(device, "no velocity", COLOR_FORMAT));
-        let velocity_view = match &dummy {
-            Some(t) => t.create_view(&Default::default()),
-            None => textures["velocity"].create_view(&Default::default()),
-        };
+        let velocity = VelocityPass::new(device, &plan, &textures);
+        debug_assert_eq!(velocity.runs(), use_velocity);
         let output_view = textures["color"].create_view(&Default::default());
         let layout = pipeline.get_bind_group_layout(0);
+        let msaa_targets = PingPong::new(MSAA_TARGETS);
         let bind_group = |parity: usize| {
             let view = |name: &str| textures[name].create_view(&Default::default());
             let mut views: Vec<(u32, wgpu::TextureView)> = match sampling {
@@ -234,7 +224,7 @@ impl CheckerboardGpu {
                     vec![(1, array(TWO_PASS_COLOR)), (5, array(TWO_PASS_DEPTH))]
                 }
                 Sampling::Msaa2x => {
-                    let (cur, prev) = (MSAA_TARGETS[parity], MSAA_TARGETS[1 - parity]);
+                    let (cur, prev) = msaa_targets.at(parity);
                     vec![
                         (1, view(cur.0)),
                         (3, view(prev.0)),
@@ -243,15 +233,14 @@ impl CheckerboardGpu {
                     ]
                 }
             };
-            views.push((9, velocity_view.clone()));
+            views.push((9, velocity.binding().clone()));
             views.push((10, output_view.clone()));
             let views: Vec<(u32, &wgpu::TextureView)> =
                 views.iter().map(|(b, v)| (*b, v)).collect();
             bind_group(device, "reconstruct", &layout, &[(0, &params)], &views)
         };
-        let bind_groups = [bind_group(0), bind_group(1)];
+        let bind_groups = PingPong::new([bind_group(0), bind_group(1)]);
         let whole = |name: &str| textures[name].create_view(&Default::default());
-        let velocity_views = use_velocity.then(|| (whole("velocity"), whole("velocity_depth")));
         let target_views = match sampling {
             Sampling::Msaa2x => MSAA_TARGETS
                 .iter()
@@ -282,10 +271,9 @@ impl CheckerboardGpu {
             pipeline,
             params,
             bind_groups,
-            _dummy_velocity: dummy,
             last: None,
             target_views,
-            velocity_views,
+            velocity,
         })
     }
 }
@@ -318,7 +306,8 @@ impl Renderer for CheckerboardGpu {
         encoder: &mut wgpu::CommandEncoder,
         frame: FrameInfo,
     ) {
-        let parity = (frame.index & 1) as usize;
+        self.bind_groups.select(frame.index);
+        let parity = self.bind_groups.side();
         let (qw, qh) = quarter_size(self.width, self.height);
         let base = View {
             time: frame.time,
@@ -384,25 +373,10 @@ impl Renderer for CheckerboardGpu {
                 );
             }
         }
-        let use_velocity = self.velocity_views.is_some();
-        if let Some((c, d)) = &self.velocity_views {
-            let full = View {
-                gradient_scale: 1.0,
-                ..base
-            };
-            scene.write_view(&gpu.queue, 2, &full);
-            record_scene_pass(
-                gpu,
-                scene,
-                timers,
-                encoder,
-                "velocity",
-                c,
-                d,
-                2,
-                ScenePipeline::Velocity,
-            );
-        }
+        // The whole view (`base` at full resolution, no jitter) in slot 2.
+        let use_velocity =
+            self.velocity
+                .record(gpu, scene, timers, encoder, 2, frame.time, frame.prev_time);
         let (cur, prev) = scene.view_projections(frame.time, frame.prev_time);
         let near_far = scene.near_far();
         let o = self.options;
@@ -434,7 +408,7 @@ impl Renderer for CheckerboardGpu {
             timers,
             "reconstruct",
             &self.pipeline,
-            &[&self.bind_groups[parity]],
+            &[self.bind_groups.current()],
             [self.width.div_ceil(8), self.height.div_ceil(8)],
         );
     }

@@ -33,7 +33,7 @@ use crate::gpu::Gpu;
 use crate::render::graph::{Graph, PassKind, Plan, TextureDesc};
 use crate::render::kit::{
     allocate_with, bind_group, compute_pipeline, placeholder_texture, record_scene_pass_on,
-    timed_dispatch,
+    timed_dispatch, PingPong,
 };
 use crate::render::renderer::{FrameInfo, Renderer};
 use crate::render::scene::{SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FORMAT};
@@ -239,12 +239,12 @@ pub struct Checkerboard2x2Gpu {
     width: u32,
     height: u32,
     reconstitution: Reconstitution,
-    /// Bind groups by frame parity (which half of each pair is current).
-    bind_groups: [wgpu::BindGroup; 2],
+    /// Bind groups, one per side (which half of each pair is current).
+    bind_groups: PingPong<wgpu::BindGroup>,
     /// Stand-ins bound where a history is not kept (never read then).
     _dummies: Vec<wgpu::Texture>,
-    /// Render-target views by parity: (scene colour, scene depth, motion, motion depth).
-    views: [[wgpu::TextureView; 4]; 2],
+    /// Render-target views per side: (scene colour, scene depth, motion, motion depth).
+    views: PingPong<[wgpu::TextureView; 4]>,
     last: Option<LastFrame>,
 }
 
@@ -342,9 +342,9 @@ impl Checkerboard2x2Gpu {
             width,
             height,
             reconstitution,
-            bind_groups: [b0, b1],
+            bind_groups: PingPong::new([b0, b1]),
             _dummies: dummies,
-            views: [v0, v1],
+            views: PingPong::new([v0, v1]),
             last: None,
         }
     }
@@ -398,17 +398,21 @@ impl Renderer for Checkerboard2x2Gpu {
         encoder: &mut wgpu::CommandEncoder,
         frame: FrameInfo,
     ) {
-        let parity = (frame.index & 1) as usize;
+        self.bind_groups.select(frame.index);
+        self.views.select(frame.index);
+        let parity = self.bind_groups.side();
         // One view serves both render passes: no jitter, full resolution.
         scene.write_view(&gpu.queue, 0, &View::whole(frame.time, frame.prev_time));
-        let checks = [&self.textures["depth_white"], &self.textures["depth_black"]];
-        let [scene_color, depth, motion, motion_depth] = &self.views[parity];
+        // This frame's check pattern and the other one (the inverse mask).
+        let checks = PingPong::new([&self.textures["depth_white"], &self.textures["depth_black"]]);
+        let (check, inverse) = checks.at(parity);
+        let [scene_color, depth, motion, motion_depth] = self.views.current();
         // 5.3.6: the scene depth starts as this frame's check pattern ...
         copy_depth(
             timers,
             encoder,
             "precondition",
-            checks[parity],
+            check,
             self.pair_texture(1, parity),
         );
         record_scene_pass_on(
@@ -426,7 +430,7 @@ impl Renderer for Checkerboard2x2Gpu {
             timers,
             encoder,
             "motion_precondition",
-            checks[1 - parity],
+            inverse,
             &self.textures["motion_depth"],
         );
         record_scene_pass_on(
@@ -453,7 +457,7 @@ impl Renderer for Checkerboard2x2Gpu {
         self.reconstitution.record(
             timers,
             encoder,
-            &self.bind_groups[parity],
+            self.bind_groups.current(),
             self.width,
             self.height,
         );

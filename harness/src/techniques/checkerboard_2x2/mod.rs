@@ -13,10 +13,8 @@ pub mod model;
 
 use super::definition::{BuildContext, Definition, FramePattern, Shader, Target};
 use crate::gpu::Unsupported;
-use crate::params::{Param, ParamSpec};
 use crate::render::graph::Plan;
 use crate::render::renderer::Renderer;
-use crate::techniques::Variant;
 
 pub use gpu::{
     graph, workgroups, Bindings, Checkerboard2x2Gpu, FrameParams, LastFrame, Reconstitution,
@@ -49,65 +47,39 @@ impl Clamp {
     }
 }
 
-pub static CLAMP: Param<Clamp> = Clamp::param(
-    "clamp",
-    Clamp::Blended,
-    "the reprojected colour against the range (min/max) of the masked pixel's two shaded direct neighbours: never clamped (report 5.3.3), always (5.3.4), only where the pixel moves more than `motion_threshold` (5.3.5), or conditional with the clamp blended back by depth difference (5.3.7, the report's final version)",
-);
-pub static MOTION_THRESHOLD: Param<f64> = Param::float(
-    "motion_threshold",
-    (0.0, true, 1.0e9),
-    1.0e-7,
-    "pixels per frame; `conditional` and `blended` do not clamp a pixel moving less than this (the report's 0.0000001: only rounding-level motion escapes the clamp)",
-);
-pub static BLEND_MIN: Param<f64> = Param::float(
-    "blend_min",
-    (0.0, true, 1.0),
-    0.005,
-    "`blended`: linear depth difference (normalised to [0, 1] between the camera's `near` and `far`) between the reprojected depth and a neighbour's below which that direction keeps the reprojected colour (the report's minimum blend difference); less than `blend_max`",
-);
-pub static BLEND_MAX: Param<f64> = Param::float(
-    "blend_max",
-    (0.0, false, 1.0),
-    0.1,
-    "`blended`: the clamp weight of a direction is its difference / `blend_max`, capped at 1 (the report's maximum blend difference); the two directions' blends are averaged",
-);
-pub static MOTION_COHERENCY: Param<bool> = Param::flag(
-    "motion_coherency",
-    true,
-    "`conditional` and `blended`: also clamp where a shaded neighbour's previous motion differs from the pixel's motion by more than `motion_threshold` (5.3.8); keeps the motion history (otherwise not allocated)",
-);
-static PARAMS: [&ParamSpec; 5] = [
-    &CLAMP.spec,
-    &MOTION_THRESHOLD.spec,
-    &BLEND_MIN.spec,
-    &BLEND_MAX.spec,
-    &MOTION_COHERENCY.spec,
-];
-
-/// Reconstitution options (the variant's parameters).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Options {
-    pub clamp: Clamp,
-    /// Pixels per frame; conditional and blended clamp only above it (5.3.5).
-    pub motion_threshold: f32,
-    /// Linear depth differences in [0, 1] (5.3.7).
-    pub blend_min: f32,
-    pub blend_max: f32,
-    pub motion_coherency: bool,
+crate::options! {
+    /// Reconstitution options (the variant's parameters).
+    #[derive(Clone, Copy, Debug, PartialEq)]
+    pub struct Options {
+        clamp: Clamp = choice(
+            Clamp::Blended,
+            "the reprojected colour against the range (min/max) of the masked pixel's two shaded direct neighbours: never clamped (report 5.3.3), always (5.3.4), only where the pixel moves more than `motion_threshold` (5.3.5), or conditional with the clamp blended back by depth difference (5.3.7, the report's final version)",
+        ),
+        /// Pixels per frame; conditional and blended clamp only above it (5.3.5).
+        motion_threshold: f32 = float(
+            (0.0, true, 1.0e9),
+            1.0e-7,
+            "pixels per frame; `conditional` and `blended` do not clamp a pixel moving less than this (the report's 0.0000001: only rounding-level motion escapes the clamp)",
+        ),
+        /// Linear depth differences in [0, 1] (5.3.7).
+        blend_min: f32 = float(
+            (0.0, true, 1.0),
+            0.005,
+            "`blended`: linear depth difference (normalised to [0, 1] between the camera's `near` and `far`) between the reprojected depth and a neighbour's below which that direction keeps the reprojected colour (the report's minimum blend difference); less than `blend_max`",
+        ),
+        blend_max: f32 = float(
+            (0.0, false, 1.0),
+            0.1,
+            "`blended`: the clamp weight of a direction is its difference / `blend_max`, capped at 1 (the report's maximum blend difference); the two directions' blends are averaged",
+        ),
+        motion_coherency: bool = flag(
+            true,
+            "`conditional` and `blended`: also clamp where a shaded neighbour's previous motion differs from the pixel's motion by more than `motion_threshold` (5.3.8); keeps the motion history (otherwise not allocated)",
+        ),
+    }
 }
 
 impl Options {
-    pub fn from_variant(v: &Variant) -> Options {
-        Options {
-            clamp: v.get(&CLAMP),
-            motion_threshold: v.get(&MOTION_THRESHOLD) as f32,
-            blend_min: v.get(&BLEND_MIN) as f32,
-            blend_max: v.get(&BLEND_MAX) as f32,
-            motion_coherency: v.get(&MOTION_COHERENCY),
-        }
-    }
-
     /// The blended clamp compares the reprojected depth with the neighbours' (5.3.7).
     pub fn reads_depth_history(&self) -> bool {
         self.clamp == Clamp::Blended
@@ -128,10 +100,6 @@ impl Definition for Checkerboard2x2 {
         "checkerboard-2x2"
     }
 
-    fn options(&self, variant: &Variant) -> Options {
-        Options::from_variant(variant)
-    }
-
     /// Even and odd frames shade the two halves of the 2x2 block mask.
     fn frames(&self, _options: &Options) -> FramePattern {
         FramePattern::Alternating
@@ -139,10 +107,6 @@ impl Definition for Checkerboard2x2 {
 
     fn summary(&self) -> &'static str {
         "the depth-based report's 2x2 checkerboarding: masked blocks rejected by a pre-conditioned depth buffer, reconstituted by motion reprojection"
-    }
-
-    fn params(&self) -> &'static [&'static ParamSpec] {
-        &PARAMS
     }
 
     fn check(&self, options: &Options) -> Result<(), String> {
@@ -153,6 +117,12 @@ impl Definition for Checkerboard2x2 {
             ));
         }
         Ok(())
+    }
+
+    /// The report's baseline renders the same motion pass (section 6: "both have a motion
+    /// pass"): `native` with `motion_pass = true`, where the scenario has it.
+    fn baseline(&self, _options: &Options) -> Option<&'static str> {
+        Some(super::native::WITH_MOTION_PASS)
     }
 
     fn plan(&self, options: &Options, target: Target) -> Plan {

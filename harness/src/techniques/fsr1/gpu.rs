@@ -7,13 +7,21 @@ use std::collections::HashMap;
 
 use super::Options;
 use crate::gpu::Gpu;
-use crate::render::graph::{Graph, PassKind, Plan, TextureDesc};
-use crate::render::kit::{allocate, bind_group, compute_pipeline, record_scene_pass};
+use crate::render::graph::{Graph, PassKind, Plan, Res, TextureDesc};
+use crate::render::kit::{
+    allocate, bind_group, compute_pipeline, record_scene_pass, timed_dispatch, TextureMap,
+};
 use crate::render::renderer::{FrameInfo, Renderer};
 use crate::render::scene::{SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::render::timers::Timers;
 
 pub static FSR1_WGSL: &str = include_str!("fsr1.wgsl");
+
+/// The render-size scene targets, EASU's perceptual output (with RCAS) and the output.
+const COLOR_LOW: Res = Res::new("color_low");
+const DEPTH_LOW: Res = Res::new("depth_low");
+const EASU: Res = Res::new("easu");
+const COLOR: Res = Res::new("color");
 
 /// The pass graph at output `width` x `height`.
 pub fn graph(options: &Options, width: u32, height: u32) -> Plan {
@@ -26,18 +34,18 @@ pub fn graph(options: &Options, width: u32, height: u32) -> Plan {
         layers: 1,
     };
     let mut g = Graph::default();
-    g.resource("color_low", tex(COLOR_FORMAT, lw, lh))
-        .resource("depth_low", tex(DEPTH_FORMAT, lw, lh))
-        .resource("color", tex(COLOR_FORMAT, width, height))
-        .pass("scene", PassKind::Render, &[], &["color_low", "depth_low"]);
-    if options.sharpness.is_some() {
-        g.resource("easu", tex(COLOR_FORMAT, width, height))
-            .pass("easu", PassKind::Compute, &["color_low"], &["easu"])
-            .pass("rcas", PassKind::Compute, &["easu"], &["color"]);
+    g.resource(COLOR_LOW, tex(COLOR_FORMAT, lw, lh))
+        .resource(DEPTH_LOW, tex(DEPTH_FORMAT, lw, lh))
+        .resource(COLOR, tex(COLOR_FORMAT, width, height))
+        .pass("scene", PassKind::Render, &[], &[COLOR_LOW, DEPTH_LOW]);
+    if options.rcas {
+        g.resource(EASU, tex(COLOR_FORMAT, width, height))
+            .pass("easu", PassKind::Compute, &[COLOR_LOW], &[EASU])
+            .pass("rcas", PassKind::Compute, &[EASU], &[COLOR]);
     } else {
-        g.pass("easu", PassKind::Compute, &["color_low"], &["color"]);
+        g.pass("easu", PassKind::Compute, &[COLOR_LOW], &[COLOR]);
     }
-    g.output("color");
+    g.output(COLOR);
     g.plan().expect("built-in graphs are well formed")
 }
 
@@ -91,17 +99,14 @@ impl FsrPass {
 
     /// Records the pass, timed under its name.
     pub fn record(&self, timers: &Timers, encoder: &mut wgpu::CommandEncoder) {
-        let q = timers.begin(self.name, encoder);
-        {
-            let mut cp = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some(self.name),
-                timestamp_writes: q.compute_pass_timestamp_writes(),
-            });
-            cp.set_pipeline(&self.pipeline);
-            cp.set_bind_group(0, &self.bind_group, &[]);
-            cp.dispatch_workgroups(self.out_size.0.div_ceil(8), self.out_size.1.div_ceil(8), 1);
-        }
-        timers.end(encoder, q);
+        timed_dispatch(
+            encoder,
+            timers,
+            self.name,
+            &self.pipeline,
+            &[&self.bind_group],
+            [self.out_size.0.div_ceil(8), self.out_size.1.div_ceil(8)],
+        );
     }
 }
 
@@ -139,23 +144,23 @@ impl Fsr1Gpu {
         let device = &gpu.device;
         let plan = graph(&options, width, height);
         let textures = allocate(device, &plan);
-        let view = |name: &str| textures[name].create_view(&Default::default());
+        let view = |res: Res| textures.view(res);
         let (lw, lh) = options.render_size(width, height);
         let easu_params = |rcas: bool| Params {
             size: [lw, lh, width, height],
             rcas: [0.0, f32::from(u8::from(rcas)), 0.0, 0.0],
         };
-        let passes = match options.sharpness {
+        let passes = match options.rcas_sharpness() {
             Some(sharpness) => vec![
                 FsrPass::new(
                     gpu,
                     "easu",
-                    (&view("color_low"), &view("easu")),
+                    (&view(COLOR_LOW), &view(EASU)),
                     easu_params(true),
                 ),
                 rcas_pass(
                     gpu,
-                    (&view("easu"), &view("color")),
+                    (&view(EASU), &view(COLOR)),
                     (width, height),
                     sharpness,
                     false,
@@ -164,11 +169,11 @@ impl Fsr1Gpu {
             None => vec![FsrPass::new(
                 gpu,
                 "easu",
-                (&view("color_low"), &view("color")),
+                (&view(COLOR_LOW), &view(COLOR)),
                 easu_params(false),
             )],
         };
-        let scene_views = (view("color_low"), view("depth_low"));
+        let scene_views = (view(COLOR_LOW), view(DEPTH_LOW));
         Fsr1Gpu {
             plan,
             textures,
@@ -194,7 +199,7 @@ impl Renderer for Fsr1Gpu {
     }
 
     fn output(&self) -> &wgpu::Texture {
-        &self.textures["color"]
+        self.textures.texture(COLOR)
     }
 
     fn record(
@@ -206,7 +211,7 @@ impl Renderer for Fsr1Gpu {
         frame: FrameInfo,
     ) {
         let view = View {
-            gradient_scale: self.options.gradient_scale,
+            gradient_scale: self.options.gradient_scale(),
             ..View::whole(frame.time, frame.prev_time)
         };
         scene.write_view(&gpu.queue, 0, &view);

@@ -22,10 +22,8 @@ pub mod model;
 
 use super::definition::{BuildContext, Definition, Shader, Target};
 use crate::gpu::Unsupported;
-use crate::params::{Param, ParamSpec};
 use crate::render::graph::Plan;
 use crate::render::renderer::Renderer;
-use crate::techniques::Variant;
 
 pub use gpu::{Fsr1Gpu, FSR1_WGSL};
 
@@ -54,78 +52,73 @@ impl Mode {
     }
 }
 
-pub static MODE: Param<Mode> = Mode::param(
-    "mode",
-    Mode::Custom,
-    "AMD's quality mode: `ultra-quality` (render scale 1/1.3, mip bias -0.38), `quality` (1/1.5, -0.58), `balanced` (1/1.7, -0.79), `performance` (1/2, -1.0); a mode sets the scale and `scale` must stay at its default; `custom`: `scale`, mip bias log2(scale)",
-);
-pub static SCALE: Param<f64> = Param::float(
-    "scale",
-    (0.25, true, 1.0),
-    0.5,
-    "render width and height as a fraction of the output resolution (EASU's quality range is 1x to 4x in area: 0.5 to 1 per axis; 0.25 is allowed)",
-);
-pub static SHARPNESS: Param<f64> = Param::float(
-    "sharpness",
-    (0.0, true, 8.0),
-    0.2,
-    "RCAS sharpness in stops below the maximum (FsrRcasCon: 0 is the sharpest, each stop halves it; AMD's default 0.2)",
-);
-pub static RCAS: Param<bool> = Param::flag(
-    "rcas",
-    true,
-    "run RCAS after EASU (a second compute pass); off: EASU alone",
-);
-pub static MIP_BIAS: Param<bool> = Param::flag(
-    "mip_bias",
-    true,
-    "apply the mode's mip bias to the ground pattern's filter width (derivatives times 2^bias); off: the reduced-resolution render's own derivatives",
-);
-static PARAMS: [&ParamSpec; 5] = [
-    &MODE.spec,
-    &SCALE.spec,
-    &SHARPNESS.spec,
-    &RCAS.spec,
-    &MIP_BIAS.spec,
-];
-
-/// A variant's options, typed.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Options {
-    /// The quality mode (`custom`: `scale` as given).
-    pub mode: Mode,
-    /// Whether `scale` was left at its default (a mode sets it).
-    pub scale_is_default: bool,
-    /// Render scale per axis.
-    pub scale: f64,
-    /// RCAS sharpness in stops, when RCAS runs.
-    pub sharpness: Option<f32>,
-    /// Multiplier of the scene's screen-space derivatives (2^mip bias, or 1).
-    pub gradient_scale: f32,
+crate::options! {
+    /// A variant's options, typed; what the passes take is derived from them
+    /// ([`Options::render_scale`], [`Options::rcas_sharpness`], [`Options::gradient_scale`]).
+    #[derive(Clone, Copy, Debug, PartialEq)]
+    pub struct Options {
+        /// The quality mode (`custom`: `scale` as given).
+        mode: Mode = choice(
+            Mode::Custom,
+            "AMD's quality mode: `ultra-quality` (render scale 1/1.3, mip bias -0.38), `quality` (1/1.5, -0.58), `balanced` (1/1.7, -0.79), `performance` (1/2, -1.0); a mode sets the scale and `scale` must stay at its default; `custom`: `scale`, mip bias log2(scale)",
+        ),
+        scale: f64 = float(
+            (0.25, true, 1.0),
+            0.5,
+            "render width and height as a fraction of the output resolution (EASU's quality range is 1x to 4x in area: 0.5 to 1 per axis; 0.25 is allowed)",
+        ),
+        sharpness: f32 = float(
+            (0.0, true, 8.0),
+            0.2,
+            "RCAS sharpness in stops below the maximum (FsrRcasCon: 0 is the sharpest, each stop halves it; AMD's default 0.2)",
+        ),
+        rcas: bool = flag(
+            true,
+            "run RCAS after EASU (a second compute pass); off: EASU alone",
+        ),
+        mip_bias: bool = flag(
+            true,
+            "apply the mode's mip bias to the ground pattern's filter width (derivatives times 2^bias); off: the reduced-resolution render's own derivatives",
+        ),
+    }
 }
 
 impl Options {
-    pub fn from_variant(v: &Variant) -> Options {
-        let (scale, bias) = v
-            .get(&MODE)
+    /// The render scale per axis and the mip bias: the mode's preset, or `scale` and its log2.
+    fn scale_and_bias(&self) -> (f64, f64) {
+        self.mode
             .preset()
-            .unwrap_or_else(|| (v.get(&SCALE), v.get(&SCALE).log2()));
-        Options {
-            mode: v.get(&MODE),
-            scale_is_default: SCALE.spec.default.value().as_f64() == Some(v.get(&SCALE)),
-            scale,
-            sharpness: v.get(&RCAS).then(|| v.get(&SHARPNESS) as f32),
-            gradient_scale: if v.get(&MIP_BIAS) {
-                bias.exp2() as f32
-            } else {
-                1.0
-            },
+            .unwrap_or((self.scale, self.scale.log2()))
+    }
+
+    /// Render scale per axis.
+    pub fn render_scale(&self) -> f64 {
+        self.scale_and_bias().0
+    }
+
+    /// Whether `scale` was left at its default (a mode sets it).
+    pub fn scale_is_default(&self) -> bool {
+        self.scale == Options::default().scale
+    }
+
+    /// RCAS sharpness in stops, when RCAS runs.
+    pub fn rcas_sharpness(&self) -> Option<f32> {
+        self.rcas.then_some(self.sharpness)
+    }
+
+    /// Multiplier of the scene's screen-space derivatives (2^mip bias, or 1).
+    pub fn gradient_scale(&self) -> f32 {
+        if self.mip_bias {
+            self.scale_and_bias().1.exp2() as f32
+        } else {
+            1.0
         }
     }
 
     /// The render size at output `width` x `height`.
     pub fn render_size(&self, width: u32, height: u32) -> (u32, u32) {
-        let s = |n: u32| ((n as f64 * self.scale).round() as u32).max(1);
+        let scale = self.render_scale();
+        let s = |n: u32| ((n as f64 * scale).round() as u32).max(1);
         (s(width), s(height))
     }
 }
@@ -143,17 +136,9 @@ impl Definition for Fsr1 {
         "AMD FidelityFX Super Resolution 1: render at a fraction of the output resolution, upscale with EASU, sharpen with RCAS (compute passes)"
     }
 
-    fn params(&self) -> &'static [&'static ParamSpec] {
-        &PARAMS
-    }
-
-    fn options(&self, variant: &Variant) -> Options {
-        Options::from_variant(variant)
-    }
-
     fn check(&self, options: &Options) -> Result<(), String> {
         let mode = options.mode;
-        if mode != Mode::Custom && !options.scale_is_default {
+        if mode != Mode::Custom && !options.scale_is_default() {
             return Err(format!(
                 "`mode = \"{}\"` sets the render scale; leave `scale` out or use `mode = \"custom\"`",
                 mode.name()

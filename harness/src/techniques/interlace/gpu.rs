@@ -1,15 +1,20 @@
-//! The GPU part of `interlace`: per frame (parity `p = index & 1`) a `scene` render pass at half
-//! width whose texel i of each row samples full-resolution column 2i + p at its pixel centre (the
-//! projection remapped, `View::ndc_scale` / `ndc_offset`); a full-resolution `velocity` pass when
-//! the scene has animated objects; and a `reconstruct` compute pass writing every full-resolution
-//! pixel (`reconstruct.wgsl`, CPU model in `model.rs`). The output and the
-//! previous output are a ping-pong pair (`color` / `color_history`).
+//! The GPU part of `interlace` with the default `pattern = "interlaced"` (section 3.3's offset
+//! sampling): per frame (parity `p = index & 1`) two quarter-resolution `scene` passes, layer r
+//! of `rows_color` / `rows_depth` shading rows `2j + r` at columns `2i + ((r + p) & 1)` (the
+//! projection remapped, `View::ndc_scale` / `ndc_offset`), so the shaded pixels form a
+//! checkerboard; a full-resolution `velocity` pass when the scene has animated objects; and a
+//! `reconstruct` compute pass writing every full-resolution pixel and its depth
+//! (`reconstruct.wgsl`, CPU model in `model.rs`). The output and its depth are ping-pong pairs
+//! with the previous frame's (`color` / `color_history`, `depth` / `depth_history`).
+//!
+//! Siege renders the pattern in one half-width pass with an MSAA trick; two single-sample
+//! quarter-resolution passes shade the same pixels on any adapter, at twice the vertex work.
 
 use std::collections::HashMap;
 
 use glam::Vec2;
 
-use super::model::half_width;
+use super::model::quarter_size;
 use super::Options;
 use crate::gpu::Gpu;
 use crate::render::graph::{Graph, PassKind, Plan, TextureDesc};
@@ -23,60 +28,82 @@ use crate::render::timers::Timers;
 
 pub static RECONSTRUCT_WGSL: &str = include_str!("reconstruct.wgsl");
 
-/// The output pair: written this frame, read as history.
+/// The output pair and the output depth pair: written this frame, read as history.
 const OUTPUTS: [&str; 2] = ["color", "color_history"];
+const DEPTHS: [&str; 2] = ["depth", "depth_history"];
+/// The format of the output depth (reversed-Z, as the scene's).
+const OUT_DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
+const SCENE_PASSES: [&str; 2] = ["scene_even_rows", "scene_odd_rows"];
 
 /// The pass graph at `width` x `height`, and whether the reconstruction reads the velocity
 /// buffer (animated objects and the `velocity` option).
 pub fn graph(options: &Options, width: u32, height: u32, dynamic_scene: bool) -> (Plan, bool) {
-    let tex = |format, width| TextureDesc {
+    let (qw, qh) = quarter_size(width, height);
+    let q = |format| TextureDesc {
+        format,
+        width: qw,
+        height: qh,
+        samples: 1,
+        layers: 2,
+    };
+    let full = |format| TextureDesc {
         format,
         width,
         height,
         samples: 1,
         layers: 1,
     };
-    let hw = half_width(width);
     let mut g = Graph::default();
-    g.resource("half_color", tex(COLOR_FORMAT, hw))
-        .resource("half_depth", tex(DEPTH_FORMAT, hw))
-        .resource("velocity", tex(COLOR_FORMAT, width))
-        .resource("velocity_depth", tex(DEPTH_FORMAT, width))
-        .resource(OUTPUTS[0], tex(COLOR_FORMAT, width))
-        .resource(OUTPUTS[1], tex(COLOR_FORMAT, width))
-        .pass(
-            "scene",
-            PassKind::Render,
-            &[],
-            &["half_color", "half_depth"],
-        )
-        .pass(
-            "velocity",
-            PassKind::Render,
-            &[],
-            &["velocity", "velocity_depth"],
-        );
+    g.resource("rows_color", q(COLOR_FORMAT))
+        .resource("rows_depth", q(DEPTH_FORMAT))
+        .resource("velocity", full(COLOR_FORMAT))
+        .resource("velocity_depth", full(DEPTH_FORMAT))
+        .resource(OUTPUTS[0], full(COLOR_FORMAT))
+        .resource(OUTPUTS[1], full(COLOR_FORMAT))
+        .resource(DEPTHS[0], full(OUT_DEPTH_FORMAT))
+        .resource(DEPTHS[1], full(OUT_DEPTH_FORMAT));
+    for name in SCENE_PASSES {
+        g.pass(name, PassKind::Render, &[], &["rows_color", "rows_depth"]);
+    }
+    g.pass(
+        "velocity",
+        PassKind::Render,
+        &[],
+        &["velocity", "velocity_depth"],
+    );
     let use_velocity = options.velocity && dynamic_scene;
-    let mut reads = vec!["half_color", "half_depth", OUTPUTS[1]];
+    let mut reads = vec!["rows_color", "rows_depth", OUTPUTS[1], DEPTHS[1]];
     if use_velocity {
         reads.push("velocity");
     }
-    g.pass("reconstruct", PassKind::Compute, &reads, &[OUTPUTS[0]])
-        .output(OUTPUTS[0]);
+    g.pass(
+        "reconstruct",
+        PassKind::Compute,
+        &reads,
+        &[OUTPUTS[0], DEPTHS[0]],
+    )
+    .output(OUTPUTS[0]);
     (
         g.plan().expect("built-in graphs are well formed"),
         use_velocity,
     )
 }
 
-/// NDC remap (scale, offset) of the half-width render for frame `parity`: texel i's centre
-/// samples full-resolution column 2i + parity's centre.
-pub fn half_view(width: u32, parity: u32) -> (Vec2, Vec2) {
-    let hw = half_width(width) as f32;
-    let sx = width as f32 / (2.0 * hw);
+/// NDC remap (scale, offset) of layer `row` (0 even rows, 1 odd rows) on frame `parity`:
+/// texel (i, j)'s centre samples the centre of full-resolution pixel
+/// `(2i + ((row + parity) & 1), 2j + row)`.
+pub fn rows_view(width: u32, height: u32, parity: u32, row: u32) -> (Vec2, Vec2) {
+    let (qw, qh) = quarter_size(width, height);
+    let (qw, qh) = (qw as f32, qh as f32);
+    let sx = width as f32 / (2.0 * qw);
+    let sy = height as f32 / (2.0 * qh);
+    let column = ((row + parity) & 1) as f32;
     (
-        Vec2::new(sx, 1.0),
-        Vec2::new(sx - 1.0 + (0.5 - parity as f32) / hw, 0.0),
+        Vec2::new(sx, sy),
+        Vec2::new(
+            sx - 1.0 + (0.5 - column) / qw,
+            1.0 - sy - (0.5 - row as f32) / qh,
+        ),
     )
 }
 
@@ -86,6 +113,8 @@ struct Params {
     prev_from_cur: [[f32; 4]; 4],
     size: [u32; 4],
     mode: [u32; 4],
+    depth: [f32; 4],
+    weights: [f32; 4],
 }
 
 /// What the last recorded reconstruction was given (for the CPU model in tests).
@@ -93,9 +122,11 @@ struct Params {
 pub struct LastFrame {
     pub parity: u32,
     pub history_valid: bool,
+    pub still: bool,
     pub prev_from_cur: glam::Mat4,
     pub velocity: bool,
-    pub clamp: bool,
+    pub near: f32,
+    pub far: f32,
 }
 
 pub struct InterlaceGpu {
@@ -106,10 +137,13 @@ pub struct InterlaceGpu {
     height: u32,
     pipeline: wgpu::ComputePipeline,
     params: wgpu::Buffer,
-    /// By parity: parity k writes `OUTPUTS[k]` and reads the other as history.
+    /// By parity: parity k writes `OUTPUTS[k]`, `DEPTHS[k]` and reads the others as history.
     bind_groups: PingPong<wgpu::BindGroup>,
-    scene_views: (wgpu::TextureView, wgpu::TextureView),
+    /// Render views of the two layers (colour, depth).
+    row_views: [(wgpu::TextureView, wgpu::TextureView); 2],
     velocity_views: Option<(wgpu::TextureView, wgpu::TextureView)>,
+    /// The scene has animated objects (so something may move with the camera still).
+    dynamic_scene: bool,
     _dummy_velocity: Option<wgpu::Texture>,
     last: Option<LastFrame>,
 }
@@ -126,6 +160,20 @@ impl InterlaceGpu {
         let (plan, use_velocity) = graph(&options, width, height, dynamic_scene);
         let textures = allocate(device, &plan);
         let view = |name: &str| textures[name].create_view(&Default::default());
+        let array = |name: &str| {
+            textures[name].create_view(&wgpu::TextureViewDescriptor {
+                dimension: Some(wgpu::TextureViewDimension::D2Array),
+                ..Default::default()
+            })
+        };
+        let layer = |name: &str, l: u32| {
+            textures[name].create_view(&wgpu::TextureViewDescriptor {
+                dimension: Some(wgpu::TextureViewDimension::D2),
+                base_array_layer: l,
+                array_layer_count: Some(1),
+                ..Default::default()
+            })
+        };
         let pipeline = compute_pipeline(device, "reconstruct", RECONSTRUCT_WGSL, "main");
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("interlace params"),
@@ -139,25 +187,26 @@ impl InterlaceGpu {
             Some(t) => t.create_view(&Default::default()),
             None => view("velocity"),
         };
-        let layout = pipeline.get_bind_group_layout(0);
-        let (half_color, half_depth) = (view("half_color"), view("half_depth"));
+        let bgl = pipeline.get_bind_group_layout(0);
+        let (rows_color, rows_depth) = (array("rows_color"), array("rows_depth"));
         let bind_groups = [0, 1].map(|k| {
-            let (out, history) = (view(OUTPUTS[k]), view(OUTPUTS[1 - k]));
             bind_group(
                 device,
                 "reconstruct",
-                &layout,
+                &bgl,
                 &[(0, &params)],
                 &[
-                    (1, &half_color),
-                    (2, &half_depth),
-                    (3, &history),
-                    (4, &velocity_view),
-                    (5, &out),
+                    (1, &rows_color),
+                    (2, &rows_depth),
+                    (3, &view(OUTPUTS[1 - k])),
+                    (4, &view(DEPTHS[1 - k])),
+                    (5, &velocity_view),
+                    (6, &view(OUTPUTS[k])),
+                    (7, &view(DEPTHS[k])),
                 ],
             )
         });
-        let scene_views = (view("half_color"), view("half_depth"));
+        let row_views = [0, 1].map(|l| (layer("rows_color", l), layer("rows_depth", l)));
         let velocity_views = use_velocity.then(|| (view("velocity"), view("velocity_depth")));
         InterlaceGpu {
             plan,
@@ -168,18 +217,23 @@ impl InterlaceGpu {
             pipeline,
             params,
             bind_groups: PingPong::new(bind_groups),
-            scene_views,
+            row_views,
             velocity_views,
+            dynamic_scene,
             _dummy_velocity: dummy,
             last: None,
         }
     }
 
-    /// A texture of the plan by resource name (`half_color`, `velocity`, ...); `history` is the
-    /// output the last frame read.
+    /// A texture of the plan by resource name (`rows_color`, `velocity`, ...); `history` and
+    /// `history_depth` are the output and depth the last frame read, `depth_out` the depth it
+    /// wrote.
     pub fn texture(&self, name: &str) -> Option<&wgpu::Texture> {
+        let read = 1 - self.bind_groups.side();
         match name {
-            "history" => self.textures.get(OUTPUTS[1 - self.bind_groups.side()]),
+            "depth_out" => self.textures.get(DEPTHS[1 - read]),
+            "history" => self.textures.get(OUTPUTS[read]),
+            "history_depth" => self.textures.get(DEPTHS[read]),
             _ => self.textures.get(name),
         }
     }
@@ -207,32 +261,35 @@ impl Renderer for InterlaceGpu {
         frame: FrameInfo,
     ) {
         let parity = frame.index & 1;
-        let (scale, offset) = half_view(self.width, parity);
         let base = View::whole(frame.time, frame.prev_time);
-        scene.write_view(
-            &gpu.queue,
-            0,
-            &View {
-                ndc_scale: scale,
-                ndc_offset: offset,
-                gradient_scale: self.options.gradient_scale,
-                ..base
-            },
-        );
-        record_scene_pass(
-            gpu,
-            scene,
-            timers,
-            encoder,
-            "scene",
-            &self.scene_views.0,
-            &self.scene_views.1,
-            0,
-            ScenePipeline::Forward { samples: 1 },
-        );
+        for (row, name) in SCENE_PASSES.into_iter().enumerate() {
+            let (scale, offset) = rows_view(self.width, self.height, parity, row as u32);
+            scene.write_view(
+                &gpu.queue,
+                row as u32,
+                &View {
+                    ndc_scale: scale,
+                    ndc_offset: offset,
+                    gradient_scale: self.options.gradient_scale,
+                    ..base
+                },
+            );
+            let (c, d) = &self.row_views[row];
+            record_scene_pass(
+                gpu,
+                scene,
+                timers,
+                encoder,
+                name,
+                c,
+                d,
+                row as u32,
+                ScenePipeline::Forward { samples: 1 },
+            );
+        }
         let use_velocity = self.velocity_views.is_some();
         if let Some((c, d)) = &self.velocity_views {
-            scene.write_view(&gpu.queue, 1, &base);
+            scene.write_view(&gpu.queue, 2, &base);
             record_scene_pass(
                 gpu,
                 scene,
@@ -241,20 +298,31 @@ impl Renderer for InterlaceGpu {
                 "velocity",
                 c,
                 d,
-                1,
+                2,
                 ScenePipeline::Velocity,
             );
         }
         let (cur, prev) = scene.view_projections(frame.time, frame.prev_time);
+        // Nothing can have moved: the camera is where it was and nothing is animated.
+        let still = cur == prev && !self.dynamic_scene;
+        let (near, far) = scene.near_far();
+        let o = &self.options;
         let params = Params {
             prev_from_cur: (prev * cur.inverse()).as_mat4().to_cols_array_2d(),
-            size: [self.width, self.height, half_width(self.width), parity],
+            size: [
+                self.width,
+                self.height,
+                quarter_size(self.width, self.height).0,
+                parity,
+            ],
             mode: [
                 u32::from(frame.history_valid),
                 u32::from(use_velocity),
-                u32::from(self.options.clamp),
-                0,
+                u32::from(o.clamp),
+                u32::from(still),
             ],
+            depth: [near, far, o.depth_tolerance, 0.0],
+            weights: [o.coherency, o.velocity_scale, 0.0, 0.0],
         };
         gpu.queue
             .write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
@@ -262,9 +330,11 @@ impl Renderer for InterlaceGpu {
         self.last = Some(LastFrame {
             parity,
             history_valid: frame.history_valid,
+            still,
             prev_from_cur: glam::Mat4::from_cols_array_2d(&params.prev_from_cur),
             velocity: use_velocity,
-            clamp: self.options.clamp,
+            near,
+            far,
         });
         timed_dispatch(
             encoder,

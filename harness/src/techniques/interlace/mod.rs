@@ -1,58 +1,78 @@
 //! Technique `interlace`: temporal interlaced rendering, the checkerboarding that shipped before
 //! checkerboards (Rainbow Six Siege's "temporal interlaced rendering" as the depth-based report
-//! describes it, `seeds/depth-based-checkerboarding.txt` section 3.3): each frame shades alternate
-//! pixel columns at half width; the other columns are the previous output reprojected through the
-//! camera and the velocity buffer, clamped to the shaded neighbours. Parameters here, the GPU
-//! part in `gpu.rs`, the CPU model in `model.rs`, the shader beside them (`reconstruct.wgsl`).
+//! describes it, `seeds/depth-based-checkerboarding.txt` section 3.3). By default
+//! (`pattern = "interlaced"`) the sampling is offset row by row so that each frame shades half the
+//! pixels in a checkerboard and every unshaded pixel has four shaded orthogonal neighbours; an
+//! unshaded pixel takes its motion from the neighbour closest to the camera, the history there is
+//! clamped to the neighbours, blended back towards the unclamped value by depth confidence, and
+//! weighted against the spatial fill by colour coherency and velocity (`gpu.rs`, `model.rs`,
+//! `reconstruct.wgsl`). `pattern = "columns"` is the scheme Tessera had before: whole columns
+//! alternate, the history clamped to six neighbours, no confidence or weights (`columns.rs`,
+//! `columns_model.rs`, `columns.wgsl`), kept to compare.
 //!
-//! Simpler than the report's account of Siege: no confidence blend back towards the unclamped
-//! colour, no colour-coherency or velocity weights, a bilinear history fetch.
+//! The report gives the steps, not their formulas: the confidence ramp, the coherency measure
+//! and the way the two weights combine are this module's reading, documented in the shader.
 
+pub mod columns;
+pub mod columns_model;
 pub mod gpu;
 pub mod model;
 
 use super::definition::{BuildContext, Definition, FramePattern, Shader, Target};
 use crate::gpu::Unsupported;
-use crate::params::{Param, ParamSpec};
 use crate::render::graph::Plan;
 use crate::render::renderer::Renderer;
-use crate::techniques::Variant;
 
-pub use gpu::{half_view, InterlaceGpu, LastFrame};
+pub use columns::{half_view, ColumnsGpu};
+pub use gpu::{rows_view, InterlaceGpu, LastFrame};
 
-pub static CLAMP: Param<bool> = Param::flag(
-    "clamp",
-    true,
-    "clamp the reprojected colour to the min/max of the six shaded neighbours (left and right columns, rows y-1 to y+1), as Siege clamps to its neighbours; off: the history unclamped",
-);
-pub static VELOCITY: Param<bool> = Param::flag(
-    "velocity",
-    true,
-    "full-resolution velocity pass for animated objects; recorded only when the scene has some (otherwise culled: the camera reprojects by depth)",
-);
-pub static GRADIENT_SCALE: Param<f64> = Param::float(
-    "gradient_scale",
-    (0.0, false, 1.0),
-    1.0,
-    "multiplies screen-space derivatives of the half-width render (the ground filter's width): 1 uncorrected (x derivatives twice native's: blurs horizontally), 0.5 matches native in x and halves y",
-);
-static PARAMS: [&ParamSpec; 3] = [&CLAMP.spec, &VELOCITY.spec, &GRADIENT_SCALE.spec];
-
-/// A variant's options, typed.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Options {
-    pub clamp: bool,
-    pub velocity: bool,
-    pub gradient_scale: f32,
+crate::choice! {
+    /// Which pixels a frame shades.
+    pub enum Pattern {
+        /// A checkerboard from two offset quarter-resolution renders: four shaded neighbours
+        /// (section 3.3).
+        Interlaced = "interlaced",
+        /// Alternate whole columns at half width: two shaded neighbours (Tessera before issue 26).
+        Columns = "columns",
+    }
 }
 
-impl Options {
-    pub fn from_variant(v: &Variant) -> Options {
-        Options {
-            clamp: v.get(&CLAMP),
-            velocity: v.get(&VELOCITY),
-            gradient_scale: v.get(&GRADIENT_SCALE) as f32,
-        }
+crate::options! {
+    /// A variant's options, typed.
+    #[derive(Clone, Copy, Debug, PartialEq)]
+    pub struct Options {
+        pattern: Pattern = choice(
+            Pattern::Interlaced,
+            "`interlaced`: each frame shades a checkerboard (two quarter-resolution renders, rows offset by one pixel: vertex work twice), every missing pixel with four shaded neighbours, confidence blend and coherency/velocity weights (section 3.3); `columns`: alternate whole columns at half width, the history clamped to six neighbours, no confidence or weights",
+        ),
+        clamp: bool = flag(
+            true,
+            "clamp the reprojected colour to the min/max of the shaded neighbours (interlaced: the four orthogonal ones, then blended back by depth confidence; columns: six, rows y-1 to y+1); off: the history unclamped",
+        ),
+        depth_tolerance: f32 = float(
+            (0.0, false, 1.0e3),
+            0.05,
+            "interlaced: how far (relative view depth) the previous depth at the reprojected position may lie outside the neighbours' depth range before the confidence reaches 0 (the clamped history); inside the range the confidence is 1 (the unclamped history)",
+        ),
+        coherency: f32 = float(
+            (0.0, false, 1.0e3),
+            0.1,
+            "interlaced: relative luma difference of the more coherent neighbour pair at which the history keeps its full weight in motion; below it a moving pixel leans towards the spatial fill",
+        ),
+        velocity_scale: f32 = float(
+            (0.0, false, 1.0e6),
+            4.0,
+            "interlaced: motion in pixels per frame at which the velocity weight is full (over coherent neighbours: the spatial fill); at rest the history",
+        ),
+        velocity: bool = flag(
+            true,
+            "full-resolution velocity pass for animated objects; recorded only when the scene has some (otherwise culled: the camera reprojects by depth)",
+        ),
+        gradient_scale: f32 = float(
+            (0.0, false, 1.0),
+            0.5,
+            "multiplies screen-space derivatives of the reduced render (the ground filter's width): interlaced renders at quarter resolution, so 0.5 matches native in x and y (1: uncorrected, blurs); columns at half width: 0.5 matches native in x and halves y",
+        ),
     }
 }
 
@@ -65,25 +85,21 @@ impl Definition for Interlace {
         "interlace"
     }
 
-    fn options(&self, variant: &Variant) -> Options {
-        Options::from_variant(variant)
-    }
-
-    /// Even and odd frames shade the even and odd pixel columns.
+    /// Even and odd frames shade the two checkerboard parities (or columns).
     fn frames(&self, _options: &Options) -> FramePattern {
         FramePattern::Alternating
     }
 
     fn summary(&self) -> &'static str {
-        "temporal interlaced rendering: alternate pixel columns shaded at half width each frame, the others reprojected from the previous output and clamped to their shaded neighbours"
-    }
-
-    fn params(&self) -> &'static [&'static ParamSpec] {
-        &PARAMS
+        "temporal interlaced rendering (Rainbow Six Siege): half the pixels shaded each frame in a checkerboard, the others reprojected by their nearest neighbour's motion, clamped to their four shaded neighbours, blended back by depth confidence and weighted by colour coherency and velocity"
     }
 
     fn plan(&self, options: &Options, target: Target) -> Plan {
-        gpu::graph(options, target.width, target.height, target.dynamic_scene).0
+        let (w, h, dynamic) = (target.width, target.height, target.dynamic_scene);
+        match options.pattern {
+            Pattern::Interlaced => gpu::graph(options, w, h, dynamic).0,
+            Pattern::Columns => columns::graph(options, w, h, dynamic).0,
+        }
     }
 
     fn build(
@@ -92,19 +108,17 @@ impl Definition for Interlace {
         cx: &BuildContext<'_>,
     ) -> Result<Box<dyn Renderer>, Unsupported> {
         let t = cx.target;
-        Ok(Box::new(InterlaceGpu::new(
-            cx.gpu,
-            *options,
-            t.width,
-            t.height,
-            t.dynamic_scene,
-        )))
+        let (w, h, dynamic) = (t.width, t.height, t.dynamic_scene);
+        Ok(match options.pattern {
+            Pattern::Interlaced => Box::new(InterlaceGpu::new(cx.gpu, *options, w, h, dynamic)),
+            Pattern::Columns => Box::new(ColumnsGpu::new(cx.gpu, *options, w, h, dynamic)),
+        })
     }
 
     fn shaders(&self) -> Vec<Shader> {
-        vec![Shader::file(
-            "interlace/reconstruct.wgsl",
-            gpu::RECONSTRUCT_WGSL,
-        )]
+        vec![
+            Shader::file("interlace/reconstruct.wgsl", gpu::RECONSTRUCT_WGSL),
+            Shader::file("interlace/columns.wgsl", columns::COLUMNS_WGSL),
+        ]
     }
 }

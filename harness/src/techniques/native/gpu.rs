@@ -41,6 +41,31 @@ pub struct Forward {
     kind: ScenePipeline,
     /// Texture LOD bias of the scene pass ([`View::lod_bias`]).
     lod_bias: f32,
+    /// The motion pass's targets (motion, its depth), when it is rendered.
+    motion: Option<(wgpu::TextureView, wgpu::TextureView)>,
+}
+
+/// [`forward_graph`] at output resolution with the motion pass after the scene pass (`native`'s
+/// `motion_pass`): the velocity pipeline into `motion`, which leaves the frame as the depth-based
+/// report's renderer hands it to later effects (section 6), so it is an output, not culled.
+pub fn forward_graph_with_motion(width: u32, height: u32) -> Plan {
+    let tex = |format| TextureDesc {
+        format,
+        width,
+        height,
+        samples: 1,
+        layers: 1,
+    };
+    let mut g = Graph::default();
+    g.resource("color", tex(COLOR_FORMAT))
+        .resource("depth", tex(DEPTH_FORMAT))
+        .resource("motion", tex(COLOR_FORMAT))
+        .resource("motion_depth", tex(DEPTH_FORMAT))
+        .pass("scene", PassKind::Render, &[], &["color", "depth"])
+        .pass("motion", PassKind::Render, &[], &["motion", "motion_depth"])
+        .output("color")
+        .output("motion");
+    g.plan().expect("built-in graphs are well formed")
 }
 
 /// The pass graph of forward rendering at `width` x `height`, resampled by `resample` if any.
@@ -99,6 +124,27 @@ impl Forward {
             scene_views,
             kind: ScenePipeline::Forward { samples: 1 },
             lod_bias: 0.0,
+            motion: None,
+        }
+    }
+
+    /// The same with the motion pass (a forward render at output resolution only).
+    pub fn with_motion_pass(self, gpu: &Gpu) -> Forward {
+        let (w, h) = (
+            self.textures["color"].width(),
+            self.textures["color"].height(),
+        );
+        let plan = forward_graph_with_motion(w, h);
+        let textures = allocate(&gpu.device, &plan);
+        let view = |name: &str| textures[name].create_view(&Default::default());
+        let scene_views = (view("color"), view("depth"));
+        let motion = Some((view("motion"), view("motion_depth")));
+        Forward {
+            plan,
+            textures,
+            scene_views,
+            motion,
+            ..self
         }
     }
 
@@ -187,6 +233,19 @@ impl Renderer for Forward {
             0,
             self.kind,
         );
+        if let Some((motion, motion_depth)) = &self.motion {
+            record_scene_pass(
+                gpu,
+                scene,
+                timers,
+                encoder,
+                "motion",
+                motion,
+                motion_depth,
+                0,
+                ScenePipeline::Velocity,
+            );
+        }
         if let Some((pipeline, bind_group, [w, h])) = &self.resample {
             let name = self.plan.passes[1].name;
             let size = [w.div_ceil(8), h.div_ceil(8)];

@@ -3,8 +3,9 @@
 //! animated objects; the `resolve` compute pass (`resolve.wgsl`, CPU model in
 //! `model.rs`) writing the output with its accumulated weight in alpha and the depth of each
 //! output pixel's sample; and, with `rcas`, FSR 1's RCAS from the resolved colour to `color`.
-//! Colour and depth histories are ping-pong pairs: frame parity k writes pair member k and reads
-//! the other.
+//! Colour and depth histories are one ping-pong pair of sides (`kit::PingPong`): frame parity k
+//! writes side k's colour and depth and reads the other's; the velocity pass is the kit's
+//! (`render/velocity.rs`).
 
 use std::collections::HashMap;
 
@@ -13,13 +14,14 @@ use glam::{DMat4, Mat4, Vec2};
 use super::jitter::{jitter, ndc_offset};
 use super::Options;
 use crate::gpu::Gpu;
-use crate::render::graph::{Graph, PassKind, Plan, TextureDesc};
+use crate::render::graph::{Graph, PassKind, Plan, Res, TextureDesc};
 use crate::render::kit::{
-    allocate, bind_group, compute_pipeline, placeholder_texture, record_scene_pass,
+    allocate, bind_group, compute_pipeline, record_scene_pass, timed_dispatch, PingPong, TextureMap,
 };
 use crate::render::renderer::{FrameInfo, Renderer};
 use crate::render::scene::{SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::render::timers::Timers;
+use crate::render::velocity::{self, VelocityPass, VELOCITY};
 use crate::techniques::fsr1::gpu::{rcas_pass, FsrPass};
 
 pub static RESOLVE_WGSL: &str = include_str!("resolve.wgsl");
@@ -27,9 +29,26 @@ pub static RESOLVE_WGSL: &str = include_str!("resolve.wgsl");
 /// Format of the per-pixel sample depth kept for the disocclusion test.
 pub const HISTORY_DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
 
-/// The resolved colour pair (written this frame, read as history) and the depth pair.
-const RESOLVED: [&str; 2] = ["taa", "taa_history"];
-const DEPTHS: [&str; 2] = ["taa_depth", "taa_depth_history"];
+/// The render-size scene targets.
+const COLOR_LOW: Res = Res::new("color_low");
+const DEPTH_LOW: Res = Res::new("depth_low");
+/// The output.
+const COLOR: Res = Res::new("color");
+/// The resolved colour pair (written this frame, read as history) with RCAS after it; without
+/// RCAS the resolve writes the output pair itself.
+const RESOLVED: [Res; 2] = [Res::new("taa"), Res::new("taa_history")];
+const OUTPUTS: [Res; 2] = [COLOR, Res::new("color_history")];
+/// The sample-depth pair.
+const DEPTHS: [Res; 2] = [Res::new("taa_depth"), Res::new("taa_depth_history")];
+
+/// The pair the resolve writes and reads: its own with RCAS, else the output pair.
+fn resolved_pair(options: &Options) -> [Res; 2] {
+    if options.rcas {
+        RESOLVED
+    } else {
+        OUTPUTS
+    }
+}
 
 /// The pass graph at output `width` x `height`, and whether the resolve reads the velocity
 /// buffer.
@@ -42,32 +61,20 @@ pub fn graph(options: &Options, width: u32, height: u32, dynamic_scene: bool) ->
         samples: 1,
         layers: 1,
     };
-    // Without RCAS the resolved colour is the output.
-    let resolved = if options.sharpness.is_some() {
-        RESOLVED
-    } else {
-        ["color", "color_history"]
-    };
+    let resolved = resolved_pair(options);
     let mut g = Graph::default();
-    g.resource("color_low", tex(COLOR_FORMAT, lw, lh))
-        .resource("depth_low", tex(DEPTH_FORMAT, lw, lh))
-        .resource("velocity", tex(COLOR_FORMAT, width, height))
-        .resource("velocity_depth", tex(DEPTH_FORMAT, width, height))
-        .resource(resolved[0], tex(COLOR_FORMAT, width, height))
+    g.resource(COLOR_LOW, tex(COLOR_FORMAT, lw, lh))
+        .resource(DEPTH_LOW, tex(DEPTH_FORMAT, lw, lh))
+        .pass("scene", PassKind::Render, &[], &[COLOR_LOW, DEPTH_LOW]);
+    velocity::declare(&mut g, width, height);
+    g.resource(resolved[0], tex(COLOR_FORMAT, width, height))
         .resource(resolved[1], tex(COLOR_FORMAT, width, height))
         .resource(DEPTHS[0], tex(HISTORY_DEPTH_FORMAT, width, height))
-        .resource(DEPTHS[1], tex(HISTORY_DEPTH_FORMAT, width, height))
-        .pass("scene", PassKind::Render, &[], &["color_low", "depth_low"])
-        .pass(
-            "velocity",
-            PassKind::Render,
-            &[],
-            &["velocity", "velocity_depth"],
-        );
+        .resource(DEPTHS[1], tex(HISTORY_DEPTH_FORMAT, width, height));
     let use_velocity = options.velocity && dynamic_scene;
-    let mut reads = vec!["color_low", "depth_low", resolved[1], DEPTHS[1]];
+    let mut reads = vec![COLOR_LOW, DEPTH_LOW, resolved[1], DEPTHS[1]];
     if use_velocity {
-        reads.push("velocity");
+        reads.push(VELOCITY);
     }
     g.pass(
         "resolve",
@@ -75,15 +82,15 @@ pub fn graph(options: &Options, width: u32, height: u32, dynamic_scene: bool) ->
         &reads,
         &[resolved[0], DEPTHS[0]],
     );
-    if options.sharpness.is_some() {
-        g.resource("color", tex(COLOR_FORMAT, width, height)).pass(
+    if options.rcas {
+        g.resource(COLOR, tex(COLOR_FORMAT, width, height)).pass(
             "rcas",
             PassKind::Compute,
             &[resolved[0]],
-            &["color"],
+            &[COLOR],
         );
     }
-    g.output("color");
+    g.output(COLOR);
     (
         g.plan().expect("built-in graphs are well formed"),
         use_velocity,
@@ -121,19 +128,22 @@ pub struct TaauGpu {
     width: u32,
     height: u32,
     low: (u32, u32),
-    /// Names of the resolved colour pair in the plan.
-    resolved: [&'static str; 2],
     pipeline: wgpu::ComputePipeline,
     params: wgpu::Buffer,
-    /// By parity: parity k writes pair member k and reads the other.
-    bind_groups: [wgpu::BindGroup; 2],
-    /// RCAS by parity (its input alternates with the resolved pair).
-    rcas: Option<[FsrPass; 2]>,
-    current: usize,
+    /// The history pair: frame parity k writes side k and reads the other.
+    sides: PingPong<Side>,
     scene_views: (wgpu::TextureView, wgpu::TextureView),
-    velocity_views: Option<(wgpu::TextureView, wgpu::TextureView)>,
-    _dummy_velocity: Option<wgpu::Texture>,
+    velocity: VelocityPass,
     last: Option<LastFrame>,
+}
+
+/// What one side of the history pair is: the colour and depth the resolve writes (the other
+/// side's read as history), its bind group, and RCAS from its colour to the output.
+struct Side {
+    resolved: Res,
+    depth: Res,
+    resolve: wgpu::BindGroup,
+    rcas: Option<FsrPass>,
 }
 
 impl TaauGpu {
@@ -147,12 +157,8 @@ impl TaauGpu {
         let device = &gpu.device;
         let (plan, use_velocity) = graph(&options, width, height, dynamic_scene);
         let textures = allocate(device, &plan);
-        let view = |name: &str| textures[name].create_view(&Default::default());
-        let resolved = if options.sharpness.is_some() {
-            RESOLVED
-        } else {
-            ["color", "color_history"]
-        };
+        let view = |res: Res| textures.view(res);
+        let resolved = resolved_pair(&options);
         let pipeline = compute_pipeline(device, "resolve", RESOLVE_WGSL, "main");
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("taau params"),
@@ -160,16 +166,15 @@ impl TaauGpu {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let dummy =
-            (!use_velocity).then(|| placeholder_texture(device, "no velocity", COLOR_FORMAT));
-        let velocity_view = match &dummy {
-            Some(t) => t.create_view(&Default::default()),
-            None => view("velocity"),
-        };
+        let velocity = VelocityPass::new(device, &plan, &textures);
+        debug_assert_eq!(velocity.runs(), use_velocity);
         let layout = pipeline.get_bind_group_layout(0);
-        let (color_low, depth_low) = (view("color_low"), view("depth_low"));
-        let bind_groups = [0, 1].map(|k| {
-            bind_group(
+        let (color_low, depth_low) = (view(COLOR_LOW), view(DEPTH_LOW));
+        let (colors, depths) = (PingPong::new(resolved), PingPong::new(DEPTHS));
+        let side = |k: usize| {
+            let (resolved, history) = colors.at(k);
+            let (depth, depth_history) = depths.at(k);
+            let resolve = bind_group(
                 device,
                 "resolve",
                 &layout,
@@ -177,27 +182,31 @@ impl TaauGpu {
                 &[
                     (1, &color_low),
                     (2, &depth_low),
-                    (3, &view(resolved[1 - k])),
-                    (4, &view(DEPTHS[1 - k])),
-                    (5, &velocity_view),
-                    (6, &view(resolved[k])),
-                    (7, &view(DEPTHS[k])),
+                    (3, &view(*history)),
+                    (4, &view(*depth_history)),
+                    (5, velocity.binding()),
+                    (6, &view(*resolved)),
+                    (7, &view(*depth)),
                 ],
-            )
-        });
-        let rcas = options.sharpness.map(|s| {
-            [0, 1].map(|k| {
+            );
+            let rcas = options.rcas_sharpness().map(|s| {
                 rcas_pass(
                     gpu,
-                    (&view(resolved[k]), &view("color")),
+                    (&view(*resolved), &view(COLOR)),
                     (width, height),
                     s,
                     true,
                 )
-            })
-        });
-        let scene_views = (view("color_low"), view("depth_low"));
-        let velocity_views = use_velocity.then(|| (view("velocity"), view("velocity_depth")));
+            });
+            Side {
+                resolved: *resolved,
+                depth: *depth,
+                resolve,
+                rcas,
+            }
+        };
+        let sides = PingPong::new([side(0), side(1)]);
+        let scene_views = (view(COLOR_LOW), view(DEPTH_LOW));
         let low = options.render_size(width, height);
         TaauGpu {
             plan,
@@ -206,15 +215,11 @@ impl TaauGpu {
             width,
             height,
             low,
-            resolved,
             pipeline,
             params,
-            bind_groups,
-            rcas,
-            current: 0,
+            sides,
             scene_views,
-            velocity_views,
-            _dummy_velocity: dummy,
+            velocity,
             last: None,
         }
     }
@@ -222,12 +227,12 @@ impl TaauGpu {
     /// A texture by resource name (`color_low`, `depth_low`, `velocity`); `resolved` and
     /// `depth` are this frame's resolve outputs, `history` and `depth_history` what it read.
     pub fn texture(&self, name: &str) -> Option<&wgpu::Texture> {
-        let k = self.current;
+        let (current, history) = (self.sides.current(), self.sides.history());
         match name {
-            "resolved" => self.textures.get(self.resolved[k]),
-            "history" => self.textures.get(self.resolved[1 - k]),
-            "depth" => self.textures.get(DEPTHS[k]),
-            "depth_history" => self.textures.get(DEPTHS[1 - k]),
+            "resolved" => self.textures.get(current.resolved.name()),
+            "history" => self.textures.get(history.resolved.name()),
+            "depth" => self.textures.get(current.depth.name()),
+            "depth_history" => self.textures.get(history.depth.name()),
             _ => self.textures.get(name),
         }
     }
@@ -252,9 +257,10 @@ impl Renderer for TaauGpu {
     }
 
     fn output(&self) -> &wgpu::Texture {
-        match self.rcas {
-            Some(_) => &self.textures["color"],
-            None => &self.textures[self.resolved[self.current]],
+        let side = self.sides.current();
+        match side.rcas {
+            Some(_) => self.textures.texture(COLOR),
+            None => self.textures.texture(side.resolved),
         }
     }
 
@@ -266,14 +272,14 @@ impl Renderer for TaauGpu {
         encoder: &mut wgpu::CommandEncoder,
         frame: FrameInfo,
     ) {
-        let j = jitter(frame.index, self.options.phases);
+        let j = jitter(frame.index, self.options.phases());
         let base = View::whole(frame.time, frame.prev_time);
         scene.write_view(
             &gpu.queue,
             0,
             &View {
                 ndc_offset: ndc_offset(j, self.low.0, self.low.1),
-                gradient_scale: self.options.gradient_scale,
+                gradient_scale: self.options.gradient_scale(),
                 ..base
             },
         );
@@ -288,21 +294,9 @@ impl Renderer for TaauGpu {
             0,
             ScenePipeline::Forward { samples: 1 },
         );
-        let use_velocity = self.velocity_views.is_some();
-        if let Some((c, d)) = &self.velocity_views {
-            scene.write_view(&gpu.queue, 1, &base);
-            record_scene_pass(
-                gpu,
-                scene,
-                timers,
-                encoder,
-                "velocity",
-                c,
-                d,
-                1,
-                ScenePipeline::Velocity,
-            );
-        }
+        let use_velocity =
+            self.velocity
+                .record(gpu, scene, timers, encoder, 1, frame.time, frame.prev_time);
         let (cur, prev) = scene.view_projections(frame.time, frame.prev_time);
         // A still camera reprojects static content exactly onto itself.
         let camera_still = cur == prev;
@@ -331,7 +325,7 @@ impl Renderer for TaauGpu {
         };
         gpu.queue
             .write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
-        self.current = (frame.index & 1) as usize;
+        self.sides.select(frame.index);
         self.last = Some(LastFrame {
             jitter: j,
             history_valid: frame.history_valid,
@@ -339,19 +333,17 @@ impl Renderer for TaauGpu {
             prev_from_cur: prev_from_cur.as_mat4(),
             velocity: use_velocity,
         });
-        let q = timers.begin("resolve", encoder);
-        {
-            let mut cp = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("resolve"),
-                timestamp_writes: q.compute_pass_timestamp_writes(),
-            });
-            cp.set_pipeline(&self.pipeline);
-            cp.set_bind_group(0, &self.bind_groups[self.current], &[]);
-            cp.dispatch_workgroups(self.width.div_ceil(8), self.height.div_ceil(8), 1);
-        }
-        timers.end(encoder, q);
-        if let Some(rcas) = &self.rcas {
-            rcas[self.current].record(timers, encoder);
+        let side = self.sides.current();
+        timed_dispatch(
+            encoder,
+            timers,
+            "resolve",
+            &self.pipeline,
+            &[&side.resolve],
+            [self.width.div_ceil(8), self.height.div_ceil(8)],
+        );
+        if let Some(rcas) = &side.rcas {
+            rcas.record(timers, encoder);
         }
     }
 }

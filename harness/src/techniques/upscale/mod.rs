@@ -4,11 +4,9 @@
 use super::definition::{BuildContext, Definition, Shader, Target};
 use super::native::gpu::{forward_graph, Forward, MakeResample, Resample};
 use crate::gpu::Gpu;
-use crate::params::{Param, ParamSpec};
 use crate::render::graph::Plan;
 use crate::render::kit::compute_pipeline;
 use crate::render::renderer::{Renderer, Unsupported};
-use crate::techniques::Variant;
 
 pub static UPSCALE_WGSL: &str = include_str!("upscale.wgsl");
 
@@ -20,27 +18,23 @@ crate::choice! {
     }
 }
 
-pub static SCALE: Param<f64> = Param::float(
-    "scale",
-    (0.0, false, 1.0),
-    0.5,
-    "render width and height as a fraction of the output resolution",
-);
-pub static FILTER: Param<Filter> = Filter::param(
-    "filter",
-    Filter::Bilinear,
-    "upscaling filter (compute pass at output resolution)",
-);
-static PARAMS: [&ParamSpec; 2] = [&SCALE.spec, &FILTER.spec];
+crate::options! {
+    /// A variant's options, typed.
+    #[derive(Clone, Copy, Debug, PartialEq)]
+    pub struct Options {
+        scale: f64 = float(
+            (0.0, false, 1.0),
+            0.5,
+            "render width and height as a fraction of the output resolution",
+        ),
+        filter: Filter = choice(
+            Filter::Bilinear,
+            "upscaling filter (compute pass at output resolution)",
+        ),
+    }
+}
 
 pub struct Upscale;
-
-/// A variant's options, typed.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Options {
-    pub scale: f64,
-    pub filter: Filter,
-}
 
 /// Render size and the upscale pass of a variant at `target`.
 fn setup(options: &Options, target: Target) -> (u32, u32, Resample, Filter) {
@@ -66,17 +60,6 @@ impl Definition for Upscale {
 
     fn summary(&self) -> &'static str {
         "render at a fraction of the output resolution, then upscale"
-    }
-
-    fn params(&self) -> &'static [&'static ParamSpec] {
-        &PARAMS
-    }
-
-    fn options(&self, variant: &Variant) -> Options {
-        Options {
-            scale: variant.get(&SCALE),
-            filter: variant.get(&FILTER),
-        }
     }
 
     fn plan(&self, options: &Options, target: Target) -> Plan {

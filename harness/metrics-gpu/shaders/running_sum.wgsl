@@ -1,0 +1,72 @@
+// FLIP's mean as flip-evaluator pools it, on the device: the f32 running sum of an error map in
+// row-major order (NaN and negative values as 0), `s = s + v` one value after the other,
+// exactly as tessera-metrics' `flip::pool::running_sum` adds them on the CPU. One workgroup per
+// map (the maps of a batch are summed side by side); its threads stage tiles of the map in
+// workgroup memory and one thread adds them in order. Sequential by definition: the f32 rounding
+// of each step depends on the sum before it, so no parallel order gives the same value.
+
+struct Params {
+    // Values per map.
+    count: u32,
+    // f32 words from one map to the next.
+    stride: u32,
+    _p0: u32,
+    _p1: u32,
+}
+
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(1) var<storage, read> maps: array<vec4<f32>>;
+@group(0) @binding(2) var<storage, read_write> sums: array<f32>;
+
+// 4096 values per tile.
+const TILE: u32 = 1024u;
+var<workgroup> tile: array<vec4<f32>, 1024>;
+
+fn clean(v: f32) -> f32 {
+    return select(0.0, v, v > 0.0);
+}
+
+@compute @workgroup_size(256)
+fn main(
+    @builtin(local_invocation_index) li: u32,
+    @builtin(workgroup_id) wg: vec3<u32>,
+) {
+    // The stride is a multiple of 4 (maps start on 256-byte boundaries).
+    let base = wg.x * (params.stride / 4u);
+    let quads = params.count / 4u + select(0u, 1u, params.count % 4u != 0u);
+    var s = 0.0;
+    for (var start = 0u; start < quads; start += TILE) {
+        let len = min(TILE, quads - start);
+        for (var j = li; j < len; j += 256u) {
+            tile[j] = maps[base + start + j];
+        }
+        workgroupBarrier();
+        if (li == 0u) {
+            let last = start + len == quads;
+            // The map's last quad may hold values past `count`: only its first `count % 4`.
+            let full = select(len, len - 1u, last && params.count % 4u != 0u);
+            for (var j = 0u; j < full; j++) {
+                let v = tile[j];
+                s = s + clean(v.x);
+                s = s + clean(v.y);
+                s = s + clean(v.z);
+                s = s + clean(v.w);
+            }
+            if (full < len) {
+                let v = tile[full];
+                let rest = params.count % 4u;
+                s = s + clean(v.x);
+                if (rest > 1u) {
+                    s = s + clean(v.y);
+                }
+                if (rest > 2u) {
+                    s = s + clean(v.z);
+                }
+            }
+        }
+        workgroupBarrier();
+    }
+    if (li == 0u) {
+        sums[wg.x] = s;
+    }
+}
