@@ -86,19 +86,21 @@ pub fn name(s: &str) -> String {
 /// table does not know it.
 pub fn axis_label(key: &str) -> String {
     match tessera_results::measure::Key::parse(key) {
-        Some(k) => {
-            let unit = k.measure.unit();
-            if unit.is_empty() {
-                k.label()
-            } else {
-                format!("{} ({unit})", k.label())
-            }
-        }
+        Some(k) => with_unit(k.label(), k.measure.unit()),
         None => match tessera_results::measure::Measure::from_name(key) {
-            Some(m) if !m.unit().is_empty() => format!("{} ({})", m.label(), m.unit()),
-            Some(m) => m.label().to_string(),
+            Some(m) => with_unit(m.label().to_string(), m.unit()),
             None => key.to_string(),
         },
+    }
+}
+
+/// `label (unit)`, or the label alone when it has no unit or already ends with it
+/// (`ColorVideoVDP JOD`, not `ColorVideoVDP JOD (JOD)`).
+fn with_unit(label: String, unit: &str) -> String {
+    if unit.is_empty() || label.ends_with(unit) {
+        label
+    } else {
+        format!("{label} ({unit})")
     }
 }
 

@@ -208,11 +208,16 @@ pub fn render(v: &ParetoView) -> String {
             format!("<a href=\"/runs/{}\">{}</a>", enc(r), esc(r))
         })
     };
+    // The hollow points only when a base run is shown.
+    let hollow = v
+        .base
+        .as_ref()
+        .map(|_| format!(" · hollow: run {}", link(&v.base)))
+        .unwrap_or_default();
     let _ = write!(
         b,
-        "<p>filled: run {} · hollow: run {} · {} ({} is better) against median GPU ms; the line joins the Pareto front</p>",
+        "<p>filled: run {}{hollow} · {} ({} is better) against median GPU ms; the line joins the Pareto front</p>",
         link(&v.run),
-        link(&v.base),
         esc(&v.metric),
         if v.higher_is_better { "higher" } else { "lower" }
     );
@@ -244,10 +249,10 @@ pub fn render(v: &ParetoView) -> String {
         kind: "scatter",
         x_label: "GPU time, median (ms)".into(),
         y_label: crate::html::axis_label(&v.metric),
-        groups: vec![
-            format!("run {}", v.run.as_deref().unwrap_or("–")),
-            format!("run {}", v.base.as_deref().unwrap_or("–")),
-        ],
+        // The base run's group only when there is one (its legend entries read "run –" else).
+        groups: std::iter::once(format!("run {}", v.run.as_deref().unwrap_or("–")))
+            .chain(v.base.as_deref().map(|b| format!("run {b}")))
+            .collect(),
         points: tagged
             .map(|(p, group)| ChartPoint {
                 x: p.gpu_ms,
