@@ -133,8 +133,11 @@ fn auto_sampling_stops_at_its_cap_and_metrics_keep_min_frames() {
 
 /// A vendor source that reports half its maximum clock, a thermal limit on every other read, and
 /// an energy counter 50 mJ higher at each read.
+/// A throttled fake GPU whose energy counter reads 5 W: 5 mJ per millisecond since it was made,
+/// like a real counter, whatever the sampling period.
 struct Throttled {
     reads: u32,
+    since: std::time::Instant,
 }
 
 impl ConditionSource for Throttled {
@@ -156,7 +159,7 @@ impl ConditionSource for Throttled {
             memory_clock_mhz: Some(2600.0),
             temperature_c: Some(87.0),
             power_w: Some(350.0),
-            energy_mj: Some(50.0 * f64::from(self.reads)),
+            energy_mj: Some(5.0 * (self.since.elapsed().as_secs_f64() * 1000.0).floor()),
             throttle_reasons: if self.reads & 1 == 0 {
                 vec![ThrottleReason::SwThermalSlowdown]
             } else {
@@ -172,7 +175,10 @@ fn a_throttled_sample_is_flagged_and_fails_its_gate() {
     let gates = "[[gates]]\nmeasure = \"throttled\"\nfail_above = 0.5\n";
     let s = common::scenario(&scenario_src("warmup = 1\nmeasured = 4\n", gates));
     let out = tempfile::tempdir().unwrap();
-    let sensors = Sensors::from_source(Ok(Box::new(Throttled { reads: 0 })));
+    let sensors = Sensors::from_source(Ok(Box::new(Throttled {
+        reads: 0,
+        since: std::time::Instant::now(),
+    })));
     let outcome = run::run_with_sensors(&gpu, &[s], &options(out.path(), true), &sensors).unwrap();
 
     match run_json(&outcome.run_dir).conditions {
@@ -192,11 +198,11 @@ fn a_throttled_sample_is_flagged_and_fails_its_gate() {
         assert!(c.throttle_causes[0]
             .starts_with("graphics clock fell to 1000 MHz, below 75% of the maximum 2000 MHz, in"));
         assert_eq!(c.throttle_reasons, vec!["sw-thermal-slowdown"]);
-        // Energy over the window of at least 1 s that follows the measured frames: the counter
-        // steps 50 mJ at every read, one read per 10 ms, so about 5 W.
+        // Energy over the window of at least 300 ms that follows the measured frames (sampled
+        // every millisecond): the counter reads 5 W.
         let e = c.energy.unwrap();
         assert_eq!(e.method, EnergyMethod::Counter);
-        assert!(e.window_ms >= 1000.0 && e.frames > 0, "{e:?}");
+        assert!(e.window_ms >= 300.0 && e.frames > 0, "{e:?}");
         let watts = e.mj_per_frame * f64::from(e.frames) / e.window_ms;
         assert!((3.0..8.0).contains(&watts), "{watts} W from {e:?}");
     }

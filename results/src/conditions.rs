@@ -109,7 +109,7 @@ impl Spread {
 
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
 pub struct Energy {
-    /// Energy of the energy window (frames that continue the measured ones, at least a second)
+    /// Energy of the energy window (frames that continue the measured ones, 500 ms by default)
     /// divided by its frames, in millijoules.
     pub mj_per_frame: f64,
     pub method: EnergyMethod,

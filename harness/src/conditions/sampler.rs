@@ -13,7 +13,8 @@ use std::time::{Duration, Instant};
 use super::{ConditionSource, DeviceLimits, Sample, SAMPLE_INTERVAL_MS};
 
 enum Command {
-    Begin,
+    /// Open a window sampled at this period (`None`: the sampler's own).
+    Begin(Option<Duration>),
     End,
 }
 
@@ -53,7 +54,15 @@ impl Sampler {
     /// Opens a window: the thread samples now and then periodically. Does not wait.
     pub fn begin(&self) {
         if let Some(c) = &self.commands {
-            let _ = c.send(Command::Begin);
+            let _ = c.send(Command::Begin(None));
+        }
+    }
+
+    /// [`Sampler::begin`] with its own period for this window (the energy window samples every
+    /// millisecond to place the energy counter's steps).
+    pub fn begin_every(&self, interval: Duration) {
+        if let Some(c) = &self.commands {
+            let _ = c.send(Command::Begin(Some(interval)));
         }
     }
 
@@ -88,32 +97,33 @@ fn run(
         s.at_s = t0.elapsed().as_secs_f64();
         s
     };
-    // The open window: its start, its samples and when the next periodic sample is due.
-    let mut window: Option<(Instant, Vec<Sample>, Instant)> = None;
+    // The open window: its start, its samples, when the next periodic sample is due, its period.
+    let mut window: Option<(Instant, Vec<Sample>, Instant, Duration)> = None;
     loop {
         let command = match &window {
             None => commands.recv().map_err(|_| RecvTimeoutError::Disconnected),
-            Some((_, _, next)) => {
+            Some((_, _, next, _)) => {
                 commands.recv_timeout(next.saturating_duration_since(Instant::now()))
             }
         };
         match command {
             Err(RecvTimeoutError::Disconnected) => return,
             Err(RecvTimeoutError::Timeout) => {
-                if let Some((t0, samples, next)) = &mut window {
+                if let Some((t0, samples, next, period)) = &mut window {
                     samples.push(take(source, *t0));
-                    *next += interval;
+                    *next += *period;
                 }
             }
             // A second begin restarts the window.
-            Ok(Command::Begin) => {
+            Ok(Command::Begin(period)) => {
+                let period = period.unwrap_or(interval);
                 let t0 = Instant::now();
                 let first = take(source, t0);
-                window = Some((t0, vec![first], t0 + interval));
+                window = Some((t0, vec![first], t0 + period, period));
             }
             Ok(Command::End) => {
                 let samples = match window.take() {
-                    Some((t0, mut samples, _)) => {
+                    Some((t0, mut samples, _, _)) => {
                         samples.push(take(source, t0));
                         samples
                     }
@@ -169,6 +179,19 @@ pub(crate) mod tests {
         let w = s.end();
         assert_eq!(w.len(), 2);
         assert_eq!(w[0].energy_mj, Some(30.0));
+    }
+
+    #[test]
+    fn a_window_can_take_its_own_period() {
+        // The sampler's period is an hour; this window's a millisecond.
+        let s = Sampler::with_interval(Box::new(Counting(0)), Duration::from_secs(3600));
+        s.begin_every(Duration::from_millis(1));
+        std::thread::sleep(Duration::from_millis(30));
+        let w = s.end();
+        assert!(w.len() > 2, "{} samples", w.len());
+        // The next plain window is back to the sampler's period: its two ends only.
+        s.begin();
+        assert_eq!(s.end().len(), 2);
     }
 
     #[test]

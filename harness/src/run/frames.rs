@@ -27,7 +27,7 @@ use tessera_metrics_gpu::GpuFrame;
 
 use super::phases;
 use crate::conditions::sampler::Sampler;
-use crate::conditions::{Sample, ENERGY_WINDOW_MS};
+use crate::conditions::{Sample, ENERGY_SAMPLE_INTERVAL_MS, ENERGY_WINDOW_MS};
 use crate::gpu::Gpu;
 use crate::render::frame_check::FrameCheck;
 use crate::render::graph::PassKind;
@@ -431,7 +431,9 @@ pub fn render_sampled(
         let first = last_done + 1;
         let window = std::time::Duration::from_secs_f64(energy_ms / 1000.0);
         let mut frames = 0u32;
-        s.begin();
+        s.begin_every(std::time::Duration::from_secs_f64(
+            ENERGY_SAMPLE_INTERVAL_MS / 1000.0,
+        ));
         let start = Instant::now();
         pipelined(
             gpu,
