@@ -157,12 +157,24 @@ impl FrameCheck {
                     size,
                 })
             }
-            let group = |pipeline: &wgpu::ComputePipeline,
-                         entries: Vec<(u32, wgpu::BindingResource)>| {
-                let entries: Vec<wgpu::BindGroupEntry> = entries
-                    .into_iter()
-                    .map(|(binding, resource)| wgpu::BindGroupEntry { binding, resource })
-                    .collect();
+            // Both checks bind the params, the band of the frame and the counters; the non-finite
+            // check adds the mask, the compare the same band of the snapshot.
+            let group = |pipeline: &wgpu::ComputePipeline, last: wgpu::BindGroupEntry| {
+                let entries = [
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: params.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: band(&raw, offset, size),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: counters.as_entire_binding(),
+                    },
+                    last,
+                ];
                 device.create_bind_group(&wgpu::BindGroupDescriptor {
                     label: Some("frame check"),
                     layout: &pipeline.get_bind_group_layout(0),
@@ -171,21 +183,17 @@ impl FrameCheck {
             };
             let non_finite = group(
                 &pipelines.non_finite,
-                vec![
-                    (0, params.as_entire_binding()),
-                    (1, band(&raw, offset, size)),
-                    (2, counters.as_entire_binding()),
-                    (3, mask.as_entire_binding()),
-                ],
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: mask.as_entire_binding(),
+                },
             );
             let compare = group(
                 &pipelines.compare,
-                vec![
-                    (0, params.as_entire_binding()),
-                    (1, band(&raw, offset, size)),
-                    (2, counters.as_entire_binding()),
-                    (4, band(&snapshot, offset, size)),
-                ],
+                wgpu::BindGroupEntry {
+                    binding: 4,
+                    resource: band(&snapshot, offset, size),
+                },
             );
             bands.push(Band {
                 non_finite,
