@@ -247,7 +247,7 @@ fn scenario_section(d: &RunDetail, prev: Option<&Previous>, s: &ScenarioResult, 
         };
         let _ = write!(
             out,
-            "<td class=n>{}</td><td class=wrap>{}</td><td class=wrap>{}</td><td>{series_link}{images}</td></tr>",
+            "<td class=n>{}</td><td class=wrap>{}</td><td class=wrap>{}</td><td class=links>{series_link}{images}</td></tr>",
             if ok { bytes(v.allocated_bytes) } else { "–".into() },
             passes.join(", "),
             gates.join("; ")
