@@ -12,6 +12,10 @@ use clap::{Parser, Subcommand};
 use tessera::run::{self, console, SuiteError};
 use tessera::scenario::{self, Scenario};
 
+/// Counts the harness's heap for the results' `peak_heap_bytes` (`run/memory.rs`).
+#[global_allocator]
+static ALLOC: tessera::run::memory::CountingAlloc = tessera::run::memory::CountingAlloc;
+
 const EXIT_GATE: u8 = 1;
 const EXIT_INPUT: u8 = 2;
 const EXIT_DEVICE: u8 = 3;

@@ -133,6 +133,7 @@ fn scenario(run_id: &str, name: &str, results: Vec<VariantResult>) -> ScenarioRe
         results,
         wall_ms: 100.0,
         peak_rss_bytes: None,
+        peak_heap_bytes: None,
     }
 }
 

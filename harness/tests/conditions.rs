@@ -131,10 +131,9 @@ fn auto_sampling_stops_at_its_cap_and_metrics_keep_min_frames() {
     }
 }
 
-/// A vendor source that reports half its maximum clock, a thermal limit on every other read, and
-/// an energy counter 50 mJ higher at each read.
-/// A throttled fake GPU whose energy counter reads 5 W: 5 mJ per millisecond since it was made,
-/// like a real counter, whatever the sampling period.
+/// A throttled fake GPU (half its maximum clock, a thermal limit on every other read) whose
+/// energy counter reads 5 W and, like an H200's, steps every 100 ms: 500 mJ per 100 ms since it
+/// was made, whatever the sampling period.
 struct Throttled {
     reads: u32,
     since: std::time::Instant,
@@ -159,7 +158,7 @@ impl ConditionSource for Throttled {
             memory_clock_mhz: Some(2600.0),
             temperature_c: Some(87.0),
             power_w: Some(350.0),
-            energy_mj: Some(5.0 * (self.since.elapsed().as_secs_f64() * 1000.0).floor()),
+            energy_mj: Some(500.0 * (self.since.elapsed().as_secs_f64() * 10.0).floor()),
             throttle_reasons: if self.reads & 1 == 0 {
                 vec![ThrottleReason::SwThermalSlowdown]
             } else {
@@ -198,11 +197,15 @@ fn a_throttled_sample_is_flagged_and_fails_its_gate() {
         assert!(c.throttle_causes[0]
             .starts_with("graphics clock fell to 1000 MHz, below 75% of the maximum 2000 MHz, in"));
         assert_eq!(c.throttle_reasons, vec!["sw-thermal-slowdown"]);
-        // Energy over the window of at least 300 ms that follows the measured frames (sampled
-        // every millisecond): the counter reads 5 W.
+        // Energy over the window that follows the measured frames (sampled every millisecond):
+        // it ends after the counter's third step, 200 to 300 ms in, before the 500 ms default;
+        // the counter reads 5 W.
         let e = c.energy.unwrap();
         assert_eq!(e.method, EnergyMethod::Counter);
-        assert!(e.window_ms >= 300.0 && e.frames > 0, "{e:?}");
+        assert!(
+            (190.0..480.0).contains(&e.window_ms) && e.frames > 0,
+            "{e:?}"
+        );
         let watts = e.mj_per_frame * f64::from(e.frames) / e.window_ms;
         assert!((3.0..8.0).contains(&watts), "{watts} W from {e:?}");
     }

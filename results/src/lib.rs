@@ -168,6 +168,11 @@ pub struct ScenarioResult {
     /// system does not report it and in files written before it was recorded.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub peak_rss_bytes: Option<u64>,
+    /// Peak bytes the harness's own heap held during the scenario (its counting allocator, reset
+    /// at the start): frames, images, metric and wgpu objects on the host; the driver's
+    /// allocations are not in it. Absent where not counted and in older files.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub peak_heap_bytes: Option<u64>,
 }
 
 /// One (run, scenario, variant) record.

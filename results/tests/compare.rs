@@ -110,6 +110,7 @@ fn scenario(run_id: &str, results: Vec<VariantResult>) -> ScenarioResult {
         results,
         wall_ms: 100.0,
         peak_rss_bytes: None,
+        peak_heap_bytes: None,
     }
 }
 

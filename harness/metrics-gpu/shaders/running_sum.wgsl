@@ -2,8 +2,9 @@
 // row-major order (NaN and negative values as 0), `s = s + v` one value after the other,
 // exactly as tessera-metrics' `flip::pool::running_sum` adds them on the CPU. One workgroup per
 // map (the maps of a batch are summed side by side); its threads stage tiles of the map in
-// workgroup memory and one thread adds them in order. Sequential by definition: the f32 rounding
-// of each step depends on the sum before it, so no parallel order gives the same value.
+// workgroup memory (the next while the last is added) and one thread adds them in order.
+// Sequential by definition: the f32 rounding of each step depends on the sum before it, so no
+// parallel order gives the same value.
 
 struct Params {
     // Values per map.
@@ -18,12 +19,25 @@ struct Params {
 @group(0) @binding(1) var<storage, read> maps: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read_write> sums: array<f32>;
 
-// 4096 values per tile.
-const TILE: u32 = 1024u;
+// 2048 values per tile; two tiles (16 KiB, WebGPU's least workgroup storage), so that the next
+// is loaded while the last is summed.
+const TILE: u32 = 512u;
 var<workgroup> tile: array<vec4<f32>, 1024>;
+
+// Threads below this do not load: the summing thread's subgroup (32 or 64 wide) stays on its
+// adds instead of waiting on its lanes' loads.
+const FIRST_LOADER: u32 = 64u;
 
 fn clean(v: f32) -> f32 {
     return select(0.0, v, v > 0.0);
+}
+
+fn load(base: u32, start: u32, len: u32, half: u32, li: u32) {
+    if (li >= FIRST_LOADER) {
+        for (var j = li - FIRST_LOADER; j < len; j += 256u - FIRST_LOADER) {
+            tile[half * TILE + j] = maps[base + start + j];
+        }
+    }
 }
 
 @compute @workgroup_size(256)
@@ -35,25 +49,29 @@ fn main(
     let base = wg.x * (params.stride / 4u);
     let quads = params.count / 4u + select(0u, 1u, params.count % 4u != 0u);
     var s = 0.0;
+    load(base, 0u, min(TILE, quads), 0u, li);
+    workgroupBarrier();
+    var half = 0u;
     for (var start = 0u; start < quads; start += TILE) {
         let len = min(TILE, quads - start);
-        for (var j = li; j < len; j += 256u) {
-            tile[j] = maps[base + start + j];
+        // The next tile into the other half while thread 0 adds this one.
+        let next = start + TILE;
+        if (next < quads) {
+            load(base, next, min(TILE, quads - next), 1u - half, li);
         }
-        workgroupBarrier();
         if (li == 0u) {
             let last = start + len == quads;
             // The map's last quad may hold values past `count`: only its first `count % 4`.
             let full = select(len, len - 1u, last && params.count % 4u != 0u);
             for (var j = 0u; j < full; j++) {
-                let v = tile[j];
+                let v = tile[half * TILE + j];
                 s = s + clean(v.x);
                 s = s + clean(v.y);
                 s = s + clean(v.z);
                 s = s + clean(v.w);
             }
             if (full < len) {
-                let v = tile[full];
+                let v = tile[half * TILE + full];
                 let rest = params.count % 4u;
                 s = s + clean(v.x);
                 if (rest > 1u) {
@@ -65,6 +83,7 @@ fn main(
             }
         }
         workgroupBarrier();
+        half = 1u - half;
     }
     if (li == 0u) {
         sums[wg.x] = s;

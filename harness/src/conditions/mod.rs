@@ -29,14 +29,19 @@ pub const VENDOR_INTEL: u32 = 0x8086;
 /// the energy window.
 pub const SAMPLE_INTERVAL_MS: f64 = 10.0;
 
-/// The energy window: after the measured frames, the sequence goes on for at least this long with
-/// the sensors sampled, since an energy counter that steps every 100 ms (an H200's, measured)
-/// cannot measure a window of a few frames. Five steps fall in it; sampled every
-/// [`ENERGY_SAMPLE_INTERVAL_MS`], their first and last are placed to a millisecond over their
-/// 400 ms span (0.25-0.5%), where a 1 s window sampled every 10 ms placed ten steps to 10 ms over
-/// 900 ms (1-2%). Run to run on the H200 the energy per frame of 1 s windows differed by 3.5%
-/// (median over 15 variants), more than either placement. Only where sensors are available.
+/// The energy window: after the measured frames, the sequence goes on with the sensors sampled,
+/// since an energy counter that steps every 100 ms (an H200's, measured) cannot measure a window
+/// of a few frames. It lasts until the counter has stepped [`ENERGY_STEPS`] times or for this
+/// long at most (a source without a counter, or one that does not step, runs it all and is read
+/// as power times time). Sampled every [`ENERGY_SAMPLE_INTERVAL_MS`], the steps are placed to a
+/// millisecond: three steps span two of the H200's intervals, 200 ms placed to 1%, reached 200 to
+/// 300 ms after the window opens. Run to run on the H200 the energy per frame of 1 s windows
+/// differed by 3.5% (median over 15 variants), more than that placement. Only where sensors are
+/// available.
 pub const ENERGY_WINDOW_MS: f64 = 500.0;
+
+/// Counter steps that end the energy window early (see [`ENERGY_WINDOW_MS`]).
+pub const ENERGY_STEPS: u32 = 3;
 
 /// Sampling period of the energy window (the measured frames' is [`SAMPLE_INTERVAL_MS`]).
 pub const ENERGY_SAMPLE_INTERVAL_MS: f64 = 1.0;

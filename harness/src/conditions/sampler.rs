@@ -4,9 +4,12 @@
 //! [`Sampler::begin`] is a channel send (the render loop calls it as the last warm-up frame
 //! completes); the thread then samples at once and every [`SAMPLE_INTERVAL_MS`] until
 //! [`Sampler::end`], which takes one last sample and returns the window's samples. Between windows
-//! the thread sleeps on its channel.
+//! the thread sleeps on its channel. While a window is open, [`Sampler::energy_steps`] says how
+//! often the energy counter has changed in it (the energy window ends on it).
 
+use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender};
+use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
@@ -23,6 +26,8 @@ pub struct Sampler {
     windows: Receiver<Vec<Sample>>,
     thread: Option<JoinHandle<()>>,
     limits: DeviceLimits,
+    /// Changes of the energy counter seen in the open window (reset when one opens).
+    steps: Arc<AtomicU32>,
 }
 
 impl Sampler {
@@ -35,15 +40,18 @@ impl Sampler {
         let limits = source.limits();
         let (commands, rx) = mpsc::channel();
         let (tx, windows) = mpsc::channel();
+        let steps = Arc::new(AtomicU32::new(0));
+        let counted = Arc::clone(&steps);
         let thread = std::thread::Builder::new()
             .name("tessera-conditions".into())
-            .spawn(move || run(source.as_mut(), interval, &rx, &tx))
+            .spawn(move || run(source.as_mut(), interval, &rx, &tx, &counted))
             .ok();
         Sampler {
             commands: Some(commands),
             windows,
             thread,
             limits,
+            steps,
         }
     }
 
@@ -53,6 +61,7 @@ impl Sampler {
 
     /// Opens a window: the thread samples now and then periodically. Does not wait.
     pub fn begin(&self) {
+        self.steps.store(0, Ordering::Release);
         if let Some(c) = &self.commands {
             let _ = c.send(Command::Begin(None));
         }
@@ -61,9 +70,16 @@ impl Sampler {
     /// [`Sampler::begin`] with its own period for this window (the energy window samples every
     /// millisecond to place the energy counter's steps).
     pub fn begin_every(&self, interval: Duration) {
+        self.steps.store(0, Ordering::Release);
         if let Some(c) = &self.commands {
             let _ = c.send(Command::Begin(Some(interval)));
         }
+    }
+
+    /// How many times the energy counter has changed between the samples of the open window so
+    /// far (0 before the thread has sampled, and without an energy counter).
+    pub fn energy_steps(&self) -> u32 {
+        self.steps.load(Ordering::Acquire)
     }
 
     /// Closes the window after one last sample and returns its samples (empty when no window
@@ -91,6 +107,7 @@ fn run(
     interval: Duration,
     commands: &Receiver<Command>,
     windows: &Sender<Vec<Sample>>,
+    steps: &AtomicU32,
 ) {
     let take = |source: &mut dyn ConditionSource, t0: Instant| {
         let mut s = source.sample();
@@ -110,13 +127,20 @@ fn run(
             Err(RecvTimeoutError::Disconnected) => return,
             Err(RecvTimeoutError::Timeout) => {
                 if let Some((t0, samples, next, period)) = &mut window {
-                    samples.push(take(source, *t0));
+                    let sample = take(source, *t0);
+                    let before = samples.last().and_then(|s| s.energy_mj);
+                    if sample.energy_mj.is_some() && before.is_some() && sample.energy_mj != before
+                    {
+                        steps.fetch_add(1, Ordering::Release);
+                    }
+                    samples.push(sample);
                     *next += *period;
                 }
             }
             // A second begin restarts the window.
             Ok(Command::Begin(period)) => {
                 let period = period.unwrap_or(interval);
+                steps.store(0, Ordering::Release);
                 let t0 = Instant::now();
                 let first = take(source, t0);
                 window = Some((t0, vec![first], t0 + period, period));
@@ -202,5 +226,31 @@ pub(crate) mod tests {
         let w = s.end();
         assert!(w.len() > 2, "{} samples", w.len());
         assert!(w.windows(2).all(|p| p[0].at_s <= p[1].at_s));
+    }
+
+    #[test]
+    fn energy_steps_count_the_counters_changes_in_the_open_window() {
+        // Counting's energy changes on every read: each periodic sample is a step.
+        let s = Sampler::with_interval(Box::new(Counting(0)), Duration::from_millis(1));
+        assert_eq!(s.energy_steps(), 0);
+        s.begin();
+        let t = Instant::now();
+        while s.energy_steps() < 3 && t.elapsed() < Duration::from_secs(10) {
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        let steps = s.energy_steps();
+        let w = s.end();
+        assert!(steps >= 3, "{steps} steps");
+        // Every periodic sample changed the counter; the first and the closing one are not
+        // counted as steps by the time `steps` was read.
+        assert!(
+            w.len() as u32 >= steps + 2,
+            "{} samples, {steps} steps",
+            w.len()
+        );
+        // A new window starts from zero at once.
+        s.begin_every(Duration::from_secs(3600));
+        assert_eq!(s.energy_steps(), 0);
+        let _ = s.end();
     }
 }

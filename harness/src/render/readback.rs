@@ -79,34 +79,67 @@ impl Readback {
             timeout: None,
         });
         rx.recv().unwrap_or(Err(wgpu::BufferAsyncError))?;
-        let mut data = Vec::with_capacity(self.width as usize * self.height as usize * 3);
+        let (w, h) = (self.width as usize, self.height as usize);
+        let mut data = vec![0.0f32; w * h * 3];
         let mut non_finite = 0u64;
         let mut mask: Vec<u64> = Vec::new();
         {
             let mapped = slice
                 .get_mapped_range()
                 .map_err(|_| wgpu::BufferAsyncError)?;
-            for y in 0..self.height as usize {
-                let start = y * self.padded_row as usize;
-                let row: &[half::f16] =
-                    bytemuck::cast_slice(&mapped[start..start + self.width as usize * 8]);
-                for (x, px) in row.chunks_exact(4).enumerate() {
-                    let before = non_finite;
-                    for c in &px[..3] {
-                        let v = c.to_f32();
-                        if !v.is_finite() {
-                            non_finite += 1;
-                        }
-                        data.push(v);
+            // Rows decoded in bands on every core (a 4K frame is 25M half floats); the values
+            // and the mask do not depend on the banding.
+            let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+            let band_rows = h.div_ceil(threads.min(h.max(1))).max(1);
+            let padded = self.padded_row as usize;
+            let bands: Vec<(u64, Vec<usize>)> = std::thread::scope(|scope| {
+                let handles: Vec<_> = data
+                    .chunks_mut(band_rows * w * 3)
+                    .enumerate()
+                    .map(|(b, out)| {
+                        let mapped = &mapped;
+                        scope.spawn(move || {
+                            let mut count = 0u64;
+                            let mut pixels = Vec::new();
+                            for (dy, out_row) in out.chunks_exact_mut(w * 3).enumerate() {
+                                let y = b * band_rows + dy;
+                                let start = y * padded;
+                                let row: &[half::f16] =
+                                    bytemuck::cast_slice(&mapped[start..start + w * 8]);
+                                for (x, (px, o)) in row
+                                    .chunks_exact(4)
+                                    .zip(out_row.chunks_exact_mut(3))
+                                    .enumerate()
+                                {
+                                    let mut bad = false;
+                                    for (c, v) in px[..3].iter().zip(o.iter_mut()) {
+                                        *v = c.to_f32();
+                                        if !v.is_finite() {
+                                            count += 1;
+                                            bad = true;
+                                        }
+                                    }
+                                    if bad {
+                                        pixels.push(y * w + x);
+                                    }
+                                }
+                            }
+                            (count, pixels)
+                        })
+                    })
+                    .collect();
+                handles
+                    .into_iter()
+                    .map(|t| t.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+                    .collect()
+            });
+            for (count, pixels) in bands {
+                non_finite += count;
+                for i in pixels {
+                    if mask.is_empty() {
+                        mask = vec![0; (w * h).div_ceil(64)];
                     }
-                    if non_finite != before {
-                        let i = y * self.width as usize + x;
-                        if mask.is_empty() {
-                            mask =
-                                vec![0; (self.width as usize * self.height as usize).div_ceil(64)];
-                        }
-                        mask[i / 64] |= 1 << (i % 64);
-                    }
+                    mask[i / 64] |= 1 << (i % 64);
                 }
             }
         }

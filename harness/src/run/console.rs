@@ -122,10 +122,14 @@ pub fn scenario_table(s: &ScenarioResult) -> String {
         }
     }
     if let Some(b) = s.peak_rss_bytes {
+        let mib = |b: u64| b as f64 / (1024.0 * 1024.0);
+        let heap = s.peak_heap_bytes.map_or(String::new(), |h| {
+            format!(", {:.0} MiB peak heap (the harness's own)", mib(h))
+        });
         let _ = writeln!(
             out,
-            "  memory: {:.0} MiB peak resident (the harness process on the host, {:.1} s wall)",
-            b as f64 / (1024.0 * 1024.0),
+            "  memory: {:.0} MiB peak resident (the process on the host, driver included){heap}; {:.1} s wall",
+            mib(b),
             s.wall_ms / 1000.0
         );
     }

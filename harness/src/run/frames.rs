@@ -13,8 +13,9 @@
 //! the stop rule ends it ([`crate::timing::stop`]), and the last compared frame is copied aside as
 //! it completes, for the determinism check (a copy submitted between two frames, outside every
 //! timed pass, compared bit for bit on the device with the capture phase's last frame:
-//! `render/frame_check.rs`). With sensors, an energy window follows: the sequence goes on, untimed, for at
-//! least [`ENERGY_WINDOW_MS`] while the sampler reads the energy counter.
+//! `render/frame_check.rs`). With sensors, an energy window follows: the sequence goes on,
+//! untimed, while the sampler reads the energy counter, until it has stepped [`ENERGY_STEPS`]
+//! times or for [`ENERGY_WINDOW_MS`] at most.
 
 use std::cell::Cell;
 use std::collections::{BTreeMap, VecDeque};
@@ -27,7 +28,7 @@ use tessera_metrics_gpu::GpuFrame;
 
 use super::phases;
 use crate::conditions::sampler::Sampler;
-use crate::conditions::{Sample, ENERGY_SAMPLE_INTERVAL_MS, ENERGY_WINDOW_MS};
+use crate::conditions::{Sample, ENERGY_SAMPLE_INTERVAL_MS, ENERGY_STEPS, ENERGY_WINDOW_MS};
 use crate::gpu::Gpu;
 use crate::render::frame_check::FrameCheck;
 use crate::render::graph::PassKind;
@@ -424,7 +425,8 @@ pub fn render_sampled(
     // histories included), compared on the device.
 
     // Energy window, with sensors only: the sequence goes on from the last timed frame, pipelined,
-    // for at least ENERGY_WINDOW_MS, while the sampler reads the energy counter.
+    // while the sampler reads the energy counter, until it has stepped ENERGY_STEPS times or for
+    // the window's length at most.
     let energy_ms = scenario.energy_window_ms.unwrap_or(ENERGY_WINDOW_MS);
     if let Some(s) = sampler.filter(|_| energy_ms > 0.0) {
         let _span = phases::span("energy window");
@@ -441,7 +443,7 @@ pub fn render_sampled(
             scenario,
             technique,
             &mut timers,
-            (first..).take_while(|_| start.elapsed() < window),
+            (first..).take_while(|_| start.elapsed() < window && s.energy_steps() < ENERGY_STEPS),
             None,
             &mut |_, _| frames += 1,
         );

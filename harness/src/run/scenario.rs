@@ -190,11 +190,11 @@ pub fn run(
                     if let (true, None, Some(own_gpu)) = (scenario.save_worst, own_frames, own_gpu)
                     {
                         let worst = images::worst_frames(&result.metrics, &scenario.save_frames);
-                        let backend = gpu.metrics();
+                        let mut backend = gpu.metrics();
                         let refs = phases::time("images", || {
                             images::save_worst_from_device(
                                 &mut result,
-                                &backend,
+                                &mut backend,
                                 own_gpu,
                                 &r.gpu,
                                 &worst,
