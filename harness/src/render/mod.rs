@@ -13,6 +13,7 @@ pub mod kit;
 pub mod material;
 pub mod mesh;
 pub mod mips;
+pub mod motion_blur;
 pub mod readback;
 pub mod renderer;
 pub mod scene;

@@ -99,6 +99,8 @@ pub enum RenderError {
     Readback,
     #[error("keeping the frame on the device for the metrics failed: {0}")]
     Metrics(String),
+    #[error("{0}")]
+    MotionBlur(String),
 }
 
 /// What the capture phase keeps of each measured frame (the saved frames' images are always
@@ -456,6 +458,15 @@ pub fn render_sampled(
     // comes back to the CPU only when something on the CPU needs it: CPU frames asked for, a
     // saved frame, `TESSERA_FRAME_HASHES`.
     timers.enable_stats(true);
+    // `reference.motion_blur`: the compared frames are blurred along the scene's motion first.
+    let mut blur = if scenario.motion_blur {
+        Some(
+            super::motion_blur::BlurredCapture::new(gpu, scenario.width, scenario.height)
+                .map_err(RenderError::MotionBlur)?,
+        )
+    } else {
+        None
+    };
     for index in 0..scenario.total_frames() {
         let render_span = phases::span("capture: render");
         submit_frame(gpu, scene, scenario, technique, &mut timers, index);
@@ -479,6 +490,17 @@ pub fn render_sampled(
             let last = index + 1 == scenario.total_frames();
             let compare = last && compared_last.is_some();
             let output = technique.output();
+            // What the metrics, images and hashes see: the output, or it motion-blurred (its
+            // own submission; the checks below read the output itself).
+            let blurring = blur.is_some();
+            let compared = match blur.as_mut() {
+                Some(b) => {
+                    let _span = phases::span("capture: motion blur");
+                    b.apply(gpu, scene, scenario, index, output)
+                        .map_err(RenderError::MotionBlur)?
+                }
+                None => output,
+            };
             // The device's checks (every frame not read back; the determinism check on the
             // last), the metrics' copy, and the readback's copy: one submission.
             let checks_span = phases::span("capture: checks");
@@ -487,19 +509,21 @@ pub fn render_sampled(
                 .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                     label: Some("capture"),
                 });
-            let checked = !on_cpu || compare;
+            // A blurred read-back frame's non-finite values are not the output's: then the
+            // device checks the output.
+            let checked = !on_cpu || compare || blurring;
             if checked {
                 check.record(gpu, &mut encoder, output, compare);
             }
             if let Some(copy) = &metric_copy {
                 encoder.copy_texture_to_texture(
-                    output.as_image_copy(),
+                    compared.as_image_copy(),
                     copy.as_image_copy(),
-                    output.size(),
+                    compared.size(),
                 );
             }
             if on_cpu {
-                readback.copy(&mut encoder, output);
+                readback.copy(&mut encoder, compared);
             }
             gpu.queue.submit([encoder.finish()]);
             if let Some(copy) = &metric_copy {
@@ -533,6 +557,7 @@ pub fn render_sampled(
                 rendered.deterministic = results.as_ref().and_then(|r| r.same_as_snapshot);
             }
             let (non_finite, mask) = match (&frame, results) {
+                (_, Some(r)) if blurring => (r.non_finite, r.non_finite_mask),
                 (Some(f), _) => (f.non_finite, f.non_finite_mask.clone()),
                 (None, Some(r)) => (r.non_finite, r.non_finite_mask),
                 (None, None) => (0, None),

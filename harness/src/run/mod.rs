@@ -17,6 +17,7 @@ pub mod images;
 pub mod memory;
 pub mod metrics;
 pub mod motion;
+pub mod motion_blur;
 pub mod output;
 pub mod phases;
 pub mod record;

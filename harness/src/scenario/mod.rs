@@ -54,6 +54,10 @@ pub struct Scenario {
     pub save_worst: bool,
     pub time_step: f64,
     pub reference: Reference,
+    /// `reference.motion_blur`: every compared frame (the reference's and each variant's) is
+    /// filtered by a box of its pixels' motion along that motion before the metrics
+    /// (`run/motion_blur.rs`).
+    pub motion_blur: bool,
     pub metrics: Vec<MetricKind>,
     /// The display ColorVideoVDP (`cvvdp`) sees the frames on.
     pub display: tessera_metrics::DisplaySpec,

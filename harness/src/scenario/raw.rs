@@ -120,6 +120,9 @@ pub struct RawReference {
     /// Ground truth: jittered samples per pixel at the output resolution (the converged
     /// reference). Default 32 when `supersample` is not given.
     pub samples: Option<i64>,
+    /// Compare after motion blur: reference and variants filtered by a box along each pixel's
+    /// motion (NVIDIA adaptive shading, section 4 and Fig. 9). Default false.
+    pub motion_blur: Option<bool>,
 }
 
 #[derive(Debug, Default, Deserialize)]

@@ -292,6 +292,13 @@ fn build(ctx: &mut Ctx, path: &Path, raw: RawScenario) -> Scenario {
     ctx.positive(&root.key("time_step"), time_step);
 
     let reference = reference(ctx, &root.key("reference"), &raw.reference);
+    let motion_blur = raw.reference.motion_blur.unwrap_or(false);
+    if motion_blur && reference == Reference::None {
+        ctx.err(
+            &root.key("reference").key("motion_blur"),
+            "`motion_blur` blurs the compared frames: it needs a reference (kind = \"native\" or \"ground-truth\")",
+        );
+    }
     let metrics = metrics(ctx, &root.key("metrics"), raw.metrics.as_deref(), reference);
     for (i, m) in metrics.iter().enumerate() {
         let min = tessera_metrics::SSIM_MIN_SIZE;
@@ -326,6 +333,7 @@ fn build(ctx: &mut Ctx, path: &Path, raw: RawScenario) -> Scenario {
         auto,
         save_frames,
         save_worst,
+        motion_blur,
         time_step,
         reference,
         metrics,

@@ -138,6 +138,11 @@ pub fn shaders() -> Vec<Shader> {
             "frame_check.wgsl",
             crate::render::frame_check::FRAME_CHECK_WGSL,
         ),
+        // The motion-blurred comparison (`reference.motion_blur`, `run/motion_blur.rs`).
+        Shader::file(
+            "motion_blur.wgsl",
+            crate::render::motion_blur::MOTION_BLUR_WGSL,
+        ),
     ];
     for t in ALL {
         all.extend(t.shaders());
