@@ -13,6 +13,7 @@ pub mod attachment;
 pub mod gpu;
 pub mod hardware;
 pub mod model;
+pub mod raw_material;
 pub mod raw_pass;
 
 use super::definition::{BuildContext, Definition, Shader, Target, Technique};
@@ -180,23 +181,33 @@ fn hardware_shaders() -> Vec<Shader> {
             source: hardware::vrs_source(),
             files: vec!["scene.wgsl", "adaptive_shading/vrs.wgsl"],
         },
+        Shader {
+            name: "adaptive vrs material".into(),
+            source: hardware::vrs_material_source(),
+            files: vec![
+                "scene.wgsl",
+                "material/material.wgsl",
+                "adaptive_shading/vrs_material.wgsl",
+            ],
+        },
     ]
 }
 
-/// The hardware path on `gpu`, or why this adapter cannot run it (its requirements were met, so
-/// the caps are there).
-/// Textured materials (glTF `materials = "file"`, the city) are drawn by the scene's forward
-/// pipelines; the G-buffer (software path) and the raw Vulkan pass (hardware path) carry no
-/// texture coordinates or materials yet, so such a scene is not this technique's to draw.
+/// Why the deferred path (`vrs = "software"`, `native-deferred`) is not built on a scene with
+/// textured materials (glTF `materials = "file"`, the city): its G-buffer carries no texture
+/// coordinates, tangents or materials, and its compute shading pass has no texture gradients.
+/// The hardware path (`vrs = "hardware"`, `native-vrs`) draws them (`raw_material.rs`).
 fn check_untextured(name: &str, cx: &BuildContext<'_>) -> Result<(), Unsupported> {
     if cx.scene.has_materials() {
         return Err(Unsupported(format!(
-            "{name} cannot draw textured materials: its G-buffer and raw Vulkan pass carry no texture coordinates or materials yet"
+            "{name} cannot draw textured materials: its G-buffer carries no texture coordinates or materials (the hardware path, `vrs = \"hardware\"` / `native-vrs`, draws them)"
         )));
     }
     Ok(())
 }
 
+/// The hardware path on `gpu`, or why this adapter cannot run it (its requirements were met, so
+/// the caps are there).
 fn build_hardware(rates: Rates, cx: &BuildContext<'_>) -> Result<Box<dyn Renderer>, Unsupported> {
     let (gpu, t) = (cx.gpu, cx.target);
     match &gpu.vrs {
@@ -261,11 +272,11 @@ impl Definition for AdaptiveShading {
         options: &Options,
         cx: &BuildContext<'_>,
     ) -> Result<Box<dyn Renderer>, Unsupported> {
-        check_untextured("adaptive-shading", cx)?;
         let t = cx.target;
         if options.vrs == Vrs::Hardware {
             return build_hardware(Rates::Adaptive(options.rates()), cx);
         }
+        check_untextured("adaptive-shading with `vrs = \"software\"`", cx)?;
         Ok(Box::new(AdaptiveGpu::new(
             cx.gpu,
             Some(options.rates()),
@@ -313,7 +324,6 @@ impl Definition for NativeVrs {
         options: &FixedOptions,
         cx: &BuildContext<'_>,
     ) -> Result<Box<dyn Renderer>, Unsupported> {
-        check_untextured("native-vrs", cx)?;
         let (rx, ry) = options.rate.size();
         build_hardware(Rates::Fixed(rx, ry), cx)
     }
