@@ -105,6 +105,13 @@ fn the_raw_descriptor_layouts_are_the_shaders_bindings() {
                 continue;
             }
             let Some(b) = &var.binding else { continue };
+            // The material set is visible to fragment shaders only (as wgpu's layout).
+            assert!(
+                !(b.group == 1 && ep.stage == naga::ShaderStage::Vertex),
+                "{} uses {:?} of the fragment-only material set",
+                ep.name,
+                var.name
+            );
             let ty = descriptor_type(&module, var);
             assert!(
                 sets[b.group as usize].contains(&(b.binding, ty)),
@@ -418,4 +425,41 @@ vrs = ["software", "hardware"]
         verdict.starts_with("PASSED: ") && verdict.contains(" ok, 3 skipped, 0 failed"),
         "{stdout}"
     );
+}
+
+/// `tessera validate` on the city: the hardware variants are skipped only where the extension is
+/// missing, the software path on every adapter for the textures; the curve's scenario validates.
+#[test]
+fn validate_skips_only_the_deferred_path_for_textures() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_tessera"))
+        .arg("validate")
+        .arg(root.join("scenarios/content/city-1080p.toml"))
+        .arg(root.join("scenarios/content/regimes-vrs.toml"))
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{stdout}{}", String::from_utf8_lossy(&out.stderr));
+    assert!(stdout.starts_with("5 scenarios valid"), "{stdout}");
+    for line in stdout.lines().skip(1) {
+        if line.contains("vrs=hardware") || line.contains(": native-vrs") {
+            assert!(line.contains(NEEDS) && !line.contains("textured"), "{line}");
+        }
+    }
+    let software: Vec<&str> = stdout
+        .lines()
+        .filter(|l| l.contains("vrs=software"))
+        .collect();
+    assert_eq!(software.len(), 1, "{stdout}");
+    assert!(
+        software[0].contains("cannot draw textured materials")
+            && software[0].ends_with("(skipped on every adapter)"),
+        "{stdout}"
+    );
+    // Four sweep points, each with native-vrs and hardware adaptive shading: both named.
+    let hardware = stdout
+        .lines()
+        .filter(|l| l.contains("regimes-vrs.toml"))
+        .count();
+    assert_eq!(hardware, 8, "{stdout}");
 }

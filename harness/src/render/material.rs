@@ -11,6 +11,8 @@
 //!
 //! Shading is `shaders/material/material.wgsl`, appended to `scene.wgsl` (same frame uniforms,
 //! lights and objects); each material picks the GGX metallic-roughness BRDF or Blinn-Phong.
+//! Passes recorded outside wgpu (hardware VRS's raw Vulkan passes) draw the same draws from
+//! [`MaterialGpu::raw`] and [`MaterialGpu::draw_order`].
 //! Not here: reading glTF files (`gltf_model.rs`), the city (`city.rs`), mip levels (`mips.rs`).
 
 use std::collections::HashMap;

@@ -15,6 +15,14 @@
 //! draw; it needs no motion, as `native` has none. No pass only clears: the clears are the render
 //! passes' load ops, as in `native`'s forward pass.
 //!
+//! Textured materials (glTF files, the city) are drawn in the same raw passes after the untextured
+//! objects (`raw_material.rs`, `vrs_material.wgsl`): opaque and alpha-tested draws in the pre-pass
+//! (the alpha test there, at full rate) and in the shading pass (EQUAL), blended draws last in the
+//! shading pass, sorted back to front as `native` sorts them, depth test without writes, at the
+//! attachment's rates. Their textures are moved into RESOURCE (SHADER_READ_ONLY_OPTIMAL) before
+//! each raw pass, with the targets. Blended draws shade over opaque surfaces, so on a scene with
+//! them `invocations-over-model` is above 1 by their invocations.
+//!
 //! Timing: each raw pass is timed by wgpu-profiler timestamps written at the end of the encoder
 //! before it and at the start of the one submitted right after it, in the same submission; their
 //! fragment-shader invocations come from the raw passes' own pipeline-statistics queries

@@ -31,6 +31,14 @@
 //! attachment alone decides the rate. Fragment-shader invocations of the shading pass and of the
 //! motion pre-pass are counted by pipeline-statistics queries of this module's own.
 //!
+//! Textured materials: after the untextured objects, each pass draws the scene's textured draws
+//! (`MaterialGpu`'s: `MaterialVertex` buffers, instanced placements, a descriptor set per material
+//! bind group from `raw_material.rs`) with pipelines from `vrs_material.wgsl` (sets 0 and 1 as
+//! `material.rs`'s wgpu layout): in a pre-pass opaque and alpha-tested draws (the alpha test at
+//! 1x1, no shading-rate state), in the shading pass opaque and alpha-tested draws at EQUAL and then
+//! blended draws in this frame's back-to-front order (GREATER, no depth writes, wgpu's
+//! `ALPHA_BLENDING`), both at the attachment's rates.
+//!
 //! Not here: which rates (the rate pass and the CPU model, this folder's `gpu.rs` and `model.rs`),
 //! timing (wgpu-profiler timestamps around the encoders).
 
