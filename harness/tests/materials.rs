@@ -542,10 +542,7 @@ fn techniques_without_the_forward_pipelines_skip_textured_scenes_with_the_reason
     for v in [
         common::variant(
             "adaptive-shading",
-            &[(
-                "vrs",
-                tessera::params::ParamValue::Str("hardware".into()),
-            )],
+            &[("vrs", tessera::params::ParamValue::Str("hardware".into()))],
         ),
         common::variant("native-vrs", &[]),
     ] {
@@ -553,7 +550,12 @@ fn techniques_without_the_forward_pipelines_skip_textured_scenes_with_the_reason
             Ok(_) => assert!(gpu.vrs.is_ok(), "{} built without VRS", v.name),
             Err(u) => {
                 assert!(!u.0.contains("textured"), "{}: {}", v.name, u.0);
-                assert!(u.0.starts_with(tessera::gpu::vrs::NEEDS), "{}: {}", v.name, u.0);
+                assert!(
+                    u.0.starts_with(tessera::gpu::vrs::NEEDS),
+                    "{}: {}",
+                    v.name,
+                    u.0
+                );
             }
         }
         assert_eq!(
@@ -565,7 +567,10 @@ fn techniques_without_the_forward_pipelines_skip_textured_scenes_with_the_reason
     }
     let software = common::variant("native-deferred", &[]);
     let reason = techniques::scene_skip_reason(&software, &s.scene).unwrap();
-    assert!(reason.contains("cannot draw textured materials"), "{reason}");
+    assert!(
+        reason.contains("cannot draw textured materials"),
+        "{reason}"
+    );
     for name in [
         "native",
         "checkerboard",

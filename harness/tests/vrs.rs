@@ -92,7 +92,10 @@ fn the_raw_descriptor_layouts_are_the_shaders_bindings() {
     for (group, (mut d, mut raw)) in declared.into_iter().zip(sets.clone()).enumerate() {
         d.sort_by_key(|x| x.0);
         raw.sort_by_key(|x| x.0);
-        assert_eq!(d, raw, "group {group}: the shader's bindings and the raw layout's");
+        assert_eq!(
+            d, raw,
+            "group {group}: the shader's bindings and the raw layout's"
+        );
     }
     // Every global an entry point uses is in a layout.
     for (i, ep) in module.entry_points.iter().enumerate() {
@@ -219,10 +222,7 @@ fn raw_passes_draw_as_native(s: &tessera::scenario::Scenario, what: &str) {
         background < pixels / 2,
         "{what}: native shows mostly background"
     );
-    for rates in [
-        Rates::Fixed(1, 1),
-        Rates::Adaptive(Default::default()),
-    ] {
+    for rates in [Rates::Fixed(1, 1), Rates::Adaptive(Default::default())] {
         let mut hw = HardwareGpu::without_rates(&gpu, rates, &scene, s.width, s.height)
             .unwrap_or_else(|e| panic!("{what} {rates:?}: {e}"));
         let r = frames::render(&gpu, &mut scene, s, &mut hw, true, true, &mut || {}).unwrap();
@@ -239,7 +239,10 @@ fn raw_passes_draw_as_native(s: &tessera::scenario::Scenario, what: &str) {
         // The raw shading pass counted its own invocations: at least the covered pixels.
         if let Some(n) = hw.invocations() {
             let covered = hw.coverage(&gpu).iter().filter(|&&c| c).count() as u64;
-            assert!(n >= covered, "{what}: {n} invocations for {covered} covered pixels");
+            assert!(
+                n >= covered,
+                "{what}: {n} invocations for {covered} covered pixels"
+            );
         }
     }
 }
@@ -439,7 +442,11 @@ fn validate_skips_only_the_deferred_path_for_textures() {
         .output()
         .unwrap();
     let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(out.status.success(), "{stdout}{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     assert!(stdout.starts_with("5 scenarios valid"), "{stdout}");
     for line in stdout.lines().skip(1) {
         if line.contains("vrs=hardware") || line.contains(": native-vrs") {

@@ -33,15 +33,10 @@ impl Scene {
     /// `SceneGpu::has_materials` will say once it is on the GPU.
     pub fn has_textured_models(&self) -> bool {
         self.city.is_some()
-            || self.objects.iter().any(|o| {
-                matches!(
-                    o.shape,
-                    super::Shape::Mesh {
-                        textured: true,
-                        ..
-                    }
-                )
-            })
+            || self
+                .objects
+                .iter()
+                .any(|o| matches!(o.shape, super::Shape::Mesh { textured: true, .. }))
     }
 }
 

@@ -553,7 +553,10 @@ impl Renderer for HardwareGpu {
         let mut submit = Vec::new();
         let mut wgpu_work = std::mem::replace(encoder, fresh());
         // This frame's order of the textured draws (blended ones sorted back to front).
-        let order = scene.materials().map(|m| m.draw_order()).unwrap_or_default();
+        let order = scene
+            .materials()
+            .map(|m| m.draw_order())
+            .unwrap_or_default();
         if let (Some(r), Some(a)) = (&self.rate, &self.attachment_pass) {
             // 1. This frame's depth and motion (alpha-tested draws sample their textures).
             self.transition(&mut wgpu_work, false, true);

@@ -332,7 +332,10 @@ mod tests {
         assert_eq!(info.min_filter, vk::Filter::LINEAR);
         assert_eq!(info.mipmap_mode, vk::SamplerMipmapMode::LINEAR);
         assert_eq!(info.address_mode_u, vk::SamplerAddressMode::REPEAT);
-        assert_eq!((info.anisotropy_enable, info.max_anisotropy), (vk::TRUE, 8.0));
+        assert_eq!(
+            (info.anisotropy_enable, info.max_anisotropy),
+            (vk::TRUE, 8.0)
+        );
         assert_eq!((info.min_lod, info.max_lod), (0.0, 32.0));
         // Without the adapter's anisotropic filtering wgpu-core sets the clamp to 1.
         assert_eq!(

@@ -322,44 +322,44 @@ impl RawVrsPass {
         // was made, also when a later step fails.
         if rated {
             unsafe {
-            let info = vk::ImageCreateInfo::default()
-                .image_type(vk::ImageType::TYPE_2D)
-                .format(vk::Format::R8_UINT)
-                .extent(vk::Extent3D {
-                    width: attachment_size[0],
-                    height: attachment_size[1],
-                    depth: 1,
-                })
-                .mip_levels(1)
-                .array_layers(1)
-                .samples(vk::SampleCountFlags::TYPE_1)
-                .tiling(vk::ImageTiling::OPTIMAL)
-                .usage(
-                    vk::ImageUsageFlags::FRAGMENT_SHADING_RATE_ATTACHMENT_KHR
-                        | vk::ImageUsageFlags::TRANSFER_DST,
-                )
-                .initial_layout(vk::ImageLayout::UNDEFINED);
-            pass.rate_image = d
-                .create_image(&info, None)
-                .map_err(vk_err("attachment image"))?;
-            let req = d.get_image_memory_requirements(pass.rate_image);
-            let types = &memory_props.memory_types[..memory_props.memory_type_count as usize];
-            let pick = |flags: vk::MemoryPropertyFlags| {
-                types.iter().enumerate().position(|(i, t)| {
-                    req.memory_type_bits & (1 << i) != 0 && t.property_flags.contains(flags)
-                })
-            };
-            let type_index = pick(vk::MemoryPropertyFlags::DEVICE_LOCAL)
-                .or_else(|| pick(vk::MemoryPropertyFlags::empty()))
-                .ok_or("no memory type for the attachment image")?;
-            let alloc = vk::MemoryAllocateInfo::default()
-                .allocation_size(req.size)
-                .memory_type_index(type_index as u32);
-            pass.rate_memory = d
-                .allocate_memory(&alloc, None)
-                .map_err(vk_err("attachment memory"))?;
-            d.bind_image_memory(pass.rate_image, pass.rate_memory, 0)
-                .map_err(vk_err("binding attachment memory"))?;
+                let info = vk::ImageCreateInfo::default()
+                    .image_type(vk::ImageType::TYPE_2D)
+                    .format(vk::Format::R8_UINT)
+                    .extent(vk::Extent3D {
+                        width: attachment_size[0],
+                        height: attachment_size[1],
+                        depth: 1,
+                    })
+                    .mip_levels(1)
+                    .array_layers(1)
+                    .samples(vk::SampleCountFlags::TYPE_1)
+                    .tiling(vk::ImageTiling::OPTIMAL)
+                    .usage(
+                        vk::ImageUsageFlags::FRAGMENT_SHADING_RATE_ATTACHMENT_KHR
+                            | vk::ImageUsageFlags::TRANSFER_DST,
+                    )
+                    .initial_layout(vk::ImageLayout::UNDEFINED);
+                pass.rate_image = d
+                    .create_image(&info, None)
+                    .map_err(vk_err("attachment image"))?;
+                let req = d.get_image_memory_requirements(pass.rate_image);
+                let types = &memory_props.memory_types[..memory_props.memory_type_count as usize];
+                let pick = |flags: vk::MemoryPropertyFlags| {
+                    types.iter().enumerate().position(|(i, t)| {
+                        req.memory_type_bits & (1 << i) != 0 && t.property_flags.contains(flags)
+                    })
+                };
+                let type_index = pick(vk::MemoryPropertyFlags::DEVICE_LOCAL)
+                    .or_else(|| pick(vk::MemoryPropertyFlags::empty()))
+                    .ok_or("no memory type for the attachment image")?;
+                let alloc = vk::MemoryAllocateInfo::default()
+                    .allocation_size(req.size)
+                    .memory_type_index(type_index as u32);
+                pass.rate_memory = d
+                    .allocate_memory(&alloc, None)
+                    .map_err(vk_err("attachment memory"))?;
+                d.bind_image_memory(pass.rate_image, pass.rate_memory, 0)
+                    .map_err(vk_err("binding attachment memory"))?;
             }
         }
 
@@ -1313,12 +1313,14 @@ impl MaterialPipeline<'_> {
         let attributes: Vec<vk::VertexInputAttributeDescription> = MATERIAL_ATTRIBUTES
             .iter()
             .enumerate()
-            .map(|(i, &(format, offset))| vk::VertexInputAttributeDescription {
-                location: i as u32,
-                binding: 0,
-                format,
-                offset,
-            })
+            .map(
+                |(i, &(format, offset))| vk::VertexInputAttributeDescription {
+                    location: i as u32,
+                    binding: 0,
+                    format,
+                    offset,
+                },
+            )
             .collect();
         let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
             .vertex_binding_descriptions(&bindings)
