@@ -272,6 +272,14 @@ fn validate_command(paths: &[PathBuf]) -> u8 {
                     for reason in tessera::techniques::skip_reasons(v) {
                         println!("{}: {}: {reason}", scenario.file.display(), v.name);
                     }
+                    if let Some(reason) = tessera::techniques::scene_skip_reason(v, &scenario.scene)
+                    {
+                        println!(
+                            "{}: {}: {reason} (skipped on every adapter)",
+                            scenario.file.display(),
+                            v.name
+                        );
+                    }
                 }
             }
             0

@@ -537,6 +537,40 @@ fn techniques_without_the_forward_pipelines_skip_textured_scenes_with_the_reason
             Ok(_) => panic!("{name} built on a textured scene"),
         }
     }
+    // The hardware path draws them: on an adapter without VRS (lavapipe) it is skipped for the
+    // extension alone, never for the textures.
+    for v in [
+        common::variant(
+            "adaptive-shading",
+            &[("vrs", tessera::params::ParamValue::Str("hardware".into()))],
+        ),
+        common::variant("native-vrs", &[]),
+    ] {
+        match techniques::build(&v, &BuildContext::new(&gpu, &scene, target)) {
+            Ok(_) => assert!(gpu.vrs.is_ok(), "{} built without VRS", v.name),
+            Err(u) => {
+                assert!(!u.0.contains("textured"), "{}: {}", v.name, u.0);
+                assert!(
+                    u.0.starts_with(tessera::gpu::vrs::NEEDS),
+                    "{}: {}",
+                    v.name,
+                    u.0
+                );
+            }
+        }
+        assert_eq!(
+            techniques::scene_skip_reason(&v, &s.scene),
+            None,
+            "{}",
+            v.name
+        );
+    }
+    let software = common::variant("native-deferred", &[]);
+    let reason = techniques::scene_skip_reason(&software, &s.scene).unwrap();
+    assert!(
+        reason.contains("cannot draw textured materials"),
+        "{reason}"
+    );
     for name in [
         "native",
         "checkerboard",

@@ -11,6 +11,8 @@
 //!
 //! Shading is `shaders/material/material.wgsl`, appended to `scene.wgsl` (same frame uniforms,
 //! lights and objects); each material picks the GGX metallic-roughness BRDF or Blinn-Phong.
+//! Passes recorded outside wgpu (hardware VRS's raw Vulkan passes) draw the same draws from
+//! [`MaterialGpu::raw`] and [`MaterialGpu::draw_order`].
 //! Not here: reading glTF files (`gltf_model.rs`), the city (`city.rs`), mip levels (`mips.rs`).
 
 use std::collections::HashMap;
@@ -260,9 +262,9 @@ struct GpuMaterial {
     uv: [[f32; 4]; 10],
 }
 
-/// How a draw's fragments reach the target: its pipeline family.
+/// How a draw's fragments reach the target: its pipeline family (glTF `alphaMode`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-enum Class {
+pub enum Class {
     Opaque,
     Mask,
     Blend,
@@ -279,11 +281,59 @@ struct Draw {
     center: Vec3,
 }
 
+/// What a material bind group holds, kept for passes recorded outside wgpu ([`RawMaterials`]).
+struct GroupResources {
+    uniform: wgpu::Buffer,
+    views: Vec<wgpu::TextureView>,
+    samplers: [SamplerDesc; 5],
+}
+
+/// One material bind group's resources, for a pass recorded outside wgpu: binding 0 the uniform
+/// buffer (whole), bindings 1..=5 the views of [`SLOTS`], bindings 6..=10 their samplers (as
+/// [`SamplerDesc::descriptor`] makes them, anisotropy applied).
+pub struct RawMaterial<'a> {
+    pub uniform: &'a wgpu::Buffer,
+    pub views: Vec<&'a wgpu::TextureView>,
+    pub samplers: [SamplerDesc; 5],
+}
+
+/// One textured draw: `index_count` indices from `first_index` (+ `base_vertex`), instances
+/// `first_object..+object_count` (scene objects), with material bind group `material`.
+#[derive(Clone, Copy, Debug)]
+pub struct RawMaterialDraw {
+    pub first_index: u32,
+    pub index_count: u32,
+    pub base_vertex: i32,
+    pub material: usize,
+    pub class: Class,
+    pub first_object: u32,
+    pub object_count: u32,
+}
+
+/// The textured draws for a pass recorded outside wgpu (hardware variable-rate shading,
+/// `techniques/adaptive_shading/raw_material.rs`): vertices ([`MaterialVertex`], four attributes
+/// at offsets 0, 12, 24, 32), `u32` indices, the material bind groups' resources, the draws (in
+/// [`MaterialGpu::draw_order`] each frame), and every sampled texture (to move into the
+/// shader-read state before such a pass).
+pub struct RawMaterials<'a> {
+    pub vertex: &'a wgpu::Buffer,
+    pub index: &'a wgpu::Buffer,
+    pub vertex_stride: u32,
+    pub uniform_size: u64,
+    pub materials: Vec<RawMaterial<'a>>,
+    pub draws: Vec<RawMaterialDraw>,
+    pub textures: Vec<&'a wgpu::Texture>,
+}
+
 /// The scene's textured geometry, materials and textures on the GPU, and their pipelines.
 pub struct MaterialGpu {
     vertex_buffer: wgpu::Buffer,
     index_buffer: wgpu::Buffer,
     bind_groups: Vec<wgpu::BindGroup>,
+    /// Per bind group, what it binds (for [`MaterialGpu::raw`]).
+    groups: Vec<GroupResources>,
+    /// Every texture the bind groups sample: the models' and the default 1x1 ones.
+    textures: Vec<wgpu::Texture>,
     draws: Vec<Draw>,
     layout: wgpu::PipelineLayout,
     module: wgpu::ShaderModule,
@@ -337,6 +387,8 @@ impl MaterialGpu {
         .collect();
         let mut bytes = 0u64;
         let mut bind_groups = Vec::new();
+        let mut groups = Vec::new();
+        let mut all_textures = Vec::new();
         let mut draws = Vec::new();
         let mut triangles = 0usize;
         for (model, placements) in models {
@@ -411,7 +463,17 @@ impl MaterialGpu {
                     layout: &layout,
                     entries: &entries,
                 }));
+                let sampler_descs = std::array::from_fn(|i| SamplerDesc {
+                    anisotropy: anisotropy.max(1),
+                    ..m.textures[i].map_or(SamplerDesc::DEFAULT, |t| t.sampler)
+                });
+                groups.push(GroupResources {
+                    uniform: buffer,
+                    views,
+                    samplers: sampler_descs,
+                });
             }
+            all_textures.extend(textures);
             for p in placements {
                 for prim in &model.parts[p.part] {
                     triangles += (prim.index_count / 3) as usize * p.count as usize;
@@ -433,6 +495,7 @@ impl MaterialGpu {
             }
         }
         queue.submit([encoder.finish()]);
+        all_textures.extend(defaults);
         if vertices.is_empty() {
             vertices.push(MaterialVertex::default());
             indices.extend([0, 0, 0]);
@@ -463,6 +526,8 @@ impl MaterialGpu {
             vertex_buffer,
             index_buffer,
             bind_groups,
+            groups,
+            textures: all_textures,
             draws,
             layout: pipeline_layout,
             module,
@@ -475,6 +540,45 @@ impl MaterialGpu {
 
     pub fn is_empty(&self) -> bool {
         self.draws.is_empty()
+    }
+
+    /// This frame's draw order (indices into [`RawMaterials::draws`]): opaque, alpha-tested, then
+    /// blended back to front as [`MaterialGpu::sort`] left it.
+    pub fn draw_order(&self) -> Vec<usize> {
+        self.order.lock().expect("draw order lock").clone()
+    }
+
+    /// The textured draws and the resources they bind, for a pass recorded outside wgpu.
+    pub fn raw(&self) -> RawMaterials<'_> {
+        RawMaterials {
+            vertex: &self.vertex_buffer,
+            index: &self.index_buffer,
+            vertex_stride: std::mem::size_of::<MaterialVertex>() as u32,
+            uniform_size: std::mem::size_of::<GpuMaterial>() as u64,
+            materials: self
+                .groups
+                .iter()
+                .map(|g| RawMaterial {
+                    uniform: &g.uniform,
+                    views: g.views.iter().collect(),
+                    samplers: g.samplers,
+                })
+                .collect(),
+            draws: self
+                .draws
+                .iter()
+                .map(|d| RawMaterialDraw {
+                    first_index: d.first_index,
+                    index_count: d.index_count,
+                    base_vertex: d.base_vertex,
+                    material: d.bind_group,
+                    class: d.class,
+                    first_object: d.first_object,
+                    object_count: d.object_count,
+                })
+                .collect(),
+            textures: self.textures.iter().collect(),
+        }
     }
 
     /// Whether any draw is alpha-blended.

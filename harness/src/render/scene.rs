@@ -311,6 +311,12 @@ impl SceneGpu {
         self.materials.is_some()
     }
 
+    /// The textured models, for passes recorded outside wgpu that draw them themselves
+    /// (`techniques/adaptive_shading/raw_material.rs`: [`MaterialGpu::raw`] and its draw order).
+    pub fn materials(&self) -> Option<&MaterialGpu> {
+        self.materials.as_ref()
+    }
+
     /// A pipeline of the scene shader, built on first use.
     pub fn pipeline(
         &mut self,

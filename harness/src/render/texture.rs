@@ -67,6 +67,12 @@ impl SamplerDesc {
     };
 
     pub fn create(&self, device: &wgpu::Device) -> wgpu::Sampler {
+        device.create_sampler(&self.descriptor())
+    }
+
+    /// The wgpu sampler this description makes (also what a pass recorded outside wgpu creates
+    /// its own sampler from: `techniques/adaptive_shading/raw_material.rs`).
+    pub fn descriptor(&self) -> wgpu::SamplerDescriptor<'static> {
         let wrap = |w: Wrap| match w {
             Wrap::Repeat => wgpu::AddressMode::Repeat,
             Wrap::Clamp => wgpu::AddressMode::ClampToEdge,
@@ -87,7 +93,7 @@ impl SamplerDesc {
             }
         };
         let all_linear = self.mag_linear && self.min_linear && self.mipmap == Some(true);
-        device.create_sampler(&wgpu::SamplerDescriptor {
+        wgpu::SamplerDescriptor {
             label: Some("material sampler"),
             address_mode_u: wrap(self.wrap_u),
             address_mode_v: wrap(self.wrap_v),
@@ -105,7 +111,7 @@ impl SamplerDesc {
                 1
             },
             border_color: None,
-        })
+        }
     }
 }
 

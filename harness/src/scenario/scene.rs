@@ -28,6 +28,16 @@ impl Scene {
         self.objects.iter().any(|o| o.animation.is_some())
             || self.city.as_ref().is_some_and(|c| c.moving > 0)
     }
+
+    /// Whether it has textured models (glTF `materials = "file"` meshes, the city): what
+    /// `SceneGpu::has_materials` will say once it is on the GPU.
+    pub fn has_textured_models(&self) -> bool {
+        self.city.is_some()
+            || self
+                .objects
+                .iter()
+                .any(|o| matches!(o.shape, super::Shape::Mesh { textured: true, .. }))
+    }
 }
 
 /// `[scene.city]`: a generated city, deterministic from its seed (`render/city.rs`).

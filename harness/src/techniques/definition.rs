@@ -90,6 +90,13 @@ pub trait Definition: Sync + 'static {
         Requirements::none()
     }
 
+    /// Whether the variant draws textured models (glTF materials, the city): the reason, in
+    /// words, when it cannot. Printed by `tessera validate` for scenarios with textured models
+    /// and checked before [`Definition::build`] on such a scene (the variant is then `skipped`).
+    fn textured(&self, _options: &Self::Options) -> Result<(), String> {
+        Ok(())
+    }
+
     /// The pass graph at `target`, without a GPU: which passes run, which are culled, what is
     /// allocated. [`Definition::build`] allocates the same plan.
     fn plan(&self, options: &Self::Options, target: Target) -> Plan;
@@ -126,6 +133,7 @@ pub trait Technique: Sync + 'static {
     fn params(&self) -> &'static [&'static ParamSpec];
     fn check(&self, variant: &Variant) -> Result<(), String>;
     fn requirements(&self, variant: &Variant) -> Requirements;
+    fn textured(&self, variant: &Variant) -> Result<(), String>;
     fn plan(&self, variant: &Variant, target: Target) -> Plan;
     fn build(
         &self,
@@ -152,6 +160,9 @@ impl<D: Definition> Technique for D {
     }
     fn requirements(&self, variant: &Variant) -> Requirements {
         Definition::requirements(self, &D::Options::from_variant(variant))
+    }
+    fn textured(&self, variant: &Variant) -> Result<(), String> {
+        Definition::textured(self, &D::Options::from_variant(variant))
     }
     fn plan(&self, variant: &Variant, target: Target) -> Plan {
         Definition::plan(self, &D::Options::from_variant(variant), target)

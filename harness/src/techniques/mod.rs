@@ -56,11 +56,24 @@ pub fn skip_reasons(variant: &Variant) -> Vec<String> {
         .collect()
 }
 
+/// Why `variant` is skipped on `scene` on every adapter (it cannot draw the scene's textured
+/// models), for `tessera validate`; `None` when it draws the scene.
+pub fn scene_skip_reason(variant: &Variant, scene: &crate::scenario::Scene) -> Option<String> {
+    if !scene.has_textured_models() {
+        return None;
+    }
+    variant.technique.textured(variant).err()
+}
+
 /// Builds `variant` in `cx`: unsupported when the adapter's texture size limit is exceeded, when
-/// it lacks one of the variant's [`Requirements`], or when the technique says so.
+/// it lacks one of the variant's [`Requirements`], when it cannot draw the scene's textured
+/// models, or when the technique says so.
 pub fn build(variant: &Variant, cx: &BuildContext<'_>) -> Result<Box<dyn Renderer>, Unsupported> {
     cx.gpu.check_size(cx.target.width, cx.target.height)?;
     requirements(variant).check(cx.gpu)?;
+    if cx.scene.has_materials() {
+        variant.technique.textured(variant).map_err(Unsupported)?;
+    }
     variant.technique.build(variant, cx)
 }
 

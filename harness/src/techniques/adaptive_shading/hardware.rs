@@ -15,6 +15,14 @@
 //! draw; it needs no motion, as `native` has none. No pass only clears: the clears are the render
 //! passes' load ops, as in `native`'s forward pass.
 //!
+//! Textured materials (glTF files, the city) are drawn in the same raw passes after the untextured
+//! objects (`raw_material.rs`, `vrs_material.wgsl`): opaque and alpha-tested draws in the pre-pass
+//! (the alpha test there, at full rate) and in the shading pass (EQUAL), blended draws last in the
+//! shading pass, sorted back to front as `native` sorts them, depth test without writes, at the
+//! attachment's rates. Their textures are moved into RESOURCE (SHADER_READ_ONLY_OPTIMAL) before
+//! each raw pass, with the targets. Blended draws shade over opaque surfaces, so on a scene with
+//! them `invocations-over-model` is above 1 by their invocations.
+//!
 //! Timing: each raw pass is timed by wgpu-profiler timestamps written at the end of the encoder
 //! before it and at the start of the one submitted right after it, in the same submission; their
 //! fragment-shader invocations come from the raw passes' own pipeline-statistics queries
@@ -40,11 +48,21 @@ use crate::render::scene::{SceneGpu, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::render::timers::Timers;
 
 pub static VRS_WGSL: &str = include_str!("vrs.wgsl");
+pub static VRS_MATERIAL_WGSL: &str = include_str!("vrs_material.wgsl");
 pub static ATTACHMENT_WGSL: &str = include_str!("attachment.wgsl");
 
 /// `scene.wgsl` with the hardware path's forward entry points appended.
 pub fn vrs_source() -> String {
     format!("{}\n{VRS_WGSL}", crate::render::scene::SCENE_WGSL)
+}
+
+/// `scene.wgsl` + `material.wgsl` with the hardware path's entry points for textured draws
+/// appended (`vrs_material.wgsl`).
+pub fn vrs_material_source() -> String {
+    format!(
+        "{}\n{VRS_MATERIAL_WGSL}",
+        crate::render::material::material_wgsl()
+    )
 }
 
 /// The pass drawn with variable-rate shading (timed and counted like every pass).
@@ -171,6 +189,8 @@ pub struct HardwareGpu {
     /// Built with the renderer, from the scene in the build context (a failure is the build's
     /// error, before any frame is rendered); `None` only while [`HardwareGpu::new`] runs.
     raw: Option<RawVrsPass>,
+    /// Whether the shading pass has the rate attachment (see [`HardwareGpu::without_rates`]).
+    rated: bool,
     parities: usize,
     /// The side (colour and depth target pair, raw-pass targets) frame `i` writes: the kit's
     /// ping-pong of the two sides when the rates read the previous frame, one side otherwise
@@ -191,9 +211,34 @@ impl HardwareGpu {
         width: u32,
         height: u32,
     ) -> Result<HardwareGpu, String> {
+        HardwareGpu::build(gpu, Some(caps), rates, scene, width, height)
+    }
+
+    /// The same passes on any Vulkan adapter, without the extension: the shading pass has no
+    /// rate attachment (every pixel shaded once, whatever `rates` computes), so the raw Vulkan
+    /// drawing (pre-passes, the textured draws, the targets' states) is tested where hardware
+    /// VRS is missing (lavapipe; `tests/vrs.rs`). Not a technique's renderer.
+    pub fn without_rates(
+        gpu: &Gpu,
+        rates: Rates,
+        scene: &SceneGpu,
+        width: u32,
+        height: u32,
+    ) -> Result<HardwareGpu, String> {
+        HardwareGpu::build(gpu, None, rates, scene, width, height)
+    }
+
+    fn build(
+        gpu: &Gpu,
+        caps: Option<&VrsCaps>,
+        rates: Rates,
+        scene: &SceneGpu,
+        width: u32,
+        height: u32,
+    ) -> Result<HardwareGpu, String> {
         let device = &gpu.device;
-        let texel = texel_of(caps);
-        let table = att::code_table(&caps.fragment_sizes);
+        let texel = caps.map_or([model::TILE, model::TILE], texel_of);
+        let table = att::code_table(caps.map_or(&[[1, 1]][..], |c| &c.fragment_sizes));
         let plan = graph(&rates, width, height, texel);
         let mut wgpu_plan = plan.clone();
         wgpu_plan.resources.retain(|r| r.name != "attachment");
@@ -265,6 +310,7 @@ impl HardwareGpu {
             staging,
             staging_readback,
             raw: None,
+            rated: caps.is_some(),
             parities,
             sides: PingPong::new([0, parities - 1]),
             last: None,
@@ -358,6 +404,8 @@ impl HardwareGpu {
     fn make_raw(&mut self, gpu: &Gpu, scene: &SceneGpu) -> Result<RawVrsPass, String> {
         let source = vrs_source();
         let adaptive = matches!(self.rates, Rates::Adaptive(_));
+        let materials = scene.materials().map(|m| m.raw());
+        let material_source = materials.as_ref().map(|_| vrs_material_source());
         let targets: Vec<Targets> = (0..self.parities)
             .map(|p| Targets {
                 color: &self.textures[COLORS[p]],
@@ -373,13 +421,15 @@ impl HardwareGpu {
                 vertex: "vs_vrs",
                 fragment: "fs_vrs",
                 motion_fragment: adaptive.then_some("fs_vrs_motion"),
+                material: material_source.as_deref(),
             },
             &targets,
             [self.width, self.height],
-            self.texel,
+            self.rated.then_some(self.texel),
             self.attachment_size,
             &self.staging,
             &scene.raw_draw(0),
+            materials.as_ref(),
         )
     }
 
@@ -432,7 +482,8 @@ impl HardwareGpu {
     }
 
     /// Moves this frame's `color` (if asked), `motion` (if asked and present) and depth into
-    /// the states the raw render passes begin and end in (COLOR_TARGET, DEPTH_STENCIL_WRITE).
+    /// the states the raw render passes begin and end in (COLOR_TARGET, DEPTH_STENCIL_WRITE),
+    /// and the textured draws' textures into RESOURCE (SHADER_READ_ONLY_OPTIMAL).
     fn transition(&self, encoder: &mut wgpu::CommandEncoder, color: bool, motion: bool) {
         let state = |texture, state| wgpu::TextureTransition {
             texture,
@@ -453,6 +504,10 @@ impl HardwareGpu {
             t.push(state(m, wgpu::TextureUses::COLOR_TARGET));
         }
         encoder.transition_resources(std::iter::empty(), t.into_iter());
+        // The textured draws' textures into the state their raw descriptors say.
+        if let Some(raw) = &self.raw {
+            raw.transition_materials(encoder);
+        }
     }
 }
 
@@ -497,14 +552,19 @@ impl Renderer for HardwareGpu {
         let fresh = || device.create_command_encoder(&Default::default());
         let mut submit = Vec::new();
         let mut wgpu_work = std::mem::replace(encoder, fresh());
+        // This frame's order of the textured draws (blended ones sorted back to front).
+        let order = scene
+            .materials()
+            .map(|m| m.draw_order())
+            .unwrap_or_default();
         if let (Some(r), Some(a)) = (&self.rate, &self.attachment_pass) {
-            // 1. This frame's depth and motion.
+            // 1. This frame's depth and motion (alpha-tested draws sample their textures).
             self.transition(&mut wgpu_work, false, true);
             let q = timers.begin_encoder(PREPASS, &mut wgpu_work);
             submit.push(std::mem::replace(&mut wgpu_work, fresh()).finish());
             let mut raw = fresh();
             if let Some(raw_pass) = self.raw.as_mut() {
-                raw_pass.record_prepass(&mut raw, side);
+                raw_pass.record_prepass(&mut raw, side, &order);
             }
             submit.push(raw.finish());
             timers.end(&mut wgpu_work, q);
@@ -534,7 +594,7 @@ impl Renderer for HardwareGpu {
         submit.push(wgpu_work.finish());
         let mut raw = fresh();
         if let Some(raw_pass) = self.raw.as_mut() {
-            raw_pass.record_shade(&mut raw, side, background);
+            raw_pass.record_shade(&mut raw, side, background, &order);
         }
         submit.push(raw.finish());
         let mut after = fresh();

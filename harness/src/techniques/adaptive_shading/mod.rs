@@ -4,6 +4,11 @@
 //! part in `gpu.rs`, the CPU model of rate selection in `model.rs`, shaders in
 //! this folder (`*.wgsl`).
 //!
+//! Scenes with textured materials (glTF files, the city) are drawn by the hardware path (its raw
+//! passes draw the scene's material draws: `raw_material.rs`, `vrs_material.wgsl`); the software
+//! path and `native-deferred` are skipped on them ([`Definition::textured`]: the G-buffer carries
+//! no texture coordinates or materials).
+//!
 //! Defaults are the paper's: t = 0.15 and l = 0.05 (section 6), k = 2.13 (Eq. 14), e = 0.1
 //! (section 4.2's example), 4x4 off (section 3.4), the 2x neighbour filter on (section 5.4). The
 //! paper gives no value for the hysteresis epsilon nor for the depth-rejection tolerance (section
@@ -13,6 +18,7 @@ pub mod attachment;
 pub mod gpu;
 pub mod hardware;
 pub mod model;
+pub mod raw_material;
 pub mod raw_pass;
 
 use super::definition::{BuildContext, Definition, Shader, Target, Technique};
@@ -72,7 +78,7 @@ crate::options! {
     pub struct Options {
         vrs: Vrs = choice(
             Vrs::Software,
-            "`software`: a G-buffer pass, then a compute pass shading once per coarse pixel and object (runs everywhere; never faster than `native`); `hardware`: the forward pass drawn with a fragment-shading-rate attachment filled from the rates (VK_KHR_fragment_shading_rate through raw Vulkan beside wgpu; in the paper's order, section 5: a depth pre-pass writes this frame's motion, the rate pass reprojects the previous output by it, then the frame is shaded at those rates); skipped on adapters without the extension and its attachment feature. Compare with `native-vrs`, the same pipeline at 1x1",
+            "`software`: a G-buffer pass, then a compute pass shading once per coarse pixel and object (runs everywhere; never faster than `native`); `hardware`: the forward pass drawn with a fragment-shading-rate attachment filled from the rates (VK_KHR_fragment_shading_rate through raw Vulkan beside wgpu; in the paper's order, section 5: a depth pre-pass writes this frame's motion, the rate pass reprojects the previous output by it, then the frame is shaded at those rates); draws textured materials (glTF files, the city) as `native` does, alpha-tested ones tested in the pre-pass, blended ones last at the attachment's rates; skipped on adapters without the extension and its attachment feature. Compare with `native-vrs`, the same pipeline at 1x1. `software` cannot draw textured materials (its G-buffer has no texture coordinates): skipped on such scenes",
         ),
         threshold: f32 = float(
             (0.0, false, 100.0),
@@ -180,23 +186,30 @@ fn hardware_shaders() -> Vec<Shader> {
             source: hardware::vrs_source(),
             files: vec!["scene.wgsl", "adaptive_shading/vrs.wgsl"],
         },
+        Shader {
+            name: "adaptive vrs material".into(),
+            source: hardware::vrs_material_source(),
+            files: vec![
+                "scene.wgsl",
+                "material/material.wgsl",
+                "adaptive_shading/vrs_material.wgsl",
+            ],
+        },
     ]
+}
+
+/// Why the deferred path (`vrs = "software"`, `native-deferred`) does not draw scenes with
+/// textured materials (glTF `materials = "file"`, the city): its G-buffer carries no texture
+/// coordinates, tangents or materials, and its compute shading pass has no texture gradients.
+/// The hardware path (`vrs = "hardware"`, `native-vrs`) draws them (`raw_material.rs`).
+fn deferred_untextured(name: &str) -> Result<(), String> {
+    Err(format!(
+        "{name} cannot draw textured materials: its G-buffer carries no texture coordinates or materials (the hardware path, `vrs = \"hardware\"` / `native-vrs`, draws them)"
+    ))
 }
 
 /// The hardware path on `gpu`, or why this adapter cannot run it (its requirements were met, so
 /// the caps are there).
-/// Textured materials (glTF `materials = "file"`, the city) are drawn by the scene's forward
-/// pipelines; the G-buffer (software path) and the raw Vulkan pass (hardware path) carry no
-/// texture coordinates or materials yet, so such a scene is not this technique's to draw.
-fn check_untextured(name: &str, cx: &BuildContext<'_>) -> Result<(), Unsupported> {
-    if cx.scene.has_materials() {
-        return Err(Unsupported(format!(
-            "{name} cannot draw textured materials: its G-buffer and raw Vulkan pass carry no texture coordinates or materials yet"
-        )));
-    }
-    Ok(())
-}
-
 fn build_hardware(rates: Rates, cx: &BuildContext<'_>) -> Result<Box<dyn Renderer>, Unsupported> {
     let (gpu, t) = (cx.gpu, cx.target);
     match &gpu.vrs {
@@ -246,6 +259,13 @@ impl Definition for AdaptiveShading {
         Ok(())
     }
 
+    fn textured(&self, options: &Options) -> Result<(), String> {
+        match options.vrs {
+            Vrs::Software => deferred_untextured("adaptive-shading with `vrs = \"software\"`"),
+            Vrs::Hardware => Ok(()),
+        }
+    }
+
     fn plan(&self, options: &Options, target: Target) -> Plan {
         let p = options.rates();
         match options.vrs {
@@ -261,7 +281,6 @@ impl Definition for AdaptiveShading {
         options: &Options,
         cx: &BuildContext<'_>,
     ) -> Result<Box<dyn Renderer>, Unsupported> {
-        check_untextured("adaptive-shading", cx)?;
         let t = cx.target;
         if options.vrs == Vrs::Hardware {
             return build_hardware(Rates::Adaptive(options.rates()), cx);
@@ -295,7 +314,7 @@ impl Definition for NativeVrs {
     }
 
     fn summary(&self) -> &'static str {
-        "the hardware path of `adaptive-shading` (`vrs = \"hardware\"`) with every tile at one fixed rate: at `1x1` the same pipeline without rates (its full-rate baseline), at `2x2` and `4x4` the fixed-rate extremes; needs VK_KHR_fragment_shading_rate"
+        "the hardware path of `adaptive-shading` (`vrs = \"hardware\"`) with every tile at one fixed rate: at `1x1` the same pipeline without rates (its full-rate baseline), at `2x2` and `4x4` the fixed-rate extremes; draws textured materials; needs VK_KHR_fragment_shading_rate"
     }
 
     fn plan(&self, options: &FixedOptions, target: Target) -> Plan {
@@ -313,7 +332,6 @@ impl Definition for NativeVrs {
         options: &FixedOptions,
         cx: &BuildContext<'_>,
     ) -> Result<Box<dyn Renderer>, Unsupported> {
-        check_untextured("native-vrs", cx)?;
         let (rx, ry) = options.rate.size();
         build_hardware(Rates::Fixed(rx, ry), cx)
     }
@@ -337,6 +355,10 @@ impl Definition for NativeDeferred {
         "the deferred path of `adaptive-shading` with every tile at 1x1: a full-resolution G-buffer pass, then a compute pass shading every pixel with the forward path's shading function (bitwise the same image as `native` on lavapipe); the baseline of `adaptive-shading` in software (`speedup.native-deferred`; in hardware it is `native-vrs`)"
     }
 
+    fn textured(&self, _options: &()) -> Result<(), String> {
+        deferred_untextured("native-deferred")
+    }
+
     fn plan(&self, _options: &(), target: Target) -> Plan {
         graph(None, target.width, target.height)
     }
@@ -346,7 +368,6 @@ impl Definition for NativeDeferred {
         _options: &(),
         cx: &BuildContext<'_>,
     ) -> Result<Box<dyn Renderer>, Unsupported> {
-        check_untextured("native-deferred", cx)?;
         let t = cx.target;
         Ok(Box::new(AdaptiveGpu::new(cx.gpu, None, t.width, t.height)))
     }

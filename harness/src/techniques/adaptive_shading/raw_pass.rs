@@ -31,12 +31,22 @@
 //! attachment alone decides the rate. Fragment-shader invocations of the shading pass and of the
 //! motion pre-pass are counted by pipeline-statistics queries of this module's own.
 //!
+//! Textured materials: after the untextured objects, each pass draws the scene's textured draws
+//! (`MaterialGpu`'s: `MaterialVertex` buffers, instanced placements, a descriptor set per material
+//! bind group from `raw_material.rs`) with pipelines from `vrs_material.wgsl` (sets 0 and 1 as
+//! `material.rs`'s wgpu layout): in a pre-pass opaque and alpha-tested draws (the alpha test at
+//! 1x1, no shading-rate state), in the shading pass opaque and alpha-tested draws at EQUAL and then
+//! blended draws in this frame's back-to-front order (GREATER, no depth writes, wgpu's
+//! `ALPHA_BLENDING`), both at the attachment's rates.
+//!
 //! Not here: which rates (the rate pass and the CPU model, this folder's `gpu.rs` and `model.rs`),
 //! timing (wgpu-profiler timestamps around the encoders).
 
 use ash::vk;
 use wgpu::hal::api::Vulkan;
 
+use super::raw_material::RawMaterialSets;
+use crate::render::material::{Class, RawMaterials};
 use crate::render::scene::RawDraw;
 
 /// The targets of one frame parity: colour (Rgba16Float) and depth (Depth32Float), and the motion
@@ -54,7 +64,29 @@ pub struct Shaders<'a> {
     pub vertex: &'a str,
     pub fragment: &'a str,
     pub motion_fragment: Option<&'a str>,
+    /// The textured draws' WGSL (`scene.wgsl` + `material.wgsl` + `vrs_material.wgsl`, entry
+    /// points [`MATERIAL_ENTRY_POINTS`]); needed when the scene has textured models.
+    pub material: Option<&'a str>,
 }
+
+/// The entry points of the textured draws' pipelines (`vrs_material.wgsl`), in the order of
+/// [`RawVrsPass`]'s material modules: vertex, shading, opaque motion, alpha-tested motion,
+/// alpha-tested depth.
+pub const MATERIAL_ENTRY_POINTS: [(naga::ShaderStage, &str); 5] = [
+    (naga::ShaderStage::Vertex, "vs_vrs_material"),
+    (naga::ShaderStage::Fragment, "fs_vrs_material"),
+    (naga::ShaderStage::Fragment, "fs_vrs_material_motion"),
+    (naga::ShaderStage::Fragment, "fs_vrs_material_motion_mask"),
+    (naga::ShaderStage::Fragment, "fs_vrs_material_depth_mask"),
+];
+
+/// The attributes of `MaterialVertex` (position, normal, uv, tangent) at location 0..=3.
+const MATERIAL_ATTRIBUTES: [(vk::Format, u32); 4] = [
+    (vk::Format::R32G32B32_SFLOAT, 0),
+    (vk::Format::R32G32B32_SFLOAT, 12),
+    (vk::Format::R32G32_SFLOAT, 24),
+    (vk::Format::R32G32B32A32_SFLOAT, 32),
+];
 
 /// Query indices in the statistics pool.
 const SHADE_QUERY: u32 = 0;
@@ -97,6 +129,29 @@ pub struct RawVrsPass {
     index: vk::Buffer,
     staging: vk::Buffer,
     draws: Vec<(u32, u32, i32)>,
+    /// Whether the shading pass has the rate attachment (always, but for
+    /// [`RawVrsPass::new`] without a texel size: the raw drawing tested where the extension is
+    /// missing).
+    rated: bool,
+    /// The scene's textured draws and their descriptor sets (`None` on an untextured scene).
+    materials: Option<RawMaterialSets>,
+    /// Sets 0 (scene) and 1 (material) of the textured draws' pipelines.
+    material_layout: vk::PipelineLayout,
+    /// Of [`MATERIAL_ENTRY_POINTS`], in its order.
+    material_modules: [vk::ShaderModule; 5],
+    /// Shading: opaque and alpha-tested draws (EQUAL, no depth writes), blended draws (GREATER,
+    /// no depth writes, blended).
+    material_shade: [vk::Pipeline; 2],
+    /// The pre-pass (motion in the split shape, depth alone in the single one): opaque draws,
+    /// alpha-tested draws (the alpha test at full rate).
+    material_prepass: [vk::Pipeline; 2],
+}
+
+/// Which of a frame's passes draws the textured models.
+#[derive(Clone, Copy, PartialEq)]
+enum Phase {
+    Prepass,
+    Shade,
 }
 
 /// SPIR-V of one entry point of `wgsl`, with the options wgpu-hal uses on Vulkan (bindings by
@@ -121,6 +176,15 @@ pub fn spirv(wgsl: &str, stage: naga::ShaderStage, entry: &str) -> Result<Vec<u3
     naga::back::spv::write_vec(&module, &info, &options, Some(&pipeline)).map_err(|e| e.to_string())
 }
 
+/// Group 0 of `scene.wgsl` as the raw layout binds it: binding, descriptor type (the frame
+/// uniforms, the objects; checked against the shader by `tests/vrs.rs`).
+pub fn scene_bindings() -> Vec<(u32, vk::DescriptorType)> {
+    vec![
+        (0, vk::DescriptorType::UNIFORM_BUFFER),
+        (1, vk::DescriptorType::STORAGE_BUFFER),
+    ]
+}
+
 fn vk_err(what: &'static str) -> impl Fn(vk::Result) -> String {
     move |e| format!("{what}: {e}")
 }
@@ -128,8 +192,10 @@ fn vk_err(what: &'static str) -> impl Fn(vk::Result) -> String {
 impl RawVrsPass {
     /// Builds the passes for `targets` (one per frame parity) at `size`, with an attachment of
     /// `attachment_size` texels of `texel` pixels filled each frame from `staging` (tightly packed
-    /// bytes), drawing `scene`; split when `shaders.motion_fragment` is given (every target then
-    /// needs its motion).
+    /// bytes), drawing `scene` and its textured `materials`; split when `shaders.motion_fragment`
+    /// is given (every target then needs its motion). Without `texel` the shading pass has no
+    /// rate attachment and its pipelines no shading-rate state: every pixel shaded once, on any
+    /// Vulkan device (how the raw drawing is tested where the extension is missing).
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         device: &wgpu::Device,
@@ -137,15 +203,34 @@ impl RawVrsPass {
         shaders: &Shaders<'_>,
         targets: &[Targets<'_>],
         size: [u32; 2],
-        texel: [u32; 2],
+        texel: Option<[u32; 2]>,
         attachment_size: [u32; 2],
         staging: &wgpu::Buffer,
         scene: &RawDraw<'_>,
+        materials: Option<&RawMaterials<'_>>,
     ) -> Result<RawVrsPass, String> {
         let split = shaders.motion_fragment.is_some();
         if split && targets.iter().any(|t| t.motion.is_none()) {
             return Err("the motion pre-pass needs a motion target for every parity".into());
         }
+        let rated = texel.is_some();
+        let texel = texel.unwrap_or([1, 1]);
+        let material_spirv = match (materials, shaders.material) {
+            (None, _) => None,
+            (Some(_), None) => {
+                return Err("the scene has textured draws and no material shader was given".into())
+            }
+            (Some(_), Some(wgsl)) => Some(
+                MATERIAL_ENTRY_POINTS
+                    .iter()
+                    .map(|&(stage, entry)| spirv(wgsl, stage, entry))
+                    .collect::<Result<Vec<_>, String>>()?,
+            ),
+        };
+        let anisotropic = adapter
+            .get_downlevel_capabilities()
+            .flags
+            .contains(wgpu::DownlevelFlags::ANISOTROPIC_FILTERING);
         let vs = spirv(shaders.wgsl, naga::ShaderStage::Vertex, shaders.vertex)?;
         let fs = spirv(shaders.wgsl, naga::ShaderStage::Fragment, shaders.fragment)?;
         let fs_motion = match shaders.motion_fragment {
@@ -220,6 +305,12 @@ impl RawVrsPass {
             index: buffer_of(scene.index)?,
             staging: buffer_of(staging)?,
             draws: scene.draws.clone(),
+            rated,
+            materials: None,
+            material_layout: vk::PipelineLayout::null(),
+            material_modules: [vk::ShaderModule::null(); 5],
+            material_shade: [vk::Pipeline::null(); 2],
+            material_prepass: [vk::Pipeline::null(); 2],
         };
         let frame = buffer_of(scene.frame)?;
         let objects = buffer_of(scene.objects)?;
@@ -229,45 +320,47 @@ impl RawVrsPass {
         // SAFETY: every create call gets a fully initialised create-info that outlives the call;
         // each object is stored in `pass` as soon as it exists, so `Drop` destroys exactly what
         // was made, also when a later step fails.
-        unsafe {
-            let info = vk::ImageCreateInfo::default()
-                .image_type(vk::ImageType::TYPE_2D)
-                .format(vk::Format::R8_UINT)
-                .extent(vk::Extent3D {
-                    width: attachment_size[0],
-                    height: attachment_size[1],
-                    depth: 1,
-                })
-                .mip_levels(1)
-                .array_layers(1)
-                .samples(vk::SampleCountFlags::TYPE_1)
-                .tiling(vk::ImageTiling::OPTIMAL)
-                .usage(
-                    vk::ImageUsageFlags::FRAGMENT_SHADING_RATE_ATTACHMENT_KHR
-                        | vk::ImageUsageFlags::TRANSFER_DST,
-                )
-                .initial_layout(vk::ImageLayout::UNDEFINED);
-            pass.rate_image = d
-                .create_image(&info, None)
-                .map_err(vk_err("attachment image"))?;
-            let req = d.get_image_memory_requirements(pass.rate_image);
-            let types = &memory_props.memory_types[..memory_props.memory_type_count as usize];
-            let pick = |flags: vk::MemoryPropertyFlags| {
-                types.iter().enumerate().position(|(i, t)| {
-                    req.memory_type_bits & (1 << i) != 0 && t.property_flags.contains(flags)
-                })
-            };
-            let type_index = pick(vk::MemoryPropertyFlags::DEVICE_LOCAL)
-                .or_else(|| pick(vk::MemoryPropertyFlags::empty()))
-                .ok_or("no memory type for the attachment image")?;
-            let alloc = vk::MemoryAllocateInfo::default()
-                .allocation_size(req.size)
-                .memory_type_index(type_index as u32);
-            pass.rate_memory = d
-                .allocate_memory(&alloc, None)
-                .map_err(vk_err("attachment memory"))?;
-            d.bind_image_memory(pass.rate_image, pass.rate_memory, 0)
-                .map_err(vk_err("binding attachment memory"))?;
+        if rated {
+            unsafe {
+                let info = vk::ImageCreateInfo::default()
+                    .image_type(vk::ImageType::TYPE_2D)
+                    .format(vk::Format::R8_UINT)
+                    .extent(vk::Extent3D {
+                        width: attachment_size[0],
+                        height: attachment_size[1],
+                        depth: 1,
+                    })
+                    .mip_levels(1)
+                    .array_layers(1)
+                    .samples(vk::SampleCountFlags::TYPE_1)
+                    .tiling(vk::ImageTiling::OPTIMAL)
+                    .usage(
+                        vk::ImageUsageFlags::FRAGMENT_SHADING_RATE_ATTACHMENT_KHR
+                            | vk::ImageUsageFlags::TRANSFER_DST,
+                    )
+                    .initial_layout(vk::ImageLayout::UNDEFINED);
+                pass.rate_image = d
+                    .create_image(&info, None)
+                    .map_err(vk_err("attachment image"))?;
+                let req = d.get_image_memory_requirements(pass.rate_image);
+                let types = &memory_props.memory_types[..memory_props.memory_type_count as usize];
+                let pick = |flags: vk::MemoryPropertyFlags| {
+                    types.iter().enumerate().position(|(i, t)| {
+                        req.memory_type_bits & (1 << i) != 0 && t.property_flags.contains(flags)
+                    })
+                };
+                let type_index = pick(vk::MemoryPropertyFlags::DEVICE_LOCAL)
+                    .or_else(|| pick(vk::MemoryPropertyFlags::empty()))
+                    .ok_or("no memory type for the attachment image")?;
+                let alloc = vk::MemoryAllocateInfo::default()
+                    .allocation_size(req.size)
+                    .memory_type_index(type_index as u32);
+                pass.rate_memory = d
+                    .allocate_memory(&alloc, None)
+                    .map_err(vk_err("attachment memory"))?;
+                d.bind_image_memory(pass.rate_image, pass.rate_memory, 0)
+                    .map_err(vk_err("binding attachment memory"))?;
+            }
         }
 
         let view =
@@ -291,12 +384,16 @@ impl RawVrsPass {
                 Ok(v)
             };
         let rate_image = pass.rate_image;
-        let rate_view = view(
-            &mut pass,
-            rate_image,
-            vk::Format::R8_UINT,
-            vk::ImageAspectFlags::COLOR,
-        )?;
+        let rate_view = if rated {
+            view(
+                &mut pass,
+                rate_image,
+                vk::Format::R8_UINT,
+                vk::ImageAspectFlags::COLOR,
+            )?
+        } else {
+            vk::ImageView::null()
+        };
 
         // Render passes. Colour targets begin and end in COLOR_ATTACHMENT_OPTIMAL, depth in
         // DEPTH_STENCIL_ATTACHMENT_OPTIMAL (what wgpu's transitions left them in); a cleared
@@ -329,12 +426,13 @@ impl RawVrsPass {
             } else {
                 clear
             };
-            let attachments = [
+            let all_attachments = [
                 attachment(formats[0], color_layout, clear),
                 attachment(formats[1], depth_layout, depth_load),
                 attachment(vk::Format::R8_UINT, rate_layout, vk::AttachmentLoadOp::LOAD)
                     .store_op(vk::AttachmentStoreOp::DONT_CARE),
             ];
+            let attachments = &all_attachments[..if rated { 3 } else { 2 }];
             let color_refs = [reference(0, color_layout)];
             let depth_ref = reference(1, depth_layout);
             let rate_ref = reference(2, rate_layout);
@@ -347,11 +445,15 @@ impl RawVrsPass {
             let subpass = vk::SubpassDescription2::default()
                 .pipeline_bind_point(vk::PipelineBindPoint::GRAPHICS)
                 .color_attachments(&color_refs)
-                .depth_stencil_attachment(&depth_ref)
-                .push_next(&mut rate_info);
+                .depth_stencil_attachment(&depth_ref);
+            let subpass = if rated {
+                subpass.push_next(&mut rate_info)
+            } else {
+                subpass
+            };
             let subpasses = [subpass];
             let rp_info = vk::RenderPassCreateInfo2::default()
-                .attachments(&attachments)
+                .attachments(attachments)
                 .subpasses(&subpasses);
             // SAFETY: the create-info chain (attachments, subpass, shading-rate attachment info)
             // lives across the call; the extension is enabled on this device (`open`).
@@ -404,7 +506,8 @@ impl RawVrsPass {
                 formats[1],
                 vk::ImageAspectFlags::DEPTH,
             )?;
-            let fb = framebuffer(pass.shade_pass, &[c, z, rate_view])?;
+            let all_views = [c, z, rate_view];
+            let fb = framebuffer(pass.shade_pass, &all_views[..if rated { 3 } else { 2 }])?;
             pass.shade_framebuffers.push(fb);
             if let (true, Some(m)) = (split, t.motion) {
                 let m = view(
@@ -420,18 +523,16 @@ impl RawVrsPass {
 
         // Descriptor set: group 0 of scene.wgsl (frame uniforms, objects).
         let stages = vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT;
-        let bindings = [
-            vk::DescriptorSetLayoutBinding::default()
-                .binding(0)
-                .descriptor_type(vk::DescriptorType::UNIFORM_BUFFER)
-                .descriptor_count(1)
-                .stage_flags(stages),
-            vk::DescriptorSetLayoutBinding::default()
-                .binding(1)
-                .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
-                .descriptor_count(1)
-                .stage_flags(stages),
-        ];
+        let bindings: Vec<vk::DescriptorSetLayoutBinding> = scene_bindings()
+            .into_iter()
+            .map(|(binding, ty)| {
+                vk::DescriptorSetLayoutBinding::default()
+                    .binding(binding)
+                    .descriptor_type(ty)
+                    .descriptor_count(1)
+                    .stage_flags(stages)
+            })
+            .collect();
         let pool_sizes = [
             vk::DescriptorPoolSize {
                 ty: vk::DescriptorType::UNIFORM_BUFFER,
@@ -612,8 +713,12 @@ impl RawVrsPass {
             .dynamic_state(&dynamic)
             .layout(pass.layout)
             .render_pass(pass.shade_pass)
-            .subpass(0)
-            .push_next(&mut rate_state);
+            .subpass(0);
+        let info = if rated {
+            info.push_next(&mut rate_state)
+        } else {
+            info
+        };
         // SAFETY: every state struct and the shading-rate chain live across the calls; the
         // render passes and layout are alive; the pipeline features are enabled on this device
         // (`open`).
@@ -665,6 +770,88 @@ impl RawVrsPass {
                 pass.depth_prepass = d
                     .create_graphics_pipelines(vk::PipelineCache::null(), &[prepass_info], None)
                     .map_err(|(_, e)| format!("depth pre-pass pipeline: {e}"))?[0];
+            }
+        }
+        if let (Some(raw), Some(code)) = (materials, &material_spirv) {
+            pass.materials = RawMaterialSets::new(&d, raw, anisotropic)?;
+            if let Some(sets) = &pass.materials {
+                let layouts = [pass.set_layout, sets.layout];
+                let stride = sets.vertex_stride;
+                // SAFETY: create-infos outlive their calls; the set layouts are alive; each
+                // object is stored in `pass` as soon as it exists (destroyed in Drop).
+                unsafe {
+                    pass.material_layout = d
+                        .create_pipeline_layout(
+                            &vk::PipelineLayoutCreateInfo::default().set_layouts(&layouts),
+                            None,
+                        )
+                        .map_err(vk_err("material pipeline layout"))?;
+                    for (i, words) in code.iter().enumerate() {
+                        pass.material_modules[i] = d
+                            .create_shader_module(
+                                &vk::ShaderModuleCreateInfo::default().code(words),
+                                None,
+                            )
+                            .map_err(vk_err("material shader"))?;
+                    }
+                }
+                let names: Vec<std::ffi::CString> = MATERIAL_ENTRY_POINTS
+                    .iter()
+                    .map(|(_, e)| std::ffi::CString::new(*e).expect("entry names have no NUL"))
+                    .collect();
+                let module = |i: usize| (pass.material_modules[i], names[i].as_c_str());
+                let base = MaterialPipeline {
+                    layout: pass.material_layout,
+                    render_pass: pass.shade_pass,
+                    stride,
+                    vertex: module(0),
+                    fragment: Some(module(1)),
+                    depth: (vk::CompareOp::EQUAL, false),
+                    color: ColorOut::Write,
+                    rates: rated,
+                };
+                let blend = MaterialPipeline {
+                    depth: (vk::CompareOp::GREATER, false),
+                    color: ColorOut::Blend,
+                    ..base
+                };
+                let (prepass_opaque, prepass_mask) = if split {
+                    let opaque = MaterialPipeline {
+                        render_pass: pass.motion_pass,
+                        fragment: Some(module(2)),
+                        depth: (vk::CompareOp::GREATER, true),
+                        rates: false,
+                        ..base
+                    };
+                    let mask = MaterialPipeline {
+                        fragment: Some(module(3)),
+                        ..opaque
+                    };
+                    (opaque, mask)
+                } else {
+                    let opaque = MaterialPipeline {
+                        fragment: None,
+                        depth: (vk::CompareOp::GREATER, true),
+                        color: ColorOut::None,
+                        rates: false,
+                        ..base
+                    };
+                    let mask = MaterialPipeline {
+                        fragment: Some(module(4)),
+                        ..opaque
+                    };
+                    (opaque, mask)
+                };
+                // SAFETY: the modules, layout and render passes are alive; the shading-rate
+                // state is chained only where the device has the extension.
+                unsafe {
+                    pass.material_shade[0] = base.create(&d, "material shading pipeline")?;
+                    pass.material_shade[1] = blend.create(&d, "blended material pipeline")?;
+                    pass.material_prepass[0] =
+                        prepass_opaque.create(&d, "material pre-pass pipeline")?;
+                    pass.material_prepass[1] =
+                        prepass_mask.create(&d, "alpha-tested pre-pass pipeline")?;
+                }
             }
         }
         // SAFETY: a two-query pool of fragment-shader invocations (shading pass, motion pre-pass);
@@ -762,11 +949,91 @@ impl RawVrsPass {
         }
     }
 
+    /// Draws the textured models in `order` for `phase`: in the pre-pass opaque and alpha-tested
+    /// draws (blended ones write no depth), in the shading pass every draw, blended ones last
+    /// (`order` puts them there). An `order` that does not name the draws (none given) draws
+    /// them in their own order.
+    ///
+    /// # Safety
+    /// Inside a render pass compatible with the phase's pipelines, on a command buffer being
+    /// recorded.
+    unsafe fn draw_materials(
+        &self,
+        d: &ash::Device,
+        cb: vk::CommandBuffer,
+        phase: Phase,
+        order: &[usize],
+    ) {
+        let Some(m) = &self.materials else { return };
+
+        let own: Vec<usize>;
+        let order = if order.len() == m.draws.len() {
+            order
+        } else {
+            own = (0..m.draws.len()).collect();
+            &own
+        };
+        let bind = vk::PipelineBindPoint::GRAPHICS;
+        // SAFETY: the caller's contract; the sets, buffers and pipelines are alive.
+        unsafe {
+            d.cmd_bind_descriptor_sets(cb, bind, self.material_layout, 0, &[self.set], &[]);
+            d.cmd_bind_vertex_buffers(cb, 0, &[m.vertex], &[0]);
+            d.cmd_bind_index_buffer(cb, m.index, 0, vk::IndexType::UINT32);
+            let mut current = vk::Pipeline::null();
+            for &i in order {
+                let Some(draw) = m.draws.get(i) else { continue };
+                let pipeline = match (phase, draw.class) {
+                    (Phase::Prepass, Class::Opaque) => self.material_prepass[0],
+                    (Phase::Prepass, Class::Mask) => self.material_prepass[1],
+                    (Phase::Prepass, Class::Blend) => continue,
+                    (Phase::Shade, Class::Blend) => self.material_shade[1],
+                    (Phase::Shade, _) => self.material_shade[0],
+                };
+                if pipeline != current {
+                    d.cmd_bind_pipeline(cb, bind, pipeline);
+                    current = pipeline;
+                }
+                let set = [m.sets[draw.material]];
+                d.cmd_bind_descriptor_sets(cb, bind, self.material_layout, 1, &set, &[]);
+                d.cmd_draw_indexed(
+                    cb,
+                    draw.index_count,
+                    draw.object_count,
+                    draw.first_index,
+                    draw.base_vertex,
+                    draw.first_object,
+                );
+            }
+        }
+    }
+
+    /// Moves the textured draws' sampled textures into the state their descriptors say (see
+    /// `raw_material.rs`), in a wgpu `encoder` submitted before the raw passes of this frame.
+    pub fn transition_materials(&self, encoder: &mut wgpu::CommandEncoder) {
+        if let Some(m) = &self.materials {
+            m.transition(encoder);
+        }
+    }
+
+    /// Whether the scene's textured draws include blended ones (drawn in the shading pass over
+    /// the opaque surfaces: their invocations are beyond the shade-count model's covered pixels).
+    pub fn has_blend(&self) -> bool {
+        self.materials.as_ref().is_some_and(|m| m.has(Class::Blend))
+    }
+
     /// The split shape's motion pre-pass for frame `parity` into `encoder` (which must hold
     /// nothing else): this frame's depth cleared and drawn, the motion written where it is
     /// drawn. Submit it after the encoder that moved the motion and depth targets into
     /// COLOR_TARGET / DEPTH_STENCIL_WRITE, before the rate pass. Does nothing in the single shape.
-    pub fn record_prepass(&mut self, encoder: &mut wgpu::CommandEncoder, parity: usize) {
+    /// `order` is this frame's order of the textured draws ([`MaterialGpu::draw_order`]).
+    ///
+    /// [`MaterialGpu::draw_order`]: crate::render::material::MaterialGpu::draw_order
+    pub fn record_prepass(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        parity: usize,
+        order: &[usize],
+    ) {
         if self.motion_framebuffers.is_empty() {
             return;
         }
@@ -798,6 +1065,7 @@ impl RawVrsPass {
                 d.cmd_set_viewport(cb, 0, &[viewport]);
                 d.cmd_set_scissor(cb, 0, &[area]);
                 self.draw_scene(d, cb, pipeline);
+                self.draw_materials(d, cb, Phase::Prepass, order);
                 d.cmd_end_render_pass2(cb, &vk::SubpassEndInfo::default());
                 d.cmd_end_query(cb, stats, PREPASS_QUERY);
             })
@@ -810,12 +1078,14 @@ impl RawVrsPass {
     /// the single shape) the depth cleared and drawn by the depth pre-pass, and the shading draw
     /// at the attachment's rates. Submit it after the encoder that filled the staging buffer and
     /// moved the colour and depth targets into COLOR_TARGET / DEPTH_STENCIL_WRITE, before
-    /// anything that reads the targets.
+    /// anything that reads the targets. The textured draws follow the untextured ones in
+    /// `order` (this frame's: opaque, alpha-tested, blended back to front).
     pub fn record_shade(
         &mut self,
         encoder: &mut wgpu::CommandEncoder,
         parity: usize,
         background: [f32; 4],
+        order: &[usize],
     ) {
         let range = vk::ImageSubresourceRange {
             aspect_mask: vk::ImageAspectFlags::COLOR,
@@ -871,36 +1141,38 @@ impl RawVrsPass {
             .clear_values(&clears);
         let subpass = vk::SubpassBeginInfo::default().contents(vk::SubpassContents::INLINE);
         let (stats, pipeline, depth_prepass) = (self.stats, self.pipeline, self.depth_prepass);
-        let (staging, rate_image) = (self.staging, self.rate_image);
+        let (staging, rate_image, rated) = (self.staging, self.rate_image, self.rated);
         // SAFETY: as in `record_prepass`; the rate image is ours and goes from UNDEFINED (its
         // bytes are rewritten whole) through TRANSFER_DST to the attachment layout each frame.
         let ok = unsafe {
             self.record_raw(encoder, |d, cb| {
-                d.cmd_pipeline_barrier(
-                    cb,
-                    vk::PipelineStageFlags::TOP_OF_PIPE,
-                    vk::PipelineStageFlags::TRANSFER,
-                    vk::DependencyFlags::empty(),
-                    &[],
-                    &[],
-                    &[to_copy],
-                );
-                d.cmd_copy_buffer_to_image(
-                    cb,
-                    staging,
-                    rate_image,
-                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                    &[copy],
-                );
-                d.cmd_pipeline_barrier(
-                    cb,
-                    vk::PipelineStageFlags::TRANSFER,
-                    vk::PipelineStageFlags::FRAGMENT_SHADING_RATE_ATTACHMENT_KHR,
-                    vk::DependencyFlags::empty(),
-                    &[],
-                    &[],
-                    &[to_rate],
-                );
+                if rated {
+                    d.cmd_pipeline_barrier(
+                        cb,
+                        vk::PipelineStageFlags::TOP_OF_PIPE,
+                        vk::PipelineStageFlags::TRANSFER,
+                        vk::DependencyFlags::empty(),
+                        &[],
+                        &[],
+                        &[to_copy],
+                    );
+                    d.cmd_copy_buffer_to_image(
+                        cb,
+                        staging,
+                        rate_image,
+                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                        &[copy],
+                    );
+                    d.cmd_pipeline_barrier(
+                        cb,
+                        vk::PipelineStageFlags::TRANSFER,
+                        vk::PipelineStageFlags::FRAGMENT_SHADING_RATE_ATTACHMENT_KHR,
+                        vk::DependencyFlags::empty(),
+                        &[],
+                        &[],
+                        &[to_rate],
+                    );
+                }
                 d.cmd_reset_query_pool(cb, stats, SHADE_QUERY, 1);
                 d.cmd_begin_query(cb, stats, SHADE_QUERY, vk::QueryControlFlags::empty());
                 d.cmd_begin_render_pass2(cb, &begin, &subpass);
@@ -908,8 +1180,10 @@ impl RawVrsPass {
                 d.cmd_set_scissor(cb, 0, &[area]);
                 if depth_prepass != vk::Pipeline::null() {
                     self.draw_scene(d, cb, depth_prepass);
+                    self.draw_materials(d, cb, Phase::Prepass, order);
                 }
                 self.draw_scene(d, cb, pipeline);
+                self.draw_materials(d, cb, Phase::Shade, order);
                 d.cmd_end_render_pass2(cb, &vk::SubpassEndInfo::default());
                 d.cmd_end_query(cb, stats, SHADE_QUERY);
             })
@@ -955,10 +1229,15 @@ impl Drop for RawVrsPass {
             for p in [self.pipeline, self.depth_prepass, self.motion_prepass] {
                 d.destroy_pipeline(p, None);
             }
-            for m in self.modules {
+            for p in self.material_shade.into_iter().chain(self.material_prepass) {
+                d.destroy_pipeline(p, None);
+            }
+            for m in self.modules.into_iter().chain(self.material_modules) {
                 d.destroy_shader_module(m, None);
             }
             d.destroy_pipeline_layout(self.layout, None);
+            d.destroy_pipeline_layout(self.material_layout, None);
+            // The material sets and samplers are `self.materials`' own (its Drop, after this).
             d.destroy_descriptor_pool(self.pool, None);
             d.destroy_descriptor_set_layout(self.set_layout, None);
             for &fb in self
@@ -976,5 +1255,140 @@ impl Drop for RawVrsPass {
             d.destroy_image(self.rate_image, None);
             d.free_memory(self.rate_memory, None);
         }
+    }
+}
+
+/// What a textured draw writes to the colour attachment.
+#[derive(Clone, Copy)]
+enum ColorOut {
+    /// Nothing (write mask 0): `native-vrs`'s depth pre-pass.
+    None,
+    /// Every channel, no blending.
+    Write,
+    /// glTF BLEND: wgpu's `BlendState::ALPHA_BLENDING` (colour `src_alpha`, `1 - src_alpha`;
+    /// alpha `1`, `1 - src_alpha`), what `material.rs`'s blended pipeline uses.
+    Blend,
+}
+
+/// One pipeline of the textured draws: `MaterialVertex`'s layout, triangles, no culling, one
+/// sample, dynamic viewport and scissor, as `material.rs`'s wgpu pipelines and the untextured raw
+/// ones.
+#[derive(Clone, Copy)]
+struct MaterialPipeline<'a> {
+    layout: vk::PipelineLayout,
+    render_pass: vk::RenderPass,
+    stride: u32,
+    vertex: (vk::ShaderModule, &'a std::ffi::CStr),
+    fragment: Option<(vk::ShaderModule, &'a std::ffi::CStr)>,
+    /// Depth compare op and whether depth is written.
+    depth: (vk::CompareOp, bool),
+    color: ColorOut,
+    /// Whether the attachment decides the fragment size (the shading draws on a device with
+    /// the extension), as the untextured shading pipeline: 1x1, combiners (KEEP, REPLACE).
+    rates: bool,
+}
+
+impl MaterialPipeline<'_> {
+    /// # Safety
+    /// The modules, layout and render pass are alive on `d`; `rates` only where the device has
+    /// VK_KHR_fragment_shading_rate turned on.
+    unsafe fn create(&self, d: &ash::Device, what: &str) -> Result<vk::Pipeline, String> {
+        let mut stages = vec![vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::VERTEX)
+            .module(self.vertex.0)
+            .name(self.vertex.1)];
+        if let Some((module, name)) = self.fragment {
+            stages.push(
+                vk::PipelineShaderStageCreateInfo::default()
+                    .stage(vk::ShaderStageFlags::FRAGMENT)
+                    .module(module)
+                    .name(name),
+            );
+        }
+        let bindings = [vk::VertexInputBindingDescription {
+            binding: 0,
+            stride: self.stride,
+            input_rate: vk::VertexInputRate::VERTEX,
+        }];
+        let attributes: Vec<vk::VertexInputAttributeDescription> = MATERIAL_ATTRIBUTES
+            .iter()
+            .enumerate()
+            .map(
+                |(i, &(format, offset))| vk::VertexInputAttributeDescription {
+                    location: i as u32,
+                    binding: 0,
+                    format,
+                    offset,
+                },
+            )
+            .collect();
+        let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
+            .vertex_binding_descriptions(&bindings)
+            .vertex_attribute_descriptions(&attributes);
+        let assembly = vk::PipelineInputAssemblyStateCreateInfo::default()
+            .topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+        let viewport = vk::PipelineViewportStateCreateInfo::default()
+            .viewport_count(1)
+            .scissor_count(1);
+        let raster = vk::PipelineRasterizationStateCreateInfo::default()
+            .polygon_mode(vk::PolygonMode::FILL)
+            .cull_mode(vk::CullModeFlags::NONE)
+            .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
+            .line_width(1.0);
+        let multisample = vk::PipelineMultisampleStateCreateInfo::default()
+            .rasterization_samples(vk::SampleCountFlags::TYPE_1);
+        let depth = vk::PipelineDepthStencilStateCreateInfo::default()
+            .depth_test_enable(true)
+            .depth_write_enable(self.depth.1)
+            .depth_compare_op(self.depth.0);
+        let attachment = match self.color {
+            ColorOut::None => vk::PipelineColorBlendAttachmentState::default(),
+            ColorOut::Write => vk::PipelineColorBlendAttachmentState::default()
+                .color_write_mask(vk::ColorComponentFlags::RGBA),
+            ColorOut::Blend => vk::PipelineColorBlendAttachmentState::default()
+                .blend_enable(true)
+                .src_color_blend_factor(vk::BlendFactor::SRC_ALPHA)
+                .dst_color_blend_factor(vk::BlendFactor::ONE_MINUS_SRC_ALPHA)
+                .color_blend_op(vk::BlendOp::ADD)
+                .src_alpha_blend_factor(vk::BlendFactor::ONE)
+                .dst_alpha_blend_factor(vk::BlendFactor::ONE_MINUS_SRC_ALPHA)
+                .alpha_blend_op(vk::BlendOp::ADD)
+                .color_write_mask(vk::ColorComponentFlags::RGBA),
+        };
+        let attachments = [attachment];
+        let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&attachments);
+        let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+        let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
+        let mut rate_state = vk::PipelineFragmentShadingRateStateCreateInfoKHR::default()
+            .fragment_size(vk::Extent2D {
+                width: 1,
+                height: 1,
+            })
+            .combiner_ops([
+                vk::FragmentShadingRateCombinerOpKHR::KEEP,
+                vk::FragmentShadingRateCombinerOpKHR::REPLACE,
+            ]);
+        let info = vk::GraphicsPipelineCreateInfo::default()
+            .stages(&stages)
+            .vertex_input_state(&vertex_input)
+            .input_assembly_state(&assembly)
+            .viewport_state(&viewport)
+            .rasterization_state(&raster)
+            .multisample_state(&multisample)
+            .depth_stencil_state(&depth)
+            .color_blend_state(&blend)
+            .dynamic_state(&dynamic)
+            .layout(self.layout)
+            .render_pass(self.render_pass)
+            .subpass(0);
+        let info = if self.rates {
+            info.push_next(&mut rate_state)
+        } else {
+            info
+        };
+        // SAFETY: every state struct lives across the call; the caller's contract.
+        unsafe { d.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None) }
+            .map(|p| p[0])
+            .map_err(|(_, e)| format!("{what}: {e}"))
     }
 }
