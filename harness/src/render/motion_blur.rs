@@ -139,7 +139,7 @@ pub fn model(frame: &[[f32; 4]], motion: &[[f32; 2]], width: u32, height: u32) -
             let (x, y) = (i % w, i / w);
             let v = motion[i as usize];
             let len = (v[0] * v[0] + v[1] * v[1]).sqrt();
-            if !(len >= 0.5) || len > 1e6 {
+            if !(0.5..=1e6).contains(&len) {
                 return frame[i as usize];
             }
             let taps = (len.ceil() as u32 + 1).min(129);
