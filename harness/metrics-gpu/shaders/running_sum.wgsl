@@ -63,12 +63,40 @@ fn main(
             let last = start + len == quads;
             // The map's last quad may hold values past `count`: only its first `count % 4`.
             let full = select(len, len - 1u, last && params.count % 4u != 0u);
-            for (var j = 0u; j < full; j++) {
-                let v = tile[half * TILE + j];
+            // Four quads read before their sixteen adds: one thread's adds wait on one
+            // workgroup-memory latency per sixteen values, not per four. Same order of adds.
+            let at = half * TILE;
+            var j = 0u;
+            while (j + 4u <= full) {
+                let a = tile[at + j];
+                let b = tile[at + j + 1u];
+                let c = tile[at + j + 2u];
+                let d = tile[at + j + 3u];
+                s = s + clean(a.x);
+                s = s + clean(a.y);
+                s = s + clean(a.z);
+                s = s + clean(a.w);
+                s = s + clean(b.x);
+                s = s + clean(b.y);
+                s = s + clean(b.z);
+                s = s + clean(b.w);
+                s = s + clean(c.x);
+                s = s + clean(c.y);
+                s = s + clean(c.z);
+                s = s + clean(c.w);
+                s = s + clean(d.x);
+                s = s + clean(d.y);
+                s = s + clean(d.z);
+                s = s + clean(d.w);
+                j += 4u;
+            }
+            while (j < full) {
+                let v = tile[at + j];
                 s = s + clean(v.x);
                 s = s + clean(v.y);
                 s = s + clean(v.z);
                 s = s + clean(v.w);
+                j += 1u;
             }
             if (full < len) {
                 let v = tile[half * TILE + full];

@@ -44,12 +44,13 @@ pub trait Renderer {
 
     /// Per-frame values and images beyond the output, asked for after each captured frame has
     /// been submitted and waited for (never between timed frames): e.g. adaptive shading's
-    /// average shading rate and shading-rate image. `frame` is the frame's output as read back;
-    /// `image`: whether this frame is saved (make images only then). None by default.
+    /// average shading rate and shading-rate image. `frame` is the saved frame's output in sRGB
+    /// (empty when not saved); `image`: whether this frame is saved (make images only then).
+    /// None by default.
     fn frame_extras(
         &mut self,
         _gpu: &Gpu,
-        _frame: &tessera_metrics::HdrImage,
+        _frame: &tessera_metrics::Rgb8Image,
         _image: bool,
     ) -> FrameExtras {
         FrameExtras::default()

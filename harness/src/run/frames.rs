@@ -486,7 +486,11 @@ pub fn render_sampled(
                 fm.fragment_invocations = stats;
             }
             let saved = scenario.save_frames.contains(&m);
-            let on_cpu = keep.frames || keep.hdr || saved || hash_frames;
+            // A saved frame nothing else on the CPU needs comes from the metrics' copy, encoded
+            // to sRGB on the device (a quarter of the float frame's bytes, no CPU encode).
+            let ldr_from_device =
+                saved && metric_copy.is_some() && !(keep.frames || keep.hdr || hash_frames);
+            let on_cpu = keep.frames || keep.hdr || (saved && !ldr_from_device) || hash_frames;
             let last = index + 1 == scenario.total_frames();
             let compare = last && compared_last.is_some();
             let output = technique.output();
@@ -526,11 +530,20 @@ pub fn render_sampled(
                 readback.copy(&mut encoder, compared);
             }
             gpu.queue.submit([encoder.finish()]);
+            let mut device_srgb = None;
             if let Some(copy) = &metric_copy {
-                let frame = gpu
-                    .metrics()
+                let mut metrics = gpu.metrics();
+                let frame = metrics
                     .frame_from_texture_with(copy, keep.gpu_hdr)
                     .map_err(|e| RenderError::Metrics(e.to_string()))?;
+                if ldr_from_device {
+                    let _span = phases::span("capture: readback");
+                    device_srgb = Some(
+                        metrics
+                            .read_ldr(&frame)
+                            .map_err(|e| RenderError::Metrics(e.to_string()))?,
+                    );
+                }
                 rendered.gpu_frames.push(frame);
             }
             let results = if checked {
@@ -565,33 +578,45 @@ pub fn render_sampled(
             rendered.non_finite += non_finite;
             rendered.non_finite_counts.push(non_finite);
             rendered.non_finite_masks.push(mask);
-            let extras_span = phases::span("capture: technique extras");
-            // Techniques read the frame only for the images of saved frames.
-            let empty = HdrImage {
-                width: 0,
-                height: 0,
-                data: Vec::new(),
-            };
-            let image = frame.as_ref().map_or(&empty, |f| &f.image);
-            rendered
-                .extras
-                .push(technique.frame_extras(gpu, image, saved));
-            drop(extras_span);
-            if let Some(frame) = frame {
+            if let Some(frame) = &frame {
                 if hash_frames {
                     let _span = phases::span("capture: frame hashes");
                     rendered.hashes.push(image_hash(&frame.image));
                 }
-                let _span = phases::span("capture: srgb encode");
-                if keep.frames || saved {
-                    let srgb = encode_srgb8(&frame.image);
-                    if saved {
+            }
+            // The sRGB frame: encoded on the device, or here from the read-back floats.
+            let srgb = match (device_srgb, &frame) {
+                (Some(img), _) => Some(img),
+                (None, Some(f)) if keep.frames || saved => {
+                    let _span = phases::span("capture: srgb encode");
+                    Some(encode_srgb8(&f.image))
+                }
+                _ => None,
+            };
+            let extras_span = phases::span("capture: technique extras");
+            // Techniques read the frame only for the images of saved frames.
+            let empty = Rgb8Image {
+                width: 0,
+                height: 0,
+                data: Vec::new(),
+            };
+            let image = srgb.as_ref().filter(|_| saved).unwrap_or(&empty);
+            rendered
+                .extras
+                .push(technique.frame_extras(gpu, image, saved));
+            drop(extras_span);
+            if let Some(srgb) = srgb {
+                match (saved, keep.frames) {
+                    (true, true) => {
                         rendered.saved.push((m, srgb.clone()));
-                    }
-                    if keep.frames {
                         rendered.frames.push(srgb);
                     }
+                    (true, false) => rendered.saved.push((m, srgb)),
+                    (false, true) => rendered.frames.push(srgb),
+                    (false, false) => {}
                 }
+            }
+            if let Some(frame) = frame {
                 if keep.hdr {
                     rendered.hdr_frames.push(frame.image);
                 }

@@ -14,7 +14,7 @@
 
 use std::collections::HashMap;
 
-use tessera_metrics::{encode_srgb8, HdrImage, Rgb8Image};
+use tessera_metrics::Rgb8Image;
 
 use super::model::{self, CoarseSample, RateParams, TILE};
 use crate::gpu::Gpu;
@@ -559,7 +559,7 @@ impl Renderer for AdaptiveGpu {
         );
     }
 
-    fn frame_extras(&mut self, gpu: &Gpu, frame: &HdrImage, image: bool) -> FrameExtras {
+    fn frame_extras(&mut self, gpu: &Gpu, frame: &Rgb8Image, image: bool) -> FrameExtras {
         let [shades, covered] = self.counters(gpu);
         let mut extras = FrameExtras::default();
         // Shades over native's (one per covered pixel); 1 where nothing is drawn.
@@ -581,8 +581,8 @@ impl Renderer for AdaptiveGpu {
 }
 
 /// The frame in grey with each tile tinted by its shading-region size, as the paper's Fig. 1 (c).
-pub fn rate_image(frame: &HdrImage, codes: &[u32]) -> Rgb8Image {
-    let mut img = encode_srgb8(frame);
+pub fn rate_image(frame: &Rgb8Image, codes: &[u32]) -> Rgb8Image {
+    let mut img = frame.clone();
     let (tw, _) = model::tiles(img.width, img.height);
     for y in 0..img.height {
         for x in 0..img.width {
@@ -609,15 +609,16 @@ pub fn rate_image(frame: &HdrImage, codes: &[u32]) -> Rgb8Image {
 mod tests {
     use super::*;
     use model::encode;
+    use tessera_metrics::{encode_srgb8, HdrImage};
 
     #[test]
     fn rate_image_tints_coarse_tiles_only() {
         // Two tiles side by side, mid grey: 1x1 stays grey, 2x2 is tinted green (Fig. 1's code).
-        let frame = HdrImage {
+        let frame = encode_srgb8(&HdrImage {
             width: 32,
             height: 16,
             data: vec![0.2; 32 * 16 * 3],
-        };
+        });
         let img = rate_image(&frame, &[encode(1, 1), encode(2, 2)]);
         let px = |x: usize| &img.data[x * 3..x * 3 + 3];
         assert!(px(3)[0] == px(3)[1] && px(3)[1] == px(3)[2], "{:?}", px(3));

@@ -30,7 +30,7 @@
 
 use std::collections::{BTreeMap, HashMap};
 
-use tessera_metrics::HdrImage;
+use tessera_metrics::Rgb8Image;
 
 use super::attachment::{self as att, Attachment};
 use super::gpu::{
@@ -618,7 +618,7 @@ impl Renderer for HardwareGpu {
         out
     }
 
-    fn frame_extras(&mut self, gpu: &Gpu, frame: &HdrImage, image: bool) -> FrameExtras {
+    fn frame_extras(&mut self, gpu: &Gpu, frame: &Rgb8Image, image: bool) -> FrameExtras {
         let mut extras = FrameExtras::default();
         let coverage = self.coverage(gpu);
         let covered = coverage.iter().filter(|&&c| c).count() as u64;
