@@ -29,10 +29,10 @@ pub const VENDOR_INTEL: u32 = 0x8086;
 /// the energy window.
 pub const SAMPLE_INTERVAL_MS: f64 = 10.0;
 
-/// The energy window: after the measured frames, the sequence goes on with the sensors sampled,
-/// since an energy counter that steps every 100 ms (an H200's, measured) cannot measure a window
-/// of a few frames. It lasts until the counter has stepped [`ENERGY_STEPS`] times or for this
-/// long at most (a source without a counter, or one that does not step, runs it all and is read
+/// The energy window: before the measured frames, as the end of the clock warm-up (once the clock
+/// is at its top), the sequence runs with the sensors sampled, since an energy counter that steps
+/// every 100 ms (an H200's, measured) cannot measure a window of a few frames. It lasts until the
+/// counter has stepped [`ENERGY_STEPS`] times or for this long at most (a source without a counter, or one that does not step, runs it all and is read
 /// as power times time). Sampled every [`ENERGY_SAMPLE_INTERVAL_MS`], the steps are placed to a
 /// millisecond: three steps span two of the H200's intervals, 200 ms placed to 1%, reached 200 to
 /// 300 ms after the window opens. Run to run on the H200 the energy per frame of 1 s windows

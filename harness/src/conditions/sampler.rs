@@ -7,7 +7,7 @@
 //! the thread sleeps on its channel. While a window is open, [`Sampler::energy_steps`] says how
 //! often the energy counter has changed in it (the energy window ends on it).
 
-use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender};
 use std::sync::Arc;
 use std::thread::JoinHandle;
@@ -28,6 +28,8 @@ pub struct Sampler {
     limits: DeviceLimits,
     /// Changes of the energy counter seen in the open window (reset when one opens).
     steps: Arc<AtomicU32>,
+    /// The last sample's graphics clock in MHz (f64 bits; NaN when none was read).
+    clock: Arc<AtomicU64>,
 }
 
 impl Sampler {
@@ -41,10 +43,14 @@ impl Sampler {
         let (commands, rx) = mpsc::channel();
         let (tx, windows) = mpsc::channel();
         let steps = Arc::new(AtomicU32::new(0));
-        let counted = Arc::clone(&steps);
+        let clock = Arc::new(AtomicU64::new(f64::NAN.to_bits()));
+        let live = Live {
+            steps: Arc::clone(&steps),
+            clock: Arc::clone(&clock),
+        };
         let thread = std::thread::Builder::new()
             .name("tessera-conditions".into())
-            .spawn(move || run(source.as_mut(), interval, &rx, &tx, &counted))
+            .spawn(move || run(source.as_mut(), interval, &rx, &tx, &live))
             .ok();
         Sampler {
             commands: Some(commands),
@@ -52,6 +58,7 @@ impl Sampler {
             thread,
             limits,
             steps,
+            clock,
         }
     }
 
@@ -62,6 +69,7 @@ impl Sampler {
     /// Opens a window: the thread samples now and then periodically. Does not wait.
     pub fn begin(&self) {
         self.steps.store(0, Ordering::Release);
+        self.clock.store(f64::NAN.to_bits(), Ordering::Release);
         if let Some(c) = &self.commands {
             let _ = c.send(Command::Begin(None));
         }
@@ -71,6 +79,7 @@ impl Sampler {
     /// millisecond to place the energy counter's steps).
     pub fn begin_every(&self, interval: Duration) {
         self.steps.store(0, Ordering::Release);
+        self.clock.store(f64::NAN.to_bits(), Ordering::Release);
         if let Some(c) = &self.commands {
             let _ = c.send(Command::Begin(Some(interval)));
         }
@@ -80,6 +89,13 @@ impl Sampler {
     /// far (0 before the thread has sampled, and without an energy counter).
     pub fn energy_steps(&self) -> u32 {
         self.steps.load(Ordering::Acquire)
+    }
+
+    /// The graphics clock of the open window's latest sample, in MHz (`None` before the thread
+    /// has sampled it, or where the source reads no clock).
+    pub fn latest_clock_mhz(&self) -> Option<f64> {
+        let v = f64::from_bits(self.clock.load(Ordering::Acquire));
+        (!v.is_nan()).then_some(v)
     }
 
     /// Closes the window after one last sample and returns its samples (empty when no window
@@ -102,16 +118,25 @@ impl Drop for Sampler {
     }
 }
 
+/// What the sampling thread shares while a window is open.
+struct Live {
+    steps: Arc<AtomicU32>,
+    clock: Arc<AtomicU64>,
+}
+
 fn run(
     source: &mut dyn ConditionSource,
     interval: Duration,
     commands: &Receiver<Command>,
     windows: &Sender<Vec<Sample>>,
-    steps: &AtomicU32,
+    live: &Live,
 ) {
     let take = |source: &mut dyn ConditionSource, t0: Instant| {
         let mut s = source.sample();
         s.at_s = t0.elapsed().as_secs_f64();
+        if let Some(mhz) = s.graphics_clock_mhz {
+            live.clock.store(mhz.to_bits(), Ordering::Release);
+        }
         s
     };
     // The open window: its start, its samples, when the next periodic sample is due, its period.
@@ -131,7 +156,7 @@ fn run(
                     let before = samples.last().and_then(|s| s.energy_mj);
                     if sample.energy_mj.is_some() && before.is_some() && sample.energy_mj != before
                     {
-                        steps.fetch_add(1, Ordering::Release);
+                        live.steps.fetch_add(1, Ordering::Release);
                     }
                     samples.push(sample);
                     *next += *period;
@@ -140,7 +165,7 @@ fn run(
             // A second begin restarts the window.
             Ok(Command::Begin(period)) => {
                 let period = period.unwrap_or(interval);
-                steps.store(0, Ordering::Release);
+                live.steps.store(0, Ordering::Release);
                 let t0 = Instant::now();
                 let first = take(source, t0);
                 window = Some((t0, vec![first], t0 + period, period));

@@ -13,9 +13,10 @@
 //! the stop rule ends it ([`crate::timing::stop`]), and the last compared frame is copied aside as
 //! it completes, for the determinism check (a copy submitted between two frames, outside every
 //! timed pass, compared bit for bit on the device with the capture phase's last frame:
-//! `render/frame_check.rs`). With sensors, an energy window follows: the sequence goes on,
-//! untimed, while the sampler reads the energy counter, until it has stepped [`ENERGY_STEPS`]
-//! times or for [`ENERGY_WINDOW_MS`] at most.
+//! `render/frame_check.rs`). With sensors, the clock warm-up and the energy window before the
+//! timed frames are one window: the sequence runs pipelined, untimed, while the sampler reads the
+//! clock and the energy counter, and from the top clock on it counts frames until the counter has
+//! stepped [`ENERGY_STEPS`] times or for [`ENERGY_WINDOW_MS`] at most.
 
 use std::cell::Cell;
 use std::collections::{BTreeMap, VecDeque};
@@ -308,50 +309,122 @@ pub fn render_sampled(
     };
     let hash_frames = frame_hash_file().is_some();
 
-    // Clock warm-up: frame 0 (which never reads history) repeated until the GPU has been busy for
-    // `warmup_ms`, so that it reaches its working clocks before the first timed frame. Where the
-    // sensors read the graphics clock and know its maximum, it ends sooner: once the load has run
-    // at the top clock throughout for CLOCK_SETTLED_MS (after at least MIN_CLOCK_WARMUP_MS), as on
-    // a GPU still at its top clock from the variant before. The clocks of the measured frames are
-    // recorded either way (`conditions`), and a low one is flagged.
-    let warm_span = phases::span("clock warm-up");
-    let warm_start = Instant::now();
+    // Clock warm-up, so that the GPU reaches its working clocks before the first timed frame,
+    // and the energy window. The clocks of the measured frames are recorded either way
+    // (`conditions`), and a low one is flagged.
     let warmup_ms = scenario.clock_warmup_ms(&gpu.info.device_type);
-    let top_clock = sampler.and_then(|s| Some((s, s.limits().max_graphics_clock_mhz?)));
-    let mut settled_since: Option<Instant> = None;
-    while warm_start.elapsed().as_secs_f64() * 1000.0 < warmup_ms {
-        let chunk_start = Instant::now();
-        if let Some((s, _)) = top_clock {
-            s.begin();
-        }
-        pipelined(
-            gpu,
-            scene,
-            scenario,
-            technique,
-            &mut timers,
-            std::iter::repeat_n(0, 4),
-            None,
-            &mut |_, _| {},
-        );
-        if let Some((s, max)) = top_clock {
-            let at_top = crate::conditions::summary::at_top_clock(&s.end(), max);
-            settled_since = if at_top {
-                settled_since.or(Some(chunk_start))
-            } else {
-                None
-            };
+    let energy_ms = scenario.energy_window_ms.unwrap_or(ENERGY_WINDOW_MS);
+    match sampler.filter(|_| energy_ms > 0.0) {
+        // With sensors: the clock warm-up and the energy window are one window, before the
+        // timed frames. The sequence runs pipelined from frame 0 while the sensors are read
+        // every millisecond; from the first sample at the top clock (or after `warmup_ms`, where
+        // the clock stays below it or its maximum is unknown) the window counts frames and the
+        // energy counter's steps,
+        // and it ends ENERGY_STEPS steps later (at least CLOCK_SETTLED_MS later, and
+        // MIN_CLOCK_WARMUP_MS after its start), or energy_ms after that point at most. A clock
+        // below the top restarts the count. Energy per frame is read from the samples and frames
+        // after that point; the timed frames then follow a GPU at its working clock.
+        Some(s) => {
+            let _span = phases::span("clock warm-up + energy window");
+            let start = Instant::now();
+            let max_mhz = s.limits().max_graphics_clock_mhz;
+            // When counting began: (instant, window time in s, energy steps then, frames then).
+            let since: Cell<Option<(Instant, f64, u32, u32)>> = Cell::new(None);
+            let frames = Cell::new(0u32);
             let ms = |t: Instant| t.elapsed().as_secs_f64() * 1000.0;
-            if settled_since.is_some_and(|t| ms(t) >= CLOCK_SETTLED_MS)
-                && ms(warm_start) >= MIN_CLOCK_WARMUP_MS
-            {
-                break;
+            s.begin_every(std::time::Duration::from_secs_f64(
+                ENERGY_SAMPLE_INTERVAL_MS / 1000.0,
+            ));
+            let cap_ms = warmup_ms + energy_ms;
+            let go_on = || {
+                // At the top clock, or warmed up as long as the clock warm-up may last.
+                let at_top = ms(start) >= warmup_ms
+                    || max_mhz.is_some_and(|max| {
+                        s.latest_clock_mhz().is_some_and(|c| {
+                            c >= crate::conditions::summary::TOP_CLOCK_FRACTION * max
+                        })
+                    });
+                if !at_top {
+                    since.set(None);
+                } else if since.get().is_none() {
+                    let now = Instant::now();
+                    since.set(Some((
+                        now,
+                        (now - start).as_secs_f64(),
+                        s.energy_steps(),
+                        frames.get(),
+                    )));
+                }
+                let done = since.get().is_some_and(|(t, _, steps, _)| {
+                    (s.energy_steps() - steps >= ENERGY_STEPS && ms(t) >= CLOCK_SETTLED_MS
+                        || ms(t) >= energy_ms)
+                        && ms(start) >= MIN_CLOCK_WARMUP_MS
+                });
+                !done && ms(start) < cap_ms
+            };
+            pipelined(
+                gpu,
+                scene,
+                scenario,
+                technique,
+                &mut timers,
+                (0..).take_while(|_| go_on()),
+                None,
+                &mut |_, _| frames.set(frames.get() + 1),
+            );
+            let samples = s.end();
+            rendered.clock_warmup_ms = since
+                .get()
+                .map_or(ms(start), |(t, _, _, _)| (t - start).as_secs_f64() * 1000.0);
+            // The samples and frames of the counted part (all of them if it never began).
+            let (from_s, from_frames) = since.get().map_or((0.0, 0), |(_, at, _, f)| (at, f));
+            let counted: Vec<Sample> = samples.into_iter().filter(|x| x.at_s >= from_s).collect();
+            rendered.energy_window = Some((counted, frames.get() - from_frames));
+        }
+        None => {
+            // Without sensors (or without an energy window): frame 0 (which never reads
+            // history) repeated until the GPU has been busy for `warmup_ms`, so that it reaches
+            // its working clocks before the first timed frame; where the sensors read the clock
+            // and know its maximum, it ends once the load has run at the top clock for
+            // CLOCK_SETTLED_MS (after at least MIN_CLOCK_WARMUP_MS).
+            let _span = phases::span("clock warm-up");
+            let warm_start = Instant::now();
+            let top_clock = sampler.and_then(|s| Some((s, s.limits().max_graphics_clock_mhz?)));
+            let mut settled_since: Option<Instant> = None;
+            while warm_start.elapsed().as_secs_f64() * 1000.0 < warmup_ms {
+                let chunk_start = Instant::now();
+                if let Some((s, _)) = top_clock {
+                    s.begin();
+                }
+                pipelined(
+                    gpu,
+                    scene,
+                    scenario,
+                    technique,
+                    &mut timers,
+                    std::iter::repeat_n(0, 4),
+                    None,
+                    &mut |_, _| {},
+                );
+                if let Some((s, max)) = top_clock {
+                    let at_top = crate::conditions::summary::at_top_clock(&s.end(), max);
+                    settled_since = if at_top {
+                        settled_since.or(Some(chunk_start))
+                    } else {
+                        None
+                    };
+                    let ms = |t: Instant| t.elapsed().as_secs_f64() * 1000.0;
+                    if settled_since.is_some_and(|t| ms(t) >= CLOCK_SETTLED_MS)
+                        && ms(warm_start) >= MIN_CLOCK_WARMUP_MS
+                    {
+                        break;
+                    }
+                }
             }
+
+            rendered.clock_warmup_ms = warm_start.elapsed().as_secs_f64() * 1000.0;
         }
     }
-    rendered.clock_warmup_ms = warm_start.elapsed().as_secs_f64() * 1000.0;
-
-    drop(warm_span);
 
     // Timed phase: warm-up then measured frames, pipelined, nothing else on the queue. CPU frame
     // time is the interval between consecutive frame completions. A fixed count ends after its
@@ -425,32 +498,6 @@ pub fn render_sampled(
     // The last compared frame of the timed phase was copied aside as it completed: the capture
     // phase renders the sequence again from frame 0 and must end on the same bits (determinism,
     // histories included), compared on the device.
-
-    // Energy window, with sensors only: the sequence goes on from the last timed frame, pipelined,
-    // while the sampler reads the energy counter, until it has stepped ENERGY_STEPS times or for
-    // the window's length at most.
-    let energy_ms = scenario.energy_window_ms.unwrap_or(ENERGY_WINDOW_MS);
-    if let Some(s) = sampler.filter(|_| energy_ms > 0.0) {
-        let _span = phases::span("energy window");
-        let first = last_done + 1;
-        let window = std::time::Duration::from_secs_f64(energy_ms / 1000.0);
-        let mut frames = 0u32;
-        s.begin_every(std::time::Duration::from_secs_f64(
-            ENERGY_SAMPLE_INTERVAL_MS / 1000.0,
-        ));
-        let start = Instant::now();
-        pipelined(
-            gpu,
-            scene,
-            scenario,
-            technique,
-            &mut timers,
-            (first..).take_while(|_| start.elapsed() < window && s.energy_steps() < ENERGY_STEPS),
-            None,
-            &mut |_, _| frames += 1,
-        );
-        rendered.energy_window = Some((s.end(), frames));
-    }
 
     // Capture phase: the same frames again, one at a time (rendering is deterministic, histories
     // included); each measured frame is counted (fragment invocations) and checked (non-finite
