@@ -533,11 +533,12 @@ pub fn render_sampled(
                 fm.fragment_invocations = stats;
             }
             let saved = scenario.save_frames.contains(&m);
-            // A saved frame nothing else on the CPU needs comes from the metrics' copy, encoded
-            // to sRGB on the device (a quarter of the float frame's bytes, no CPU encode).
+            // An sRGB frame the CPU needs (a saved frame; the frames of ColorVideoVDP, which
+            // reads CPU images) comes from the metrics' copy, encoded on the device (half the
+            // float frame's bytes, no CPU encode), unless the floats themselves are needed.
             let ldr_from_device =
-                saved && metric_copy.is_some() && !(keep.frames || keep.hdr || hash_frames);
-            let on_cpu = keep.frames || keep.hdr || (saved && !ldr_from_device) || hash_frames;
+                (saved || keep.frames) && metric_copy.is_some() && !(keep.hdr || hash_frames);
+            let on_cpu = keep.hdr || hash_frames || ((saved || keep.frames) && !ldr_from_device);
             let last = index + 1 == scenario.total_frames();
             let compare = last && compared_last.is_some();
             let output = technique.output();
