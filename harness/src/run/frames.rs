@@ -548,7 +548,13 @@ pub fn render_sampled(
             let compared = match blur.as_mut() {
                 Some(b) => {
                     let _span = phases::span("capture: motion blur");
-                    b.apply(gpu, scene, scenario, index, output)
+                    let (motion, motion_timers) = b.motion_pass();
+                    submit_frame(gpu, scene, scenario, motion, motion_timers, index);
+                    let _ = gpu.device.poll(wgpu::PollType::Wait {
+                        submission_index: None,
+                        timeout: None,
+                    });
+                    b.blur(gpu, output, history_valid(scenario, index))
                         .map_err(RenderError::MotionBlur)?
                 }
                 None => output,

@@ -13,9 +13,7 @@
 
 use crate::gpu::Gpu;
 use crate::render::motion_blur::MotionBlur;
-use crate::render::scene::SceneGpu;
 use crate::render::timers::Timers;
-use crate::scenario::Scenario;
 use crate::techniques::MotionPass;
 
 /// The scene's motion pass and the blur, for one scenario's frames.
@@ -34,31 +32,21 @@ impl BlurredCapture {
         })
     }
 
-    /// Frame `index` of the scenario's sequence (just rendered into `frame` by a technique),
-    /// blurred by the scene's motion of that frame; unblurred where the frame has no previous
-    /// frame in its shot. Waits for the GPU.
-    pub fn apply(
+    /// The scene's velocity pass, to render frame `index`'s motion with (`frames.rs` submits it
+    /// right after the technique's frame, with [`BlurredCapture::timers`]).
+    pub fn motion_pass(&mut self) -> (&mut dyn crate::render::renderer::Renderer, &mut Timers) {
+        (self.motion.renderer(), &mut self.timers)
+    }
+
+    /// `frame` blurred by the motion the velocity pass last rendered, or copied where the frame
+    /// has no previous frame in its shot (`enabled` false). Waits for the GPU.
+    pub fn blur(
         &mut self,
         gpu: &Gpu,
-        scene: &mut SceneGpu,
-        scenario: &Scenario,
-        index: u32,
         frame: &wgpu::Texture,
+        enabled: bool,
     ) -> Result<&wgpu::Texture, String> {
-        super::frames::submit_frame(
-            gpu,
-            scene,
-            scenario,
-            self.motion.renderer(),
-            &mut self.timers,
-            index,
-        );
-        let _ = gpu.device.poll(wgpu::PollType::Wait {
-            submission_index: None,
-            timeout: None,
-        });
         let _ = self.timers.try_collect(&gpu.queue);
-        let enabled = super::frames::history_valid(scenario, index);
         let motion = self.motion.motion().create_view(&Default::default());
         self.blur.blur(gpu, frame, &motion, enabled)
     }

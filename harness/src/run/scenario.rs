@@ -56,6 +56,12 @@ pub fn run(
         }
     };
 
+    // On a GPU the PNGs are written beside the next variant's work (a CPU adapter renders on
+    // the cores that would encode them).
+    if gpu.info.device_type != "cpu" {
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        images::defer_writes((cores / 4).clamp(1, 4));
+    }
     let needs_reference = scenario.needs_reference();
     // Where the metrics run: `metrics_device` (the scenario's, `--metrics-device`), else by
     // adapter. With the GPU's, frames stay on the device when they fit its buffers.
@@ -302,6 +308,8 @@ pub fn run(
             .position(|v| v.name == r.variant)
             .unwrap_or(usize::MAX)
     });
+    let failed = phases::time("images", images::finish_writes);
+    images::forget_failed(&mut results, &failed, run_dir);
     gates::apply(scenario, &mut results);
     finish(scenario, run_id, results, start)
 }
