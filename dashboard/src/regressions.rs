@@ -196,7 +196,12 @@ pub fn find(pts: &[WindowPoint], params: &Params) -> Vec<Found> {
         .change_points
         .iter()
         .map(|c| Found {
-            status: if analysis.points_after(c.index, pts.len()) < params.confirm_after {
+            // Confirmed only once the runs after the *latest* commit the change may lie at
+            // (its range's last candidate) number `confirm_after`: while the location is spread
+            // over the range the alert stays pending and follows the data.
+            status: if analysis.points_after(c.index.max(c.last_candidate), pts.len())
+                < params.confirm_after
+            {
                 PENDING
             } else {
                 CONFIRMED

@@ -226,3 +226,100 @@ fn an_outlier_splits_evenly_and_the_later_side_is_blamed() {
     assert!(p(19) + p(20) > 0.99, "{c:?}");
     assert_eq!(most_likely(&c).map(|i| c[i].0), Some(20));
 }
+
+/// The rule before issue 22's exact-commit work: squares (capped at 10σ) around the sides'
+/// medians. Kept here only to measure the new rule against it.
+fn old_locate(values: &[f64], k: usize, sigma: f64, lo: usize, hi: usize) -> Vec<(usize, f64)> {
+    let from = k.saturating_sub(LOCATE_WITHIN).max(lo).max(1);
+    let to = (k + LOCATE_WITHIN).min(hi).min(values.len() - 1);
+    let cap = LOCATE_CAP_SIGMAS * sigma;
+    let (ml, mr) = (level(&values[..k]), level(&values[k..]));
+    let kept: Vec<bool> = values
+        .iter()
+        .map(|v| (v - ml).abs() <= cap || (v - mr).abs() <= cap)
+        .collect();
+    let side = |r: std::ops::Range<usize>| -> Vec<f64> {
+        r.filter(|&i| kept[i]).map(|i| values[i]).collect()
+    };
+    let c2 = LOCATE_CAP_SIGMAS * LOCATE_CAP_SIGMAS;
+    let cost = |j: usize| {
+        let (l, r) = (side(0..j), side(j..values.len()));
+        let (ml, mr) = (level(&l), level(&r));
+        let c = |v: &f64, m: f64| ((v - m) / sigma).powi(2).min(c2);
+        l.iter().map(|v| c(v, ml)).sum::<f64>() + r.iter().map(|v| c(v, mr)).sum::<f64>()
+    };
+    let costs: Vec<(usize, f64)> = (from..=to).map(|j| (j, cost(j))).collect();
+    let best = costs.iter().map(|c| c.1).fold(f64::INFINITY, f64::min);
+    let w: Vec<(usize, f64)> = costs
+        .iter()
+        .map(|&(j, c)| (j, (-(c - best) / 2.0).exp()))
+        .collect();
+    let t: f64 = w.iter().map(|x| x.1).sum();
+    w.into_iter().map(|(j, x)| (j, x / t)).collect()
+}
+
+fn t5(rng: &mut Rng) -> f64 {
+    let chi2: f64 = (0..5).map(|_| rng.normal().powi(2)).sum();
+    rng.normal() / (chi2 / 5.0).sqrt() / (5.0f64 / 3.0).sqrt()
+}
+
+#[test]
+#[ignore]
+fn print_location_rules() {
+    for (name, heavy) in [("gauss", false), ("t5", true)] {
+        for step in [2.5, 3.0, 3.5, 4.0, 5.0] {
+            for after in [4usize, 8, 30] {
+                let mut rng = Rng::new(77);
+                let (mut old, mut new, trials) = (0, 0, 4000);
+                let (mut old_sure, mut new_sure) = (0, 0);
+                for _ in 0..trials {
+                    let v: Vec<f64> = (0..40 + after)
+                        .map(|i| {
+                            let e = if heavy { t5(&mut rng) } else { rng.normal() };
+                            1.0 + 0.02 * e + if i >= 40 { 0.02 * step } else { 0.0 }
+                        })
+                        .collect();
+                    let sigma = noise_sigma(&v);
+                    let hi = v.len() - 1;
+                    let pick = |c: Vec<(usize, f64)>| most_likely(&c).map(|i| c[i].0);
+                    let (o, n) = (old_locate(&v, 40, sigma, 3, hi), locate(&v, 40, sigma, 3, hi));
+                    let at = |c: &[(usize, f64)]| c.iter().find(|x| x.0 == 40).map_or(0.0, |x| x.1);
+                    old_sure += (at(&o) < 0.01) as usize;
+                    new_sure += (at(&n) < 0.01) as usize;
+                    old += (pick(o) == Some(40)) as usize;
+                    new += (pick(n) == Some(40)) as usize;
+                }
+                eprintln!("{name} {step}σ after {after}: old {old} new {new} of {trials}; truth below 1%: old {old_sure} new {new_sure}");
+            }
+        }
+    }
+}
+
+#[test]
+#[ignore]
+fn print_prefixes() {
+    let Ok(path) = std::env::var("I22_VALUES") else { return };
+    let v: Vec<f64> = std::fs::read_to_string(path)
+        .unwrap()
+        .split_whitespace()
+        .map(|x| x.parse().unwrap())
+        .collect();
+    let from: usize = std::env::var("I22_FROM").unwrap().parse().unwrap();
+    for n in from..=v.len() {
+        let cps = detect(&v[..n], &Params::default());
+        let d: Vec<String> = cps
+            .iter()
+            .map(|c| {
+                format!(
+                    "@{} {:+.3} [{}..{}] {:?}",
+                    c.index,
+                    c.relative_change,
+                    c.first_candidate,
+                    c.last_candidate,
+                    c.candidates.iter().map(|x| (x.0, (x.1 * 1000.0).round() / 1000.0)).collect::<Vec<_>>()
+                )
+            })
+            .collect();
+        eprintln!("n={n}: {}", d.join(" | "));
+    }
+}
