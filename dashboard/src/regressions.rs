@@ -199,9 +199,11 @@ pub fn find(pts: &[WindowPoint], params: &Params) -> Vec<Found> {
             // Confirmed only once the runs after the *latest* commit the change may lie at
             // (its range's last candidate) number `confirm_after`: while the location is spread
             // over the range the alert stays pending and follows the data.
-            status: if analysis.points_after(c.index.max(c.last_candidate), pts.len())
-                < params.confirm_after
-            {
+            status: if {
+                let after = analysis.points_after(c.index.max(c.last_candidate), pts.len());
+                after < params.confirm_after
+                    || (c.first_candidate != c.last_candidate && after < 2 * params.confirm_after)
+            } {
                 PENDING
             } else {
                 CONFIRMED
