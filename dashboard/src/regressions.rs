@@ -4,8 +4,9 @@
 //!
 //! One pass over a series ([`update_series`]):
 //! 1. reads the newest `window` points in commit order ([`window`], an index range of `points`);
-//! 2. runs [`crate::detect::analyse`] on them; a change point with fewer than `confirm_after` points
-//!    after it (in its environment segment) is *pending*, otherwise *confirmed*;
+//! 2. runs [`crate::detect::analyse`] on them; a change point is *pending* until `confirm_after`
+//!    points (in its environment segment) follow the last commit of its range, and twice that while
+//!    its range holds more than one commit; then *confirmed* ([`find`]);
 //! 3. reconciles ([`plan`]) with the series' stored alerts in the *open* part of the window (all of
 //!    it while the series is shorter than the window, else all but its oldest quarter, whose alerts
 //!    are final): a change is the alert stored at its commit, else the nearest open alert within
@@ -196,9 +197,11 @@ pub fn find(pts: &[WindowPoint], params: &Params) -> Vec<Found> {
         .change_points
         .iter()
         .map(|c| Found {
-            // Confirmed only once the runs after the *latest* commit the change may lie at
-            // (its range's last candidate) number `confirm_after`: while the location is spread
-            // over the range the alert stays pending and follows the data.
+            // Confirmed only once the runs after the *latest* commit the change may lie at (its
+            // range's last candidate) number `confirm_after`, and twice that while the range holds
+            // more than one commit: a confirmed alert stays where it was announced, so it is not
+            // announced while its location is still spread over the range (pending alerts follow
+            // the data).
             status: if {
                 let after = analysis.points_after(c.index.max(c.last_candidate), pts.len());
                 after < params.confirm_after

@@ -20,9 +20,11 @@
 //!    smallest residual sum of squares; the change then has fewer than `min_segment` points after it,
 //!    which keeps it *pending* (see [`Params::confirm_after`]).
 //! 6. Location apart from certainty: near the statistic's split, each split's probability comes
-//!    from a two-level fit that leaves outliers out ([`locate`]), so an outlier next to the step
-//!    cannot capture it; the most likely split is the change point, the shortest run of candidates
-//!    holding 95% is its commit range, and the size gets a 95% interval.
+//!    from the profile likelihood of a two-level model with Student-t noise that leaves outliers
+//!    out ([`locate`]), so an outlier next to the step cannot capture it and a noisy night beside
+//!    a small step is priced as heavy-tailed noise is; the most likely split is the change point,
+//!    the shortest run of candidates holding 95% is its commit range, and the size gets a 95%
+//!    interval.
 //! 7. Binary segmentation: accepted change points split the segment and both halves are tested
 //!    again.
 //!
@@ -44,8 +46,10 @@ pub struct Params {
     pub min_relative_change: f64,
     /// Values further than this many σ from the segment median are clipped to it.
     pub clip_sigmas: f64,
-    /// A change point with fewer points than this after it (in its environment segment) is
-    /// *pending*: shown, not notified, free to move or vanish as runs arrive.
+    /// A change point with fewer points than this after the last commit of its range (in its
+    /// environment segment; twice this while the range holds more than one commit, see
+    /// [`crate::regressions::find`]) is *pending*: shown, not notified, free to move or vanish
+    /// as runs arrive.
     pub confirm_after: usize,
     /// Detection reads the newest `window` points of a series; changes older than the open part of
     /// the window (see [`crate::regressions`]) are final.
