@@ -30,7 +30,7 @@ use std::collections::{BTreeMap, BTreeSet, HashMap};
 
 use crate::bundle::RunBundle;
 use crate::db::{transaction, Backend, Connection, Value};
-use crate::detect::{analyse, ChangePoint, Params};
+use crate::detect::{analyse, Analysis, ChangePoint, Params};
 use crate::store::alerts::{self, DetectionStatus, Placement};
 use crate::store::ingest::{ingest_in_transaction, Ingested};
 use crate::store::StoreError;
@@ -197,23 +197,28 @@ pub fn find(pts: &[WindowPoint], params: &Params) -> Vec<Found> {
         .change_points
         .iter()
         .map(|c| Found {
-            // Confirmed only once the runs after the *latest* commit the change may lie at (its
-            // range's last candidate) number `confirm_after`, and twice that while the range holds
-            // more than one commit: a confirmed alert stays where it was announced, so it is not
-            // announced while its location is still spread over the range (pending alerts follow
-            // the data).
-            status: if {
-                let after = analysis.points_after(c.index.max(c.last_candidate), pts.len());
-                after < params.confirm_after
-                    || (c.first_candidate != c.last_candidate && after < 2 * params.confirm_after)
-            } {
-                PENDING
-            } else {
-                CONFIRMED
-            },
+            status: status(&analysis, c, pts.len(), params),
             change: c.clone(),
         })
         .collect()
+}
+
+/// Confirmed only once the runs after the *latest* commit change `c` may lie at (its range's
+/// last candidate) number `confirm_after`, and twice that while the range holds more than one
+/// commit: a confirmed alert stays where it was announced, so it is not announced while its
+/// location is still spread over the range (pending alerts follow the data).
+fn status(analysis: &Analysis, c: &ChangePoint, len: usize, params: &Params) -> DetectionStatus {
+    let after = analysis.points_after(c.index.max(c.last_candidate), len);
+    let needed = if c.first_candidate == c.last_candidate {
+        params.confirm_after
+    } else {
+        2 * params.confirm_after
+    };
+    if after < needed {
+        PENDING
+    } else {
+        CONFIRMED
+    }
 }
 
 /// Index of the first point whose alerts are still open: 0 while the series fits in the window.

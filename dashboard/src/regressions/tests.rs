@@ -126,8 +126,14 @@ fn a_change_spread_over_two_commits_waits_for_its_location() {
         assert_eq!(f.len(), 1, "{f:?}");
         let c = &f[0].change;
         assert_eq!((c.first_candidate, c.last_candidate), (30, 31), "{c:?}");
-        assert!(c.probability_at(30) > 0.4 && c.probability_at(31) > 0.4, "{c:?}");
-        assert_eq!(f[0].status, PENDING, "{after_second} runs after the second commit");
+        assert!(
+            c.probability_at(30) > 0.4 && c.probability_at(31) > 0.4,
+            "{c:?}"
+        );
+        assert_eq!(
+            f[0].status, PENDING,
+            "{after_second} runs after the second commit"
+        );
         v.push(1.1);
     }
     let f = find(&points(&v), &params);
