@@ -4,8 +4,9 @@
 //!
 //! One pass over a series ([`update_series`]):
 //! 1. reads the newest `window` points in commit order ([`window`], an index range of `points`);
-//! 2. runs [`crate::detect::analyse`] on them; a change point with fewer than `confirm_after` points
-//!    after it (in its environment segment) is *pending*, otherwise *confirmed*;
+//! 2. runs [`crate::detect::analyse`] on them; a change point is *pending* until `confirm_after`
+//!    points (in its environment segment) follow the last commit of its range, and twice that while
+//!    its range holds more than one commit; then *confirmed* ([`find`]);
 //! 3. reconciles ([`plan`]) with the series' stored alerts in the *open* part of the window (all of
 //!    it while the series is shorter than the window, else all but its oldest quarter, whose alerts
 //!    are final): a change is the alert stored at its commit, else the nearest open alert within
@@ -29,7 +30,7 @@ use std::collections::{BTreeMap, BTreeSet, HashMap};
 
 use crate::bundle::RunBundle;
 use crate::db::{transaction, Backend, Connection, Value};
-use crate::detect::{analyse, ChangePoint, Params};
+use crate::detect::{analyse, Analysis, ChangePoint, Params};
 use crate::store::alerts::{self, DetectionStatus, Placement};
 use crate::store::ingest::{ingest_in_transaction, Ingested};
 use crate::store::StoreError;
@@ -196,14 +197,28 @@ pub fn find(pts: &[WindowPoint], params: &Params) -> Vec<Found> {
         .change_points
         .iter()
         .map(|c| Found {
-            status: if analysis.points_after(c.index, pts.len()) < params.confirm_after {
-                PENDING
-            } else {
-                CONFIRMED
-            },
+            status: status(&analysis, c, pts.len(), params),
             change: c.clone(),
         })
         .collect()
+}
+
+/// Confirmed only once the runs after the *latest* commit change `c` may lie at (its range's
+/// last candidate) number `confirm_after`, and twice that while the range holds more than one
+/// commit: a confirmed alert stays where it was announced, so it is not announced while its
+/// location is still spread over the range (pending alerts follow the data).
+fn status(analysis: &Analysis, c: &ChangePoint, len: usize, params: &Params) -> DetectionStatus {
+    let after = analysis.points_after(c.index.max(c.last_candidate), len);
+    let needed = if c.first_candidate == c.last_candidate {
+        params.confirm_after
+    } else {
+        2 * params.confirm_after
+    };
+    if after < needed {
+        PENDING
+    } else {
+        CONFIRMED
+    }
 }
 
 /// Index of the first point whose alerts are still open: 0 while the series fits in the window.

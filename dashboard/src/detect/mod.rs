@@ -20,9 +20,11 @@
 //!    smallest residual sum of squares; the change then has fewer than `min_segment` points after it,
 //!    which keeps it *pending* (see [`Params::confirm_after`]).
 //! 6. Location apart from certainty: near the statistic's split, each split's probability comes
-//!    from a two-level fit that leaves outliers out ([`locate`]), so an outlier next to the step
-//!    cannot capture it; the most likely split is the change point, the shortest run of candidates
-//!    holding 95% is its commit range, and the size gets a 95% interval.
+//!    from the profile likelihood of a two-level model with Student-t noise that leaves outliers
+//!    out ([`locate`]), so an outlier next to the step cannot capture it and a noisy night beside
+//!    a small step is priced as heavy-tailed noise is; the most likely split is the change point,
+//!    the shortest run of candidates holding 95% is its commit range, and the size gets a 95%
+//!    interval.
 //! 7. Binary segmentation: accepted change points split the segment and both halves are tested
 //!    again.
 //!
@@ -44,8 +46,10 @@ pub struct Params {
     pub min_relative_change: f64,
     /// Values further than this many σ from the segment median are clipped to it.
     pub clip_sigmas: f64,
-    /// A change point with fewer points than this after it (in its environment segment) is
-    /// *pending*: shown, not notified, free to move or vanish as runs arrive.
+    /// A change point with fewer points than this after the last commit of its range (in its
+    /// environment segment; twice this while the range holds more than one commit, see
+    /// [`crate::regressions::find`]) is *pending*: shown, not notified, free to move or vanish
+    /// as runs arrive.
     pub confirm_after: usize,
     /// Detection reads the newest `window` points of a series; changes older than the open part of
     /// the window (see [`crate::regressions`]) are final.
@@ -110,27 +114,40 @@ impl ChangePoint {
 /// Candidate splits tested on each side of the statistic's split by [`locate`].
 pub const LOCATE_WITHIN: usize = 3;
 /// In [`locate`], a point further than this many σ from *both* levels is an outlier: it says
-/// nothing about where the change is and is left out of the fit; a residual beyond it counts as
-/// this many σ. Far enough that noise does not reach it even when σ, estimated from a few dozen
+/// nothing about where the change is and is left out of the fit. Far enough that noise does not reach it even when σ, estimated from a few dozen
 /// points, comes out at half the true value (a 4.6σ night at the new level of a 50σ step is still
 /// the new level's), close enough that a whole-run outlier (1.5x: 25σ at 2% noise) always does.
 pub const LOCATE_CAP_SIGMAS: f64 = 10.0;
 
+/// Degrees of freedom of the Student-t noise law of [`locate`]: tails heavy enough that a 4σ
+/// night costs what it is under timing noise (a few per hundred runs, not one in 30,000), the
+/// value Lange, Little and Taylor (1989) recommend when ν is not estimated.
+pub const LOCATE_NU: f64 = 4.0;
+
 /// Where a change found near split `k` lies: the probability of each split `j` within
-/// [`LOCATE_WITHIN`] of `k` (keeping `lo <= j <= hi`), from the likelihood of a two-level model
-/// with Gaussian noise of σ `sigma` (levels are the medians of the two sides). Outliers (see
-/// [`LOCATE_CAP_SIGMAS`]) are left out, other residuals capped there.
+/// [`LOCATE_WITHIN`] of the most likely split (itself within twice that of `k`; always
+/// `lo <= j <= hi`), from the profile likelihood of a
+/// two-level model with Student-t noise ([`LOCATE_NU`] degrees of freedom, standard deviation
+/// `sigma`): each side's level is its maximum-likelihood estimate under that law, so every
+/// split is priced at its best fit. Outliers (see [`LOCATE_CAP_SIGMAS`]) are left out.
 ///
-/// With plain squares, a one-night outlier two runs before a +10% step costs less on the "after"
-/// side and the step was blamed on the outlier; with squares capped at 3σ, a noisy night at the
-/// new level of a large step cost as much as on the old level's side and the step was blamed a
-/// night late. Left out, an outlier costs nothing on either side: splits that differ only by the
-/// side of outliers are equally likely, and of those the latest is the change point, the first run
-/// that shows the new level, so a step is never blamed on the outlier the night before it
-/// (issue 22: "outliers next to a step do not move the split onto them").
+/// History (issue 22). With plain squares, a one-night outlier two runs before a +10% step cost
+/// less on the "after" side and the step was blamed on the outlier; with squares capped at 3σ, a
+/// noisy night at the new level of a large step cost as much as on the old level's side and the
+/// step was blamed a night late. Squares around the sides' *medians* were neither Gaussian nor
+/// robust maximum likelihood: moving one point across the split moved the short side's median by
+/// up to half the gap between two of its points, which flipped a 3σ step back and forth between
+/// two commits with "0.00%" at each in turn, and put a step whose night before it was 1.2σ high
+/// on that night. Left out, an outlier costs nothing on either side: splits that differ only by
+/// the side of outliers are equally likely, and of those the latest is the change point, the
+/// first run that shows the new level, so a step is never blamed on the outlier the night before
+/// it ("outliers next to a step do not move the split onto them").
 pub fn locate(values: &[f64], k: usize, sigma: f64, lo: usize, hi: usize) -> Vec<(usize, f64)> {
-    let from = k.saturating_sub(LOCATE_WITHIN).max(lo).max(1);
-    let to = (k + LOCATE_WITHIN)
+    // Searched twice as far, then centred on the most likely split: the statistic's split is a
+    // noisier estimate of the same change, and a window centred on it moved by a few points as
+    // runs arrived, giving a split 0% one night (outside the window) and 97% the next.
+    let from = k.saturating_sub(2 * LOCATE_WITHIN).max(lo).max(1);
+    let to = (k + 2 * LOCATE_WITHIN)
         .min(hi)
         .min(values.len().saturating_sub(1));
     if from > to {
@@ -150,21 +167,71 @@ pub fn locate(values: &[f64], k: usize, sigma: f64, lo: usize, hi: usize) -> Vec
             v
         }
     };
-    let c2 = LOCATE_CAP_SIGMAS * LOCATE_CAP_SIGMAS;
-    let cost = |j: usize| {
-        let (l, r) = (side(0..j), side(j..values.len()));
-        let (ml, mr) = (level(&l), level(&r));
-        let c = |v: &f64, m: f64| ((v - m) / sigma).powi(2).min(c2);
-        l.iter().map(|v| c(v, ml)).sum::<f64>() + r.iter().map(|v| c(v, mr)).sum::<f64>()
-    };
+    let noise = StudentT::with_sd(sigma);
+    let cost = |j: usize| noise.deviance(&side(0..j)) + noise.deviance(&side(j..values.len()));
     let costs: Vec<(usize, f64)> = (from..=to).map(|j| (j, cost(j))).collect();
     let best = costs.iter().map(|c| c.1).fold(f64::INFINITY, f64::min);
+    // The latest of equals (see `most_likely`).
+    let centre = costs.iter().rev().find(|c| c.1 == best).map_or(k, |c| c.0);
     let weights: Vec<(usize, f64)> = costs
         .iter()
+        .filter(|c| c.0.abs_diff(centre) <= LOCATE_WITHIN)
         .map(|&(j, c)| (j, (-(c - best) / 2.0).exp()))
         .collect();
     let total: f64 = weights.iter().map(|w| w.1).sum();
     weights.into_iter().map(|(j, w)| (j, w / total)).collect()
+}
+
+/// The Student-t noise law of [`locate`]: [`LOCATE_NU`] degrees of freedom, scale `s`.
+#[derive(Clone, Copy, Debug)]
+pub struct StudentT {
+    s: f64,
+}
+
+impl StudentT {
+    /// The law whose standard deviation is `sd` (scale sd·√((ν−2)/ν)).
+    pub fn with_sd(sd: f64) -> StudentT {
+        StudentT {
+            s: sd * ((LOCATE_NU - 2.0) / LOCATE_NU).sqrt(),
+        }
+    }
+
+    /// −2 log-likelihood of `v` around `m`, up to a constant: Σ (ν+1)·ln(1 + r²/ν), r = (x−m)/s.
+    pub fn deviance_at(&self, v: &[f64], m: f64) -> f64 {
+        v.iter()
+            .map(|x| {
+                let r = (x - m) / self.s;
+                (LOCATE_NU + 1.0) * (r * r / LOCATE_NU).ln_1p()
+            })
+            .sum()
+    }
+
+    /// The maximum-likelihood level of `v` (iteratively reweighted means from the median: the
+    /// weights (ν+1)/(ν+r²) fall with the residual, so a far point hardly pulls it).
+    pub fn level(&self, v: &[f64]) -> f64 {
+        let mut m = level(v);
+        for _ in 0..100 {
+            let (mut sw, mut swx) = (0.0, 0.0);
+            for &x in v {
+                let r = (x - m) / self.s;
+                let w = (LOCATE_NU + 1.0) / (LOCATE_NU + r * r);
+                sw += w;
+                swx += w * x;
+            }
+            let next = swx / sw;
+            let done = (next - m).abs() <= 1e-9 * self.s;
+            m = next;
+            if done {
+                break;
+            }
+        }
+        m
+    }
+
+    /// −2 log-likelihood of `v` at its maximum-likelihood level.
+    pub fn deviance(&self, v: &[f64]) -> f64 {
+        self.deviance_at(v, self.level(v))
+    }
 }
 
 /// The most likely of `candidates`, the latest of equals (see [`locate`]).

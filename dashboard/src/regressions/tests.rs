@@ -97,3 +97,51 @@ fn alerts_before_the_open_part_are_final() {
     );
     assert_eq!(actions, vec![]);
 }
+
+fn points(values: &[f64]) -> Vec<WindowPoint> {
+    values
+        .iter()
+        .enumerate()
+        .map(|(i, &value)| WindowPoint {
+            run_pk: i as i64 + 1,
+            environment: 0,
+            value,
+        })
+        .collect()
+}
+
+/// A change is confirmed once `confirm_after` runs follow the *latest* commit it may lie at, and
+/// while its range holds more than one commit, twice that: a night exactly between the levels
+/// leaves it at either of two commits, so with 4 runs after the first it is still pending (it was
+/// confirmed on the first before, and a confirmed alert stays where it was announced), and it is
+/// confirmed with 8 runs after the second.
+#[test]
+fn a_change_spread_over_two_commits_waits_for_its_location() {
+    let mut v = vec![1.0; 30];
+    v.push(1.05);
+    v.extend([1.1; 3]);
+    let params = Params::default();
+    for after_second in 3..8 {
+        let f = find(&points(&v), &params);
+        assert_eq!(f.len(), 1, "{f:?}");
+        let c = &f[0].change;
+        assert_eq!((c.first_candidate, c.last_candidate), (30, 31), "{c:?}");
+        assert!(
+            c.probability_at(30) > 0.4 && c.probability_at(31) > 0.4,
+            "{c:?}"
+        );
+        assert_eq!(
+            f[0].status, PENDING,
+            "{after_second} runs after the second commit"
+        );
+        v.push(1.1);
+    }
+    let f = find(&points(&v), &params);
+    assert_eq!(f[0].status, CONFIRMED, "{f:?}");
+    // A change whose range is one commit is confirmed with 4 runs after it.
+    let mut w = vec![1.0; 30];
+    w.extend([1.1; 3]);
+    assert_eq!(find(&points(&w), &params)[0].status, PENDING);
+    w.push(1.1);
+    assert_eq!(find(&points(&w), &params)[0].status, CONFIRMED);
+}
