@@ -57,9 +57,10 @@ fn view_depth(d: f32) -> f32 {
 
 // Section 5.1's layout: 32 threads per tile, each owning 8 pixels, here a column of 8: thread
 // (x, h) owns pixels (x, 8h) to (x, 8h + 7) of the tile. Each sums its pixels in order, then the
-// 32 partial sums are reduced as a tree (the CPU model reduces in the same order). A one-thread-
-// per-pixel variant (256 threads reading, 32 summing) measured slower on an H200 at 4K (0.135
-// against 0.106 ms): the loads below are batched per thread instead.
+// 32 partial sums are reduced as a tree (the CPU model reduces in the same order). Measured on an
+// H200 at 3840x2160 (rates pass alone): this layout 0.106 ms; one thread per pixel for the reads
+// (256 threads, 32 summing) 0.135 ms; the reads batched eight per thread in arrays 0.196 ms
+// (register pressure lowers occupancy below the 32 one-warp tiles per SM this layout reaches).
 @compute @workgroup_size(16, 2)
 fn main(
     @builtin(workgroup_id) tile: vec3<u32>,
@@ -70,49 +71,25 @@ fn main(
     var s = vec4<f32>(0.0);
     var mn = vec2<f32>(1e30);
     var l: array<f32, 8>;
-    // The reads in three rounds of eight independent loads (this frame's depth; its motion;
-    // the reprojected colour and depth), so that each thread keeps eight in flight: the pass is
-    // bound by the latency of these dependent reads, not by arithmetic. Coordinates are clamped
-    // and loads made unconditionally; the values are used exactly where the model uses them.
-    var d: array<f32, 8>;
-    var mv: array<vec4<f32>, 8>;
-    var pc: array<vec3<f32>, 8>;
-    var pd: array<f32, 8>;
-    var c: array<vec2<i32>, 8>;
-    for (var k = 0u; k < 8u; k = k + 1u) {
-        let p = vec2<i32>(tile.xy * 16u + vec2<u32>(lid.x, lid.y * 8u + k));
-        d[k] = textureLoad(depth, min(p, size - 1), 0);
-    }
-    for (var k = 0u; k < 8u; k = k + 1u) {
-        let p = vec2<i32>(tile.xy * 16u + vec2<u32>(lid.x, lid.y * 8u + k));
-        mv[k] = textureLoad(motion, min(p, size - 1), 0);
-    }
-    for (var k = 0u; k < 8u; k = k + 1u) {
-        let p = vec2<i32>(tile.xy * 16u + vec2<u32>(lid.x, lid.y * 8u + k));
-        let m = select(vec4<f32>(0.0), mv[k], d[k] > 0.0);
-        let q = floor(vec2<f32>(p) + 0.5 - m.xy);
-        c[k] = vec2<i32>(min(max(q, vec2<f32>(0.0)), vec2<f32>(size - 1)));
-        pc[k] = textureLoad(prev_color, c[k], 0).rgb;
-        pd[k] = textureLoad(prev_depth, c[k], 0);
-    }
     for (var k = 0u; k < 8u; k = k + 1u) {
         let ly = lid.y * 8u + k;
         let p = vec2<i32>(tile.xy * 16u + vec2<u32>(lid.x, ly));
         l[k] = 0.0;
         if all(p < size) {
-            let covered = d[k] > 0.0;
+            let covered = textureLoad(depth, p, 0) > 0.0;
             var m = vec4<f32>(0.0);
             if covered {
-                m = mv[k];
+                m = textureLoad(motion, p, 0);
             }
             let q = floor(vec2<f32>(p) + 0.5 - m.xy);
             let on_screen = all(q >= vec2<f32>(0.0)) && all(q < vec2<f32>(size));
-            l[k] = luma(max(pc[k], vec3<f32>(0.0)));
+            let c = vec2<i32>(min(max(q, vec2<f32>(0.0)), vec2<f32>(size - 1)));
+            l[k] = luma(max(textureLoad(prev_color, c, 0).rgb, vec3<f32>(0.0)));
             if covered {
                 mn = min(mn, abs(m.xy));
                 var occluded = true;
                 if on_screen {
-                    let prev = view_depth(pd[k]);
+                    let prev = view_depth(textureLoad(prev_depth, c, 0));
                     let expected = view_depth(m.z);
                     occluded = abs(prev - expected) > rp.more.y * expected;
                 }
