@@ -128,6 +128,14 @@ fn the_energy_window_is_range_checked_and_zero_turns_it_off() {
     let src = VALID.replace("measured = 3", "measured = 3\nenergy_window_ms = 0");
     let s = scenario::parse(Path::new("s.toml"), &src).unwrap();
     assert_eq!(s.energy_window_ms, Some(0.0));
+    // The steps that end it: 2 to 600, a located error otherwise.
+    let src = VALID.replace("measured = 3", "measured = 3\nenergy_steps = 1");
+    let e = errors_of(&src);
+    assert_eq!(e.len(), 1, "{e:?}");
+    assert!(e[0].contains("`frames.energy_steps`"), "{e:?}");
+    let src = VALID.replace("measured = 3", "measured = 3\nenergy_steps = 6");
+    let s = scenario::parse(Path::new("s.toml"), &src).unwrap();
+    assert_eq!(s.energy_steps, Some(6));
 }
 
 #[test]

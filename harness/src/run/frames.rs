@@ -336,6 +336,7 @@ pub fn render_sampled(
                 ENERGY_SAMPLE_INTERVAL_MS / 1000.0,
             ));
             let cap_ms = warmup_ms + energy_ms;
+            let steps_wanted = scenario.energy_steps.unwrap_or(ENERGY_STEPS);
             let go_on = || {
                 // At the top clock, or warmed up as long as the clock warm-up may last.
                 let at_top = ms(start) >= warmup_ms
@@ -356,7 +357,7 @@ pub fn render_sampled(
                     )));
                 }
                 let done = since.get().is_some_and(|(t, _, steps, _)| {
-                    (s.energy_steps() - steps >= ENERGY_STEPS && ms(t) >= CLOCK_SETTLED_MS
+                    (s.energy_steps() - steps >= steps_wanted && ms(t) >= CLOCK_SETTLED_MS
                         || ms(t) >= energy_ms)
                         && ms(start) >= MIN_CLOCK_WARMUP_MS
                 });

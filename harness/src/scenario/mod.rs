@@ -42,6 +42,9 @@ pub struct Scenario {
     /// The energy window after the timed frames where sensors exist, in milliseconds (0: none);
     /// `None` is [`crate::conditions::ENERGY_WINDOW_MS`].
     pub energy_window_ms: Option<f64>,
+    /// `frames.energy_steps`: the energy counter's steps that end the energy window; `None` is
+    /// [`crate::conditions::ENERGY_STEPS`].
+    pub energy_steps: Option<u32>,
     pub measured_frames: u32,
     /// `frames.measured = "auto"`: timed frames go on past `measured_frames` (then the rule's
     /// `min`) until the median GPU frame time is precise enough or the cap is reached; metrics

@@ -54,6 +54,8 @@ pub struct RawFrames {
     pub warmup_ms: Option<f64>,
     /// Energy window after the timed frames, where sensors exist; 0 turns it off.
     pub energy_window_ms: Option<f64>,
+    /// Energy counter steps that end the energy window (default 3).
+    pub energy_steps: Option<i64>,
     /// Frames timed and compared (an integer, default 8), or `"auto"` / `{ min, max, precision }`.
     pub measured: Option<RawMeasured>,
     /// Measured-frame indices saved as PNG; negative counts from the end. Default `[-1]`.

@@ -279,6 +279,10 @@ fn build(ctx: &mut Ctx, path: &Path, raw: RawScenario) -> Scenario {
             format!("{ms} is out of range: expected 0 to 60000 milliseconds"),
         );
     }
+    let energy_steps = raw
+        .frames
+        .energy_steps
+        .map(|n| ctx.count(&frames.key("energy_steps"), n, 2, 600));
     let (measured_frames, auto) = measured(ctx, &frames.key("measured"), &raw.frames.measured);
     let save_frames = save_frames(
         ctx,
@@ -329,6 +333,7 @@ fn build(ctx: &mut Ctx, path: &Path, raw: RawScenario) -> Scenario {
         warmup_frames,
         warmup_ms,
         energy_window_ms,
+        energy_steps,
         measured_frames,
         auto,
         save_frames,
