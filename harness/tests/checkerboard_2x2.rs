@@ -16,7 +16,7 @@ use tessera::render::timers::Timers;
 use tessera::scenario::Scenario;
 use tessera::techniques::checkerboard_2x2::model::{self, shaded, Inputs, Source};
 use tessera::techniques::checkerboard_2x2::{
-    Bindings, Checkerboard2x2Gpu, Clamp, FrameParams, Options, Reconstitution,
+    Bindings, Checkerboard2x2Gpu, Clamp, FrameParams, Options, Precondition, Reconstitution,
 };
 use tessera::techniques::Variant;
 use tessera::techniques::{self, BuildContext, Target};
@@ -40,12 +40,14 @@ fn variant(params: &[(&str, ParamValue)]) -> Variant {
     common::variant("checkerboard-2x2", params)
 }
 
+/// The report's layout (5.3.6: standby depth buffers copied each frame), for the memory table.
 fn options(clamp: Clamp, motion_coherency: bool) -> Options {
     Options {
         clamp,
         motion_threshold: 1e-7,
         blend_min: 0.005,
         blend_max: 0.1,
+        precondition: Precondition::Copy,
         motion_coherency,
     }
 }
@@ -640,7 +642,13 @@ fn the_depth_test_rejects_half_the_samples_native_shades() {
     let gpu = common::gpu();
     let s = common::scenario(&common::TINY.replace("[48, 32]", "[64, 48]"));
     let mut scene = SceneGpu::new(&gpu.device, &gpu.queue, &s).unwrap();
-    let t = Checkerboard2x2Gpu::new(&gpu, &variant(&[]), s.width, s.height);
+    // The standby checks exist with `precondition = "copy"`.
+    let t = Checkerboard2x2Gpu::new(
+        &gpu,
+        &variant(&[("precondition", ParamValue::Str("copy".into()))]),
+        s.width,
+        s.height,
+    );
     let native = techniques::build(
         &common::variant("native", &[]),
         &BuildContext::new(&gpu, &scene, Target::new(s.width, s.height, true)),
@@ -966,4 +974,39 @@ fn renders_bitwise_identically_twice() {
         assert!(bits(&fa.data) == bits(&fb.data), "two renders differ");
     }
     assert_eq!(a.non_finite, 0);
+}
+
+#[test]
+fn the_mask_drawn_each_frame_gives_the_copied_masks_frames_and_keeps_no_standby_buffers() {
+    let gpu = common::gpu();
+    let s = common::scenario(&common::TINY.replace("measured = 2", "measured = 4"));
+    let drawn = render(&gpu, &s, &variant(&[]));
+    let copied = render(
+        &gpu,
+        &s,
+        &variant(&[("precondition", ParamValue::Str("copy".into()))]),
+    );
+    assert!(drawn.hdr_frames.len() >= 2);
+    let bits = |d: &[f32]| d.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    for (i, (a, b)) in drawn.hdr_frames.iter().zip(&copied.hdr_frames).enumerate() {
+        assert!(
+            bits(&a.data) == bits(&b.data),
+            "frame {i}: drawn and copied masks differ"
+        );
+    }
+    let names = |o: &Options| {
+        tessera::techniques::checkerboard_2x2::graph(64, 48, o)
+            .plan()
+            .unwrap()
+            .records()
+            .into_iter()
+            .map(|r| r.name)
+            .collect::<Vec<_>>()
+    };
+    let mut draw = options(Clamp::Blended, true);
+    draw.precondition = Precondition::Draw;
+    assert!(!names(&draw)
+        .iter()
+        .any(|n| n.starts_with("depth_white") || n.starts_with("depth_black")));
+    assert!(names(&options(Clamp::Blended, true)).contains(&"depth_white".to_string()));
 }

@@ -28,7 +28,7 @@
 
 use std::collections::HashMap;
 
-use super::Options;
+use super::{Options, Precondition};
 use crate::gpu::Gpu;
 use crate::render::graph::{Graph, PassKind, Plan, TextureDesc};
 use crate::render::kit::{
@@ -53,9 +53,12 @@ pub fn graph(width: u32, height: u32, options: &Options) -> Graph {
         layers: 1,
     };
     let mut g = Graph::default();
-    g.resource("depth_white", full(DEPTH_FORMAT))
-        .resource("depth_black", full(DEPTH_FORMAT))
-        .resource("depth", full(DEPTH_FORMAT))
+    let copy = options.precondition == Precondition::Copy;
+    if copy {
+        g.resource("depth_white", full(DEPTH_FORMAT))
+            .resource("depth_black", full(DEPTH_FORMAT));
+    }
+    g.resource("depth", full(DEPTH_FORMAT))
         .resource("depth_history", full(DEPTH_FORMAT))
         .resource("scene_color", full(COLOR_FORMAT))
         .resource("motion_depth", full(DEPTH_FORMAT))
@@ -63,20 +66,20 @@ pub fn graph(width: u32, height: u32, options: &Options) -> Graph {
         .resource("motion_history", full(COLOR_FORMAT))
         .resource("color", full(COLOR_FORMAT))
         .resource("color_history", full(COLOR_FORMAT));
-    let checks = ["depth_white", "depth_black"];
-    g.pass("precondition", PassKind::Copy, &checks, &["depth"])
+    // `copy` reads the standby checks; `draw` writes the mask itself (a render pass).
+    let (checks, kind): (&[&str], _) = if copy {
+        (&["depth_white", "depth_black"], PassKind::Copy)
+    } else {
+        (&[], PassKind::Render)
+    };
+    g.pass("precondition", kind, checks, &["depth"])
         .pass(
             "scene",
             PassKind::Render,
             &["depth"],
             &["scene_color", "depth"],
         )
-        .pass(
-            "motion_precondition",
-            PassKind::Copy,
-            &checks,
-            &["motion_depth"],
-        )
+        .pass("motion_precondition", kind, checks, &["motion_depth"])
         .pass(
             "motion",
             PassKind::Render,
@@ -245,6 +248,8 @@ pub struct Checkerboard2x2Gpu {
     _dummies: Vec<wgpu::Texture>,
     /// Render-target views per side: (scene colour, scene depth, motion, motion depth).
     views: PingPong<[wgpu::TextureView; 4]>,
+    /// `precondition = "draw"`: the white and black mask pipelines (`mask.wgsl`).
+    masks: Option<[wgpu::RenderPipeline; 2]>,
     last: Option<LastFrame>,
 }
 
@@ -270,7 +275,14 @@ impl Checkerboard2x2Gpu {
             .expect("built-in graphs are well formed");
         // Depth textures are filled by copies (pre-conditioning): every texture is a copy target.
         let textures = allocate_with(device, &plan, wgpu::TextureUsages::COPY_DST);
-        draw_checks(gpu, &textures["depth_white"], &textures["depth_black"]);
+        let masks = mask_pipelines(gpu);
+        let masks = match (textures.get("depth_white"), textures.get("depth_black")) {
+            (Some(white), Some(black)) => {
+                draw_checks(gpu, &masks, white, black);
+                None
+            }
+            _ => Some(masks),
+        };
 
         let dummy = |format| placeholder_texture(device, "no history", format);
         let mut dummies = Vec::new();
@@ -345,6 +357,7 @@ impl Checkerboard2x2Gpu {
             bind_groups: PingPong::new([b0, b1]),
             _dummies: dummies,
             views: PingPong::new([v0, v1]),
+            masks,
             last: None,
         }
     }
@@ -403,16 +416,17 @@ impl Renderer for Checkerboard2x2Gpu {
         let parity = self.bind_groups.side();
         // One view serves both render passes: no jitter, full resolution.
         scene.write_view(&gpu.queue, 0, &View::whole(frame.time, frame.prev_time));
-        // This frame's check pattern and the other one (the inverse mask).
-        let checks = PingPong::new([&self.textures["depth_white"], &self.textures["depth_black"]]);
-        let (check, inverse) = checks.at(parity);
         let [scene_color, depth, motion, motion_depth] = self.views.current();
-        // 5.3.6: the scene depth starts as this frame's check pattern ...
-        copy_depth(
+        // The scene depth starts as this frame's check pattern (white on even frames), the
+        // motion depth as the other one (the inverse mask): drawn now, or copied from the
+        // standby buffers (5.3.6).
+        let (check, inverse) = (parity, 1 - parity);
+        self.precondition(
             timers,
             encoder,
             "precondition",
             check,
+            depth,
             self.pair_texture(1, parity),
         );
         record_scene_pass_on(
@@ -425,12 +439,12 @@ impl Renderer for Checkerboard2x2Gpu {
             depth,
             wgpu::LoadOp::Load,
         );
-        // ... and the motion depth as the other one (the inverse mask).
-        copy_depth(
+        self.precondition(
             timers,
             encoder,
             "motion_precondition",
             inverse,
+            motion_depth,
             &self.textures["motion_depth"],
         );
         record_scene_pass_on(
@@ -465,18 +479,16 @@ impl Renderer for Checkerboard2x2Gpu {
     }
 }
 
-/// Draws the white and black checks once (5.3.2, moved to start-up in 5.3.6).
-fn draw_checks(gpu: &Gpu, white: &wgpu::Texture, black: &wgpu::Texture) {
+/// The white and black mask pipelines of `mask.wgsl` (5.3.2): a full-screen triangle writing, with
+/// depth compare Always, the nearest depth in masked blocks and the clear value in free ones.
+fn mask_pipelines(gpu: &Gpu) -> [wgpu::RenderPipeline; 2] {
     let device = &gpu.device;
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("checkerboard_2x2_mask.wgsl"),
         source: wgpu::ShaderSource::Wgsl(MASK_WGSL.into()),
     });
-    let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-        label: Some("checkerboard-2x2 checks"),
-    });
-    for (texture, entry) in [(white, "fs_white"), (black, "fs_black")] {
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+    ["fs_white", "fs_black"].map(|entry| {
+        device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some(entry),
             layout: None,
             vertex: wgpu::VertexState {
@@ -502,27 +514,83 @@ fn draw_checks(gpu: &Gpu, white: &wgpu::Texture, black: &wgpu::Texture) {
             multisample: Default::default(),
             multiview_mask: None,
             cache: None,
-        });
-        let view = texture.create_view(&Default::default());
+        })
+    })
+}
+
+/// Records the depth-only pass that clears `view` and draws mask `pipeline` over it, timed as
+/// `name` when `timers` are given.
+fn draw_mask(
+    encoder: &mut wgpu::CommandEncoder,
+    timers: Option<&Timers>,
+    name: &'static str,
+    pipeline: &wgpu::RenderPipeline,
+    view: &wgpu::TextureView,
+) {
+    let q = timers.map(|t| t.begin(name, encoder));
+    {
         let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some(entry),
+            label: Some(name),
             color_attachments: &[],
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &view,
+                view,
                 depth_ops: Some(wgpu::Operations {
                     load: wgpu::LoadOp::Clear(0.0),
                     store: wgpu::StoreOp::Store,
                 }),
                 stencil_ops: None,
             }),
-            timestamp_writes: None,
+            timestamp_writes: q.as_ref().and_then(|q| q.render_pass_timestamp_writes()),
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        rp.set_pipeline(&pipeline);
+        rp.set_pipeline(pipeline);
         rp.draw(0..3, 0..1);
     }
+    if let (Some(t), Some(q)) = (timers, q) {
+        t.end(encoder, q);
+    }
+}
+
+/// Draws the white and black standby checks once (5.3.2, moved to start-up in 5.3.6).
+fn draw_checks(
+    gpu: &Gpu,
+    masks: &[wgpu::RenderPipeline; 2],
+    white: &wgpu::Texture,
+    black: &wgpu::Texture,
+) {
+    let mut encoder = gpu
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("checkerboard-2x2 checks"),
+        });
+    for (texture, pipeline) in [white, black].into_iter().zip(masks) {
+        let view = texture.create_view(&Default::default());
+        draw_mask(&mut encoder, None, "checks", pipeline, &view);
+    }
     gpu.queue.submit([encoder.finish()]);
+}
+
+impl Checkerboard2x2Gpu {
+    /// Gives a depth target (`view` of `texture`) check pattern `check` (0 white, 1 black): drawn
+    /// by the mask pass (`draw`) or copied from its standby buffer (`copy`), timed as `name`.
+    fn precondition(
+        &self,
+        timers: &Timers,
+        encoder: &mut wgpu::CommandEncoder,
+        name: &'static str,
+        check: usize,
+        view: &wgpu::TextureView,
+        texture: &wgpu::Texture,
+    ) {
+        match &self.masks {
+            Some(masks) => draw_mask(encoder, Some(timers), name, &masks[check], view),
+            None => {
+                let standby = [&self.textures["depth_white"], &self.textures["depth_black"]];
+                copy_depth(timers, encoder, name, standby[check], texture);
+            }
+        }
+    }
 }
 
 /// Copies a whole pre-conditioned depth buffer into a pass's depth target, timed as `name`.

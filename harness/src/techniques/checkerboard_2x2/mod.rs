@@ -47,6 +47,14 @@ impl Clamp {
     }
 }
 
+crate::choice! {
+    /// How each frame's depth buffers get their mask (5.3.2, 5.3.6).
+    pub enum Precondition {
+        Copy = "copy",
+        Draw = "draw",
+    }
+}
+
 crate::options! {
     /// Reconstitution options (the variant's parameters).
     #[derive(Clone, Copy, Debug, PartialEq)]
@@ -71,6 +79,10 @@ crate::options! {
             (0.0, false, 1.0),
             0.1,
             "`blended`: the clamp weight of a direction is its difference / `blend_max`, capped at 1 (the report's maximum blend difference); the two directions' blends are averaged",
+        ),
+        precondition: Precondition = choice(
+            Precondition::Draw,
+            "how the scene and motion depth buffers get this frame's block mask: `draw`, a depth-only full-screen pass that clears and writes the masked blocks' nearest depth (5.3.2's mask pass, each frame; no standby buffers kept); `copy`, a copy of a whole pre-conditioned standby buffer drawn once at start-up (5.3.6: \"depth creation is moved to application startup\"; two more depth buffers). The buffers' contents, and so the frames, are the same",
         ),
         motion_coherency: bool = flag(
             true,

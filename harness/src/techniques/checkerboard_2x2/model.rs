@@ -200,6 +200,7 @@ mod tests {
                 motion_threshold: 1e-7,
                 blend_min: 0.005,
                 blend_max: 0.1,
+                precondition: super::super::Precondition::Draw,
                 motion_coherency: true,
             },
             near: 0.1,
