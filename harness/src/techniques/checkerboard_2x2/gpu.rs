@@ -275,7 +275,7 @@ impl Checkerboard2x2Gpu {
             .expect("built-in graphs are well formed");
         // Depth textures are filled by copies (pre-conditioning): every texture is a copy target.
         let textures = allocate_with(device, &plan, wgpu::TextureUsages::COPY_DST);
-        let masks = mask_pipelines(gpu, width, height);
+        let masks = mask_pipelines(gpu);
         let masks = match (textures.get("depth_white"), textures.get("depth_black")) {
             (Some(white), Some(black)) => {
                 draw_checks(gpu, &masks, white, black);
@@ -479,39 +479,30 @@ impl Renderer for Checkerboard2x2Gpu {
     }
 }
 
-/// The white and black mask pipelines of `mask.wgsl` (5.3.2) for `width` x `height`: its masked
-/// 2x2 blocks drawn as triangles at the nearest depth (`vs_blocks`, depth compare Always), depth
-/// only; with the vertex count [`mask_vertices`] draws.
-fn mask_pipelines(gpu: &Gpu, width: u32, height: u32) -> [wgpu::RenderPipeline; 2] {
+/// The white and black mask pipelines of `mask.wgsl` (5.3.2): a full-screen triangle writing, with
+/// depth compare Always, the nearest depth in masked blocks and the clear value in free ones.
+fn mask_pipelines(gpu: &Gpu) -> [wgpu::RenderPipeline; 2] {
     let device = &gpu.device;
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("checkerboard_2x2_mask.wgsl"),
         source: wgpu::ShaderSource::Wgsl(MASK_WGSL.into()),
     });
-    [0.0f64, 1.0].map(|free_parity| {
-        let constants = [
-            ("width", f64::from(width)),
-            ("height", f64::from(height)),
-            ("blocks_x", f64::from(width.div_ceil(2))),
-            ("free_parity", free_parity),
-        ];
+    ["fs_white", "fs_black"].map(|entry| {
         device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some(if free_parity == 0.0 {
-                "mask white"
-            } else {
-                "mask black"
-            }),
+            label: Some(entry),
             layout: None,
             vertex: wgpu::VertexState {
                 module: &module,
-                entry_point: Some("vs_blocks"),
-                compilation_options: wgpu::PipelineCompilationOptions {
-                    constants: &constants,
-                    ..Default::default()
-                },
+                entry_point: Some("vs_fullscreen"),
+                compilation_options: Default::default(),
                 buffers: &[],
             },
-            fragment: None,
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                targets: &[],
+            }),
             primitive: Default::default(),
             depth_stencil: Some(wgpu::DepthStencilState {
                 format: DEPTH_FORMAT,
@@ -527,18 +518,13 @@ fn mask_pipelines(gpu: &Gpu, width: u32, height: u32) -> [wgpu::RenderPipeline; 
     })
 }
 
-/// Vertices of a mask draw: two triangles for every 2x2 block of a `width` x `height` target.
-fn mask_vertices(width: u32, height: u32) -> u32 {
-    6 * width.div_ceil(2) * height.div_ceil(2)
-}
-
 /// Records the depth-only pass that clears `view` and draws mask `pipeline` over it, timed as
 /// `name` when `timers` are given.
 fn draw_mask(
     encoder: &mut wgpu::CommandEncoder,
     timers: Option<&Timers>,
     name: &'static str,
-    (pipeline, vertices): (&wgpu::RenderPipeline, u32),
+    pipeline: &wgpu::RenderPipeline,
     view: &wgpu::TextureView,
 ) {
     let q = timers.map(|t| t.begin(name, encoder));
@@ -559,7 +545,7 @@ fn draw_mask(
             multiview_mask: None,
         });
         rp.set_pipeline(pipeline);
-        rp.draw(0..vertices, 0..1);
+        rp.draw(0..3, 0..1);
     }
     if let (Some(t), Some(q)) = (timers, q) {
         t.end(encoder, q);
@@ -573,7 +559,6 @@ fn draw_checks(
     white: &wgpu::Texture,
     black: &wgpu::Texture,
 ) {
-    let vertices = mask_vertices(white.width(), white.height());
     let mut encoder = gpu
         .device
         .create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -581,7 +566,7 @@ fn draw_checks(
         });
     for (texture, pipeline) in [white, black].into_iter().zip(masks) {
         let view = texture.create_view(&Default::default());
-        draw_mask(&mut encoder, None, "checks", (pipeline, vertices), &view);
+        draw_mask(&mut encoder, None, "checks", pipeline, &view);
     }
     gpu.queue.submit([encoder.finish()]);
 }
@@ -599,10 +584,7 @@ impl Checkerboard2x2Gpu {
         texture: &wgpu::Texture,
     ) {
         match &self.masks {
-            Some(masks) => {
-                let vertices = mask_vertices(self.width, self.height);
-                draw_mask(encoder, Some(timers), name, (&masks[check], vertices), view)
-            }
+            Some(masks) => draw_mask(encoder, Some(timers), name, &masks[check], view),
             None => {
                 let standby = [&self.textures["depth_white"], &self.textures["depth_black"]];
                 copy_depth(timers, encoder, name, standby[check], texture);

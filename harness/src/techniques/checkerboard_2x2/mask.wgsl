@@ -2,41 +2,34 @@
 // (seeds/depth-based-checkerboarding.txt 5.3.2 and 5.3.6: "depth creation is moved to application
 // startup ... two persistent standby depth targets are maintained, used as a copy source").
 //
-// After a clear to the far value, depth compare Always writes, per 2x2 block (bx, by), the nearest
-// depth where the block is masked; free blocks keep the clear value. Depth is reversed-Z here
+// A full-screen triangle with depth compare Always writes, per 2x2 block (bx, by), the nearest
+// depth where the block is masked and the clear value where it is free. Depth is reversed-Z here
 // (near = 1, cleared to 0, compared with Greater), so the report's "depth output of zero" (nearest
 // in standard depth) becomes 1.0: a scene fragment can never be Greater than 1.0 and is rejected by
 // the early depth test in masked blocks. The scene shader itself writes no `frag_depth`, so early-Z
 // stays on (../shared/notes/techniques.md 1c, "wgpu mapping").
 //
-// "White" (`free_parity = 0`) leaves the blocks with (bx + by) even free: the scene pass of even
-// frames and the motion pass of odd frames start from it. "Black" (`free_parity = 1`) is the
-// inverse.
-
-// The mask as geometry (drawn once for `precondition = "copy"`'s standby buffers, each frame for
-// `draw`): two triangles per masked 2x2 block at depth 1.0 (the nearest, from the vertex: no
-// `frag_depth`, no fragment stage), free blocks degenerate. A full-screen `frag_depth` pass measured 0.302 ms at 1920x1080 on an H200
-// against 0.154 ms for the copy (per-pixel depth output loses the depth buffer's compression);
-// rasterised depth keeps it. The triangles' edges lie on even pixel coordinates, so each block
-// covers exactly its four pixel centres.
-override width: f32;
-override height: f32;
-override blocks_x: u32;
-override free_parity: u32;
+// "White" (`fs_white`) leaves the blocks with (bx + by) even free: the scene pass of even frames
+// and the motion pass of odd frames start from it. "Black" (`fs_black`) is the inverse.
 
 @vertex
-fn vs_blocks(@builtin(vertex_index) v: u32) -> @builtin(position) vec4<f32> {
-    let b = v / 6u;
-    let bx = b % blocks_x;
-    let by = b / blocks_x;
-    if ((bx + by) & 1u) == free_parity {
-        return vec4<f32>(0.0, 0.0, 0.0, 1.0);
-    }
-    // Corners of the two triangles: (0,0) (1,0) (0,1), (1,0) (1,1) (0,1).
-    let c = v % 6u;
-    let ox = select(0u, 1u, c == 1u || c == 3u || c == 4u);
-    let oy = select(0u, 1u, c == 2u || c == 4u || c == 5u);
-    let px = f32((bx + ox) * 2u);
-    let py = f32((by + oy) * 2u);
-    return vec4<f32>(px / width * 2.0 - 1.0, 1.0 - py / height * 2.0, 1.0, 1.0);
+fn vs_fullscreen(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
+    let uv = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
+    return vec4<f32>(uv * 2.0 - 1.0, 0.0, 1.0);
+}
+
+// Nearest depth (1.0) on blocks whose parity is not `free_parity`, the clear value (0.0) elsewhere.
+fn mask_depth(pixel: vec2<f32>, free_parity: u32) -> f32 {
+    let b = vec2<u32>(pixel) >> vec2<u32>(1u);
+    return select(0.0, 1.0, ((b.x + b.y) & 1u) != free_parity);
+}
+
+@fragment
+fn fs_white(@builtin(position) p: vec4<f32>) -> @builtin(frag_depth) f32 {
+    return mask_depth(p.xy, 0u);
+}
+
+@fragment
+fn fs_black(@builtin(position) p: vec4<f32>) -> @builtin(frag_depth) f32 {
+    return mask_depth(p.xy, 1u);
 }
