@@ -9,6 +9,10 @@
 // the early depth test in masked blocks. The scene shader itself writes no `frag_depth`, so early-Z
 // stays on (../shared/notes/techniques.md 1c, "wgpu mapping").
 //
+// Each frame with `precondition = "draw"`; once at start-up for `copy`'s standby buffers (the
+// default: on an H200 at 1920x1080 this pass takes 0.302 ms, the copy 0.154 ms; the same mask as
+// two triangles per block at the nearest vertex depth took 2.17 ms, tiny triangles being slow).
+//
 // "White" (`fs_white`) leaves the blocks with (bx + by) even free: the scene pass of even frames
 // and the motion pass of odd frames start from it. "Black" (`fs_black`) is the inverse.
 
