@@ -28,12 +28,7 @@ fn static_scene(metrics: &str) -> String {
 }
 
 fn run(src: &str) -> ScenarioResult {
-    let dir = tempfile::tempdir().unwrap();
-    let f = dir.path().join("static.toml");
-    std::fs::write(&f, src).unwrap();
-    let (code, result, stdout) = common::run_file(&f);
-    assert_eq!(code, 0, "{stdout}");
-    result
+    common::run_ok(src, "static.toml")
 }
 
 fn metric(v: &VariantResult, name: &str) -> f64 {

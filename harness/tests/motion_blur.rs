@@ -138,12 +138,7 @@ scale = 0.5
 "#;
 
 fn run(src: &str) -> ScenarioResult {
-    let dir = tempfile::tempdir().unwrap();
-    let f = dir.path().join("s.toml");
-    std::fs::write(&f, src).unwrap();
-    let (code, result, stdout) = common::run_file(&f);
-    assert_eq!(code, 0, "{stdout}");
-    result
+    common::run_ok(src, "s.toml")
 }
 
 fn values(s: &ScenarioResult, variant: &str, metric: &str) -> Vec<f64> {

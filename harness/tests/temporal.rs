@@ -47,12 +47,7 @@ technique = "checkerboard"
 "#;
 
 fn run(src: &str) -> ScenarioResult {
-    let dir = tempfile::tempdir().unwrap();
-    let f = dir.path().join("pan.toml");
-    std::fs::write(&f, src).unwrap();
-    let (code, result, stdout) = common::run_file(&f);
-    assert_eq!(code, 0, "{stdout}");
-    result
+    common::run_ok(src, "pan.toml")
 }
 
 fn metric<'a>(

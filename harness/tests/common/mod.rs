@@ -89,6 +89,17 @@ target = [0, 0.4, 0]
 technique = "native"
 "#;
 
+/// Writes `src` as `name` in a temporary folder, runs it (as [`run_file`]) and returns its result,
+/// asserting exit code 0.
+pub fn run_ok(src: &str, name: &str) -> tessera_results::ScenarioResult {
+    let dir = tempfile::tempdir().unwrap();
+    let f = dir.path().join(name);
+    std::fs::write(&f, src).unwrap();
+    let (code, result, stdout) = run_file(&f);
+    assert_eq!(code, 0, "{stdout}");
+    result
+}
+
 /// Runs `tessera run FILE --quiet` into a temporary folder: the exit code, the scenario's result
 /// file and stdout.
 pub fn run_file(file: &Path) -> (i32, tessera_results::ScenarioResult, String) {

@@ -154,6 +154,20 @@ enum Phase {
     Shade,
 }
 
+/// The shading pipelines' rate state: 1x1 from the pipeline, the attachment's rate replacing it
+/// (combiner ops KEEP, REPLACE): the attachment alone decides the rate.
+fn attachment_rates() -> vk::PipelineFragmentShadingRateStateCreateInfoKHR<'static> {
+    vk::PipelineFragmentShadingRateStateCreateInfoKHR::default()
+        .fragment_size(vk::Extent2D {
+            width: 1,
+            height: 1,
+        })
+        .combiner_ops([
+            vk::FragmentShadingRateCombinerOpKHR::KEEP,
+            vk::FragmentShadingRateCombinerOpKHR::REPLACE,
+        ])
+}
+
 /// SPIR-V of one entry point of `wgsl`, with the options wgpu-hal uses on Vulkan (bindings by
 /// group and binding, no coordinate adjustment).
 pub fn spirv(wgsl: &str, stage: naga::ShaderStage, entry: &str) -> Result<Vec<u32>, String> {
@@ -692,15 +706,7 @@ impl RawVrsPass {
             vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
         let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
         let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
-        let mut rate_state = vk::PipelineFragmentShadingRateStateCreateInfoKHR::default()
-            .fragment_size(vk::Extent2D {
-                width: 1,
-                height: 1,
-            })
-            .combiner_ops([
-                vk::FragmentShadingRateCombinerOpKHR::KEEP,
-                vk::FragmentShadingRateCombinerOpKHR::REPLACE,
-            ]);
+        let mut rate_state = attachment_rates();
         let info = vk::GraphicsPipelineCreateInfo::default()
             .stages(&shade_stages)
             .vertex_input_state(&vertex_input)
@@ -1359,15 +1365,7 @@ impl MaterialPipeline<'_> {
         let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&attachments);
         let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
         let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
-        let mut rate_state = vk::PipelineFragmentShadingRateStateCreateInfoKHR::default()
-            .fragment_size(vk::Extent2D {
-                width: 1,
-                height: 1,
-            })
-            .combiner_ops([
-                vk::FragmentShadingRateCombinerOpKHR::KEEP,
-                vk::FragmentShadingRateCombinerOpKHR::REPLACE,
-            ]);
+        let mut rate_state = attachment_rates();
         let info = vk::GraphicsPipelineCreateInfo::default()
             .stages(&stages)
             .vertex_input_state(&vertex_input)
