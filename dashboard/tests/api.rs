@@ -367,6 +367,14 @@ async fn triage_is_stored_and_needs_the_token() {
     let id = regs[0]["id"].as_i64().unwrap();
     let (_, _, page) = get(&app, "/regressions").await;
     assert!(page.contains(&format!("id=r{id}")) && page.contains("worse"));
+    // Where and how sure, apart: the location probability and the change's interval are shown;
+    // the significance of *a* change is no column of its own (it reads ~100% everywhere).
+    let p = regs[0]["location_probability"].as_f64().unwrap();
+    assert!(
+        page.contains(&format!("{:.0}% at this run", p * 100.0)) && page.contains("95%: "),
+        "{page}"
+    );
+    assert!(page.contains("<th class=n>located</th>") && !page.contains(">confidence<"));
 
     let triage = |token: Option<&str>, body: &str| {
         let mut r = Request::post(format!("/api/regressions/{id}"))

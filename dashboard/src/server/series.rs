@@ -383,19 +383,21 @@ pub fn render(v: &SeriesView) -> String {
         }
         b.push_str("</p></details>");
     }
-    b.push_str("<h2>Detected changes</h2><table id=changes><tr><th>after run</th><th>commit</th><th class=n>before</th><th class=n>after</th><th class=n>change</th><th class=n>confidence</th><th>state</th></tr>");
+    b.push_str("<h2>Detected changes</h2><table id=changes><tr><th>after run</th><th>commit</th><th class=n>before</th><th class=n>after</th><th class=n>change (95% interval)</th><th class=n>located</th><th>state</th></tr>");
     for r in &v.regressions {
         let _ = write!(
             b,
-            "<tr><td><a href=\"/runs/{}\">{}</a></td><td><code>{}</code></td><td class=n>{}</td><td class=n>{}</td><td class=\"n {}\">{}</td><td class=n>{:.2}%</td><td>{}</td></tr>",
+            "<tr><td><a href=\"/runs/{}\">{}</a></td><td><code>{}</code></td><td class=n>{}</td><td class=n>{}</td><td class=\"n {}\" title=\"significance of a change: {:.2}%\">{}{}</td><td class=n>{}</td><td>{}</td></tr>",
             enc(&r.run_after),
             esc(&r.run_after),
             esc(&commit(r.commit_after.as_deref())),
             num(r.value_before),
             num(r.value_after),
             if r.is_regression { "worse" } else { "better" },
-            pct(r.relative_change),
             r.confidence * 100.0,
+            pct(r.relative_change),
+            super::regressions::formats::interval_line(r),
+            super::regressions::formats::located_cell(r),
             esc(r.state.as_str())
         );
     }

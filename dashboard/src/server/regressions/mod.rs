@@ -16,7 +16,7 @@
 
 mod api;
 mod feed;
-mod formats;
+pub(crate) mod formats;
 mod pages;
 
 pub use api::{api, group_api, group_triage_api, groups_api, triage_api, RegressionsQuery};

@@ -249,7 +249,7 @@ fn group_head(g: &Group, b: &mut String, title_link: bool) {
 fn alert_row(a: &Alert, b: &mut String) {
     let _ = write!(
         b,
-        "<tr id=r{} class=\"series-row stat-{}\"><td data-label=adapter>{}</td><td data-label=suite>{}</td><td data-label=scenario>{}</td><td data-label=variant>{}</td><td data-label=measure><a href=\"/series/{}\">{}</a></td><td class=n data-label=before>{}</td><td class=n data-label=after>{}</td><td class=n data-label=change>{}</td><td class=n data-label=confidence>{:.1}%</td><td data-label=status>{}</td></tr>",
+        "<tr id=r{} class=\"series-row stat-{}\"><td data-label=adapter>{}</td><td data-label=suite>{}</td><td data-label=scenario>{}</td><td data-label=variant>{}</td><td data-label=measure><a href=\"/series/{}\">{}</a></td><td class=n data-label=before>{}</td><td class=n data-label=after>{}</td><td class=n data-label=change title=\"significance of a change: {:.1}%\">{}{}</td><td class=n data-label=located>{}</td><td data-label=status>{}</td></tr>",
         a.id,
         esc(a.status.as_str()),
         esc(&a.series.adapter),
@@ -260,13 +260,15 @@ fn alert_row(a: &Alert, b: &mut String) {
         name(&a.series.measure),
         num(a.value_before),
         num(a.value_after),
-        change_cell(a),
         a.confidence * 100.0,
+        change_cell(a),
+        super::formats::interval_line(a),
+        super::formats::located_cell(a),
         esc(a.status.as_str())
     );
 }
 
-const ALERT_HEADER: &str = "<tr class=cols><th>adapter</th><th>suite</th><th>scenario</th><th>variant</th><th>measure (series)</th><th class=n>before</th><th class=n>after</th><th class=n>change</th><th class=n>confidence</th><th>status</th></tr>";
+const ALERT_HEADER: &str = "<tr class=cols><th>adapter</th><th>suite</th><th>scenario</th><th>variant</th><th>measure (series)</th><th class=n>before</th><th class=n>after</th><th class=n>change (95% interval)</th><th class=n>located</th><th>status</th></tr>";
 
 /// Most series listed under a group on the list page (largest changes first); its own page
 /// lists them all, so a change that moved thousands of series keeps the list fast.
