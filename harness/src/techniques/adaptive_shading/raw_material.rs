@@ -126,11 +126,8 @@ impl RawMaterialSets {
         if materials.materials.is_empty() {
             return Ok(None);
         }
-        let buffer_of = |b: &wgpu::Buffer| -> Result<vk::Buffer, String> {
-            // SAFETY: the handle is only used while `b` (a kept clone) is alive.
-            unsafe { b.as_hal::<Vulkan>().map(|h| h.raw_handle()) }
-                .ok_or_else(|| "buffer is not a Vulkan buffer".to_string())
-        };
+        // The buffers are kept clones.
+        let buffer_of = super::raw_pass::raw_buffer;
         let view_of = |v: &wgpu::TextureView| -> Result<vk::ImageView, String> {
             // SAFETY: the handle is only used while `v` (a kept clone) is alive.
             unsafe { v.as_hal::<Vulkan>().map(|h| h.raw_handle()) }
