@@ -127,7 +127,7 @@ impl RawMaterialSets {
             return Ok(None);
         }
         // The buffers are kept clones.
-        let buffer_of = super::raw_pass::raw_buffer;
+        let buffer_of = raw_buffer;
         let view_of = |v: &wgpu::TextureView| -> Result<vk::ImageView, String> {
             // SAFETY: the handle is only used while `v` (a kept clone) is alive.
             unsafe { v.as_hal::<Vulkan>().map(|h| h.raw_handle()) }
@@ -298,6 +298,14 @@ impl Drop for RawMaterialSets {
             d.destroy_descriptor_set_layout(self.layout, None);
         }
     }
+}
+
+/// The raw handle of a wgpu buffer on Vulkan. The caller keeps `b` (a clone) alive as long as the
+/// handle is used.
+pub(super) fn raw_buffer(b: &wgpu::Buffer) -> Result<vk::Buffer, String> {
+    // SAFETY: only the handle is read; its lifetime is the caller's clone's.
+    unsafe { b.as_hal::<Vulkan>().map(|h| h.raw_handle()) }
+        .ok_or_else(|| "buffer is not a Vulkan buffer".to_string())
 }
 
 #[cfg(test)]

@@ -154,14 +154,6 @@ enum Phase {
     Shade,
 }
 
-/// The raw handle of a wgpu buffer on Vulkan. The caller keeps `b` (a clone) alive as long as the
-/// handle is used.
-pub(super) fn raw_buffer(b: &wgpu::Buffer) -> Result<vk::Buffer, String> {
-    // SAFETY: only the handle is read; its lifetime is the caller's clone's.
-    unsafe { b.as_hal::<Vulkan>().map(|h| h.raw_handle()) }
-        .ok_or_else(|| "buffer is not a Vulkan buffer".to_string())
-}
-
 /// The shading pipelines' rate state: 1x1 from the pipeline, the attachment's rate replacing it
 /// (combiner ops KEEP, REPLACE): the attachment alone decides the rate.
 fn attachment_rates() -> vk::PipelineFragmentShadingRateStateCreateInfoKHR<'static> {
@@ -285,7 +277,7 @@ impl RawVrsPass {
                 .ok_or_else(|| "texture is not a Vulkan texture".to_string())
         };
         // The buffers are kept in `_keep_buffers` while the pass lives.
-        let buffer_of = raw_buffer;
+        let buffer_of = super::raw_material::raw_buffer;
         let mut pass = RawVrsPass {
             device: raw,
             size,
