@@ -55,89 +55,16 @@ fn view_depth(d: f32) -> f32 {
     return near * far / (near + d * (far - near));
 }
 
-// Section 5.1's layout: 32 threads per tile, each owning 8 pixels, here a column of 8: thread
-// (x, h) owns pixels (x, 8h) to (x, 8h + 7) of the tile. Each sums its pixels in order, then the
-// 32 partial sums are reduced as a tree (the CPU model reduces in the same order). Measured on an
-// H200 at 3840x2160 (rates pass alone): this layout 0.106 ms; one thread per pixel for the reads
-// (256 threads, 32 summing) 0.135 ms; the reads batched eight per thread in arrays 0.196 ms
-// (register pressure lowers occupancy below the 32 one-warp tiles per SM this layout reaches);
-// two tiles per workgroup (two warps, to lift that limit) 0.109-0.119 ms.
-@compute @workgroup_size(16, 2)
-fn main(
-    @builtin(workgroup_id) tile: vec3<u32>,
-    @builtin(local_invocation_id) lid: vec3<u32>,
-    @builtin(local_invocation_index) i: u32,
-) {
+// The tile's rate from its reduced sums (x, y: Eq. 2's squared differences, z: luma, w:
+// disoccluded pixels) and minimum motion: Eq. 15, 20 to 22, 24 and the hysteresis of 5.4.
+fn decide(t_xy: vec2<i32>, total: vec4<f32>, vmin: vec2<f32>) {
     let size = vec2<i32>(rp.size.xy);
-    var s = vec4<f32>(0.0);
-    var mn = vec2<f32>(1e30);
-    var l: array<f32, 8>;
-    for (var k = 0u; k < 8u; k = k + 1u) {
-        let ly = lid.y * 8u + k;
-        let p = vec2<i32>(tile.xy * 16u + vec2<u32>(lid.x, ly));
-        l[k] = 0.0;
-        if all(p < size) {
-            let covered = textureLoad(depth, p, 0) > 0.0;
-            var m = vec4<f32>(0.0);
-            if covered {
-                m = textureLoad(motion, p, 0);
-            }
-            let q = floor(vec2<f32>(p) + 0.5 - m.xy);
-            let on_screen = all(q >= vec2<f32>(0.0)) && all(q < vec2<f32>(size));
-            let c = vec2<i32>(min(max(q, vec2<f32>(0.0)), vec2<f32>(size - 1)));
-            l[k] = luma(max(textureLoad(prev_color, c, 0).rgb, vec3<f32>(0.0)));
-            if covered {
-                mn = min(mn, abs(m.xy));
-                var occluded = true;
-                if on_screen {
-                    let prev = view_depth(textureLoad(prev_depth, c, 0));
-                    let expected = view_depth(m.z);
-                    occluded = abs(prev - expected) > rp.more.y * expected;
-                }
-                s.w = s.w + select(0.0, 1.0, occluded);
-            }
-        }
-        lum[ly * 16u + lid.x] = l[k];
-    }
-    workgroupBarrier();
-    for (var k = 0u; k < 8u; k = k + 1u) {
-        let ly = lid.y * 8u + k;
-        let p = vec2<i32>(tile.xy * 16u + vec2<u32>(lid.x, ly));
-        if all(p < size) {
-            let idx = ly * 16u + lid.x;
-            // Eq. 2: ((I_i - I_{i-1}) / 2)^2 over neighbouring pairs inside the tile.
-            if lid.x >= 1u {
-                let d = (l[k] - lum[idx - 1u]) * 0.5;
-                s.x = s.x + d * d;
-            }
-            if ly >= 1u {
-                let d = (l[k] - lum[idx - 16u]) * 0.5;
-                s.y = s.y + d * d;
-            }
-            s.z = s.z + l[k];
-        }
-    }
-    sums[i] = s;
-    mins[i] = mn;
-    workgroupBarrier();
-    for (var stride = 16u; stride > 0u; stride = stride / 2u) {
-        if i < stride {
-            sums[i] = sums[i] + sums[i + stride];
-            mins[i] = min(mins[i], mins[i + stride]);
-        }
-        workgroupBarrier();
-    }
-    if i != 0u {
-        return;
-    }
-    let t_xy = vec2<i32>(tile.xy);
     if rp.mode.y == 0u {
         // No history (first frame, camera cut): full rate everywhere.
         textureStore(rates_out, t_xy, vec4<u32>(0u));
         textureStore(state_out, t_xy, vec4<f32>(-1.0, -1.0, 0.0, 0.0));
         return;
     }
-    let total = sums[0];
     let tw = f32(min(size.x - t_xy.x * 16, 16));
     let th = f32(min(size.y - t_xy.y * 16, 16));
     let pairs = vec2<f32>((tw - 1.0) * th, tw * (th - 1.0));
@@ -149,7 +76,7 @@ fn main(
         err.y = sqrt(total.y / pairs.y);
     }
     let avg = total.z / (tw * th);
-    var v = mins[0];
+    var v = vmin;
     if v.x > 1e29 {
         v.x = 0.0;
     }
@@ -217,6 +144,84 @@ fn main(
     }
     textureStore(rates_out, t_xy, vec4<u32>(rate.x | (rate.y << 2u), 0u, 0u, 0u));
     textureStore(state_out, t_xy, vec4<f32>(vec2<f32>(rate), 0.0, 0.0));
+}
+
+// Section 5.1's layout: 32 threads per tile, each owning 8 pixels, here a column of 8: thread
+// (x, h) owns pixels (x, 8h) to (x, 8h + 7) of the tile. Each sums its pixels in order, then the
+// 32 partial sums are reduced as a tree (the CPU model reduces in the same order). Measured on an
+// H200 at 3840x2160 (rates pass alone): this layout 0.106 ms; one thread per pixel for the reads
+// (256 threads, 32 summing) 0.135 ms; the reads batched eight per thread in arrays 0.196 ms
+// (register pressure lowers occupancy below the 32 one-warp tiles per SM this layout reaches);
+// two tiles per workgroup (two warps, to lift that limit) 0.109-0.119 ms.
+// Reads without branches: depth and motion are loaded together (coordinates clamped, results
+// selected), the reprojected colour and depth right after, so a thread's 32 loads form two
+// dependent levels instead of three per pixel. H200, 3840x2160 (runs 20261202T1301-1303Z): 0.100
+// ms on the engine and the Table 2 pan against 0.106 / 0.116 ms with the loads inside `if`s; the
+// same with two tiles per workgroup: 0.104 ms.
+@compute @workgroup_size(16, 2)
+fn main(
+    @builtin(workgroup_id) tile: vec3<u32>,
+    @builtin(local_invocation_id) lid: vec3<u32>,
+    @builtin(local_invocation_index) i: u32,
+) {
+    let size = vec2<i32>(rp.size.xy);
+    var s = vec4<f32>(0.0);
+    var mn = vec2<f32>(1e30);
+    var l: array<f32, 8>;
+    for (var k = 0u; k < 8u; k = k + 1u) {
+        let ly = lid.y * 8u + k;
+        let p = vec2<i32>(tile.xy * 16u + vec2<u32>(lid.x, ly));
+        let inside = all(p < size);
+        let pc = min(p, size - 1);
+        let d = textureLoad(depth, pc, 0);
+        let m_raw = textureLoad(motion, pc, 0);
+        let covered = inside && d > 0.0;
+        let m = select(vec4<f32>(0.0), m_raw, covered);
+        let q = floor(vec2<f32>(p) + 0.5 - m.xy);
+        let on_screen = all(q >= vec2<f32>(0.0)) && all(q < vec2<f32>(size));
+        let c = vec2<i32>(min(max(q, vec2<f32>(0.0)), vec2<f32>(size - 1)));
+        let col = textureLoad(prev_color, c, 0).rgb;
+        let pd = textureLoad(prev_depth, c, 0);
+        l[k] = select(0.0, luma(max(col, vec3<f32>(0.0))), inside);
+        mn = select(mn, min(mn, abs(m.xy)), covered);
+        let prev = view_depth(pd);
+        let expected = view_depth(m.z);
+        let occluded = !on_screen || abs(prev - expected) > rp.more.y * expected;
+        s.w = s.w + select(0.0, 1.0, covered && occluded);
+        lum[ly * 16u + lid.x] = l[k];
+    }
+    workgroupBarrier();
+    for (var k = 0u; k < 8u; k = k + 1u) {
+        let ly = lid.y * 8u + k;
+        let p = vec2<i32>(tile.xy * 16u + vec2<u32>(lid.x, ly));
+        if all(p < size) {
+            let idx = ly * 16u + lid.x;
+            // Eq. 2: ((I_i - I_{i-1}) / 2)^2 over neighbouring pairs inside the tile.
+            if lid.x >= 1u {
+                let d = (l[k] - lum[idx - 1u]) * 0.5;
+                s.x = s.x + d * d;
+            }
+            if ly >= 1u {
+                let d = (l[k] - lum[idx - 16u]) * 0.5;
+                s.y = s.y + d * d;
+            }
+            s.z = s.z + l[k];
+        }
+    }
+    sums[i] = s;
+    mins[i] = mn;
+    workgroupBarrier();
+    for (var stride = 16u; stride > 0u; stride = stride / 2u) {
+        if i < stride {
+            sums[i] = sums[i] + sums[i + stride];
+            mins[i] = min(mins[i], mins[i + stride]);
+        }
+        workgroupBarrier();
+    }
+    if i != 0u {
+        return;
+    }
+    decide(vec2<i32>(tile.xy), sums[0], mins[0]);
 }
 
 // Section 5.4's filter: per axis, at most twice the lowest rate among the eight neighbours.
