@@ -377,21 +377,15 @@ fn hardware_plans_need_no_gpu() {
     );
     let plan = techniques::plan(&hw, target);
     let names: Vec<&str> = plan.passes.iter().map(|p| p.name).collect();
-    assert_eq!(
-        names,
-        [
-            PREPASS,
-            "rates",
-            "rate_filter",
-            "rate_attachment",
-            SCENE_PASS
-        ]
-    );
+    assert_eq!(names, [PREPASS, "rates", "rate_attachment", SCENE_PASS]);
     // The paper's order of work (section 5): this frame's motion first, then the rates, then the
     // frame shaded at them; no pass only clears (the raw passes clear in their load ops).
     let pass = |name: &str| plan.passes.iter().find(|p| p.name == name).unwrap();
     assert!(pass(PREPASS).writes.contains(&"motion") && pass(PREPASS).self_counted);
     assert!(pass("rates").reads.contains(&"motion"));
+    // Section 5.4's filter is applied by the attachment pass, which stores the filtered codes.
+    assert!(pass("rate_attachment").reads.contains(&"rates_raw"));
+    assert!(pass("rate_attachment").writes.contains(&"rates"));
     assert!(pass(SCENE_PASS).self_counted && !pass(SCENE_PASS).writes.contains(&"motion"));
     // 100x60 at 16x16 texels: a 7x4 attachment.
     let a = plan

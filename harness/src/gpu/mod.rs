@@ -207,6 +207,7 @@ pub fn wanted_features() -> wgpu::Features {
         | wgpu::Features::PIPELINE_STATISTICS_QUERY
         | wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES
         | wgpu::Features::SHADER_F16
+        | wgpu::Features::SUBGROUP
 }
 
 /// Opens a device with the adapter's real limits (not the downlevel defaults, which cap textures

@@ -28,6 +28,31 @@ use crate::render::scene::{SceneGpu, View, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::render::timers::Timers;
 
 pub static RATE_WGSL: &str = include_str!("rate.wgsl");
+/// The rate pass's entry point for any adapter (workgroup memory, barriers).
+pub static RATE_SHARED_WGSL: &str = include_str!("rate_shared.wgsl");
+/// The rate pass's entry point where a subgroup holds a tile (shuffles, subgroup sums).
+pub static RATE_SUBGROUP_WGSL: &str = include_str!("rate_subgroup.wgsl");
+/// Section 5.4's neighbour filter, appended to the modules that filter.
+pub static RATE_FILTER_WGSL: &str = include_str!("rate_filter.wgsl");
+
+/// The rate pass's module: `rate.wgsl` and the filter, with the subgroup entry point where `wide`
+/// (see [`wide_subgroups`]), the workgroup-memory one otherwise.
+pub fn rate_source(wide: bool) -> String {
+    if wide {
+        format!("{RATE_WGSL}\n{RATE_FILTER_WGSL}\n{RATE_SUBGROUP_WGSL}")
+    } else {
+        format!("{RATE_WGSL}\n{RATE_FILTER_WGSL}\n{RATE_SHARED_WGSL}")
+    }
+}
+
+/// Whether the rate pass can reduce a tile's 32 threads inside one subgroup: the device has
+/// subgroup operations and no subgroup is narrower than 32 invocations (NVIDIA 32, AMD 32 or 64;
+/// lavapipe's 8 and Intel's 8 to 32 take the workgroup-memory path). The two measured on an H200:
+/// `scenarios/adaptive/README.md`, "Rate pass at 4K".
+pub fn wide_subgroups(gpu: &Gpu) -> bool {
+    gpu.device.features().contains(wgpu::Features::SUBGROUP)
+        && gpu.adapter.get_info().subgroup_min_size >= 32
+}
 pub static SHADE_WGSL: &str = include_str!("shade.wgsl");
 
 /// `scene.wgsl` with the G-buffer and shading entry points appended.
@@ -119,7 +144,7 @@ pub fn graph(rates: Option<&RateParams>, width: u32, height: u32) -> Plan {
     g.plan().expect("built-in graphs are well formed")
 }
 
-/// The rate pass and its filter, with bind groups per frame parity.
+/// The rate pass and its filter (where it is its own pass), with bind groups per frame parity.
 pub(super) struct RatePass {
     params: RateParams,
     uniforms: wgpu::Buffer,
@@ -132,21 +157,25 @@ pub(super) struct RatePass {
 impl RatePass {
     /// The rate pass (and filter) reading the resources `view` names: `color0`/`color1`,
     /// `depth0`/`depth1` (the previous frame's by parity, and this frame's for coverage), `motion`,
-    /// `rate_state0`/`1`, and
-    /// writing `rates` (through `rates_raw` with the filter).
+    /// `rate_state0`/`1`, and writing `rates` (through `rates_raw` and the filter pass with the
+    /// filter), or only `rates_raw` where a later pass filters (`own_filter` false: the hardware
+    /// path's attachment pass).
     pub(super) fn new(
-        device: &wgpu::Device,
+        gpu: &Gpu,
         params: RateParams,
+        own_filter: bool,
         view: &dyn Fn(&str) -> wgpu::TextureView,
     ) -> RatePass {
-        let pipeline = compute_pipeline(device, "rates", RATE_WGSL, "main");
+        let device = &gpu.device;
+        let source = rate_source(wide_subgroups(gpu));
+        let pipeline = compute_pipeline(device, "rates", &source, "main");
         let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("rate params"),
             size: std::mem::size_of::<RateUniforms>() as u64,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let raw = if params.neighbour_filter {
+        let raw = if params.neighbour_filter || !own_filter {
             "rates_raw"
         } else {
             "rates"
@@ -172,8 +201,8 @@ impl RatePass {
             bind_group(device, "rates", &layout, &[(0, &uniforms)], &views)
         };
         let bind_groups = PingPong::new([bind_group(0), bind_group(1)]);
-        let filter = params.neighbour_filter.then(|| {
-            let pipeline = compute_pipeline(device, "rate_filter", RATE_WGSL, "filter_rates");
+        let filter = (params.neighbour_filter && own_filter).then(|| {
+            let pipeline = compute_pipeline(device, "rate_filter", &source, "filter_rates");
             let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("rate_filter"),
                 layout: &pipeline.get_bind_group_layout(0),
@@ -375,7 +404,7 @@ impl AdaptiveGpu {
         };
         let sides = PingPong::new([side(0), side(usize::from(history))]);
 
-        let rate = params.map(|params| RatePass::new(device, params, &view));
+        let rate = params.map(|params| RatePass::new(gpu, params, true, &view));
 
         let mut gbuffer_views: Vec<wgpu::TextureView> = GBUFFER.iter().map(|n| view(n)).collect();
         if history {

@@ -5,10 +5,11 @@
 //! Each frame of `adaptive-shading`, in the paper's order of work (section 5: the rate pass runs
 //! right after the depth pre-pass, with this frame's motion, and the frame is shaded at the rates
 //! it computes): `motion_prepass` (raw Vulkan, `raw_pass.rs`) clears and draws this frame's depth
-//! and writes its motion (the software G-buffer's motion); `rates` (and `rate_filter`, section
-//! 5.4) reproject the previous output by that motion, with depth rejection against the previous
-//! depth (the same rate shader as the software path, `rate.wgsl`); `rate_attachment` turns the
-//! per-tile codes into attachment texels (`attachment.wgsl`, CPU model in `attachment.rs`);
+//! and writes its motion (the software G-buffer's motion); `rates` reprojects the previous output
+//! by that motion, with depth rejection against the previous depth (the same rate shader as the
+//! software path, `rate.wgsl`); `rate_attachment` applies section 5.4's neighbour filter to the
+//! per-tile codes and turns them into attachment texels (`attachment.wgsl`, CPU model in
+//! `attachment.rs`), storing the filtered codes as `rates`;
 //! `scene_vrs` clears the colour and shades, `fs_main`'s shading, at those rates (depth test
 //! EQUAL against the pre-pass). `native-vrs` is one raw render pass with a constant attachment
 //! (every tile 1x1, 2x2 or 4x4): colour and depth cleared, a depth-only pre-pass, the same shading
@@ -50,6 +51,11 @@ use crate::render::timers::Timers;
 pub static VRS_WGSL: &str = include_str!("vrs.wgsl");
 pub static VRS_MATERIAL_WGSL: &str = include_str!("vrs_material.wgsl");
 pub static ATTACHMENT_WGSL: &str = include_str!("attachment.wgsl");
+
+/// The attachment pass's module: `attachment.wgsl` and section 5.4's filter.
+pub fn attachment_source() -> String {
+    format!("{ATTACHMENT_WGSL}\n{}", super::gpu::RATE_FILTER_WGSL)
+}
 
 /// `scene.wgsl` with the hardware path's forward entry points appended.
 pub fn vrs_source() -> String {
@@ -99,14 +105,15 @@ pub fn graph(rates: &Rates, width: u32, height: u32, texel: [u32; 2]) -> Plan {
     // The attachment: an R8_UINT image made by raw_pass.rs (wgpu cannot give it the usage).
     g.resource("attachment", tex(wgpu::TextureFormat::R8Uint, aw, ah));
     match rates {
-        Rates::Adaptive(p) => {
+        Rates::Adaptive(_) => {
             g.resource("motion", tex(MOTION_FORMAT, width, height));
             for i in 0..2 {
                 g.resource(COLORS[i], tex(COLOR_FORMAT, width, height))
                     .resource(DEPTHS[i], tex(DEPTH_FORMAT, width, height))
                     .resource(STATES[i], tex(STATE_FORMAT, tw, th));
             }
-            g.resource("rates", tex(RATE_FORMAT, tw, th));
+            g.resource("rates", tex(RATE_FORMAT, tw, th))
+                .resource("rates_raw", tex(RATE_FORMAT, tw, th));
             g.pass(
                 PREPASS,
                 PassKind::Render,
@@ -117,28 +124,19 @@ pub fn graph(rates: &Rates, width: u32, height: u32, texel: [u32; 2]) -> Plan {
             let reads = [
                 COLORS[0], COLORS[1], "motion", DEPTHS[0], DEPTHS[1], STATES[0], STATES[1],
             ];
-            if p.neighbour_filter {
-                g.resource("rates_raw", tex(RATE_FORMAT, tw, th))
-                    .pass(
-                        "rates",
-                        PassKind::Compute,
-                        &reads,
-                        &["rates_raw", STATES[0], STATES[1]],
-                    )
-                    .pass("rate_filter", PassKind::Compute, &["rates_raw"], &["rates"]);
-            } else {
-                g.pass(
-                    "rates",
-                    PassKind::Compute,
-                    &reads,
-                    &["rates", STATES[0], STATES[1]],
-                );
-            }
+            g.pass(
+                "rates",
+                PassKind::Compute,
+                &reads,
+                &["rates_raw", STATES[0], STATES[1]],
+            );
+            // Section 5.4's filter (where it is on) is applied by the attachment pass as it reads
+            // the codes, which it stores as `rates`: one dispatch less than the software path.
             g.pass(
                 "rate_attachment",
                 PassKind::Compute,
-                &["rates"],
-                &["attachment"],
+                &["rates_raw"],
+                &["attachment", "rates"],
             );
             g.pass(
                 SCENE_PASS,
@@ -169,7 +167,8 @@ pub fn graph(rates: &Rates, width: u32, height: u32, texel: [u32; 2]) -> Plan {
 struct AttachmentPass {
     pipeline: wgpu::ComputePipeline,
     group: wgpu::BindGroup,
-    words: u32,
+    /// Threads: one per four attachment texels and one per tile, whichever are more.
+    threads: u32,
 }
 
 pub struct HardwareGpu {
@@ -262,11 +261,13 @@ impl HardwareGpu {
         let view = |name: &str| textures[name].create_view(&Default::default());
         let (rate, attachment_pass, parities) = match rates {
             Rates::Adaptive(p) => {
-                let rate = RatePass::new(device, p, &view);
-                let pipeline = compute_pipeline(device, "rate_attachment", ATTACHMENT_WGSL, "main");
+                let rate = RatePass::new(gpu, p, false, &view);
+                let pipeline =
+                    compute_pipeline(device, "rate_attachment", &attachment_source(), "main");
                 use wgpu::util::DeviceExt;
                 let (tw, th) = model::tiles(width, height);
-                let mut u: Vec<u32> = vec![tw, th, aw, ah, texel[0], texel[1], 0, 0];
+                let filter = u32::from(p.neighbour_filter);
+                let mut u: Vec<u32> = vec![tw, th, aw, ah, texel[0], texel[1], filter, 0];
                 u.extend(table.iter().map(|&t| t as u32));
                 let uniforms = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                     label: Some("rate attachment params"),
@@ -278,14 +279,14 @@ impl HardwareGpu {
                     "rate_attachment",
                     &pipeline.get_bind_group_layout(0),
                     &[(0, &uniforms), (2, &staging)],
-                    &[(1, &view("rates"))],
+                    &[(1, &view("rates_raw")), (3, &view("rates"))],
                 );
                 (
                     Some(rate),
                     Some(AttachmentPass {
                         pipeline,
                         group,
-                        words,
+                        threads: words.max(tw * th),
                     }),
                     2,
                 )
@@ -585,7 +586,7 @@ impl Renderer for HardwareGpu {
                 "rate_attachment",
                 &a.pipeline,
                 &[&a.group],
-                [a.words.div_ceil(64), 1],
+                [a.threads.div_ceil(64), 1],
             );
         }
         // 3. The frame shaded at the rates.
@@ -620,11 +621,21 @@ impl Renderer for HardwareGpu {
 
     fn frame_extras(&mut self, gpu: &Gpu, frame: &Rgb8Image, image: bool) -> FrameExtras {
         let mut extras = FrameExtras::default();
+        let (w, h) = (self.width, self.height);
         let coverage = self.coverage(gpu);
         let covered = coverage.iter().filter(|&&c| c).count() as u64;
         let codes = self.rates(gpu);
-        let model = self.model_attachment(codes.as_deref().unwrap_or(&[]));
-        let (w, h) = (self.width, self.height);
+        // The model's attachment from the rate pass's own codes through the CPU model of the
+        // filter the attachment pass applies (section 5.4), so that the check below covers both.
+        let model_codes = match (self.rates, self.textures.get("rates_raw")) {
+            (Rates::Adaptive(p), Some(raw)) if p.neighbour_filter => {
+                let raw: Vec<u32> = bytemuck::cast_slice(&read_texture_raw(gpu, raw)).to_vec();
+                let (tw, th) = model::tiles(w, h);
+                Some(model::neighbour_filter(&raw, tw, th))
+            }
+            _ => codes.clone(),
+        };
+        let model = self.model_attachment(model_codes.as_deref().unwrap_or(&[]));
         let shades = att::shades(&model, w, h, &|x, y| coverage[(y * w + x) as usize]);
         // The CPU model's shades over covered pixels, as the software path reports its rate.
         let rate = att::rate(shades, covered);
@@ -641,7 +652,7 @@ impl Renderer for HardwareGpu {
                 .values
                 .push(FrameValue::neither("invocations-over-model", ratio, "x"));
         }
-        // The attachment the GPU used against the model's from the same rate codes.
+        // The attachment the GPU used against the model's from the same rate-pass codes.
         let gpu_attachment = self.attachment(gpu);
         let differ = gpu_attachment
             .data

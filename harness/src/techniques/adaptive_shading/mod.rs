@@ -163,24 +163,44 @@ fn hardware_requirements() -> Requirements {
     Requirements::none().extension(Extension::FragmentShadingRate)
 }
 
+/// The rate pass's two modules (workgroup-memory and subgroup entry points, `gpu::rate_source`).
+fn rate_shaders() -> [Shader; 2] {
+    [false, true].map(|wide| Shader {
+        name: format!("adaptive rates{}", if wide { " (subgroups)" } else { "" }),
+        source: gpu::rate_source(wide),
+        files: vec![
+            "adaptive_shading/rate.wgsl",
+            "adaptive_shading/rate_filter.wgsl",
+            if wide {
+                "adaptive_shading/rate_subgroup.wgsl"
+            } else {
+                "adaptive_shading/rate_shared.wgsl"
+            },
+        ],
+    })
+}
+
 fn shaders() -> Vec<Shader> {
-    vec![
-        Shader::file("adaptive_shading/rate.wgsl", gpu::RATE_WGSL),
-        Shader {
-            name: "adaptive shade".into(),
-            source: gpu::shade_source(),
-            files: vec!["scene.wgsl", "adaptive_shading/shade.wgsl"],
-        },
-    ]
+    let mut v = Vec::from(rate_shaders());
+    v.extend([Shader {
+        name: "adaptive shade".into(),
+        source: gpu::shade_source(),
+        files: vec!["scene.wgsl", "adaptive_shading/shade.wgsl"],
+    }]);
+    v
 }
 
 fn hardware_shaders() -> Vec<Shader> {
-    vec![
-        Shader::file("adaptive_shading/rate.wgsl", gpu::RATE_WGSL),
-        Shader::file(
-            "adaptive_shading/attachment.wgsl",
-            hardware::ATTACHMENT_WGSL,
-        ),
+    let mut v = Vec::from(rate_shaders());
+    v.extend([
+        Shader {
+            name: "adaptive rate attachment".into(),
+            source: hardware::attachment_source(),
+            files: vec![
+                "adaptive_shading/attachment.wgsl",
+                "adaptive_shading/rate_filter.wgsl",
+            ],
+        },
         Shader {
             name: "adaptive vrs".into(),
             source: hardware::vrs_source(),
@@ -195,7 +215,8 @@ fn hardware_shaders() -> Vec<Shader> {
                 "adaptive_shading/vrs_material.wgsl",
             ],
         },
-    ]
+    ]);
+    v
 }
 
 /// Why the deferred path (`vrs = "software"`, `native-deferred`) does not draw scenes with

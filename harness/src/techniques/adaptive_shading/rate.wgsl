@@ -31,10 +31,6 @@ struct RateParams {
 // where it is not 0.
 @group(0) @binding(9) var depth: texture_depth_2d;
 
-var<workgroup> lum: array<f32, 256>;
-var<workgroup> sums: array<vec4<f32>, 32>;
-var<workgroup> mins: array<vec2<f32>, 32>;
-
 // Eq. 25.
 fn luma(c: vec3<f32>) -> f32 {
     return 0.299 * c.r + 0.587 * c.g + 0.114 * c.b;
@@ -148,83 +144,66 @@ fn decide(t_xy: vec2<i32>, total: vec4<f32>, vmin: vec2<f32>) {
 
 // Section 5.1's layout: 32 threads per tile, each owning 8 pixels, here a column of 8: thread
 // (x, h) owns pixels (x, 8h) to (x, 8h + 7) of the tile. Each sums its pixels in order, then the
-// 32 partial sums are reduced as a tree (the CPU model reduces in the same order). Measured on an
-// H200 at 3840x2160 (rates pass alone): this layout 0.106 ms; one thread per pixel for the reads
-// (256 threads, 32 summing) 0.135 ms; the reads batched eight per thread in arrays 0.196 ms
-// (register pressure lowers occupancy below the 32 one-warp tiles per SM this layout reaches);
-// two tiles per workgroup (two warps, to lift that limit) 0.109-0.119 ms.
-// Reads without branches: depth and motion are loaded together (coordinates clamped, results
-// selected), the reprojected colour and depth right after, so a thread's 32 loads form two
-// dependent levels instead of three per pixel. H200, 3840x2160 (runs 20261202T1301-1303Z): 0.100
-// ms on the engine and the Table 2 pan against 0.106 / 0.116 ms with the loads inside `if`s; the
-// same with two tiles per workgroup: 0.104 ms.
-@compute @workgroup_size(16, 2)
-fn main(
-    @builtin(workgroup_id) tile: vec3<u32>,
-    @builtin(local_invocation_id) lid: vec3<u32>,
-    @builtin(local_invocation_index) i: u32,
-) {
-    let size = vec2<i32>(rp.size.xy);
-    var s = vec4<f32>(0.0);
-    var mn = vec2<f32>(1e30);
-    var l: array<f32, 8>;
-    for (var k = 0u; k < 8u; k = k + 1u) {
-        let ly = lid.y * 8u + k;
-        let p = vec2<i32>(tile.xy * 16u + vec2<u32>(lid.x, ly));
-        let inside = all(p < size);
-        let pc = min(p, size - 1);
-        let d = textureLoad(depth, pc, 0);
-        let m_raw = textureLoad(motion, pc, 0);
-        let covered = inside && d > 0.0;
-        let m = select(vec4<f32>(0.0), m_raw, covered);
-        let q = floor(vec2<f32>(p) + 0.5 - m.xy);
-        let on_screen = all(q >= vec2<f32>(0.0)) && all(q < vec2<f32>(size));
-        let c = vec2<i32>(min(max(q, vec2<f32>(0.0)), vec2<f32>(size - 1)));
-        let col = textureLoad(prev_color, c, 0).rgb;
-        let pd = textureLoad(prev_depth, c, 0);
-        l[k] = select(0.0, luma(max(col, vec3<f32>(0.0))), inside);
-        mn = select(mn, min(mn, abs(m.xy)), covered);
-        let prev = view_depth(pd);
-        let expected = view_depth(m.z);
-        let occluded = !on_screen || abs(prev - expected) > rp.more.y * expected;
-        s.w = s.w + select(0.0, 1.0, covered && occluded);
-        lum[ly * 16u + lid.x] = l[k];
-    }
-    workgroupBarrier();
-    for (var k = 0u; k < 8u; k = k + 1u) {
-        let ly = lid.y * 8u + k;
-        let p = vec2<i32>(tile.xy * 16u + vec2<u32>(lid.x, ly));
-        if all(p < size) {
-            let idx = ly * 16u + lid.x;
-            // Eq. 2: ((I_i - I_{i-1}) / 2)^2 over neighbouring pairs inside the tile.
-            if lid.x >= 1u {
-                let d = (l[k] - lum[idx - 1u]) * 0.5;
-                s.x = s.x + d * d;
-            }
-            if ly >= 1u {
-                let d = (l[k] - lum[idx - 16u]) * 0.5;
-                s.y = s.y + d * d;
-            }
-            s.z = s.z + l[k];
-        }
-    }
-    sums[i] = s;
-    mins[i] = mn;
-    workgroupBarrier();
-    for (var stride = 16u; stride > 0u; stride = stride / 2u) {
-        if i < stride {
-            sums[i] = sums[i] + sums[i + stride];
-            mins[i] = min(mins[i], mins[i + stride]);
-        }
-        workgroupBarrier();
-    }
-    if i != 0u {
-        return;
-    }
-    decide(vec2<i32>(tile.xy), sums[0], mins[0]);
+// 32 partial sums are reduced (the CPU model reduces them as a tree, as `rate_shared.wgsl` does).
+// The entry point, which loops over the thread's pixels (`read_pixel`), exchanges lumas between
+// threads and reduces the sums, is one of two files appended to this one: `rate_shared.wgsl`
+// (workgroup memory and barriers, any adapter) or `rate_subgroup.wgsl` (subgroup operations, where
+// a subgroup holds the whole tile).
+//
+// Measured on an H200 at 3840x2160 (rates pass alone, shared-memory entry point): this layout
+// 0.106 ms; one thread per pixel for the reads (256 threads, 32 summing) 0.135 ms; the reads
+// batched eight per thread in arrays 0.196 ms (register pressure lowers occupancy below the 32
+// one-warp tiles per SM this layout reaches); two tiles per workgroup (two warps, to lift that
+// limit) 0.109-0.119 ms. Reads without branches: depth and motion are loaded together
+// (coordinates clamped, results selected), the reprojected colour and depth right after, so a
+// thread's 32 loads form two dependent levels instead of three per pixel. H200, 3840x2160 (runs
+// 20261202T1301-1303Z): 0.100 ms on the engine and the Table 2 pan against 0.106 / 0.116 ms with
+// the loads inside `if`s; the same with two tiles per workgroup: 0.104 ms.
+
+// What the rate pass reads of one pixel: its luma after reprojection (0 outside the frame),
+// whether it is covered and disoccluded, and its motion.
+struct Pixel {
+    l: f32,
+    covered: bool,
+    disoccluded: f32,
+    m: vec2<f32>,
 }
 
-// Section 5.4's filter: per axis, at most twice the lowest rate among the eight neighbours.
+// Pixel p of this frame (`inside` the frame or not): reproject the previous output by the motion
+// (5.1), luma (Eq. 25), disocclusion by depth. The loads have no branches: depth and motion at
+// clamped coordinates first, then the reprojected colour and depth.
+fn read_pixel(p: vec2<i32>) -> Pixel {
+    let size = vec2<i32>(rp.size.xy);
+    let inside = all(p < size);
+    let pc = min(p, size - 1);
+    let d = textureLoad(depth, pc, 0);
+    let m_raw = textureLoad(motion, pc, 0);
+    let covered = inside && d > 0.0;
+    let m = select(vec4<f32>(0.0), m_raw, covered);
+    let q = floor(vec2<f32>(p) + 0.5 - m.xy);
+    let on_screen = all(q >= vec2<f32>(0.0)) && all(q < vec2<f32>(size));
+    let c = vec2<i32>(min(max(q, vec2<f32>(0.0)), vec2<f32>(size - 1)));
+    let col = textureLoad(prev_color, c, 0).rgb;
+    let pd = textureLoad(prev_depth, c, 0);
+    let prev = view_depth(pd);
+    let expected = view_depth(m.z);
+    let occluded = !on_screen || abs(prev - expected) > rp.more.y * expected;
+    var out: Pixel;
+    out.l = select(0.0, luma(max(col, vec3<f32>(0.0))), inside);
+    out.covered = covered;
+    out.disoccluded = select(0.0, 1.0, covered && occluded);
+    out.m = m.xy;
+    return out;
+}
+
+// Eq. 2's term for a pair of neighbouring lumas: ((I_i - I_{i-1}) / 2)^2.
+fn pair(a: f32, b: f32) -> f32 {
+    let d = (a - b) * 0.5;
+    return d * d;
+}
+
+// Section 5.4's filter as its own pass (the software path; the hardware path filters in its
+// attachment pass): `filtered_code` of `rate_filter.wgsl`, appended to this module.
 @group(0) @binding(7) var rates_in: texture_2d<u32>;
 @group(0) @binding(8) var rates_filtered: texture_storage_2d<r32uint, write>;
 
@@ -235,19 +214,5 @@ fn filter_rates(@builtin(global_invocation_id) id: vec3<u32>) {
     if t.x >= tiles.x || t.y >= tiles.y {
         return;
     }
-    let c = textureLoad(rates_in, t, 0).x;
-    var lx = c & 3u;
-    var ly = (c >> 2u) & 3u;
-    for (var dy = -1; dy <= 1; dy = dy + 1) {
-        for (var dx = -1; dx <= 1; dx = dx + 1) {
-            let n = t + vec2<i32>(dx, dy);
-            if any(n < vec2<i32>(0)) || any(n >= tiles) {
-                continue;
-            }
-            let nc = textureLoad(rates_in, n, 0).x;
-            lx = min(lx, (nc & 3u) + 1u);
-            ly = min(ly, ((nc >> 2u) & 3u) + 1u);
-        }
-    }
-    textureStore(rates_filtered, t, vec4<u32>(lx | (ly << 2u), 0u, 0u, 0u));
+    textureStore(rates_filtered, t, vec4<u32>(filtered_code(t, tiles), 0u, 0u, 0u));
 }
