@@ -828,6 +828,17 @@ mod tests {
     use super::*;
 
     #[test]
+    fn instance_runs_split_a_draw_into_the_taken_objects() {
+        let runs = |r: Range<u32>, only| instance_runs(r, only).collect::<Vec<_>>();
+        assert_eq!(runs(2..6, None), vec![2..6]);
+        // Objects 0..8: 1, 3, 4 and 7 taken; 8 and beyond are not in the list (not taken).
+        let taken = [false, true, false, true, true, false, false, true];
+        assert_eq!(runs(0..10, Some(&taken)), vec![1..2, 3..5, 7..8]);
+        assert_eq!(runs(4..7, Some(&taken)), vec![4..5]);
+        assert!(runs(5..7, Some(&taken)).is_empty());
+    }
+
+    #[test]
     fn tangents_follow_increasing_u_with_handedness() {
         // A quad in the xy plane, normal +z, u along +x, v along -y (glTF's v points down).
         let v = |x: f32, y: f32, u: f32, w: f32| MaterialVertex {

@@ -9,7 +9,12 @@
 //! CSO with mosaiikki's tolerance (view units); mosaiikki's differential fill; Intel's unclamped
 //! history (mosaiikki's clamps are options); mosaiikki's velocity buffer of the dynamic objects
 //! only (`velocity_objects`), with a depth test for static occluders mosaiikki does not need
-//! (every object of its scene moves).
+//! (every object of its scene moves). Issue 26 item 5, on lavapipe: the velocity pass of
+//! `scenarios/perf/aso-cso-city.toml` at 320x180 (24 moving cars among static buildings) takes
+//! 1.8-2.1 ms instead of 10.3-14.1 ms with every object, frames identical (28.42 dB); on a box
+//! moving about 4 px a frame behind a static one at 128x96, 26.88 against 26.91 dB, FLIP 0.0330
+//! against 0.0326 (a few pixels a frame at the occluder's edges, where the neighbours' mean mixes
+//! both surfaces).
 
 pub mod gpu;
 pub mod model;
