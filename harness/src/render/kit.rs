@@ -8,7 +8,7 @@
 use std::collections::HashMap;
 
 use super::graph::{Plan, Res};
-use super::scene::{SceneGpu, ScenePipeline};
+use super::scene::{Objects, SceneGpu, ScenePipeline};
 use super::timers::Timers;
 use crate::gpu::Gpu;
 
@@ -97,14 +97,15 @@ pub fn record_scene_pass(
         scene,
         timers,
         encoder,
-        (name, slot, kind),
+        (name, slot, kind, Objects::All),
         color_view,
         depth_view,
         wgpu::LoadOp::Clear(0.0),
     );
 }
 
-/// [`record_scene_pass`] with the depth buffer's load op: `Load` draws over a pre-conditioned
+/// [`record_scene_pass`] with the objects drawn ([`Objects::Dynamic`]: a velocity pass of the
+/// dynamic objects only) and the depth buffer's load op: `Load` draws over a pre-conditioned
 /// depth buffer (checkerboard-2x2's masks), `Clear(0.0)` starts from the far plane (reversed-Z).
 #[allow(clippy::too_many_arguments)]
 pub fn record_scene_pass_on(
@@ -112,7 +113,7 @@ pub fn record_scene_pass_on(
     scene: &mut SceneGpu,
     timers: &Timers,
     encoder: &mut wgpu::CommandEncoder,
-    (name, slot, kind): (&'static str, u32, ScenePipeline),
+    (name, slot, kind, objects): (&'static str, u32, ScenePipeline, Objects),
     color_view: &wgpu::TextureView,
     depth_view: &wgpu::TextureView,
     depth_load: wgpu::LoadOp<f32>,
@@ -149,7 +150,7 @@ pub fn record_scene_pass_on(
             multiview_mask: None,
         });
         timers.begin_stats(&mut rp, name);
-        scene.draw_kind(&mut rp, kind, slot);
+        scene.draw_objects(&mut rp, kind, slot, objects);
         timers.end_stats(&mut rp, name);
     }
     timers.end(encoder, q);

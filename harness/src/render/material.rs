@@ -7,7 +7,8 @@
 //! hundreds of buildings are a few draws. Opaque draws go first, then alpha-tested (`MASK`,
 //! discarded below `alphaCutoff`), then blended (`BLEND`, depth test without depth writes, sorted
 //! back to front per frame by each draw's centre). The velocity pass draws opaque and
-//! alpha-tested surfaces only: a blended surface has no one motion.
+//! alpha-tested surfaces only: a blended surface has no one motion. A pass may draw a subset of
+//! the scene objects ([`instance_runs`]: a dynamic-only velocity pass).
 //!
 //! Shading is `shaders/material/material.wgsl`, appended to `scene.wgsl` (same frame uniforms,
 //! lights and objects); each material picks the GGX metallic-roughness BRDF or Blinn-Phong.
@@ -16,6 +17,7 @@
 //! Not here: reading glTF files (`gltf_model.rs`), the city (`city.rs`), mip levels (`mips.rs`).
 
 use std::collections::HashMap;
+use std::ops::Range;
 use std::sync::Mutex;
 
 use bytemuck::{Pod, Zeroable};
@@ -614,14 +616,16 @@ impl MaterialGpu {
         }
     }
 
-    /// Draws every textured object with view bind group `scene_group` (group 0, at `offset`)
-    /// into the current pass, with the pipelines of `kind` ([`MaterialGpu::prepare`] first).
+    /// Draws the textured objects `only` takes (per scene object; `None`: all) with view bind
+    /// group `scene_group` (group 0, at `offset`) into the current pass, with the pipelines of
+    /// `kind` ([`MaterialGpu::prepare`] first).
     pub fn draw(
         &self,
         pass: &mut wgpu::RenderPass<'_>,
         kind: ScenePipeline,
         scene_group: &wgpu::BindGroup,
         offset: u32,
+        only: Option<&[bool]>,
     ) {
         if self.draws.is_empty() {
             return;
@@ -640,14 +644,43 @@ impl MaterialGpu {
                 pass.set_pipeline(p);
                 current = Some(d.class);
             }
+            let mut runs =
+                instance_runs(d.first_object..d.first_object + d.object_count, only).peekable();
+            if runs.peek().is_none() {
+                continue; // none of its instances is taken
+            }
             pass.set_bind_group(1, &self.bind_groups[d.bind_group], &[]);
-            pass.draw_indexed(
-                d.first_index..d.first_index + d.index_count,
-                d.base_vertex,
-                d.first_object..d.first_object + d.object_count,
-            );
+            for instances in runs {
+                pass.draw_indexed(
+                    d.first_index..d.first_index + d.index_count,
+                    d.base_vertex,
+                    instances,
+                );
+            }
         }
     }
+}
+
+/// The runs of consecutive scene objects in `objects` that `only` takes (per scene object;
+/// `None`: the whole range): the instance ranges of a draw restricted to them. A placement mixes
+/// static and moving objects (the city's parked and moving cars of one colour), so a draw of
+/// the dynamic objects only may become several.
+pub fn instance_runs(
+    objects: Range<u32>,
+    only: Option<&[bool]>,
+) -> impl Iterator<Item = Range<u32>> + '_ {
+    let taken = move |i: u32| only.is_none_or(|o| o.get(i as usize).copied().unwrap_or(false));
+    let mut next = objects.start;
+    std::iter::from_fn(move || {
+        while next < objects.end && !taken(next) {
+            next += 1;
+        }
+        let start = next;
+        while next < objects.end && taken(next) {
+            next += 1;
+        }
+        (start < next).then_some(start..next)
+    })
 }
 
 fn gpu_material(m: &Material) -> GpuMaterial {
@@ -793,6 +826,17 @@ fn pipeline(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn instance_runs_split_a_draw_into_the_taken_objects() {
+        let runs = |r: Range<u32>, only| instance_runs(r, only).collect::<Vec<_>>();
+        assert_eq!(runs(2..6, None), vec![2..6]);
+        // Objects 0..8: 1, 3, 4 and 7 taken; 8 and beyond are not in the list (not taken).
+        let taken = [false, true, false, true, true, false, false, true];
+        assert_eq!(runs(0..10, Some(&taken)), vec![1..2, 3..5, 7..8]);
+        assert_eq!(runs(4..7, Some(&taken)), vec![4..5]);
+        assert!(runs(5..7, Some(&taken)).is_empty());
+    }
 
     #[test]
     fn tangents_follow_increasing_u_with_handedness() {

@@ -15,7 +15,7 @@ use std::collections::HashMap;
 use bytemuck::{Pod, Zeroable};
 use glam::{DMat4, DVec3, Vec2, Vec4};
 
-use super::material::{MaterialGpu, Model, Placement};
+use super::material::{instance_runs, MaterialGpu, Model, Placement};
 use super::mesh::{self, Mesh, MeshError, Vertex};
 use super::{city, gltf_model};
 use crate::scenario::scene::{CameraPose, GroundFilter, Light, Stage};
@@ -93,6 +93,16 @@ impl View {
     }
 }
 
+/// Which of the scene's objects a pass draws.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Objects {
+    /// Every object.
+    All,
+    /// Only the objects that move by themselves (animated scene objects, the city's moving
+    /// vehicles); the ground, still objects and parked vehicles are left out.
+    Dynamic,
+}
+
 /// A draw: one object's index range.
 struct Draw {
     first_index: u32,
@@ -131,6 +141,9 @@ pub struct SceneGpu {
     materials: Option<MaterialGpu>,
     /// The city's objects, after the scenario's in the objects buffer.
     city_objects: Vec<city::CityObject>,
+    /// Per object of the objects buffer (its instance index): whether it moves by itself, as
+    /// `write_objects` marks it for the shaders (`emissive.a`).
+    dynamic: Vec<bool>,
     pub triangles: usize,
     /// Bytes of geometry and uniform buffers and of textures with their mip chains, shared by
     /// every variant.
@@ -177,6 +190,13 @@ impl SceneGpu {
             city_objects = generated.objects;
             models.push((generated.model, generated.placements));
         }
+        // In the objects buffer's order (`write_objects`): the ground (static: it follows the
+        // camera, its pattern stays in world space), the scenario's objects (textured ones too),
+        // the city's.
+        let dynamic: Vec<bool> = (scenario.scene.ground.iter().map(|_| false))
+            .chain(scenario.scene.objects.iter().map(|o| o.animation.is_some()))
+            .chain(city_objects.iter().map(|c| c.is_dynamic()))
+            .collect();
         let mut vertices: Vec<Vertex> = Vec::new();
         let mut indices: Vec<u32> = Vec::new();
         let mut draws = Vec::new();
@@ -300,6 +320,7 @@ impl SceneGpu {
             pipelines: HashMap::new(),
             materials,
             city_objects,
+            dynamic,
             triangles,
             buffer_bytes,
         })
@@ -603,14 +624,27 @@ impl SceneGpu {
     /// Draws every object with view `slot` into the current render pass with the pipelines of
     /// `kind` ([`SceneGpu::pipeline`] first): the untextured objects, then the textured models.
     pub fn draw_kind(&self, pass: &mut wgpu::RenderPass<'_>, kind: ScenePipeline, slot: u32) {
-        let pipeline = &self.pipelines[&kind];
-        self.draw(pass, pipeline, slot);
+        self.draw_objects(pass, kind, slot, Objects::All);
+    }
+
+    /// [`SceneGpu::draw_kind`] for the `objects` asked for only: a velocity pass of the dynamic
+    /// objects leaves the static ones (and their overdraw) out.
+    pub fn draw_objects(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        kind: ScenePipeline,
+        slot: u32,
+        objects: Objects,
+    ) {
+        let only = self.selection(objects);
+        self.draw_selected(pass, &self.pipelines[&kind], slot, only);
         if let Some(m) = &self.materials {
             m.draw(
                 pass,
                 kind,
                 &self.bind_group,
                 (slot as u64 * SLOT_STRIDE) as u32,
+                only,
             );
         }
     }
@@ -623,6 +657,25 @@ impl SceneGpu {
         pipeline: &wgpu::RenderPipeline,
         slot: u32,
     ) {
+        self.draw_selected(pass, pipeline, slot, None);
+    }
+
+    /// Per object, whether `objects` takes it (`None`: every object).
+    fn selection(&self, objects: Objects) -> Option<&[bool]> {
+        match objects {
+            Objects::All => None,
+            Objects::Dynamic => Some(&self.dynamic),
+        }
+    }
+
+    /// The untextured draws of the objects `only` takes (`None`: all).
+    fn draw_selected(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        pipeline: &wgpu::RenderPipeline,
+        slot: u32,
+        only: Option<&[bool]>,
+    ) {
         pass.set_pipeline(pipeline);
         pass.set_bind_group(0, &self.bind_group, &[(slot as u64 * SLOT_STRIDE) as u32]);
         pass.set_vertex_buffer(0, self.vertex_buffer.slice(..));
@@ -632,11 +685,13 @@ impl SceneGpu {
                 continue; // a textured object's slot
             }
             let i = i as u32;
-            pass.draw_indexed(
-                d.first_index..d.first_index + d.index_count,
-                d.base_vertex,
-                i..i + 1,
-            );
+            for instances in instance_runs(i..i + 1, only) {
+                pass.draw_indexed(
+                    d.first_index..d.first_index + d.index_count,
+                    d.base_vertex,
+                    instances,
+                );
+            }
         }
     }
 }

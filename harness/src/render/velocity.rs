@@ -2,7 +2,14 @@
 //! pixel's motion (the scene's velocity pipeline) with its own depth buffer, declared in the pass
 //! graph beside the technique's passes and read by its reconstruction only where objects move by
 //! themselves and the technique's `velocity` option is on. Otherwise nothing reads it, the graph
-//! culls it, and a 1x1 placeholder is bound in its place, so one bind group layout serves both.
+//! culls it, and 1x1 placeholders are bound in its place, so one bind group layout serves both.
+//!
+//! The technique says which objects it draws ([`Objects`]): all of them (motion for every pixel,
+//! exact where a static object hides a moving one), or only the dynamic ones, as mosaiikki
+//! ("Overview" 1: "Only dynamic objects; for static objects camera reprojection is used in the
+//! reconstruction pass"), which leaves the static geometry's overdraw out of the pass; a static
+//! object in front of a moving one is then not in the buffer, and the reconstruction tells it
+//! by comparing [`VELOCITY_DEPTH`] with its own depth.
 //!
 //! Infrastructure: knows no technique. Not for the motion target of the `tde` metric (native's
 //! velocity-only forward path) or a technique's own motion pass drawn over a pre-conditioned
@@ -11,14 +18,14 @@
 use std::collections::HashMap;
 
 use super::graph::{Graph, PassKind, Plan, Res, TextureDesc};
-use super::kit::{placeholder_texture, record_scene_pass, TextureMap};
-use super::scene::{SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FORMAT};
+use super::kit::{placeholder_texture, record_scene_pass_on, TextureMap};
+use super::scene::{Objects, SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FORMAT};
 use super::timers::Timers;
 use crate::gpu::Gpu;
 
 /// The motion target the reconstruction reads.
 pub const VELOCITY: Res = Res::new("velocity");
-/// Its depth buffer.
+/// Its depth buffer (reversed-Z, cleared to 0: 0 where nothing was drawn).
 pub const VELOCITY_DEPTH: Res = Res::new("velocity_depth");
 /// The pass's name in the plan and the timings.
 pub const PASS: &str = "velocity";
@@ -44,7 +51,8 @@ pub fn declare(g: &mut Graph, width: u32, height: u32) {
 pub struct VelocityPass {
     targets: Option<(wgpu::TextureView, wgpu::TextureView)>,
     binding: wgpu::TextureView,
-    _placeholder: Option<wgpu::Texture>,
+    depth_binding: wgpu::TextureView,
+    _placeholders: Vec<wgpu::Texture>,
 }
 
 impl VelocityPass {
@@ -58,14 +66,17 @@ impl VelocityPass {
             VelocityPass {
                 targets: Some((textures.view(VELOCITY), textures.view(VELOCITY_DEPTH))),
                 binding: textures.view(VELOCITY),
-                _placeholder: None,
+                depth_binding: textures.view(VELOCITY_DEPTH),
+                _placeholders: Vec::new(),
             }
         } else {
             let t = placeholder_texture(device, "no velocity", COLOR_FORMAT);
+            let d = placeholder_texture(device, "no velocity depth", DEPTH_FORMAT);
             VelocityPass {
                 targets: None,
                 binding: t.create_view(&Default::default()),
-                _placeholder: Some(t),
+                depth_binding: d.create_view(&Default::default()),
+                _placeholders: vec![t, d],
             }
         }
     }
@@ -80,9 +91,14 @@ impl VelocityPass {
         &self.binding
     }
 
+    /// What a reconstruction binds to compare depths: [`VELOCITY_DEPTH`], or a placeholder.
+    pub fn depth_binding(&self) -> &wgpu::TextureView {
+        &self.depth_binding
+    }
+
     /// Records the pass when it runs: the whole, unjittered view of `time` (from `prev_time`)
-    /// written to the scene's view `slot`, then the velocity pipeline into the targets, timed as
-    /// [`PASS`]. Returns [`VelocityPass::runs`].
+    /// written to the scene's view `slot`, then the velocity pipeline drawing `objects` into the
+    /// targets, timed as [`PASS`]. Returns [`VelocityPass::runs`].
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -93,21 +109,21 @@ impl VelocityPass {
         slot: u32,
         time: f64,
         prev_time: f64,
+        objects: Objects,
     ) -> bool {
         let Some((color, depth)) = &self.targets else {
             return false;
         };
         scene.write_view(&gpu.queue, slot, &View::whole(time, prev_time));
-        record_scene_pass(
+        record_scene_pass_on(
             gpu,
             scene,
             timers,
             encoder,
-            PASS,
+            (PASS, slot, ScenePipeline::Velocity, objects),
             color,
             depth,
-            slot,
-            ScenePipeline::Velocity,
+            wgpu::LoadOp::Clear(0.0),
         );
         true
     }

@@ -4,7 +4,10 @@
 //! through the projection), then a compute pass that rebuilds every full-resolution pixel from
 //! this frame's samples and the previous frame's (`resolve.wgsl`, CPU model
 //! in `model.rs`). Sampling is either a 2x MSAA target shaded per sample (Intel, mosaiikki) or two
-//! jittered single-sample renders (same samples on any adapter).
+//! jittered single-sample renders (same samples on any adapter). In a scene with dynamic objects
+//! the kit's velocity pass (`render/velocity.rs`) draws them (or every object, with
+//! `velocity_objects = "all"`); with the dynamic objects only, the reconstruction also binds that
+//! pass's depth to tell a static object in front of a moving one (`resolve.wgsl` step 3).
 //!
 //! The quarter-resolution targets are one pixel wider than `ceil(W / 2)`, so that odd frames also
 //! shade the top-right quadrant of the last block column: every full-resolution pixel is covered
@@ -15,7 +18,7 @@ use std::collections::HashMap;
 
 use glam::Vec2;
 
-use super::{Occlusion, Options, Sampling};
+use super::{Occlusion, Options, Sampling, VelocityObjects};
 use crate::gpu::{Gpu, Unsupported, STANDARD_2X};
 use crate::render::graph::{Graph, PassKind, Plan, TextureDesc};
 use crate::render::kit::{
@@ -24,7 +27,7 @@ use crate::render::kit::{
 use crate::render::renderer::{FrameInfo, Renderer};
 use crate::render::scene::{SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::render::timers::Timers;
-use crate::render::velocity::{self, VelocityPass, VELOCITY};
+use crate::render::velocity::{self, VelocityPass, VELOCITY, VELOCITY_DEPTH};
 
 pub static RESOLVE_WGSL: &str = include_str!("resolve.wgsl");
 pub static TWO_PASS_WGSL: &str = include_str!("two_pass.wgsl");
@@ -166,9 +169,13 @@ pub fn graph(options: &Options, width: u32, height: u32, dynamic_scene: bool) ->
     }
     velocity::declare(&mut g, width, height);
     // Dynamic objects need the velocity buffer; without them, nothing reads it and it is culled.
+    // Drawn for the dynamic objects only, its depth tells where a static object hides them.
     let use_velocity = options.velocity && dynamic_scene;
     if use_velocity {
         reads.push(VELOCITY.name());
+        if options.velocity_objects == VelocityObjects::Dynamic {
+            reads.push(VELOCITY_DEPTH.name());
+        }
     }
     g.resource("color", full(COLOR_FORMAT));
     g.pass("reconstruct", PassKind::Compute, &reads, &["color"])
@@ -234,6 +241,7 @@ impl CheckerboardGpu {
                 }
             };
             views.push((9, velocity.binding().clone()));
+            views.push((11, velocity.depth_binding().clone()));
             views.push((10, output_view.clone()));
             let views: Vec<(u32, &wgpu::TextureView)> =
                 views.iter().map(|(b, v)| (*b, v)).collect();
@@ -374,12 +382,21 @@ impl Renderer for CheckerboardGpu {
             }
         }
         // The whole view (`base` at full resolution, no jitter) in slot 2.
-        let use_velocity =
-            self.velocity
-                .record(gpu, scene, timers, encoder, 2, frame.time, frame.prev_time);
+        let o = self.options;
+        let use_velocity = self.velocity.record(
+            gpu,
+            scene,
+            timers,
+            encoder,
+            2,
+            frame.time,
+            frame.prev_time,
+            o.velocity_objects.objects(),
+        );
+        // Only the dynamic objects drawn: the reconstruction tests for static occluders.
+        let occluders = use_velocity && o.velocity_objects == VelocityObjects::Dynamic;
         let (cur, prev) = scene.view_projections(frame.time, frame.prev_time);
         let near_far = scene.near_far();
-        let o = self.options;
         let params = ResolveParams {
             reproject: (cur * prev.inverse()).as_mat4().to_cols_array_2d(),
             size: [self.width, self.height, qw, qh],
@@ -389,7 +406,12 @@ impl Renderer for CheckerboardGpu {
                 u32::from(o.occlusion == Occlusion::Aso),
                 o.fill.code(),
             ],
-            mode2: [o.clamp.code(), u32::from(use_velocity), 0, 0],
+            mode2: [
+                o.clamp.code(),
+                u32::from(use_velocity),
+                u32::from(occluders),
+                0,
+            ],
             depth: [o.depth_tolerance, near_far.0, near_far.1, 0.0],
         };
         gpu.queue

@@ -2,12 +2,12 @@
 //! step, in f32: the oracle the GPU output is compared with in tests.
 //!
 //! Not used when rendering. Inputs are the quarter-resolution samples of the current and previous
-//! frame (as read back from the two-pass targets), the velocity buffer, and the parameters the
-//! shader receives.
+//! frame (as read back from the two-pass targets), the velocity buffer and its depth, and the
+//! parameters the shader receives.
 
 use glam::{Mat4, Vec2, Vec3, Vec4};
 
-use super::{Clamp, Fill, Occlusion, Options};
+use super::{Clamp, Fill, Occlusion, Options, VelocityObjects};
 
 /// One frame's quarter-resolution samples: colour and reversed-Z depth per sample index.
 #[derive(Clone, Debug)]
@@ -33,6 +33,9 @@ pub struct Inputs<'a> {
     pub previous: &'a Samples,
     /// Full-resolution velocity (pixels, y down; z = 1 on dynamic objects), if recorded.
     pub velocity: Option<&'a [Vec4]>,
+    /// The velocity pass's reversed-Z depth (full resolution, 0 where it drew nothing): needed
+    /// with `velocity_objects = "dynamic"` and a velocity buffer, for the static-occluder test.
+    pub velocity_depth: Option<&'a [f32]>,
 }
 
 fn is_current(inp: &Inputs, q: u32) -> bool {
@@ -189,6 +192,51 @@ fn filled(inp: &Inputs, x: i32, y: i32) -> (Vec4, Source) {
     (finish(fill(inp, &n), tonemapped), Source::Fill)
 }
 
+/// Where a missing pixel's content was last frame came from (the shader's step 3).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Motion {
+    /// The velocity buffer (a dynamic object).
+    Velocity,
+    /// Camera reprojection of the previous sample's depth (static content, or a static object
+    /// in front of a dynamic one in a dynamic-only velocity buffer).
+    Camera,
+}
+
+/// Step 3: the previous position (full-resolution pixels) of missing pixel (x, y), and how it
+/// was found.
+pub fn previous_position(inp: &Inputs, x: i32, y: i32) -> (Vec2, Motion) {
+    let size = Vec2::new(inp.width as f32, inp.height as f32);
+    let centre = Vec2::new(x as f32, y as f32) + 0.5;
+    let i = (y as u32 * inp.width + x as u32) as usize;
+    let v = inp.velocity.map(|v| v[i]).unwrap_or(Vec4::ZERO);
+    let mut dynamic = inp.velocity.is_some() && v.z > 0.5;
+    // A dynamic-only buffer says nothing of static occluders: where the dynamic surface is behind
+    // this frame's neighbours by the tolerance, a static object hides it (`resolve.wgsl`).
+    if dynamic && inp.options.velocity_objects == VelocityObjects::Dynamic {
+        let depth = inp
+            .velocity_depth
+            .expect("velocity_depth is needed with velocity_objects = \"dynamic\"")[i];
+        let behind = linear_depth(inp, depth) - neighbour_depth(inp, x, y);
+        dynamic = behind < inp.options.depth_tolerance;
+    }
+    if dynamic {
+        return (centre - v.truncate().truncate(), Motion::Velocity);
+    }
+    let d = depth_at(inp, x, y);
+    let ndc = Vec4::new(
+        centre.x / size.x * 2.0 - 1.0,
+        1.0 - centre.y / size.y * 2.0,
+        d,
+        1.0,
+    );
+    let now = inp.reproject * ndc;
+    let now_px = Vec2::new(
+        (now.x / now.w * 0.5 + 0.5) * size.x,
+        (0.5 - now.y / now.w * 0.5) * size.y,
+    );
+    (centre - (now_px - centre), Motion::Camera)
+}
+
 /// The reconstructed colour of full-resolution pixel (x, y) and how it was made.
 pub fn reconstruct(inp: &Inputs, x: i32, y: i32) -> (Vec4, Source) {
     let q = quadrant(x, y);
@@ -198,29 +246,7 @@ pub fn reconstruct(inp: &Inputs, x: i32, y: i32) -> (Vec4, Source) {
     if inp.reset {
         return filled(inp, x, y);
     }
-    let size = Vec2::new(inp.width as f32, inp.height as f32);
-    let centre = Vec2::new(x as f32, y as f32) + 0.5;
-    let v = inp
-        .velocity
-        .map(|v| v[(y as u32 * inp.width + x as u32) as usize])
-        .unwrap_or(Vec4::ZERO);
-    let prev_pos = if inp.velocity.is_some() && v.z > 0.5 {
-        centre - v.truncate().truncate()
-    } else {
-        let d = depth_at(inp, x, y);
-        let ndc = Vec4::new(
-            centre.x / size.x * 2.0 - 1.0,
-            1.0 - centre.y / size.y * 2.0,
-            d,
-            1.0,
-        );
-        let now = inp.reproject * ndc;
-        let now_px = Vec2::new(
-            (now.x / now.w * 0.5 + 0.5) * size.x,
-            (0.5 - now.y / now.w * 0.5) * size.y,
-        );
-        centre - (now_px - centre)
-    };
+    let (prev_pos, _) = previous_position(inp, x, y);
     let (px, py) = (prev_pos.x.floor() as i32, prev_pos.y.floor() as i32);
     if !inside(inp, px, py) || is_current(inp, quadrant(px, py)) {
         return filled(inp, x, y);
@@ -410,6 +436,7 @@ mod tests {
                 current: cur,
                 previous: prev,
                 velocity: None,
+                velocity_depth: None,
             };
             for (i, (c, src)) in reconstruct_all(&inp).into_iter().enumerate() {
                 let (x, y) = (i as u32 % w, i as u32 / w);
@@ -439,6 +466,7 @@ mod tests {
             current: &white,
             previous: &white,
             velocity: None,
+            velocity_depth: None,
         };
         let (c, src) = reconstruct(&inp, 1, 0);
         assert_eq!(src, Source::Fill);
@@ -475,6 +503,8 @@ mod tests {
         // Content moved one pixel right: the pixel was one to the left last frame, in a quadrant the
         // previous (odd) frame did not shade.
         let velocity: Vec<Vec4> = vec![Vec4::new(1.0, 0.0, 1.0, 0.0); (w * h) as usize];
+        // The moving surface is the one the samples show (not behind a static occluder).
+        let velocity_depth = vec![0.5; (w * h) as usize];
         let inp = Inputs {
             width: w,
             height: h,
@@ -487,6 +517,7 @@ mod tests {
             current: &c,
             previous: &c,
             velocity: Some(&velocity),
+            velocity_depth: Some(&velocity_depth),
         };
         assert_eq!(reconstruct(&inp, 3, 0).1, Source::Fill);
         // Two pixels: the quadrant matches again, the block differs, depths agree: history.
@@ -505,5 +536,61 @@ mod tests {
             ..inp
         };
         assert_eq!(reconstruct(&inp, 3, 0).1, Source::Fill);
+    }
+
+    #[test]
+    fn a_dynamic_surface_behind_its_neighbours_is_camera_reprojected_with_a_dynamic_only_buffer() {
+        let (w, h) = (8, 4);
+        let n = (w * h) as usize;
+        // This frame's samples at reversed-Z 0.5 (view depth ~0.2); the velocity buffer says
+        // "dynamic, 2 px right" everywhere; the camera is still.
+        let c = flat(w, h, |_, _, _| Vec4::new(0.5, 0.5, 0.5, 1.0), 0.5);
+        let velocity = vec![Vec4::new(2.0, 0.0, 1.0, 0.0); n];
+        let at = |depth: f32| vec![depth; n];
+        let (same, behind, in_front) = (at(0.5), at(0.01), at(0.9));
+        let inp = |objects, velocity_depth| Inputs {
+            width: w,
+            height: h,
+            parity: 0,
+            reset: false,
+            options: Options {
+                velocity_objects: objects,
+                ..options(Fill::Plain, Clamp::None)
+            },
+            near: 0.1,
+            far: 100.0,
+            reproject: Mat4::IDENTITY,
+            current: &c,
+            previous: &c,
+            velocity: Some(&velocity),
+            velocity_depth,
+        };
+        let centre = Vec2::new(3.5, 0.5);
+        let moved = (centre - Vec2::new(2.0, 0.0), Motion::Velocity);
+        let dynamic = VelocityObjects::Dynamic;
+        // The dynamic surface is what the neighbours show, or in front of them: its velocity.
+        assert_eq!(previous_position(&inp(dynamic, Some(&same)), 3, 0), moved);
+        assert_eq!(
+            previous_position(&inp(dynamic, Some(&in_front)), 3, 0),
+            moved
+        );
+        // Far behind them (view depth ~10 against ~0.2): a static object hides it, camera path.
+        assert_eq!(
+            previous_position(&inp(dynamic, Some(&behind)), 3, 0),
+            (centre, Motion::Camera)
+        );
+        assert_eq!(
+            reconstruct(&inp(dynamic, Some(&behind)), 3, 0).1,
+            Source::History
+        );
+        // With every object in the buffer it is exact: the velocity, whatever its depth says.
+        assert_eq!(
+            previous_position(&inp(VelocityObjects::All, Some(&behind)), 3, 0),
+            moved
+        );
+        assert_eq!(
+            previous_position(&inp(VelocityObjects::All, None), 3, 0),
+            moved
+        );
     }
 }

@@ -7,7 +7,7 @@
 // 1b. Pixel coordinates are y-down: quadrant 0 = top-left, 1 = top-right, 2 = bottom-left,
 // 3 = bottom-right of a 2x2 block. Even frames shade quadrants {0, 3}, odd frames {1, 2}.
 // The sample accessors `load_color` / `load_depth` come from a prelude (two-pass or 2x MSAA).
-// The CPU model in harness/src/render/checkerboard_model.rs mirrors this file step by step.
+// The CPU model in model.rs beside this file mirrors it step by step.
 
 struct Params {
     // Previous frame's full-resolution NDC (unjittered) to current clip space.
@@ -17,7 +17,8 @@ struct Params {
     // x: parity (0 even, 1 odd), y: reset history, z: occlusion (0 cso, 1 aso),
     // w: fill (0 plain, 1 tonemapped, 2 differential).
     mode: vec4<u32>,
-    // x: clamp (0 none, 1 min-max, 2 min-max with depth confidence), y: velocity buffer present.
+    // x: clamp (0 none, 1 min-max, 2 min-max with depth confidence), y: velocity buffer present,
+    // z: it holds the dynamic objects only (test its depth for static occluders).
     mode2: vec4<u32>,
     // x: depth tolerance (view units), y: near, z: far.
     depth: vec4<f32>,
@@ -25,6 +26,8 @@ struct Params {
 
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(9) var velocity: texture_2d<f32>;
+// The velocity pass's depth (reversed-Z, 0 where it drew nothing); read when mode2.z is set.
+@group(0) @binding(11) var velocity_depth: texture_depth_2d;
 @group(0) @binding(10) var output: texture_storage_2d<rgba16float, write>;
 
 // Which set of samples holds quadrant `q`: the current frame's if this frame shaded it.
@@ -194,6 +197,23 @@ fn reconstruct(pixel: vec2<i32>) -> vec4<f32> {
         var v = vec4<f32>(0.0);
         if params.mode2.y != 0u {
             v = textureLoad(velocity, pixel, 0);
+        }
+        // Static occluders (mode2.z: the velocity pass drew the dynamic objects only, as
+        // mosaiikki's "Overview" 1, "Only dynamic objects; for static objects camera reprojection
+        // is used in the reconstruction pass"). mosaiikki needs no test, every object of its scene
+        // moves; here a static object in front of a moving one is not in the buffer, which then
+        // says "dynamic, motion m" where the pixel shows the static object. This frame's
+        // neighbours show what is in front: where the dynamic surface lies behind their mean
+        // view depth by the tolerance or more, the pixel is taken as static (camera reprojection,
+        // the path mosaiikki's "Reconstruction shader" 2 gives static objects). A plane or a
+        // convex surface never is behind its own neighbours' mean (view depth is convex along a
+        // screen line), so an unoccluded dynamic surface keeps its velocity; at an occluder's
+        // edge the mean mixes both and the rule may pick either.
+        if v.z > 0.5 && params.mode2.z != 0u {
+            let behind = linear_depth(textureLoad(velocity_depth, pixel, 0)) - neighbour_depth(pixel);
+            if behind >= params.depth.x {
+                v.z = 0.0;
+            }
         }
         if v.z > 0.5 {
             prev_pos = centre - v.xy;

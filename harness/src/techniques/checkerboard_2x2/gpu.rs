@@ -36,7 +36,7 @@ use crate::render::kit::{
     timed_dispatch, PingPong,
 };
 use crate::render::renderer::{FrameInfo, Renderer};
-use crate::render::scene::{SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FORMAT};
+use crate::render::scene::{Objects, SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::render::timers::Timers;
 
 pub static MASK_WGSL: &str = include_str!("mask.wgsl");
@@ -434,7 +434,12 @@ impl Renderer for Checkerboard2x2Gpu {
             scene,
             timers,
             encoder,
-            ("scene", 0, ScenePipeline::Forward { samples: 1 }),
+            (
+                "scene",
+                0,
+                ScenePipeline::Forward { samples: 1 },
+                Objects::All,
+            ),
             scene_color,
             depth,
             wgpu::LoadOp::Load,
@@ -452,7 +457,7 @@ impl Renderer for Checkerboard2x2Gpu {
             scene,
             timers,
             encoder,
-            ("motion", 0, ScenePipeline::Velocity),
+            ("motion", 0, ScenePipeline::Velocity, Objects::All),
             motion,
             motion_depth,
             wgpu::LoadOp::Load,

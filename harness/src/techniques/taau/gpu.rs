@@ -19,7 +19,7 @@ use crate::render::kit::{
     allocate, bind_group, compute_pipeline, record_scene_pass, timed_dispatch, PingPong, TextureMap,
 };
 use crate::render::renderer::{FrameInfo, Renderer};
-use crate::render::scene::{SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FORMAT};
+use crate::render::scene::{Objects, SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::render::timers::Timers;
 use crate::render::velocity::{self, VelocityPass, VELOCITY};
 use crate::techniques::fsr1::gpu::{rcas_pass, FsrPass};
@@ -294,9 +294,18 @@ impl Renderer for TaauGpu {
             0,
             ScenePipeline::Forward { samples: 1 },
         );
-        let use_velocity =
-            self.velocity
-                .record(gpu, scene, timers, encoder, 1, frame.time, frame.prev_time);
+        // Every object, as Bevy's TAA renders motion: the resolve trusts the buffer's dynamic
+        // mark with no occluder test, so a static object in front of a moving one must be in it.
+        let use_velocity = self.velocity.record(
+            gpu,
+            scene,
+            timers,
+            encoder,
+            1,
+            frame.time,
+            frame.prev_time,
+            Objects::All,
+        );
         let (cur, prev) = scene.view_projections(frame.time, frame.prev_time);
         // A still camera reprojects static content exactly onto itself.
         let camera_still = cur == prev;
