@@ -111,7 +111,7 @@ crate::options! {
         ),
         neighbour_filter: bool = flag(
             true,
-            "a `rate_filter` pass limiting neighbouring tiles (8-neighbourhood) to a 2x rate difference per axis, quarter raised to half (section 5.4)",
+            "section 5.4's filter limiting neighbouring tiles (8-neighbourhood) to a 2x rate difference per axis, quarter raised to half: a `rate_filter` pass on the software path, applied by `rate_attachment` as it reads the codes on the hardware path",
         ),
         allow_4x4: bool = flag(
             false,
