@@ -195,20 +195,22 @@ fn moving_camera_matches_the_model_with_every_option() {
     // Pans about 2.4 px per frame at 40x30 and 60 fps.
     let s =
         scenario("[[camera.keyframes]]\ntime = 1\nposition = [3, 1.5, 4]\ntarget = [3, 0.4, 0]\n");
-    for (occlusion, fill, clamp) in [
-        ("cso", "differential", "none"),
-        ("aso", "plain", "min-max"),
-        ("cso", "tonemapped", "min-max-confidence"),
+    for (occlusion, aso_motion, fill, clamp) in [
+        ("cso", "quarter-texel", "differential", "none"),
+        ("aso", "quarter-texel", "plain", "min-max"),
+        ("aso", "block", "plain", "min-max"),
+        ("cso", "quarter-texel", "tonemapped", "min-max-confidence"),
     ] {
         let v = variant(&[
             ("occlusion", ParamValue::Str(occlusion.into())),
+            ("aso_motion", ParamValue::Str(aso_motion.into())),
             ("fill", ParamValue::Str(fill.into())),
             ("clamp", ParamValue::Str(clamp.into())),
         ]);
         let sources = compare_with_model(&s, &v, 4);
         assert!(
             sources.contains(&Source::History) && sources.contains(&Source::Fill),
-            "{occlusion} {fill} {clamp}"
+            "{occlusion} {aso_motion} {fill} {clamp}"
         );
     }
 }

@@ -18,7 +18,7 @@ use std::collections::HashMap;
 
 use glam::Vec2;
 
-use super::{Occlusion, Options, Sampling, VelocityObjects};
+use super::{AsoMotion, Occlusion, Options, Sampling, VelocityObjects};
 use crate::gpu::{Gpu, Unsupported, STANDARD_2X};
 use crate::render::graph::{Graph, PassKind, Plan, TextureDesc};
 use crate::render::kit::{
@@ -410,7 +410,7 @@ impl Renderer for CheckerboardGpu {
                 o.clamp.code(),
                 u32::from(use_velocity),
                 u32::from(occluders),
-                0,
+                u32::from(o.aso_motion == AsoMotion::QuarterTexel),
             ],
             depth: [o.depth_tolerance, near_far.0, near_far.1, 0.0],
         };

@@ -6,7 +6,9 @@
 //! (DDXY_BIAS 0.5), measured better than the white paper's and mosaiikki's -0.5 LOD
 //! (`gradient_scale = 0.7071`, kept as the option; issue 26: 28.61 against 40.58 dB on the quality
 //! suite's static scene, FLIP 0.0304 against 0.0278 on the city at 1080p);
-//! CSO with mosaiikki's tolerance (view units); mosaiikki's differential fill; Intel's unclamped
+//! CSO with mosaiikki's tolerance (view units); ASO, where chosen, on Intel's rule (history that
+//! moved more than a quarter-resolution texel; mosaiikki's "moved to another 2x2 block" is
+//! `aso_motion = "block"`); mosaiikki's differential fill; Intel's unclamped
 //! history (mosaiikki's clamps are options); mosaiikki's velocity buffer of the dynamic objects
 //! only (`velocity_objects`), with a depth test for static occluders mosaiikki does not need
 //! (every object of its scene moves). Issue 26 item 5, on lavapipe: the velocity pass of
@@ -46,6 +48,16 @@ crate::choice! {
         Cso = "cso",
         /// Always.
         Aso = "aso",
+    }
+}
+
+crate::choice! {
+    /// Which moved history ASO takes as occluded.
+    pub enum AsoMotion {
+        /// Moved more than a quarter-resolution texel (2 pixels): Intel's white paper.
+        QuarterTexel = "quarter-texel",
+        /// Moved to another 2x2 block: mosaiikki's `possiblyOccluded`.
+        Block = "block",
     }
 }
 
@@ -125,6 +137,10 @@ crate::options! {
         occlusion: Occlusion = choice(
             Occlusion::Cso,
             "a pixel whose history moved to another 2x2 block is occluded (filled spatially) when its old view depth differs from its neighbours' mean by `depth_tolerance` or more (CSO), or always (ASO)",
+        ),
+        aso_motion: AsoMotion = choice(
+            AsoMotion::QuarterTexel,
+            "which history ASO assumes occluded: `quarter-texel`, history that moved more than a quarter-resolution texel (2 pixels), as Intel's white paper (\"Assume Shading Occluded\": \"assumes occlusion for any shading information that moved more than a quarter-resolution texel\"); `block`, history that moved to another 2x2 block, as mosaiikki (`possiblyOccluded`: with ASO every moved static pixel is filled spatially)",
         ),
         depth_tolerance: f32 = float(
             (0.0, false, 1.0e9),

@@ -7,7 +7,7 @@
 
 use glam::{Mat4, Vec2, Vec3, Vec4};
 
-use super::{Clamp, Fill, Occlusion, Options, VelocityObjects};
+use super::{AsoMotion, Clamp, Fill, Occlusion, Options, VelocityObjects};
 
 /// One frame's quarter-resolution samples: colour and reversed-Z depth per sample index.
 #[derive(Clone, Debug)]
@@ -259,9 +259,17 @@ pub fn reconstruct(inp: &Inputs, x: i32, y: i32) -> (Vec4, Source) {
     } else {
         0.0
     };
-    if moved_block
-        && (inp.options.occlusion == Occlusion::Aso || deviation >= inp.options.depth_tolerance)
-    {
+    let occluded = match inp.options.occlusion {
+        Occlusion::Cso => moved_block && deviation >= inp.options.depth_tolerance,
+        Occlusion::Aso => match inp.options.aso_motion {
+            AsoMotion::QuarterTexel => {
+                let centre = Vec2::new(x as f32, y as f32) + 0.5;
+                (prev_pos - centre).length() > 2.0
+            }
+            AsoMotion::Block => moved_block,
+        },
+    };
+    if occluded {
         return filled(inp, x, y);
     }
     let history = color_at(inp, px, py);
@@ -527,15 +535,34 @@ mod tests {
             ..inp
         };
         assert_eq!(reconstruct(&inp, 3, 0).1, Source::History);
-        // ASO assumes the moved pixel occluded.
-        let inp = Inputs {
-            options: Options {
-                occlusion: Occlusion::Aso,
-                ..options(Fill::Plain, Clamp::None)
-            },
+        // ASO as mosaiikki assumes the pixel moved to another block occluded ...
+        let aso = |aso_motion| Options {
+            occlusion: Occlusion::Aso,
+            aso_motion,
+            ..options(Fill::Plain, Clamp::None)
+        };
+        let block = Inputs {
+            options: aso(AsoMotion::Block),
             ..inp
         };
-        assert_eq!(reconstruct(&inp, 3, 0).1, Source::Fill);
+        assert_eq!(reconstruct(&block, 3, 0).1, Source::Fill);
+        // ... as Intel only beyond a quarter-resolution texel: 2 px is not more than one.
+        let intel = Inputs {
+            options: aso(AsoMotion::QuarterTexel),
+            ..inp
+        };
+        assert_eq!(reconstruct(&intel, 3, 0).1, Source::History);
+        let velocity: Vec<Vec4> = vec![Vec4::new(4.0, 0.0, 1.0, 0.0); (w * h) as usize];
+        let far = Inputs {
+            velocity: Some(&velocity),
+            ..intel
+        };
+        assert_eq!(reconstruct(&far, 5, 0).1, Source::Fill);
+        let far_no_aso = Inputs {
+            options: options(Fill::Plain, Clamp::None),
+            ..far
+        };
+        assert_eq!(reconstruct(&far_no_aso, 5, 0).1, Source::History);
     }
 
     #[test]

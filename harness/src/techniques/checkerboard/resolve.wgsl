@@ -18,7 +18,8 @@ struct Params {
     // w: fill (0 plain, 1 tonemapped, 2 differential).
     mode: vec4<u32>,
     // x: clamp (0 none, 1 min-max, 2 min-max with depth confidence), y: velocity buffer present,
-    // z: it holds the dynamic objects only (test its depth for static occluders).
+    // z: it holds the dynamic objects only (test its depth for static occluders), w: ASO's motion
+    // rule (1 more than a quarter-resolution texel, Intel; 0 another 2x2 block, mosaiikki).
     mode2: vec4<u32>,
     // x: depth tolerance (view units), y: near, z: far.
     depth: vec4<f32>,
@@ -235,7 +236,14 @@ fn reconstruct(pixel: vec2<i32>) -> vec4<f32> {
             if (moved_block && params.mode.z == 0u) || confidence_clamp {
                 deviation = abs(neighbour_depth(pixel) - linear_depth(depth_at(prev_pixel)));
             }
-            use_history = !(moved_block && (params.mode.z == 1u || deviation >= params.depth.x));
+            if params.mode.z == 1u {
+                // ASO: moved more than a quarter-resolution texel (2 px; Intel's white paper,
+                // "Assume Shading Occluded") or, as mosaiikki, to another 2x2 block (mode2.w 0).
+                let moved_far = length(prev_pos - centre) > 2.0;
+                use_history = !select(moved_block, moved_far, params.mode2.w == 1u);
+            } else {
+                use_history = !(moved_block && deviation >= params.depth.x);
+            }
         }
     }
     // A non-finite history sample is not used (stability, as the neighbours above).
