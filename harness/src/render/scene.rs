@@ -141,8 +141,8 @@ pub struct SceneGpu {
     materials: Option<MaterialGpu>,
     /// The city's objects, after the scenario's in the objects buffer.
     city_objects: Vec<city::CityObject>,
-    /// Per object of the objects buffer (its instance index): whether it moves by itself, as
-    /// `write_objects` marks it for the shaders (`emissive.a`).
+    /// Per object of the objects buffer (its instance index): whether it moves by itself; what
+    /// `write_objects` marks for the shaders (`emissive.a`) and `Objects::Dynamic` draws.
     dynamic: Vec<bool>,
     pub triangles: usize,
     /// Bytes of geometry and uniform buffers and of textures with their mip chains, shared by
@@ -432,6 +432,9 @@ impl SceneGpu {
                 .as_mat4()
                 .to_cols_array_2d()
         };
+        // The shaders' dynamic mark (`emissive.a` 2, above 1.5) from the same list the passes of
+        // the dynamic objects draw by (`dynamic`, in this buffer's order).
+        let mark = |i: usize| if self.dynamic[i] { 2.0 } else { 0.0 };
         let mut objects = Vec::new();
         if let Some(g) = &self.stage.scene.ground {
             // The quad follows the camera in x and z; the pattern is anchored in world space, so
@@ -456,10 +459,7 @@ impl SceneGpu {
                 model: rel(o.model_at(time)),
                 prev_model: rel(o.model_at(prev_time)),
                 color: o.color.extend(o.specular).into(),
-                emissive: o
-                    .emissive
-                    .extend(if o.animation.is_some() { 2.0 } else { 0.0 })
-                    .into(),
+                emissive: o.emissive.extend(mark(objects.len())).into(),
                 flags: [o.inject.map_or(0.0, |i| i.code()), 0.0, 0.0, 0.0],
             });
         }
@@ -468,7 +468,7 @@ impl SceneGpu {
                 model: rel(c.model_at(time)),
                 prev_model: rel(c.model_at(prev_time)),
                 color: [1.0, 1.0, 1.0, 0.0],
-                emissive: [0.0, 0.0, 0.0, if c.is_dynamic() { 2.0 } else { 0.0 }],
+                emissive: [0.0, 0.0, 0.0, mark(objects.len())],
                 flags: [0.0; 4],
             });
         }
