@@ -25,6 +25,9 @@ pub struct RunBundle {
     pub scenarios: Vec<ScenarioResult>,
     /// Image bytes by path in the run folder.
     pub images: BTreeMap<String, Vec<u8>>,
+    /// Images uploaded apart as blobs: path in the run folder to the blob's digest
+    /// (`UploadBody::image_digests`); the store checks that it holds each blob.
+    pub image_digests: BTreeMap<String, String>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -202,7 +205,61 @@ impl RunBundle {
             run,
             scenarios: parsed,
             images,
+            image_digests: BTreeMap::new(),
         })
+    }
+
+    /// Adds images sent apart as blobs (path to digest), each checked as an inline image's path
+    /// is, and its digest for shape; whether the store holds the blob is the store's check.
+    pub fn with_image_digests(
+        mut self,
+        digests: BTreeMap<String, String>,
+    ) -> Result<RunBundle, BundleError> {
+        let referenced: std::collections::BTreeSet<&str> = self
+            .scenarios
+            .iter()
+            .flat_map(|s| {
+                s.results
+                    .iter()
+                    .flat_map(|v| v.images.iter().map(|i| i.path.as_str()))
+            })
+            .collect();
+        for (path, digest) in &digests {
+            let problem = if !safe_relative_path(path) {
+                Some("must be a relative path inside the run folder".to_string())
+            } else if !referenced.contains(path.as_str()) {
+                Some("is not listed in any result's images".to_string())
+            } else if self.images.contains_key(path) {
+                Some("is sent both inline and as a blob".to_string())
+            } else if !tessera_results::upload::is_blob_digest(digest) {
+                Some(format!(
+                    "has digest {digest:?}; a blob digest is 64 lowercase hex digits (SHA-256)"
+                ))
+            } else {
+                None
+            };
+            if let Some(problem) = problem {
+                return Err(BundleError::Image {
+                    path: path.clone(),
+                    problem,
+                });
+            }
+        }
+        self.image_digests = digests;
+        Ok(self)
+    }
+
+    /// Every image's digest by path: inline images hashed, blobs as referenced.
+    pub fn digests_by_path(&self) -> BTreeMap<&str, String> {
+        let mut out: BTreeMap<&str, String> = self
+            .images
+            .iter()
+            .map(|(p, b)| (p.as_str(), tessera_results::upload::blob_digest(b)))
+            .collect();
+        for (p, d) in &self.image_digests {
+            out.insert(p.as_str(), d.clone());
+        }
+        out
     }
 
     /// Decodes an upload body.
@@ -213,7 +270,8 @@ impl RunBundle {
                 path,
                 problem: format!("is not valid base64: {e}"),
             })?;
-        RunBundle::from_parts(body.run, body.scenarios, images)
+        RunBundle::from_parts(body.run, body.scenarios, images)?
+            .with_image_digests(body.image_digests)
     }
 
     /// Reads a run folder through the shared reader: `run.json`, `scenarios/*.json` (in name
@@ -239,6 +297,7 @@ impl RunBundle {
                 .iter()
                 .map(|(p, b)| (p.clone(), tessera_results::upload::encode(b)))
                 .collect(),
+            image_digests: self.image_digests.clone(),
         }
     }
 }

@@ -12,6 +12,7 @@ pub mod regimes;
 pub mod render;
 pub mod run;
 pub mod scenario;
+pub mod tables;
 pub mod techniques;
 pub mod timing;
 pub mod upload;

@@ -105,6 +105,16 @@ enum Command {
         #[arg(required = true)]
         runs: Vec<PathBuf>,
     },
+    /// The measured tables of the READMEs from run folders: per scenario and adapter, the driver
+    /// and clocks, then per variant GPU ms, speed-up, every metric, its Pareto fronts and run ids.
+    Report {
+        /// Run folders, or folders holding run folders.
+        #[arg(required = true)]
+        runs: Vec<PathBuf>,
+        /// `text` (aligned columns) or `md` (Markdown, for a README).
+        #[arg(long, value_enum, default_value_t = tessera::tables::Format::Text)]
+        format: tessera::tables::Format,
+    },
     /// Send a run folder to a dashboard (`POST /api/runs`, token from TESSERA_DASHBOARD_TOKEN).
     Upload {
         run: PathBuf,
@@ -188,6 +198,7 @@ fn main() -> ExitCode {
         } => compare_command(&run_a, &run_b, threshold_pct),
         Command::Upload { run, url } => upload_command(&run, &url),
         Command::Regimes { runs } => regimes_command(&runs),
+        Command::Report { runs, format } => report_command(&runs, format),
         Command::Diff {
             reference,
             test,
@@ -475,6 +486,33 @@ fn regimes_command(dirs: &[PathBuf]) -> u8 {
         return EXIT_INPUT;
     }
     print!("{}", tessera::regimes::markdown(&rows));
+    0
+}
+
+fn report_command(args: &[PathBuf], format: tessera::tables::Format) -> u8 {
+    let dirs = match tessera::tables::run_folders(args) {
+        Ok(d) => d,
+        Err(e) => {
+            eprintln!("error: cannot list the run folders: {e}");
+            return EXIT_INPUT;
+        }
+    };
+    let mut runs = Vec::new();
+    for d in &dirs {
+        match tessera::compare::load_run(d) {
+            Ok(r) => runs.push(r),
+            Err(e) => {
+                eprintln!("error: {e}");
+                return EXIT_INPUT;
+            }
+        }
+    }
+    let tables = tessera::tables::tables(&runs);
+    if tables.is_empty() {
+        eprintln!("error: these runs hold no scenario results");
+        return EXIT_INPUT;
+    }
+    print!("{}", tessera::tables::render(&tables, format));
     0
 }
 

@@ -6,7 +6,12 @@
 //! reads (`dashboard/README.md`, "Uploading"): `run` (run.json), `scenarios` (every
 //! `scenarios/*.json`, by file name), both brought to the current schema version by the shared
 //! run-folder reader, and `images` (every PNG the results list and the folder holds, keyed by its
-//! path in the run folder, in base64). Nothing here changes the run folder: an upload that fails
+//! path in the run folder, in base64). Images travel apart where the dashboard offers it: the
+//! client asks which image digests the dashboard lacks (`POST /api/blobs/missing`), sends those
+//! in batches under the request cap (`POST /api/blobs`), then posts the records with
+//! `image_digests` instead of the bytes; so a 4K run with all its frames uploads, and a repeated
+//! upload sends only its records. A dashboard without the blob routes (404) gets the images
+//! inline, as before. Nothing here changes the run folder: an upload that fails
 //! leaves the results on disk for a later `tessera upload`.
 
 use std::path::Path;
@@ -52,7 +57,11 @@ impl UploadError {
     }
 }
 
-/// What the dashboard answered to an accepted upload.
+/// Most bytes of images one `POST /api/blobs` carries (the dashboard's default cap is 64 MiB;
+/// one image is at most 16 MiB).
+pub const BATCH_BYTES: usize = 24 << 20;
+
+/// What the dashboard answered to an accepted upload, and what the upload sent.
 #[derive(Clone, Debug, PartialEq, Eq, serde::Deserialize)]
 pub struct Reply {
     pub run_id: String,
@@ -62,19 +71,43 @@ pub struct Reply {
     pub results: usize,
     #[serde(default)]
     pub new_regressions: usize,
+    /// Request body bytes sent, every request of the upload together.
+    #[serde(skip)]
+    pub bytes_sent: u64,
+    /// Images the run lists and holds, and how many of them the dashboard lacked and was sent.
+    #[serde(skip)]
+    pub images: usize,
+    #[serde(skip)]
+    pub images_sent: usize,
 }
 
 impl Reply {
     /// One line for the console.
     pub fn summary(&self) -> String {
+        let sent = format!(
+            "sent {} in all, {} of {} images new to the dashboard",
+            human_bytes(self.bytes_sent),
+            self.images_sent,
+            self.images
+        );
         if self.stored {
             format!(
-                "uploaded: {} stored ({} results, {} new regressions)",
+                "uploaded: {} stored ({} results, {} new regressions; {sent})",
                 self.run_id, self.results, self.new_regressions
             )
         } else {
-            format!("uploaded: {} was already stored", self.run_id)
+            format!("uploaded: {} was already stored ({sent})", self.run_id)
         }
+    }
+}
+
+fn human_bytes(n: u64) -> String {
+    if n >= 1 << 20 {
+        format!("{:.1} MiB", n as f64 / f64::from(1u32 << 20))
+    } else if n >= 1 << 10 {
+        format!("{:.1} KiB", n as f64 / 1024.0)
+    } else {
+        format!("{n} bytes")
     }
 }
 
@@ -105,12 +138,16 @@ pub fn token_from_env() -> Result<String, UploadError> {
     }
 }
 
-/// POSTs `body` (JSON) and reads the answer: 200 and 201 are success, anything else is
-/// [`UploadError::Refused`] with the dashboard's `{"error"}` message.
-pub fn post(url: &str, token: &str, body: &[u8]) -> Result<Reply, UploadError> {
-    let url = endpoint(url)?;
+/// POSTs `body` to `url` and returns the status and the answer's text, waiting out a rate
+/// limit (429, its `Retry-After`) a few times.
+fn send(
+    url: &str,
+    token: &str,
+    content_type: &str,
+    body: &[u8],
+) -> Result<(u16, String), UploadError> {
     let transport = |source| UploadError::Transport {
-        url: url.clone(),
+        url: url.to_string(),
         source,
     };
     let agent: ureq::Agent = ureq::Agent::config_builder()
@@ -118,24 +155,36 @@ pub fn post(url: &str, token: &str, body: &[u8]) -> Result<Reply, UploadError> {
         .timeout_global(Some(TIMEOUT))
         .build()
         .into();
-    let mut response = agent
-        .post(&url)
-        .header("Authorization", &format!("Bearer {token}"))
-        .header("Content-Type", "application/json")
-        // The dashboard checks the token before it reads a body: with 100-continue a refused
-        // upload gets the dashboard's answer instead of a broken pipe half-way through the body.
-        .header("Expect", "100-continue")
-        .send(body)
-        .map_err(transport)?;
-    let status = response.status().as_u16();
-    let text = response.body_mut().read_to_string().map_err(transport)?;
-    if status == 200 || status == 201 {
-        return serde_json::from_str(&text).map_err(|e| UploadError::Refused {
-            url: url.clone(),
-            status,
-            message: format!("unexpected answer ({e}): {text}"),
-        });
+    let mut attempt = 0;
+    loop {
+        let mut response = agent
+            .post(url)
+            .header("Authorization", &format!("Bearer {token}"))
+            .header("Content-Type", content_type)
+            // The dashboard checks the token before it reads a body: with 100-continue a refused
+            // upload gets the dashboard's answer instead of a broken pipe half-way through the body.
+            .header("Expect", "100-continue")
+            .send(body)
+            .map_err(transport)?;
+        let status = response.status().as_u16();
+        let wait = response
+            .headers()
+            .get("retry-after")
+            .and_then(|v| v.to_str().ok())
+            .and_then(|v| v.trim().parse::<u64>().ok());
+        let text = response.body_mut().read_to_string().map_err(transport)?;
+        match (status, wait) {
+            (429, Some(secs)) if attempt < 5 && secs <= 120 => {
+                attempt += 1;
+                std::thread::sleep(Duration::from_secs(secs.max(1)));
+            }
+            _ => return Ok((status, text)),
+        }
     }
+}
+
+/// The dashboard's `{"error"}` message of a refusal, or its text.
+fn refused(url: &str, status: u16, text: String) -> UploadError {
     let message = serde_json::from_str::<serde_json::Value>(&text)
         .ok()
         .and_then(|v| v["error"].as_str().map(str::to_string))
@@ -146,18 +195,131 @@ pub fn post(url: &str, token: &str, body: &[u8]) -> Result<Reply, UploadError> {
                 text
             }
         });
-    Err(UploadError::Refused {
-        url,
+    UploadError::Refused {
+        url: url.to_string(),
         status,
         message,
-    })
+    }
 }
 
-/// Bundles the run folder `dir` and sends it to the dashboard at `url` with the token from the
-/// environment.
+/// POSTs `body` (JSON) to `<url>/api/runs` and reads the answer: 200 and 201 are success,
+/// anything else is [`UploadError::Refused`] with the dashboard's `{"error"}` message.
+pub fn post(url: &str, token: &str, body: &[u8]) -> Result<Reply, UploadError> {
+    let url = endpoint(url)?;
+    let (status, text) = send(&url, token, "application/json", body)?;
+    if status == 200 || status == 201 {
+        let mut reply: Reply = serde_json::from_str(&text).map_err(|e| UploadError::Refused {
+            url: url.clone(),
+            status,
+            message: format!("unexpected answer ({e}): {text}"),
+        })?;
+        reply.bytes_sent = body.len() as u64;
+        return Ok(reply);
+    }
+    Err(refused(&url, status, text))
+}
+
+/// What [`send_blobs`] did: every image's digest by path, the bytes sent, the images sent.
+type BlobsSent = (std::collections::BTreeMap<String, String>, u64, usize);
+
+/// Sends the images the dashboard lacks as blob batches. `Ok(None)` when the dashboard has no
+/// blob routes (an older one: the caller sends the images inline); otherwise the digests by
+/// path, the bytes sent and how many images were new.
+fn send_blobs(
+    url: &str,
+    token: &str,
+    images: &std::collections::BTreeMap<String, Vec<u8>>,
+) -> Result<Option<BlobsSent>, UploadError> {
+    use tessera_results::upload::{blob_digest, blob_record, MissingReply, MissingRequest};
+    let base = endpoint(url)?;
+    let base = base.trim_end_matches("/api/runs");
+    let digests: std::collections::BTreeMap<String, String> = images
+        .iter()
+        .map(|(p, b)| (p.clone(), blob_digest(b)))
+        .collect();
+    let ask = MissingRequest {
+        digests: digests.values().cloned().collect(),
+    };
+    let ask = serde_json::to_vec(&ask).expect("the question serialises");
+    let missing_url = format!("{base}/api/blobs/missing");
+    let (status, text) = send(&missing_url, token, "application/json", &ask)?;
+    if status == 404 || status == 405 {
+        return Ok(None);
+    }
+    if status != 200 {
+        return Err(refused(&missing_url, status, text));
+    }
+    let missing: MissingReply = serde_json::from_str(&text).map_err(|e| UploadError::Refused {
+        url: missing_url.clone(),
+        status,
+        message: format!("unexpected answer ({e}): {text}"),
+    })?;
+    let mut sent = ask.len() as u64;
+    let want: std::collections::BTreeSet<&str> =
+        missing.missing.iter().map(String::as_str).collect();
+    let blobs_url = format!("{base}/api/blobs");
+    let mut batch: Vec<u8> = Vec::new();
+    let mut done: std::collections::BTreeSet<String> = std::collections::BTreeSet::new();
+    let flush = |batch: &mut Vec<u8>, sent: &mut u64| -> Result<(), UploadError> {
+        if batch.is_empty() {
+            return Ok(());
+        }
+        let (status, text) = send(&blobs_url, token, "application/octet-stream", batch)?;
+        if status != 200 && status != 201 {
+            return Err(refused(&blobs_url, status, text));
+        }
+        *sent += batch.len() as u64;
+        batch.clear();
+        Ok(())
+    };
+    for (path, bytes) in images {
+        let d = digests[path].as_str();
+        if !want.contains(d) || !done.insert(d.to_string()) {
+            continue;
+        }
+        if !batch.is_empty() && batch.len() + bytes.len() > BATCH_BYTES {
+            flush(&mut batch, &mut sent)?;
+        }
+        batch.extend(blob_record(bytes));
+    }
+    flush(&mut batch, &mut sent)?;
+    Ok(Some((digests, sent, done.len())))
+}
+
+/// Sends the run folder `dir` to the dashboard at `url` with the token from the environment:
+/// its images as blobs the dashboard lacks (inline to a dashboard without blob routes), then
+/// its records.
 pub fn upload(dir: &Path, url: &str) -> Result<Reply, UploadError> {
     endpoint(url)?;
     let token = token_from_env()?;
-    let body = serde_json::to_vec(&bundle(dir)?).expect("the upload body serialises");
-    post(url, &token, &body)
+    let raw = read_raw(dir)?;
+    let images = raw.read_images()?;
+    let mut body = UploadBody {
+        run: raw.run.clone(),
+        scenarios: raw.scenarios.clone(),
+        ..UploadBody::default()
+    };
+    let (mut sent, mut images_sent) = (0, 0);
+    if !images.is_empty() {
+        match send_blobs(url, &token, &images)? {
+            Some((digests, bytes, new)) => {
+                body.image_digests = digests;
+                sent += bytes;
+                images_sent = new;
+            }
+            None => {
+                body.images = images
+                    .iter()
+                    .map(|(p, b)| (p.clone(), tessera_results::upload::encode(b)))
+                    .collect();
+                images_sent = images.len();
+            }
+        }
+    }
+    let json = serde_json::to_vec(&body).expect("the upload body serialises");
+    let mut reply = post(url, &token, &json)?;
+    reply.bytes_sent += sent;
+    reply.images = images.len();
+    reply.images_sent = images_sent;
+    Ok(reply)
 }

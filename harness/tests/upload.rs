@@ -50,64 +50,105 @@ impl Request {
     }
 }
 
-/// Serves one request with `status` and JSON `answer`; returns the URL and the recorded request.
-fn fake_dashboard(status: &'static str, answer: &'static str) -> (String, JoinHandle<Request>) {
-    fake_dashboard_with(status, answer, true)
+/// Serves one upload, answering `/api/runs` (and any request, when `status` is not 2xx) with
+/// `status` and JSON `answer`, as a dashboard without blob routes (404 to `/api/blobs*`); returns
+/// the URL and the recorded requests.
+fn fake_dashboard(
+    status: &'static str,
+    answer: &'static str,
+) -> (String, JoinHandle<Vec<Request>>) {
+    fake_dashboard_with(status, answer, true, None)
 }
 
 /// With `read_body` false it answers right after the request head and closes without reading
 /// the body, as the dashboard does for a request without a valid token (it never sends
-/// `100 Continue` then).
+/// `100 Continue` then). With `blobs` it offers the blob routes, holding those digests at first.
 fn fake_dashboard_with(
     status: &'static str,
     answer: &'static str,
     read_body: bool,
-) -> (String, JoinHandle<Request>) {
+    blobs: Option<Vec<String>>,
+) -> (String, JoinHandle<Vec<Request>>) {
     let listener = TcpListener::bind("127.0.0.1:0").unwrap();
     let url = format!("http://{}", listener.local_addr().unwrap());
     let handle = std::thread::spawn(move || {
-        let (stream, _) = listener.accept().unwrap();
-        let mut reader = BufReader::new(stream.try_clone().unwrap());
-        let mut line = String::new();
-        reader.read_line(&mut line).unwrap();
-        let mut headers = Vec::new();
+        let mut held = blobs.clone().unwrap_or_default();
+        let mut requests = Vec::new();
         loop {
-            let mut h = String::new();
-            reader.read_line(&mut h).unwrap();
-            let h = h.trim_end();
-            if h.is_empty() {
-                break;
+            let (stream, _) = listener.accept().unwrap();
+            let mut reader = BufReader::new(stream.try_clone().unwrap());
+            let mut line = String::new();
+            reader.read_line(&mut line).unwrap();
+            let mut headers = Vec::new();
+            loop {
+                let mut h = String::new();
+                reader.read_line(&mut h).unwrap();
+                let h = h.trim_end();
+                if h.is_empty() {
+                    break;
+                }
+                let (k, v) = h.split_once(':').unwrap();
+                headers.push((k.trim().to_string(), v.trim().to_string()));
             }
-            let (k, v) = h.split_once(':').unwrap();
-            headers.push((k.trim().to_string(), v.trim().to_string()));
-        }
-        let length: usize = headers
-            .iter()
-            .find(|(k, _)| k.eq_ignore_ascii_case("content-length"))
-            .map(|(_, v)| v.parse().unwrap())
-            .unwrap_or(0);
-        let mut stream = stream;
-        let mut body = Vec::new();
-        if read_body {
-            let expects = headers.iter().any(|(k, v)| {
-                k.eq_ignore_ascii_case("expect") && v.eq_ignore_ascii_case("100-continue")
+            let length: usize = headers
+                .iter()
+                .find(|(k, _)| k.eq_ignore_ascii_case("content-length"))
+                .map(|(_, v)| v.parse().unwrap())
+                .unwrap_or(0);
+            let mut stream = stream;
+            let mut body = Vec::new();
+            if read_body {
+                let expects = headers.iter().any(|(k, v)| {
+                    k.eq_ignore_ascii_case("expect") && v.eq_ignore_ascii_case("100-continue")
+                });
+                if expects {
+                    stream.write_all(b"HTTP/1.1 100 Continue\r\n\r\n").unwrap();
+                }
+                body = vec![0; length];
+                reader.read_exact(&mut body).unwrap();
+            }
+            let ok = status.starts_with('2');
+            let blob_route = line.contains(" /api/blobs");
+            let (st, ans): (&str, String) = if !ok || !blob_route {
+                (status, answer.to_string())
+            } else if blobs.is_none() {
+                ("404 Not Found", r#"{"error":"no such page"}"#.to_string())
+            } else if line.contains("/api/blobs/missing") {
+                let asked: serde_json::Value = serde_json::from_slice(&body).unwrap();
+                let missing: Vec<String> = asked["digests"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .map(|d| d.as_str().unwrap().to_string())
+                    .filter(|d| !held.contains(d))
+                    .collect();
+                (
+                    "200 OK",
+                    serde_json::json!({ "missing": missing }).to_string(),
+                )
+            } else {
+                let got = tessera_results::upload::split_batch(&body, u64::MAX).unwrap();
+                held.extend(got.iter().map(|(d, _)| d.clone()));
+                (
+                    "201 Created",
+                    format!(r#"{{"stored":{},"already":0}}"#, got.len()),
+                )
+            };
+            write!(
+                stream,
+                "HTTP/1.1 {st}\r\nContent-Type: application/json\r\nContent-Length: {}\r\nConnection: close\r\n\r\n{ans}",
+                ans.len()
+            )
+            .unwrap();
+            let last = !ok || !blob_route;
+            requests.push(Request {
+                line: line.trim_end().to_string(),
+                headers,
+                body,
             });
-            if expects {
-                stream.write_all(b"HTTP/1.1 100 Continue\r\n\r\n").unwrap();
+            if last {
+                return requests;
             }
-            body = vec![0; length];
-            reader.read_exact(&mut body).unwrap();
-        }
-        write!(
-            stream,
-            "HTTP/1.1 {status}\r\nContent-Type: application/json\r\nContent-Length: {}\r\nConnection: close\r\n\r\n{answer}",
-            answer.len()
-        )
-        .unwrap();
-        Request {
-            line: line.trim_end().to_string(),
-            headers,
-            body,
         }
     });
     (url, handle)
@@ -160,8 +201,16 @@ fn upload_posts_the_bundle_with_the_bearer_token() {
     );
     let (code, out, err) = tessera(&["upload", &run, "--url", &url], Some("s3cret"));
     assert_eq!((code, err.as_str()), (0, ""));
-    assert_eq!(out, "uploaded: r1 stored (3 results, 1 new regressions)\n");
-    let req = server.join().unwrap();
+    assert!(
+        out.starts_with("uploaded: r1 stored (3 results, 1 new regressions; sent ")
+            && out.ends_with(" in all, 1 of 1 images new to the dashboard)\n"),
+        "{out}"
+    );
+    // A dashboard without blob routes: the question is answered 404, the images go inline.
+    let reqs = server.join().unwrap();
+    assert_eq!(reqs.len(), 2);
+    assert_eq!(reqs[0].line, "POST /api/blobs/missing HTTP/1.1");
+    let req = &reqs[1];
     assert_eq!(req.line, "POST /api/runs HTTP/1.1");
     assert_eq!(req.header("authorization"), Some("Bearer s3cret"));
     assert_eq!(req.header("content-type"), Some("application/json"));
@@ -179,9 +228,10 @@ fn already_stored_is_success() {
         r#"{"run_id":"r1","stored":false,"results":0,"new_regressions":0}"#,
     );
     let (code, out, _) = tessera(&["upload", &run, "--url", &url], Some("s3cret"));
-    assert_eq!(
-        (code, out.as_str()),
-        (0, "uploaded: r1 was already stored\n")
+    assert_eq!(code, 0);
+    assert!(
+        out.starts_with("uploaded: r1 was already stored (sent "),
+        "{out}"
     );
     server.join().unwrap();
 }
@@ -196,7 +246,7 @@ fn refused_upload_exits_4_with_the_dashboards_message() {
     assert_eq!(
         err,
         format!(
-            "error: the dashboard at {url}/api/runs refused the run with HTTP 401: wrong token\n"
+            "error: the dashboard at {url}/api/blobs/missing refused the run with HTTP 401: wrong token\n"
         )
     );
     server.join().unwrap();
@@ -218,16 +268,73 @@ fn refusal_before_a_large_body_is_reported_with_the_dashboards_message() {
         "401 Unauthorized",
         r#"{"error":"this request needs a write token"}"#,
         false,
+        Some(Vec::new()),
     );
     let (code, _, err) = tessera(&["upload", &run, "--url", &url], Some("wrong"));
     assert_eq!(
         (code, err.as_str()),
         (
             4,
-            format!("error: the dashboard at {url}/api/runs refused the run with HTTP 401: this request needs a write token\n").as_str()
+            format!("error: the dashboard at {url}/api/blobs/missing refused the run with HTTP 401: this request needs a write token\n").as_str()
         )
     );
-    assert!(server.join().unwrap().body.is_empty());
+    let reqs = server.join().unwrap();
+    assert_eq!(reqs.len(), 1, "nothing is sent after a refusal");
+    assert!(reqs[0].body.is_empty());
+}
+
+#[test]
+fn images_travel_as_blobs_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = run_folder(dir.path());
+    // A second image, larger than everything else the upload sends.
+    let big: Vec<u8> = PNG
+        .iter()
+        .copied()
+        .chain((0..200_000u32).map(|i| (i % 251) as u8))
+        .collect();
+    std::fs::write(Path::new(&run).join("images/tiny/native-f001.png"), &big).unwrap();
+    let answer = r#"{"run_id":"r1","stored":true,"results":1,"new_regressions":0}"#;
+    let (url, server) = fake_dashboard_with("201 Created", answer, true, Some(Vec::new()));
+    let (code, out, err) = tessera(&["upload", &run, "--url", &url], Some("s3cret"));
+    assert_eq!((code, err.as_str()), (0, ""), "{out}");
+    assert!(out.contains("2 of 2 images new"), "{out}");
+    let reqs = server.join().unwrap();
+    let lines: Vec<&str> = reqs.iter().map(|r| r.line.as_str()).collect();
+    assert_eq!(
+        lines,
+        [
+            "POST /api/blobs/missing HTTP/1.1",
+            "POST /api/blobs HTTP/1.1",
+            "POST /api/runs HTTP/1.1"
+        ]
+    );
+    assert_eq!(
+        reqs[1].header("content-type"),
+        Some("application/octet-stream")
+    );
+    let sent = tessera_results::upload::split_batch(&reqs[1].body, u64::MAX).unwrap();
+    assert_eq!(sent.len(), 2);
+    let body: serde_json::Value = serde_json::from_slice(&reqs[2].body).unwrap();
+    assert!(body.get("images").unwrap().as_object().unwrap().is_empty());
+    let digests = body["image_digests"].as_object().unwrap();
+    assert_eq!(
+        digests["images/tiny/native-f001.png"],
+        tessera_results::upload::blob_digest(&big)
+    );
+    assert!(reqs[2].body.len() < 10_000);
+
+    // Again, to a dashboard holding both blobs: only the question and the records travel.
+    let held: Vec<String> = sent.iter().map(|(d, _)| d.clone()).collect();
+    let answer = r#"{"run_id":"r1","stored":false,"results":0,"new_regressions":0}"#;
+    let (url, server) = fake_dashboard_with("200 OK", answer, true, Some(held));
+    let (code, out, _) = tessera(&["upload", &run, "--url", &url], Some("s3cret"));
+    assert_eq!(code, 0);
+    assert!(out.contains("0 of 2 images new"), "{out}");
+    let reqs = server.join().unwrap();
+    assert_eq!(reqs.len(), 2);
+    let total: usize = reqs.iter().map(|r| r.body.len()).sum();
+    assert!(total < big.len() / 10, "{total} bytes sent again");
 }
 
 #[test]
@@ -243,7 +350,7 @@ fn unreachable_dashboard_and_missing_token_exit_4() {
     assert_eq!(code, 4, "{err}");
     assert!(
         err.starts_with(&format!(
-            "error: cannot reach the dashboard at {url}/api/runs: "
+            "error: cannot reach the dashboard at {url}/api/blobs/missing: "
         )),
         "{err}"
     );

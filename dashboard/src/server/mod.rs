@@ -8,6 +8,7 @@
 
 pub mod assets;
 pub mod auth;
+pub mod blobs;
 pub mod compare;
 pub mod compare_runs;
 pub mod delete;
@@ -99,6 +100,8 @@ pub fn app(state: AppState) -> Router {
         )
         .route("/api/runs/{run_id}/images/{scenario}", get(images::api))
         .route("/images/{digest}", get(images::blob))
+        .route("/api/blobs/missing", post(blobs::missing))
+        .route("/api/blobs", post(blobs::store))
         .route("/series", get(series::list_page))
         .route("/api/series", get(series::list_api))
         .route("/series/{id}", get(series::page))

@@ -10,7 +10,6 @@
 
 use std::collections::BTreeMap;
 
-use sha2::{Digest, Sha256};
 use tessera_results::{RunInfo, Status};
 
 use super::StoreError;
@@ -99,10 +98,7 @@ pub fn order_key(run: &RunInfo) -> String {
 }
 
 pub fn digest(bytes: &[u8]) -> String {
-    Sha256::digest(bytes)
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect()
+    tessera_results::upload::blob_digest(bytes)
 }
 
 /// Whether stored run `run_pk` holds what `bundle` holds: the same `run.json`, the same
@@ -165,16 +161,17 @@ fn same_content(
         })
         .collect::<Result<_, DbError>>()?;
     let mut incoming = std::collections::BTreeSet::new();
+    let digests = bundle.digests_by_path();
     for s in &bundle.scenarios {
         for v in &s.results {
             for img in &v.images {
-                if let Some(bytes) = bundle.images.get(&img.path) {
+                if let Some(d) = digests.get(img.path.as_str()) {
                     incoming.insert((
                         s.scenario.clone(),
                         v.variant.clone(),
                         img.kind.clone(),
                         i64::from(img.frame),
-                        digest(bytes),
+                        d.clone(),
                     ));
                 }
             }
@@ -245,12 +242,25 @@ fn ingest_once(conn: &mut dyn Connection, bundle: &RunBundle) -> Result<Ingested
     let run_pk = row.i64(0)?;
 
     // Images, content-addressed; in digest order so that concurrent uploads take rows in one order.
-    let mut digests: BTreeMap<&str, String> = BTreeMap::new();
+    let digests: BTreeMap<&str, String> = bundle.digests_by_path();
     let mut by_digest: BTreeMap<String, &[u8]> = BTreeMap::new();
     for (path, bytes) in &bundle.images {
-        let d = digest(bytes);
-        digests.insert(path, d.clone());
-        by_digest.insert(d, bytes);
+        by_digest.insert(digests[path.as_str()].clone(), bytes);
+    }
+    // Images sent apart must have arrived first (`PUT /api/blobs/<digest>`).
+    for (path, d) in &bundle.image_digests {
+        if !by_digest.contains_key(d)
+            && conn
+                .query_opt(
+                    "SELECT 1 FROM blobs WHERE digest = $1",
+                    &[d.as_str().into()],
+                )?
+                .is_none()
+        {
+            return Err(StoreError::Invalid(format!(
+                "image {path}: blob {d} is not stored; send it first with POST /api/blobs (dashboard README, Uploading)"
+            )));
+        }
     }
     for (d, bytes) in &by_digest {
         conn.execute(

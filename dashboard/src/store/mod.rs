@@ -4,6 +4,7 @@
 //! Not for: SQL dialect details (see [`crate::db`]), HTTP or HTML.
 
 pub mod alerts;
+pub mod blobs;
 pub mod browse;
 pub mod delete;
 pub mod extras;
