@@ -66,6 +66,11 @@ enum Command {
         /// `<run>/timings.json`.
         #[arg(long)]
         timings: bool,
+        /// Run only the variants whose names match (comma-separated, `*` as a wildcard, e.g.
+        /// "taau*,fsr1[scale=0.5]"), with `native` and their own baselines; scenarios without
+        /// a match are left out.
+        #[arg(long, value_name = "PATTERN")]
+        variants: Option<String>,
     },
     /// Check scenarios without a GPU.
     Validate {
@@ -177,6 +182,7 @@ fn main() -> ExitCode {
             branch,
             metrics_device,
             timings,
+            variants,
         } => run_command(
             &paths,
             adapter,
@@ -187,6 +193,7 @@ fn main() -> ExitCode {
             branch,
             metrics_device,
             timings,
+            variants,
         ),
         Command::Validate { paths } => validate_command(&paths),
         Command::Load { paths, adapter } => load_command(&paths, adapter),
@@ -352,11 +359,29 @@ fn run_command(
     branch: Option<String>,
     metrics_device: Option<tessera::metrics_device::Backend>,
     timings: bool,
+    variants: Option<String>,
 ) -> u8 {
     let started = std::time::Instant::now();
     let Some(mut scenarios) = load_all(paths) else {
         return EXIT_INPUT;
     };
+    if let Some(pattern) = &variants {
+        match run::select::select(&mut scenarios, pattern) {
+            Ok(sel) => {
+                if !sel.dropped_scenarios.is_empty() {
+                    eprintln!(
+                        "--variants: left out {} scenario(s) without a match: {}",
+                        sel.dropped_scenarios.len(),
+                        sel.dropped_scenarios.join(", ")
+                    );
+                }
+            }
+            Err(e) => {
+                eprintln!("error: {e}");
+                return EXIT_INPUT;
+            }
+        }
+    }
     if let Some(device) = metrics_device {
         for s in &mut scenarios {
             s.metrics_device = Some(device);

@@ -24,6 +24,7 @@ pub mod record;
 pub mod reference;
 pub mod report;
 pub mod scenario;
+pub mod select;
 pub mod stability;
 pub mod summary;
 
