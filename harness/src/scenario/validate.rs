@@ -642,6 +642,14 @@ fn light(ctx: &mut Ctx, path: &KeyPath, l: &RawLight) -> Light {
         ("direction", l.direction.is_some()),
         ("position", l.position.is_some()),
     ];
+    let apath = path.key("animation");
+    let anim = l.animation.as_ref().map(|a| animation(ctx, &apath, a));
+    let moves = |a: &Option<Animation>| {
+        matches!(
+            a,
+            Some(Animation::Translate { .. } | Animation::Oscillate { .. })
+        )
+    };
     match ctx.choice(
         &path.key("type"),
         "light type",
@@ -656,12 +664,20 @@ fn light(ctx: &mut Ctx, path: &KeyPath, l: &RawLight) -> Light {
                     position: Vec3::ZERO,
                     color,
                     intensity,
+                    animation: None,
                 };
             };
+            if anim.is_some() && !moves(&anim) {
+                ctx.err(
+                    &apath.key("kind"),
+                    "a point light's animation is `translate` or `oscillate` (`rotate` turns a directional light)",
+                );
+            }
             Light::Point {
                 position: ctx.vec3(&path.key("position"), p),
                 color,
                 intensity,
+                animation: anim,
             }
         }
         _ => {
@@ -674,10 +690,17 @@ fn light(ctx: &mut Ctx, path: &KeyPath, l: &RawLight) -> Light {
             if d.length_squared() == 0.0 {
                 ctx.err(&path.key("direction"), "the direction must not be zero");
             }
+            if moves(&anim) {
+                ctx.err(
+                    &apath.key("kind"),
+                    "a directional light's animation is `rotate` (it turns the direction; `translate` and `oscillate` move a point light)",
+                );
+            }
             Light::Directional {
                 direction: d.normalize_or(Vec3::NEG_Y),
                 color,
                 intensity,
+                animation: anim,
             }
         }
     }
