@@ -776,12 +776,6 @@ fn object(ctx: &mut Ctx, path: &KeyPath, file: &Path, o: &RawObject) -> Object {
                 &set,
                 &["path", "scale", "materials"],
             );
-            let textured = ctx.choice(
-                &path.key("materials"),
-                "materials",
-                o.materials.as_deref().unwrap_or("color"),
-                &["color", "file"],
-            ) == Some("file");
             let rel = match &o.path {
                 Some(p) => p.clone(),
                 None => {
@@ -799,6 +793,18 @@ fn object(ctx: &mut Ctx, path: &KeyPath, file: &Path, o: &RawObject) -> Object {
                     ),
                 );
             }
+            // A file with materials is drawn with them unless the scenario asks for "color".
+            let default = if file_has_materials(&resolved) {
+                "file"
+            } else {
+                "color"
+            };
+            let textured = ctx.choice(
+                &path.key("materials"),
+                "materials",
+                o.materials.as_deref().unwrap_or(default),
+                &["color", "file"],
+            ) == Some("file");
             Shape::Mesh {
                 path: resolved,
                 scale: ctx.positive(&path.key("scale"), o.scale.unwrap_or(1.0)),
@@ -1251,4 +1257,10 @@ fn gates(ctx: &mut Ctx, path: &KeyPath, raw: &[RawGate], metrics: &[MetricKind])
         });
     }
     out
+}
+
+/// Whether the glTF file at `path` declares materials (its JSON only: no buffers or images are
+/// read). False for a file that cannot be read or parsed: loading it reports that.
+fn file_has_materials(path: &Path) -> bool {
+    gltf::Gltf::open(path).is_ok_and(|g| g.materials().len() > 0)
 }
