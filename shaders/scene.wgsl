@@ -173,9 +173,12 @@ fn ground_coord(rel_pos: vec3<f32>) -> vec2<f32> {
 // The surface description of a rasterised fragment.
 fn surface(in: VsOut) -> Surface {
     // Derivatives in uniform control flow, for the ground pattern.
+    // One LOD policy for the ground and textures (`material.wgsl`'s `k`): derivatives times the
+    // gradient scale times 2^lod_bias (exactly 1 where the bias is 0).
     let p = ground_coord(in.rel_pos);
-    let ddx = dpdx(p) * frame.params.z;
-    let ddy = dpdy(p) * frame.params.z;
+    let k = frame.params.z * select(exp2(frame.ground.z), 1.0, frame.ground.z == 0.0);
+    let ddx = dpdx(p) * k;
+    let ddy = dpdy(p) * k;
     return Surface(in.rel_pos, in.normal, in.local, in.object, max(abs(ddx), abs(ddy)));
 }
 
@@ -238,11 +241,12 @@ fn injected(color: vec4<f32>, mode: f32) -> vec4<f32> {
     return vec4<f32>(vec3<f32>(bitcast<f32>(bits)), 1.0);
 }
 
-// Velocity pass (checkerboard, and the `tde` metric's exact motion): full-resolution screen
-// motion in pixels (y down) of every object, with z = 1 where the object is dynamic (moves by
-// itself) and 0 where the camera alone moves it (checkerboard reprojects those through the
-// cameras instead), and w = the point's reversed-Z depth in the previous frame (disocclusion
-// test). Cleared to 0 where nothing is drawn. Not jittered.
+// Velocity pass (the motion provider, `render/velocity.rs`, and the `tde` metric's exact
+// motion): screen motion in output pixels (y down, whatever the target's size) of the objects
+// drawn, with z = 1 where the object is dynamic (moves by itself) and 0 where the camera alone
+// moves it (techniques reproject those through the cameras instead), and w = the point's
+// reversed-Z depth in the previous frame (disocclusion test). Cleared to 0 where nothing is
+// drawn. The motion is not jittered; the raster follows the view's remap (see `vs_velocity`).
 struct VelocityOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) current: vec4<f32>,
@@ -264,7 +268,11 @@ fn vs_velocity(
     let still = is_still(object);
     out.previous = previous_clip(position, object, out.current, still);
     out.still = select(0u, 1u, still);
-    out.clip = out.current;
+    // Rasterised through the view's remap like the scene pass (a jittered render-resolution
+    // motion pass covers the same samples as the scene pass it serves, so its depth can be
+    // compared with the scene's); the motion itself is the unjittered `current - previous`.
+    // With the identity remap (0, 0, 1, 1) this is `current` bit for bit.
+    out.clip = vec4<f32>(out.current.xy * frame.jitter.zw + frame.jitter.xy * out.current.w, out.current.zw);
     out.dynamic_object = select(0u, 1u, o.emissive.a > 1.5);
     return out;
 }

@@ -115,6 +115,7 @@ fn variant(name: &str, samples: &[f64], quality: Option<(f64, f64, f64)>) -> Var
         conditions: None,
         sampling: None,
         pacing: None,
+        convergence: None,
     }
 }
 

@@ -169,6 +169,7 @@ fn easu_and_rcas_match_the_model_on_real_frames() {
             ("scale", ParamValue::Float(0.6)),
         ],
         vec![("sharpness", ParamValue::Float(0.0))],
+        vec![("input", ParamValue::Str("aliased".into()))],
     ] {
         let v = common::variant("fsr1", &params);
         compare_with_model(&s, &v, 5);
@@ -192,4 +193,97 @@ fn a_mode_and_a_scale_together_are_refused() {
     assert!((o.render_scale() - 1.0 / 1.5).abs() < 1e-12);
     // AMD's -0.58 mip bias on the ground's filter width.
     assert!((o.gradient_scale() - (-0.58f32).exp2()).abs() < 1e-6);
+}
+
+#[test]
+fn rcas_on_the_gpu_keeps_an_isolated_peak_within_one_and_equals_the_model() {
+    // FSR 1.0.2's case on the GPU: 0.8 encoded at isolated pixels over a ring of 0.5 (and the
+    // mirror case, 0.05), sharpness 0.2 stops. v1.0's limiter decoded the peak to about 61,000.
+    use wgpu::util::DeviceExt;
+    let gpu = common::gpu();
+    let (w, h) = (6u32, 5u32);
+    let mut texels = vec![Vec4::new(0.5, 0.5, 0.5, 1.0); (w * h) as usize];
+    texels[(2 * w + 2) as usize] = Vec4::new(0.8, 0.8, 0.8, 1.0);
+    texels[(2 * w + 4) as usize] = Vec4::new(0.8, 0.5, 0.05, 1.0);
+    texels[(4 * w) as usize] = Vec4::new(0.05, 0.05, 0.05, 1.0);
+    let halves: Vec<half::f16> = texels
+        .iter()
+        .flat_map(|t| t.to_array().map(half::f16::from_f32))
+        .collect();
+    let size = wgpu::Extent3d {
+        width: w,
+        height: h,
+        depth_or_array_layers: 1,
+    };
+    let desc = |label, usage| wgpu::TextureDescriptor {
+        label: Some(label),
+        size,
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: tessera::render::scene::COLOR_FORMAT,
+        usage,
+        view_formats: &[],
+    };
+    let src = gpu.device.create_texture_with_data(
+        &gpu.queue,
+        &desc("peaks", wgpu::TextureUsages::TEXTURE_BINDING),
+        wgpu::util::TextureDataOrder::LayerMajor,
+        bytemuck::cast_slice(&halves),
+    );
+    let dst = gpu.device.create_texture(&desc(
+        "rcas out",
+        wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC,
+    ));
+    let stops = 0.2f32;
+    let pass = tessera::techniques::fsr1::gpu::rcas_pass(
+        &gpu,
+        (
+            &src.create_view(&Default::default()),
+            &dst.create_view(&Default::default()),
+        ),
+        (w, h),
+        stops,
+        false,
+    );
+    let timers = Timers::new(&gpu.device, &[]).unwrap();
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    pass.record(&timers, &mut encoder);
+    gpu.queue.submit([encoder.finish()]);
+    let out = vec4s(read_texture(&gpu.device, &gpu.queue, &dst));
+    let stored: Vec<Vec4> = texels
+        .iter()
+        .map(|t| Vec4::from_array(t.to_array().map(|x| half::f16::from_f32(x).to_f32())))
+        .collect();
+    let img = Image {
+        width: w,
+        height: h,
+        texels: &stored,
+    };
+    for y in 0..h {
+        for x in 0..w {
+            let raw = model::rcas_unclamped(&img, (-stops).exp2(), x, y);
+            assert!(
+                raw.min_element() >= 0.0 && raw.max_element() <= 1.0,
+                "({x}, {y}): the limiter let {raw} out of [0, 1]"
+            );
+            let (_, c) = model::rcas(&img, (-stops).exp2(), false, x, y);
+            let (want, got) = (f16(c), out[(y * w + x) as usize].truncate());
+            assert!(
+                got.is_finite() && got.max_element() < 30.0,
+                "({x}, {y}): {got}"
+            );
+            let d = (want - got).abs().max_element();
+            assert!(
+                d <= 2e-3 * want.abs().max_element().max(1.0),
+                "({x}, {y}): model {want} gpu {got}"
+            );
+        }
+    }
+    // The peak was sharpened (above its own decoded value), not flattened.
+    let peak = out[(2 * w + 2) as usize].x;
+    assert!(
+        peak > model::decode(Vec3::splat(stored[(2 * w + 2) as usize].x)).x,
+        "{peak}"
+    );
 }

@@ -62,6 +62,7 @@ fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) -> Vec<Vec<Source>
         let history = vec4s(read(&t, "history"));
         let history_depth = read(&t, "history_depth");
         let velocity = last.velocity.then(|| vec4s(read(&t, "velocity")));
+        let velocity_depth = last.velocity.then(|| read(&t, "velocity_depth"));
         let inputs = Inputs {
             width: s.width,
             height: s.height,
@@ -72,6 +73,7 @@ fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) -> Vec<Vec<Source>
             history: &history,
             history_depth: &history_depth,
             velocity: velocity.as_deref(),
+            velocity_depth: velocity_depth.as_deref(),
             prev_from_cur: last.prev_from_cur,
             history_valid: last.history_valid,
             still: last.still,

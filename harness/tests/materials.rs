@@ -585,3 +585,24 @@ fn techniques_without_the_forward_pipelines_skip_textured_scenes_with_the_reason
         );
     }
 }
+
+/// A glTF file with materials is drawn with them unless the scenario asks for `"color"`
+/// (issue 33): a textured model loaded as a new user would is not drawn flat grey.
+#[test]
+fn a_mesh_with_materials_is_drawn_with_them_by_default() {
+    let src = |materials: &str| {
+        format!(
+            "resolution = [8, 8]\n[camera]\n[[camera.keyframes]]\ntime = 0\nposition = [0, 1, 4]\ntarget = [0, 0, 0]\n[[techniques]]\ntechnique = \"native\"\n[[scene.objects]]\nshape = \"mesh\"\npath = \"{FLIGHT_HELMET}\"\n{materials}\n"
+        )
+    };
+    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("s.toml");
+    let textured = |m: &str| {
+        tessera::scenario::parse(&file, &src(m))
+            .unwrap_or_else(|e| panic!("{e:?}"))
+            .scene
+            .has_textured_models()
+    };
+    assert!(textured(""));
+    assert!(textured("materials = \"file\""));
+    assert!(!textured("materials = \"color\""));
+}

@@ -190,9 +190,17 @@ fn a_still_camera_accumulates_the_mean_of_the_claimed_samples() {
     let s = scenario(&[SCENE, STILL]);
     let gpu = common::gpu();
     let mut scene = SceneGpu::new(&gpu.device, &gpu.queue, &s).unwrap();
-    let v = common::variant("taau", &[]);
+    // The still-scene accumulator's options, 32 phases: the mean of one whole jitter cycle.
+    let v = common::variant(
+        "taau",
+        &[
+            ("phases", ParamValue::Float(32.0)),
+            ("clip_moving_only", ParamValue::Bool(true)),
+            ("freeze_converged", ParamValue::Bool(true)),
+        ],
+    );
     let options = Options::from_variant(&v);
-    assert_eq!(options.phases(), 32);
+    assert_eq!(options.phases(s.width), 32);
     let mut t = TaauGpu::new(&gpu, options, s.width, s.height, false);
     let mut timers = Timers::new(&gpu.device, &[]).unwrap();
     for index in 0..32 {
@@ -233,7 +241,7 @@ fn a_still_camera_accumulates_the_mean_of_the_claimed_samples() {
         let d = (o.truncate() - m.truncate()).abs().max_element();
         assert!(d <= bound, "pixel {i}: taau {o} mean {m} (bound {bound})");
     }
-    // Converged and still: held, frame after frame (`hold`), as still as native.
+    // Converged and still: held, frame after frame (`freeze_converged`), as still as native.
     for index in 32..36 {
         tessera::run::frames::submit_frame(&gpu, &mut scene, &s, &mut t, &mut timers, index);
         let _ = timers.try_collect(&gpu.queue);
@@ -272,6 +280,7 @@ fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) -> Vec<Vec<Source>
         let history = vec4s(read(&t, "history"));
         let depth_history = read_r32(&t, "depth_history");
         let velocity = last.velocity.then(|| vec4s(read(&t, "velocity")));
+        let velocity_depth = last.velocity.then(|| read(&t, "velocity_depth"));
         let inputs = Inputs {
             low: t.render_size(),
             out: (s.width, s.height),
@@ -281,16 +290,17 @@ fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) -> Vec<Vec<Source>
             history: &history,
             depth_history: &depth_history,
             velocity: velocity.as_deref(),
+            velocity_depth: velocity_depth.as_deref(),
             prev_from_cur: last.prev_from_cur,
             history_valid: last.history_valid,
             camera_still: last.camera_still,
-            clip_still: options.clip_still,
+            clip_still: !options.clip_moving_only,
             clip_gamma: options.clip_gamma,
             depth_tolerance: options.depth_tolerance,
             max_weight: options.max_weight,
             moving_weight: options.moving_weight,
             fill_weight: tessera::techniques::taau::gpu::FILL_WEIGHT,
-            hold: options.hold,
+            freeze_converged: options.freeze_converged,
         };
         let model = model::resolve_all(&inputs);
         let resolved = vec4s(read(&t, "resolved"));
@@ -355,7 +365,8 @@ fn moving_camera_animated_object_and_cut_match_the_model() {
             ("scale", ParamValue::Float(std::f64::consts::FRAC_1_SQRT_2)),
             ("rcas", ParamValue::Bool(true)),
         ],
-        vec![("clip_still", ParamValue::Bool(true))],
+        vec![("clip_moving_only", ParamValue::Bool(true))],
+        vec![("freeze_converged", ParamValue::Bool(true))],
     ] {
         let v = common::variant("taau", &params);
         let frames = compare_with_model(&s, &v, 6);
@@ -370,9 +381,15 @@ fn moving_camera_animated_object_and_cut_match_the_model() {
 }
 
 #[test]
-fn a_still_scene_keeps_history_unclipped_and_a_cut_resets_it() {
+fn a_still_scene_keeps_history_unclipped_with_clip_moving_only() {
     let s = scenario(&[SCENE, STILL]);
-    let v = common::variant("taau", &[("scale", ParamValue::Float(0.5))]);
+    let v = common::variant(
+        "taau",
+        &[
+            ("scale", ParamValue::Float(0.5)),
+            ("clip_moving_only", ParamValue::Bool(true)),
+        ],
+    );
     let frames = compare_with_model(&s, &v, 4);
     assert!(frames[0].iter().all(|s| *s == Source::Reset));
     // Nothing moves: no clipping, and from frame 1 on every pixel has history (upsampled pixels
@@ -380,4 +397,40 @@ fn a_still_scene_keeps_history_unclipped_and_a_cut_resets_it() {
     for f in &frames[1..] {
         assert!(f.iter().all(|s| *s == Source::History), "{f:?}");
     }
+}
+
+#[test]
+fn the_defaults_clip_every_frame_and_never_stop_accumulating() {
+    // A shipped TAA's defaults (Bevy's taa.wgsl, FSR 2): a still scene's history is clipped every
+    // frame, and a converged still pixel still takes in its new sample.
+    let s = scenario(&[SCENE, STILL]);
+    let v = common::variant("taau", &[]);
+    let options = Options::from_variant(&v);
+    assert!(!options.clip_moving_only && !options.freeze_converged);
+    assert_eq!(options.phases(s.width), 8);
+    let frames = compare_with_model(&s, &v, 4);
+    assert!(frames[0].iter().all(|s| *s == Source::Reset));
+    for f in &frames[1..] {
+        assert!(f.iter().all(|s| *s == Source::Clipped), "{f:?}");
+    }
+    // Past `max_weight` frames the output still changes with each jitter phase.
+    let gpu = common::gpu();
+    let mut scene = SceneGpu::new(&gpu.device, &gpu.queue, &s).unwrap();
+    let mut t = TaauGpu::new(&gpu, options, s.width, s.height, false);
+    let mut timers = Timers::new(&gpu.device, &[]).unwrap();
+    let mut last = Vec::new();
+    let mut changed = 0;
+    for index in 0..40 {
+        tessera::run::frames::submit_frame(&gpu, &mut scene, &s, &mut t, &mut timers, index);
+        let _ = timers.try_collect(&gpu.queue);
+        let out = vec4s(read_texture(&gpu.device, &gpu.queue, t.output()));
+        if index >= 34 && out != last {
+            changed += 1;
+        }
+        last = out;
+    }
+    assert!(
+        changed > 0,
+        "a converged still image stopped taking samples"
+    );
 }

@@ -225,6 +225,30 @@ pub struct VariantResult {
     /// Frame-time stability of the per-frame GPU times; `None` with fewer than 2 of them.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pacing: Option<conditions::Pacing>,
+    /// The frames the variant's history needs against the warm-up it had. Absent for variants
+    /// that did not render and in files written before it was recorded.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub convergence: Option<Convergence>,
+}
+
+/// A variant's declared convergence against its run's warm-up (`results/README.md`,
+/// "Convergence").
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
+pub struct Convergence {
+    /// Frames the technique's history needs before its output is steady, as it declares them
+    /// (`taau`: its jitter phases; `adaptive-shading`: its previous frame and, with hysteresis,
+    /// the previous rates; `checkerboard`, `interlace`: both frame parities; 0: no history).
+    pub frames: u32,
+    /// Warm-up frames rendered before the first measured one.
+    pub warmup_frames: u32,
+    /// Whether the camera moved during the warm-up.
+    pub camera_moving_in_warmup: bool,
+    /// Whether the camera moved during the measured frames.
+    pub camera_moving_in_measured: bool,
+    /// The measured frames saw a steady history: at least `frames` warm-up frames, moving
+    /// through the warm-up wherever the camera moves while measured. False: the result was
+    /// measured before its history was steady, and says so.
+    pub converged: bool,
 }
 
 /// Stability checks of one variant (`results/README.md`, "Stability").

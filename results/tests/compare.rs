@@ -92,6 +92,7 @@ fn variant(name: &str, samples: &[f64], psnr: f64) -> VariantResult {
         conditions: None,
         sampling: None,
         pacing: None,
+        convergence: None,
     }
 }
 

@@ -268,8 +268,11 @@ fn vs_material_velocity(
     let o = objects[object];
     let current = frame.view_proj * o.model * vec4<f32>(position, 1.0);
     let still = is_still(object);
+    // The raster follows the view's remap as `vs_velocity`'s does (bit for bit `current` with
+    // the identity remap); the motion stays unjittered.
+    let clip = vec4<f32>(current.xy * frame.jitter.zw + frame.jitter.xy * current.w, current.zw);
     return MaterialVelocityOut(
-        current,
+        clip,
         current,
         previous_clip(position, object, current, still),
         select(0u, 1u, o.emissive.a > 1.5),

@@ -118,6 +118,32 @@ pub fn record_scene_pass_on(
     depth_view: &wgpu::TextureView,
     depth_load: wgpu::LoadOp<f32>,
 ) {
+    record_scene_pass_resolved(
+        gpu,
+        scene,
+        timers,
+        encoder,
+        (name, slot, kind, objects),
+        (color_view, None),
+        depth_view,
+        depth_load,
+    );
+}
+
+/// [`record_scene_pass_on`] into a multisampled `color_view` resolved (the hardware's box
+/// average of the samples) into `resolve_target` at the end of the pass, when one is given: an
+/// MSAA-anti-aliased render at one sample per pixel.
+#[allow(clippy::too_many_arguments)]
+pub fn record_scene_pass_resolved(
+    gpu: &Gpu,
+    scene: &mut SceneGpu,
+    timers: &Timers,
+    encoder: &mut wgpu::CommandEncoder,
+    (name, slot, kind, objects): (&'static str, u32, ScenePipeline, Objects),
+    (color_view, resolve_target): (&wgpu::TextureView, Option<&wgpu::TextureView>),
+    depth_view: &wgpu::TextureView,
+    depth_load: wgpu::LoadOp<f32>,
+) {
     // Velocity targets hold motion, not colour: nothing drawn means no motion.
     let clear = match kind {
         ScenePipeline::Velocity => wgpu::Color::TRANSPARENT,
@@ -131,7 +157,7 @@ pub fn record_scene_pass_on(
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {
                 view: color_view,
                 depth_slice: None,
-                resolve_target: None,
+                resolve_target,
                 ops: wgpu::Operations {
                     load: wgpu::LoadOp::Clear(clear),
                     store: wgpu::StoreOp::Store,

@@ -332,6 +332,12 @@ impl SceneGpu {
         self.materials.is_some()
     }
 
+    /// Whether a light moves or turns (`animation` on a light): shading changes where nothing
+    /// moves, so "camera still, nothing animated" no longer means "the history is exact".
+    pub fn lights_animated(&self) -> bool {
+        self.stage.scene.has_animated_lights()
+    }
+
     /// The textured models, for passes recorded outside wgpu that draw them themselves
     /// (`techniques/adaptive_shading/raw_material.rs`: [`MaterialGpu::raw`] and its draw order).
     pub fn materials(&self) -> Option<&MaterialGpu> {
@@ -522,22 +528,24 @@ impl SceneGpu {
             radiance: [0.0; 4],
         }; MAX_LIGHTS];
         for (i, l) in s.scene.lights.iter().take(MAX_LIGHTS).enumerate() {
-            lights[i] = match l {
+            lights[i] = match l.at(view.time) {
                 Light::Directional {
                     direction,
                     color,
                     intensity,
+                    ..
                 } => GpuLight {
                     position_or_direction: direction.extend(0.0).into(),
-                    radiance: (*color * *intensity).extend(0.0).into(),
+                    radiance: (color * intensity).extend(0.0).into(),
                 },
                 Light::Point {
                     position,
                     color,
                     intensity,
+                    ..
                 } => GpuLight {
                     position_or_direction: (position.as_dvec3() - eye).as_vec3().extend(1.0).into(),
-                    radiance: (*color * *intensity).extend(0.0).into(),
+                    radiance: (color * intensity).extend(0.0).into(),
                 },
             };
         }

@@ -1,15 +1,21 @@
-//! The optional velocity pass that reprojecting techniques share: a full-resolution render of each
-//! pixel's motion (the scene's velocity pipeline) with its own depth buffer, declared in the pass
-//! graph beside the technique's passes and read by its reconstruction only where objects move by
-//! themselves and the technique's `velocity` option is on. Otherwise nothing reads it, the graph
-//! culls it, and 1x1 placeholders are bound in its place, so one bind group layout serves both.
+//! The motion provider every reprojecting technique shares (`checkerboard`, `interlace`,
+//! `taau`): camera motion is reconstructed from depth in the technique's own reconstruction
+//! (its previous camera times the inverse of its current one), and object motion comes from this
+//! pass, which draws the objects that move by themselves ([`Objects::Dynamic`]) with the scene's
+//! velocity pipeline and its own depth buffer, at the resolution the technique renders and
+//! through the view it renders with (`taau`'s jittered render-resolution view, so its depth
+//! equals the scene pass's where the dynamic object is in front). That is how engines give
+//! motion to a temporal technique (UE's velocity pass of movable objects, FSR 2's
+//! render-resolution motion vectors, mosaiikki "Overview" 1: "Only dynamic objects; for static
+//! objects camera reprojection is used in the reconstruction pass"). A static object in front
+//! of a moving one is then not in the buffer; the reconstruction tells it by comparing
+//! [`VELOCITY_DEPTH`] with its own depth. Drawing every object ([`Objects::All`]) stays
+//! available as `checkerboard`'s `velocity_objects = "all"` option.
 //!
-//! The technique says which objects it draws ([`Objects`]): all of them (motion for every pixel,
-//! exact where a static object hides a moving one), or only the dynamic ones, as mosaiikki
-//! ("Overview" 1: "Only dynamic objects; for static objects camera reprojection is used in the
-//! reconstruction pass"), which leaves the static geometry's overdraw out of the pass; a static
-//! object in front of a moving one is then not in the buffer, and the reconstruction tells it
-//! by comparing [`VELOCITY_DEPTH`] with its own depth.
+//! Declared in the pass graph beside the technique's passes and read by its reconstruction only
+//! where objects move by themselves and the technique's `velocity` option is on. Otherwise
+//! nothing reads it, the graph culls it, and 1x1 placeholders are bound in its place, so one
+//! bind group layout serves both.
 //!
 //! Infrastructure: knows no technique. Not for the motion target of the `tde` metric (native's
 //! velocity-only forward path) or a technique's own motion pass drawn over a pre-conditioned
@@ -29,6 +35,11 @@ pub const VELOCITY: Res = Res::new("velocity");
 pub const VELOCITY_DEPTH: Res = Res::new("velocity_depth");
 /// The pass's name in the plan and the timings.
 pub const PASS: &str = "velocity";
+/// How much nearer (relative, in reversed-Z) a technique's own depth at a sample may be than
+/// [`VELOCITY_DEPTH`] there before a static object is taken to hide the dynamic one the motion
+/// pass drew: the two rasterise the same triangles at the same sample and differ only by the
+/// rounding of their vertex transforms. The reconstruction shaders carry the same constant.
+pub const MOTION_DEPTH_EPSILON: f32 = 1e-4;
 
 /// Declares [`VELOCITY`], [`VELOCITY_DEPTH`] (both `width` x `height`) and the velocity pass in
 /// `g`. It runs only when a later pass reads [`VELOCITY`]: the technique adds it to its
@@ -97,8 +108,7 @@ impl VelocityPass {
     }
 
     /// Records the pass when it runs: the whole, unjittered view of `time` (from `prev_time`)
-    /// written to the scene's view `slot`, then the velocity pipeline drawing `objects` into the
-    /// targets, timed as [`PASS`]. Returns [`VelocityPass::runs`].
+    /// written to the scene's view `slot`, then [`VelocityPass::record_in`] that slot.
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -111,10 +121,28 @@ impl VelocityPass {
         prev_time: f64,
         objects: Objects,
     ) -> bool {
+        if !self.runs() {
+            return false;
+        }
+        scene.write_view(&gpu.queue, slot, &View::whole(time, prev_time));
+        self.record_in(gpu, scene, timers, encoder, slot, objects)
+    }
+
+    /// Records the pass when it runs, in the view already written to `slot` this frame (a
+    /// technique's own, e.g. jittered, render view): the velocity pipeline drawing `objects`
+    /// into the targets, timed as [`PASS`]. Returns [`VelocityPass::runs`].
+    pub fn record_in(
+        &self,
+        gpu: &Gpu,
+        scene: &mut SceneGpu,
+        timers: &Timers,
+        encoder: &mut wgpu::CommandEncoder,
+        slot: u32,
+        objects: Objects,
+    ) -> bool {
         let Some((color, depth)) = &self.targets else {
             return false;
         };
-        scene.write_view(&gpu.queue, slot, &View::whole(time, prev_time));
         record_scene_pass_on(
             gpu,
             scene,

@@ -8,6 +8,7 @@
 
 pub mod captured;
 pub mod console;
+pub mod convergence;
 pub mod cvvdp;
 pub mod evaluate;
 pub mod frames;

@@ -75,6 +75,7 @@ pub fn empty_result(v: &Variant, status: Status) -> VariantResult {
         conditions: None,
         sampling: None,
         pacing: None,
+        convergence: None,
     }
 }
 
@@ -190,4 +191,8 @@ pub fn fill_conditions(
         c.clock_warmup_ms = Some(r.clock_warmup_ms);
     }
     result.conditions = Some(conditions);
+    result.convergence = Some(super::convergence::record(
+        scenario,
+        variant.technique.convergence(variant, scenario.width),
+    ));
 }

@@ -79,6 +79,14 @@ impl Report for Console<'_> {
                 for hint in console::throttle_hints(last) {
                     eprintln!("{hint}");
                 }
+                for r in &last.results {
+                    let c = r.convergence.as_ref();
+                    if let Some(h) =
+                        c.and_then(|c| super::convergence::hint(&last.scenario, &r.variant, c))
+                    {
+                        eprintln!("{h}");
+                    }
+                }
             });
         }
         Ok(())

@@ -186,6 +186,9 @@ pub struct RawLight {
     pub position: Option<Vec<f64>>,
     pub color: Option<Vec<f64>>,
     pub intensity: Option<f64>,
+    /// The same inline table as objects': `translate` and `oscillate` move a point light,
+    /// `rotate` turns a directional light's direction.
+    pub animation: Option<RawAnimation>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -29,6 +29,11 @@ impl Scene {
             || self.city.as_ref().is_some_and(|c| c.moving > 0)
     }
 
+    /// Whether a light moves or turns: the shading changes with nothing in motion.
+    pub fn has_animated_lights(&self) -> bool {
+        self.lights.iter().any(Light::is_animated)
+    }
+
     /// Whether it has textured models (glTF `materials = "file"` meshes, the city): what
     /// `SceneGpu::has_materials` will say once it is on the GPU.
     pub fn has_textured_models(&self) -> bool {
@@ -91,12 +96,64 @@ pub enum Light {
         direction: Vec3,
         color: Vec3,
         intensity: f32,
+        /// `rotate` turns the direction about its axis.
+        animation: Option<Animation>,
     },
     Point {
         position: Vec3,
         color: Vec3,
         intensity: f32,
+        /// `translate` or `oscillate` moves the position.
+        animation: Option<Animation>,
     },
+}
+
+impl Light {
+    /// The light at scene time `t` (seconds): its animation applied, as objects' are
+    /// ([`Object::model_at`]); the light itself when it has none.
+    pub fn at(&self, t: f64) -> Light {
+        let mut l = self.clone();
+        match &mut l {
+            Light::Directional {
+                direction,
+                animation:
+                    Some(Animation::Rotate {
+                        axis,
+                        degrees_per_second,
+                    }),
+                ..
+            } => {
+                let angle = (*degrees_per_second as f64 * t).to_radians();
+                let turn = glam::DQuat::from_axis_angle(axis.as_dvec3().normalize(), angle);
+                *direction = (turn * direction.as_dvec3()).as_vec3();
+            }
+            Light::Point {
+                position,
+                animation: Some(a),
+                ..
+            } => {
+                let offset = match a {
+                    Animation::Translate { velocity } => velocity.as_dvec3() * t,
+                    Animation::Oscillate { amplitude, period } => {
+                        amplitude.as_dvec3() * (std::f64::consts::TAU * t / *period as f64).sin()
+                    }
+                    Animation::Rotate { .. } => DVec3::ZERO,
+                };
+                *position = (position.as_dvec3() + offset).as_vec3();
+            }
+            _ => {}
+        }
+        l
+    }
+
+    /// Whether it has an animation.
+    pub fn is_animated(&self) -> bool {
+        match self {
+            Light::Directional { animation, .. } | Light::Point { animation, .. } => {
+                animation.is_some()
+            }
+        }
+    }
 }
 
 #[derive(Clone, Debug)]

@@ -642,6 +642,14 @@ fn light(ctx: &mut Ctx, path: &KeyPath, l: &RawLight) -> Light {
         ("direction", l.direction.is_some()),
         ("position", l.position.is_some()),
     ];
+    let apath = path.key("animation");
+    let anim = l.animation.as_ref().map(|a| animation(ctx, &apath, a));
+    let moves = |a: &Option<Animation>| {
+        matches!(
+            a,
+            Some(Animation::Translate { .. } | Animation::Oscillate { .. })
+        )
+    };
     match ctx.choice(
         &path.key("type"),
         "light type",
@@ -656,12 +664,20 @@ fn light(ctx: &mut Ctx, path: &KeyPath, l: &RawLight) -> Light {
                     position: Vec3::ZERO,
                     color,
                     intensity,
+                    animation: None,
                 };
             };
+            if anim.is_some() && !moves(&anim) {
+                ctx.err(
+                    &apath.key("kind"),
+                    "a point light's animation is `translate` or `oscillate` (`rotate` turns a directional light)",
+                );
+            }
             Light::Point {
                 position: ctx.vec3(&path.key("position"), p),
                 color,
                 intensity,
+                animation: anim,
             }
         }
         _ => {
@@ -674,10 +690,17 @@ fn light(ctx: &mut Ctx, path: &KeyPath, l: &RawLight) -> Light {
             if d.length_squared() == 0.0 {
                 ctx.err(&path.key("direction"), "the direction must not be zero");
             }
+            if moves(&anim) {
+                ctx.err(
+                    &apath.key("kind"),
+                    "a directional light's animation is `rotate` (it turns the direction; `translate` and `oscillate` move a point light)",
+                );
+            }
             Light::Directional {
                 direction: d.normalize_or(Vec3::NEG_Y),
                 color,
                 intensity,
+                animation: anim,
             }
         }
     }
@@ -753,12 +776,6 @@ fn object(ctx: &mut Ctx, path: &KeyPath, file: &Path, o: &RawObject) -> Object {
                 &set,
                 &["path", "scale", "materials"],
             );
-            let textured = ctx.choice(
-                &path.key("materials"),
-                "materials",
-                o.materials.as_deref().unwrap_or("color"),
-                &["color", "file"],
-            ) == Some("file");
             let rel = match &o.path {
                 Some(p) => p.clone(),
                 None => {
@@ -776,6 +793,18 @@ fn object(ctx: &mut Ctx, path: &KeyPath, file: &Path, o: &RawObject) -> Object {
                     ),
                 );
             }
+            // A file with materials is drawn with them unless the scenario asks for "color".
+            let default = if file_has_materials(&resolved) {
+                "file"
+            } else {
+                "color"
+            };
+            let textured = ctx.choice(
+                &path.key("materials"),
+                "materials",
+                o.materials.as_deref().unwrap_or(default),
+                &["color", "file"],
+            ) == Some("file");
             Shape::Mesh {
                 path: resolved,
                 scale: ctx.positive(&path.key("scale"), o.scale.unwrap_or(1.0)),
@@ -1228,4 +1257,10 @@ fn gates(ctx: &mut Ctx, path: &KeyPath, raw: &[RawGate], metrics: &[MetricKind])
         });
     }
     out
+}
+
+/// Whether the glTF file at `path` declares materials (its JSON only: no buffers or images are
+/// read). False for a file that cannot be read or parsed: loading it reports that.
+fn file_has_materials(path: &Path) -> bool {
+    gltf::Gltf::open(path).is_ok_and(|g| g.materials().len() > 0)
 }

@@ -123,6 +123,17 @@ pub trait Definition: Sync + 'static {
     fn frames(&self, _options: &Self::Options) -> FramePattern {
         FramePattern::Same
     }
+
+    /// Frames its history needs before its output is steady at an output `width` pixels wide
+    /// (its declared convergence): a run's warm-up should be at least this long, with the camera
+    /// already moving, and a result says whether it was (`Convergence`). By default 0 (no
+    /// history), or 2 for alternating frames (both parities).
+    fn convergence(&self, options: &Self::Options, _width: u32) -> u32 {
+        match self.frames(options) {
+            FramePattern::Same => 0,
+            FramePattern::Alternating => 2,
+        }
+    }
 }
 
 /// A technique as the registry and a [`Variant`] hold it: a [`Definition`] with its options
@@ -143,6 +154,7 @@ pub trait Technique: Sync + 'static {
     fn shaders(&self) -> Vec<Shader>;
     fn baseline(&self, variant: &Variant) -> Option<&'static str>;
     fn frames(&self, variant: &Variant) -> FramePattern;
+    fn convergence(&self, variant: &Variant, width: u32) -> u32;
 }
 
 impl<D: Definition> Technique for D {
@@ -182,6 +194,9 @@ impl<D: Definition> Technique for D {
     }
     fn frames(&self, variant: &Variant) -> FramePattern {
         Definition::frames(self, &D::Options::from_variant(variant))
+    }
+    fn convergence(&self, variant: &Variant, width: u32) -> u32 {
+        Definition::convergence(self, &D::Options::from_variant(variant), width)
     }
 }
 

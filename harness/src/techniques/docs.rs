@@ -7,9 +7,14 @@ use crate::params::{DefaultValue, ParamKind, ParamSpec};
 pub const BEGIN: &str = "<!-- parameters: generated from harness/src/techniques (tests/docs.rs; TESSERA_BLESS=1 cargo test -p tessera --test docs rewrites it) -->";
 pub const END: &str = "<!-- end of parameters -->";
 
+/// The one level-of-detail policy of every technique that renders below the output's sample
+/// density, stated once above the table.
+pub const LOD_POLICY: &str = "**LOD policy.** Every technique that renders below the output's sample density samples textures and the procedural ground alike as at the output's density: the screen-space derivatives of both (the ground filter's width, texture gradients) are multiplied by the render's sample spacing in output pixels, i.e. a mip bias of log2(render / output) per axis: `upscale` and `fsr1` at `scale` (AMD's FSR 1 modes: -0.38 / -0.58 / -0.79 / -1.0), `checkerboard` at its `gradient_scale` (Intel's DDXY_BIAS 0.5: quarter-resolution raster, full-resolution samples), `interlace` at its `gradient_scale`. A temporal upscaler whose source asks for more adds it on top: `taau`'s `mip_bias` (FSR 2's guide: log2(render / display) - 1, since accumulation resolves detail finer than one frame's samples). `native` and the references use 1.";
+
 /// The Markdown table of every technique and parameter, in registry order.
 pub fn parameter_table() -> String {
-    let mut out = String::from(
+    let mut out = format!("{LOD_POLICY}\n\n");
+    out.push_str(
         "| technique | parameter | allowed | default | meaning |\n|---|---|---|---|---|\n",
     );
     for t in super::ALL {

@@ -197,6 +197,7 @@ pub(crate) mod tests {
             conditions: None,
             sampling: None,
             pacing: None,
+            convergence: None,
         }
     }
 

@@ -253,6 +253,16 @@ impl Definition for AdaptiveShading {
         "adaptive-shading"
     }
 
+    /// The rates read the previous frame's output (1 frame) and, with hysteresis, the previous
+    /// frame's rates as well (1 more: the Schmitt trigger of section 5.4 settles after it).
+    fn convergence(&self, options: &Options, _width: u32) -> u32 {
+        if options.hysteresis > 0.0 {
+            2
+        } else {
+            1
+        }
+    }
+
     fn requirements(&self, options: &Options) -> Requirements {
         match options.vrs {
             Vrs::Software => Requirements::none(),

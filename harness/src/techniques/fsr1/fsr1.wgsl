@@ -1,6 +1,7 @@
 // `fsr1` technique: AMD FidelityFX Super Resolution 1 as two compute passes, `easu` (edge-adaptive
 // spatial upsampling) then `rcas` (robust contrast-adaptive sharpening), written from AMD's MIT
-// reference `ffx_fsr1.h` v1.20210629 (sections "[EASU] EDGE ADAPTIVE SPATIAL UPSAMPLING",
+// reference `ffx_fsr1.h` as released in FidelityFX FSR v1.0.2 (GPUOpen-Effects/FidelityFX-FSR
+// commit a21ffb8, whose one change is RCAS's limiter bounded by the centre pixel; sections "[EASU] EDGE ADAPTIVE SPATIAL UPSAMPLING",
 // "NON-PACKED 32-BIT VERSION" of EASU and of RCAS, "[SRTM] SIMPLE REVERSIBLE TONE-MAPPER").
 //
 // Input contract (ffx_fsr1.h, EASU "Input image requirements"): 3 channels in [0, 1], encoded "as
@@ -18,7 +19,9 @@
 // - AMD's approximate reciprocals (APrxLoRcpF1, APrxLoRsqF1, APrxMedRcpF1) are exact divisions
 //   and `inverseSqrt`, with the zero cases the bit tricks leave finite made explicit: a zero
 //   gradient gives a zero edge length, RCAS's limiters are 0 where their denominator is 0.
-// - no FP16 path, no 8x8 remapping of invocations (one invocation per output pixel).
+// - no FP16 path, no 8x8 remapping of invocations (one invocation per output pixel);
+// - RCAS's filtered value is clamped to [0, 1] before the decode: v1.0.2's limiter keeps it there
+//   in exact arithmetic, the clamp absorbs f32 rounding so `1 - max3` never reaches its floor.
 
 struct Params {
     // x, y: input (render) size; z, w: output size.
@@ -222,16 +225,19 @@ fn load_easu(p: vec2<i32>) -> vec3<f32> {
     return c;
 }
 
-// One channel's lobe limit (FsrRcasF "Limiters"): the negative lobe weight at which the cross
-// filter would clip below 0 (from the ring's minimum) or above 1 (from its maximum).
-fn rcas_lobe(mn4: f32, mx4: f32) -> f32 {
+// One channel's lobe limit (ffx_fsr1.h v1.0.2, FsrRcasF "Limiters"): the negative lobe weight at
+// which the cross filter would clip below 0 or above 1. v1.0.2's one fix bounds both with the
+// centre tap `e` as well as the ring (`hitMin = min(mn4, e) / (4 mx4)`,
+// `hitMax = (1 - max(mx4, e)) / (4 mn4 - 4)`); v1.0's ring-only limiter let an isolated peak
+// (`e` above every ring tap) leave [0, 1], which the SRTM decode turns into huge radiance.
+fn rcas_lobe(mn4: f32, mx4: f32, e: f32) -> f32 {
     var hit_min = 0.0;
     if mx4 > 0.0 {
-        hit_min = mn4 / (4.0 * mx4);
+        hit_min = min(mn4, e) / (4.0 * mx4);
     }
     var hit_max = 0.0;
     if mn4 < 1.0 {
-        hit_max = (1.0 - mx4) / (4.0 * mn4 - 4.0);
+        hit_max = (1.0 - max(mx4, e)) / (4.0 * mn4 - 4.0);
     }
     return max(-hit_min, hit_max);
 }
@@ -257,11 +263,13 @@ fn rcas(@builtin(global_invocation_id) id: vec3<u32>) {
     let mn4 = min(min(b, d), min(f, h));
     let mx4 = max(max(b, d), max(f, h));
     let lobe_rgb = vec3<f32>(
-        rcas_lobe(mn4.r, mx4.r),
-        rcas_lobe(mn4.g, mx4.g),
-        rcas_lobe(mn4.b, mx4.b),
+        rcas_lobe(mn4.r, mx4.r, e.r),
+        rcas_lobe(mn4.g, mx4.g, e.g),
+        rcas_lobe(mn4.b, mx4.b, e.b),
     );
     let lobe = max(-RCAS_LIMIT, min(max3(lobe_rgb), 0.0)) * params.rcas.x;
-    let pix = (lobe * (b + d + h + f) + e) / (4.0 * lobe + 1.0);
+    // In exact arithmetic v1.0.2's limiter keeps `pix` in [0, 1]; the clamp only absorbs f32
+    // rounding, so the decode never sees 1 + epsilon (where `1 - max3` would reach its floor).
+    let pix = clamp((lobe * (b + d + h + f) + e) / (4.0 * lobe + 1.0), vec3<f32>(0.0), vec3<f32>(1.0));
     textureStore(dst, id.xy, vec4<f32>(decode(pix), 1.0));
 }

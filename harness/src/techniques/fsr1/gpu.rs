@@ -1,18 +1,19 @@
 //! The GPU part of `fsr1`: a `scene` render pass at the render size (the ground's derivatives
-//! scaled by the mip bias), an `easu` compute pass to the output size and, when RCAS is on, an
+//! scaled by the mip bias; with `input = "msaa4x"` into 4x multisampled targets resolved into
+//! `color_low` at the end of the pass), an `easu` compute pass to the output size and, when RCAS is on, an
 //! `rcas` compute pass (`fsr1.wgsl`; CPU model in `model.rs`). With RCAS, EASU writes
 //! perceptual values into `easu` and RCAS the linear output; without, EASU writes the output.
 
 use std::collections::HashMap;
 
-use super::Options;
+use super::{Input, Options};
 use crate::gpu::Gpu;
 use crate::render::graph::{Graph, PassKind, Plan, Res, TextureDesc};
 use crate::render::kit::{
-    allocate, bind_group, compute_pipeline, record_scene_pass, timed_dispatch, TextureMap,
+    allocate, bind_group, compute_pipeline, record_scene_pass_resolved, timed_dispatch, TextureMap,
 };
 use crate::render::renderer::{FrameInfo, Renderer};
-use crate::render::scene::{SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FORMAT};
+use crate::render::scene::{Objects, SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::render::timers::Timers;
 
 pub static FSR1_WGSL: &str = include_str!("fsr1.wgsl");
@@ -22,6 +23,11 @@ const COLOR_LOW: Res = Res::new("color_low");
 const DEPTH_LOW: Res = Res::new("depth_low");
 const EASU: Res = Res::new("easu");
 const COLOR: Res = Res::new("color");
+/// The 4x multisampled scene targets (`input = "msaa4x"`), resolved into [`COLOR_LOW`].
+const COLOR_MS: Res = Res::new("color_msaa");
+const DEPTH_MS: Res = Res::new("depth_msaa");
+/// MSAA sample count of the anti-aliased input.
+const MSAA_SAMPLES: u32 = 4;
 
 /// The pass graph at output `width` x `height`.
 pub fn graph(options: &Options, width: u32, height: u32) -> Plan {
@@ -35,9 +41,31 @@ pub fn graph(options: &Options, width: u32, height: u32) -> Plan {
     };
     let mut g = Graph::default();
     g.resource(COLOR_LOW, tex(COLOR_FORMAT, lw, lh))
-        .resource(DEPTH_LOW, tex(DEPTH_FORMAT, lw, lh))
-        .resource(COLOR, tex(COLOR_FORMAT, width, height))
-        .pass("scene", PassKind::Render, &[], &[COLOR_LOW, DEPTH_LOW]);
+        .resource(COLOR, tex(COLOR_FORMAT, width, height));
+    match options.input {
+        Input::Aliased => {
+            g.resource(DEPTH_LOW, tex(DEPTH_FORMAT, lw, lh)).pass(
+                "scene",
+                PassKind::Render,
+                &[],
+                &[COLOR_LOW, DEPTH_LOW],
+            );
+        }
+        Input::Msaa4x => {
+            let ms = |format| TextureDesc {
+                samples: MSAA_SAMPLES,
+                ..tex(format, lw, lh)
+            };
+            g.resource(COLOR_MS, ms(COLOR_FORMAT))
+                .resource(DEPTH_MS, ms(DEPTH_FORMAT))
+                .pass(
+                    "scene",
+                    PassKind::Render,
+                    &[],
+                    &[COLOR_MS, DEPTH_MS, COLOR_LOW],
+                );
+        }
+    }
     if options.rcas {
         g.resource(EASU, tex(COLOR_FORMAT, width, height))
             .pass("easu", PassKind::Compute, &[COLOR_LOW], &[EASU])
@@ -136,7 +164,12 @@ pub struct Fsr1Gpu {
     textures: HashMap<&'static str, wgpu::Texture>,
     options: Options,
     passes: Vec<FsrPass>,
-    scene_views: (wgpu::TextureView, wgpu::TextureView),
+    /// The scene pass's colour and depth targets, and its resolve target with MSAA.
+    scene_views: (
+        wgpu::TextureView,
+        wgpu::TextureView,
+        Option<wgpu::TextureView>,
+    ),
 }
 
 impl Fsr1Gpu {
@@ -173,7 +206,10 @@ impl Fsr1Gpu {
                 easu_params(false),
             )],
         };
-        let scene_views = (view(COLOR_LOW), view(DEPTH_LOW));
+        let scene_views = match options.input {
+            Input::Aliased => (view(COLOR_LOW), view(DEPTH_LOW), None),
+            Input::Msaa4x => (view(COLOR_MS), view(DEPTH_MS), Some(view(COLOR_LOW))),
+        };
         Fsr1Gpu {
             plan,
             textures,
@@ -215,16 +251,20 @@ impl Renderer for Fsr1Gpu {
             ..View::whole(frame.time, frame.prev_time)
         };
         scene.write_view(&gpu.queue, 0, &view);
-        record_scene_pass(
+        let (color, depth, resolve) = &self.scene_views;
+        let samples = match resolve {
+            Some(_) => MSAA_SAMPLES,
+            None => 1,
+        };
+        record_scene_pass_resolved(
             gpu,
             scene,
             timers,
             encoder,
-            "scene",
-            &self.scene_views.0,
-            &self.scene_views.1,
-            0,
-            ScenePipeline::Forward { samples: 1 },
+            ("scene", 0, ScenePipeline::Forward { samples }, Objects::All),
+            (color, resolve.as_ref()),
+            depth,
+            wgpu::LoadOp::Clear(0.0),
         );
         for p in &self.passes {
             p.record(timers, encoder);

@@ -1,14 +1,18 @@
-//! Technique `fsr1`: AMD FidelityFX Super Resolution 1 (`ffx_fsr1.h` v1.20210629, MIT): the scene
+//! Technique `fsr1`: AMD FidelityFX Super Resolution 1 (`ffx_fsr1.h` of FidelityFX FSR v1.0.2, MIT): the scene
 //! rendered at a fraction of the output resolution, upscaled by EASU (edge-adaptive spatial
 //! upsampling) and sharpened by RCAS (robust contrast-adaptive sharpening), both compute passes.
 //! Parameters here, the GPU part in `gpu.rs`, the CPU model in `model.rs`, the shader in
 //! `fsr1.wgsl` (its header states the input contract and every deviation).
 //!
-//! Input contract, as AMD states it and as kept here: EASU wants anti-aliased, perceptually
-//! encoded colour in [0, 1]; RCAS is undefined for negative input. The scene pass here has **no
-//! anti-aliasing** (one sample per pixel, as every other reduced-resolution technique in the
-//! harness is fed): FSR 1 is measured as a user without an AA pass would get it, and `taau` at a
-//! scale below 1 (with its RCAS) is the anti-aliased, temporal alternative. The linear HDR render
+//! Input contract, as AMD states it: EASU wants anti-aliased, perceptually encoded colour in
+//! [0, 1] (the integration guide, `docs/FidelityFX-FSR-Overview-Integration.pdf`: "FSR 1.0
+//! applied on a non anti-aliased input image will likely return poor results"; place it after
+//! TAA or MSAA and tonemapping); RCAS is undefined for negative input. By default
+//! (`input = "msaa4x"`) the scene pass renders 4x MSAA at the render size and resolves it (the
+//! hardware's box average) before EASU: MSAA is the anti-aliasing that lavapipe and every
+//! measured GPU offer at one pass, and its cost is in the `scene` pass's time.
+//! `input = "aliased"` feeds EASU the one-sample render, FSR 1 as a user without an AA pass
+//! would get it, against AMD's contract, and says so in its variant name. The linear HDR render
 //! is made finite and non-negative, reversibly tonemapped (AMD's SRTM) and gamma-2.0 encoded per
 //! tap; the output is decoded back to linear.
 //!
@@ -21,9 +25,10 @@ pub mod gpu;
 pub mod model;
 
 use super::definition::{BuildContext, Definition, Shader, Target};
-use crate::gpu::Unsupported;
+use crate::gpu::{Requirements, Unsupported};
 use crate::render::graph::Plan;
 use crate::render::renderer::Renderer;
+use crate::render::scene::{COLOR_FORMAT, DEPTH_FORMAT};
 
 pub use gpu::{Fsr1Gpu, FSR1_WGSL};
 
@@ -52,6 +57,14 @@ impl Mode {
     }
 }
 
+crate::choice! {
+    /// What EASU is fed.
+    pub enum Input {
+        Msaa4x = "msaa4x",
+        Aliased = "aliased",
+    }
+}
+
 crate::options! {
     /// A variant's options, typed; what the passes take is derived from them
     /// ([`Options::render_scale`], [`Options::rcas_sharpness`], [`Options::gradient_scale`]).
@@ -75,6 +88,10 @@ crate::options! {
         rcas: bool = flag(
             true,
             "run RCAS after EASU (a second compute pass); off: EASU alone",
+        ),
+        input: Input = choice(
+            Input::Msaa4x,
+            "what EASU is fed: `msaa4x` the render-size scene with 4x MSAA, resolved (anti-aliased, as AMD's integration guide asks: \"FSR 1.0 applied on a non anti-aliased input image will likely return poor results\"); `aliased` one sample per pixel, against that contract (FSR 1 as a user without an AA pass gets it)",
         ),
         mip_bias: bool = flag(
             true,
@@ -145,6 +162,16 @@ impl Definition for Fsr1 {
             ));
         }
         Ok(())
+    }
+
+    /// 4x MSAA scene targets with `input = "msaa4x"`.
+    fn requirements(&self, options: &Options) -> Requirements {
+        match options.input {
+            Input::Msaa4x => Requirements::none()
+                .msaa(4, COLOR_FORMAT, "rgba16float")
+                .msaa(4, DEPTH_FORMAT, "depth32float"),
+            Input::Aliased => Requirements::none(),
+        }
     }
 
     fn plan(&self, options: &Options, target: Target) -> Plan {

@@ -2,7 +2,8 @@
 //! sampling): per frame (parity `p = index & 1`) two quarter-resolution `scene` passes, layer r
 //! of `rows_color` / `rows_depth` shading rows `2j + r` at columns `2i + ((r + p) & 1)` (the
 //! projection remapped, `View::ndc_scale` / `ndc_offset`), so the shaded pixels form a
-//! checkerboard; a full-resolution `velocity` pass when the scene has animated objects; and a
+//! checkerboard; the shared motion provider's `velocity` pass (`render/velocity.rs`: the
+//! dynamic objects only, at full resolution) when the scene has animated objects; and a
 //! `reconstruct` compute pass writing every full-resolution pixel and its depth
 //! (`reconstruct.wgsl`, CPU model in `model.rs`). The output and its depth are ping-pong pairs
 //! with the previous frame's (`color` / `color_history`, `depth` / `depth_history`).
@@ -19,12 +20,12 @@ use super::Options;
 use crate::gpu::Gpu;
 use crate::render::graph::{Graph, PassKind, Plan, TextureDesc};
 use crate::render::kit::{
-    allocate, bind_group, compute_pipeline, placeholder_texture, record_scene_pass, timed_dispatch,
-    PingPong,
+    allocate, bind_group, compute_pipeline, record_scene_pass, timed_dispatch, PingPong,
 };
 use crate::render::renderer::{FrameInfo, Renderer};
-use crate::render::scene::{SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FORMAT};
+use crate::render::scene::{Objects, SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::render::timers::Timers;
+use crate::render::velocity::{self, VelocityPass, VELOCITY, VELOCITY_DEPTH};
 
 pub static RECONSTRUCT_WGSL: &str = include_str!("reconstruct.wgsl");
 
@@ -56,8 +57,6 @@ pub fn graph(options: &Options, width: u32, height: u32, dynamic_scene: bool) ->
     let mut g = Graph::default();
     g.resource("rows_color", q(COLOR_FORMAT))
         .resource("rows_depth", q(DEPTH_FORMAT))
-        .resource("velocity", full(COLOR_FORMAT))
-        .resource("velocity_depth", full(DEPTH_FORMAT))
         .resource(OUTPUTS[0], full(COLOR_FORMAT))
         .resource(OUTPUTS[1], full(COLOR_FORMAT))
         .resource(DEPTHS[0], full(OUT_DEPTH_FORMAT))
@@ -65,16 +64,11 @@ pub fn graph(options: &Options, width: u32, height: u32, dynamic_scene: bool) ->
     for name in SCENE_PASSES {
         g.pass(name, PassKind::Render, &[], &["rows_color", "rows_depth"]);
     }
-    g.pass(
-        "velocity",
-        PassKind::Render,
-        &[],
-        &["velocity", "velocity_depth"],
-    );
+    velocity::declare(&mut g, width, height);
     let use_velocity = options.velocity && dynamic_scene;
     let mut reads = vec!["rows_color", "rows_depth", OUTPUTS[1], DEPTHS[1]];
     if use_velocity {
-        reads.push("velocity");
+        reads.extend([VELOCITY.name(), VELOCITY_DEPTH.name()]);
     }
     g.pass(
         "reconstruct",
@@ -141,10 +135,9 @@ pub struct InterlaceGpu {
     bind_groups: PingPong<wgpu::BindGroup>,
     /// Render views of the two layers (colour, depth).
     row_views: [(wgpu::TextureView, wgpu::TextureView); 2],
-    velocity_views: Option<(wgpu::TextureView, wgpu::TextureView)>,
+    velocity: VelocityPass,
     /// The scene has animated objects (so something may move with the camera still).
     dynamic_scene: bool,
-    _dummy_velocity: Option<wgpu::Texture>,
     last: Option<LastFrame>,
 }
 
@@ -181,12 +174,8 @@ impl InterlaceGpu {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let dummy =
-            (!use_velocity).then(|| placeholder_texture(device, "no velocity", COLOR_FORMAT));
-        let velocity_view = match &dummy {
-            Some(t) => t.create_view(&Default::default()),
-            None => view("velocity"),
-        };
+        let velocity = VelocityPass::new(device, &plan, &textures);
+        debug_assert_eq!(velocity.runs(), use_velocity);
         let bgl = pipeline.get_bind_group_layout(0);
         let (rows_color, rows_depth) = (array("rows_color"), array("rows_depth"));
         let bind_groups = [0, 1].map(|k| {
@@ -200,14 +189,14 @@ impl InterlaceGpu {
                     (2, &rows_depth),
                     (3, &view(OUTPUTS[1 - k])),
                     (4, &view(DEPTHS[1 - k])),
-                    (5, &velocity_view),
+                    (5, velocity.binding()),
                     (6, &view(OUTPUTS[k])),
                     (7, &view(DEPTHS[k])),
+                    (8, velocity.depth_binding()),
                 ],
             )
         });
         let row_views = [0, 1].map(|l| (layer("rows_color", l), layer("rows_depth", l)));
-        let velocity_views = use_velocity.then(|| (view("velocity"), view("velocity_depth")));
         InterlaceGpu {
             plan,
             textures,
@@ -218,9 +207,8 @@ impl InterlaceGpu {
             params,
             bind_groups: PingPong::new(bind_groups),
             row_views,
-            velocity_views,
+            velocity,
             dynamic_scene,
-            _dummy_velocity: dummy,
             last: None,
         }
     }
@@ -287,24 +275,22 @@ impl Renderer for InterlaceGpu {
                 ScenePipeline::Forward { samples: 1 },
             );
         }
-        let use_velocity = self.velocity_views.is_some();
-        if let Some((c, d)) = &self.velocity_views {
-            scene.write_view(&gpu.queue, 2, &base);
-            record_scene_pass(
-                gpu,
-                scene,
-                timers,
-                encoder,
-                "velocity",
-                c,
-                d,
-                2,
-                ScenePipeline::Velocity,
-            );
-        }
+        // The dynamic objects only; the reconstruction tells a static object in front of one
+        // by comparing the motion pass's depth with the shaded neighbour's.
+        let use_velocity = self.velocity.record(
+            gpu,
+            scene,
+            timers,
+            encoder,
+            2,
+            frame.time,
+            frame.prev_time,
+            Objects::Dynamic,
+        );
         let (cur, prev) = scene.view_projections(frame.time, frame.prev_time);
-        // Nothing can have moved: the camera is where it was and nothing is animated.
-        let still = cur == prev && !self.dynamic_scene;
+        // Nothing can have changed: the camera is where it was, nothing is animated, no light
+        // moves.
+        let still = cur == prev && !self.dynamic_scene && !scene.lights_animated();
         let (near, far) = scene.near_far();
         let o = &self.options;
         let params = Params {

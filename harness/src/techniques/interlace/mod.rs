@@ -66,7 +66,7 @@ crate::options! {
         ),
         velocity: bool = flag(
             true,
-            "full-resolution velocity pass for animated objects; recorded only when the scene has some (otherwise culled: the camera reprojects by depth)",
+            "object motion from the shared motion provider (`render/velocity.rs`): the dynamic objects only, at full resolution, a static object in front told by depth; recorded only when the scene has animated objects (otherwise culled: the camera reprojects by depth)",
         ),
         gradient_scale: f32 = float(
             (0.0, false, 1.0),

@@ -7,6 +7,8 @@
 
 use glam::{Mat4, Vec2, Vec3, Vec4};
 
+use crate::render::velocity::MOTION_DEPTH_EPSILON;
+
 /// What one reconstruction reads: this frame's two quarter-resolution layers, the previous output
 /// and its depth, the velocity buffer if bound, and the frame's constants.
 pub struct Inputs<'a> {
@@ -24,6 +26,8 @@ pub struct Inputs<'a> {
     pub history_depth: &'a [f32],
     /// Full-resolution velocity (xy: current minus previous position, pixels; z > 0.5: covered).
     pub velocity: Option<&'a [Vec4]>,
+    /// The motion pass's depth (full resolution, reversed-Z), with `velocity`.
+    pub velocity_depth: Option<&'a [f32]>,
     pub prev_from_cur: Mat4,
     pub history_valid: bool,
     /// Nothing can have moved since the previous frame (camera still, no animated objects): the
@@ -183,10 +187,15 @@ pub fn reconstruct(inp: &Inputs, x: u32, y: u32) -> (Vec4, f32, Source) {
     let centre = Vec2::new(x as f32, y as f32) + 0.5;
     let mut prev_pos = centre;
     let mut dz = 0.0;
-    let v = inp
-        .velocity
-        .map(|v| v[(ny[closest] * w + nx[closest]) as usize])
-        .unwrap_or(Vec4::ZERO);
+    let n = (ny[closest] * w + nx[closest]) as usize;
+    let mut v = inp.velocity.map(|v| v[n]).unwrap_or(Vec4::ZERO);
+    if let Some(vd) = inp.velocity_depth {
+        // A static object in front of the animated one the motion pass drew.
+        let vd = vd[n];
+        if d_near - vd > MOTION_DEPTH_EPSILON * d_near.max(vd) {
+            v.z = 0.0;
+        }
+    }
     if v.z > 0.5 {
         prev_pos = centre - Vec2::new(v.x, v.y);
     } else if d_near > 0.0 && !inp.still {
@@ -277,6 +286,7 @@ mod tests {
             history,
             history_depth,
             velocity: None,
+            velocity_depth: None,
             prev_from_cur: Mat4::IDENTITY,
             history_valid: true,
             still: false,

@@ -8,7 +8,10 @@
 // Every other pixel, in the report's order:
 //   1. its four neighbours' colour and depth (borders mirrored onto a shaded pixel);
 //   2. motion from the neighbour closest to the camera: its velocity where it covers an animated
-//      object, else the camera reprojection of the pixel centre at that neighbour's depth;
+//      object (the shared motion provider's pass, render/velocity.rs, draws the dynamic objects
+//      only; where its depth lies behind the neighbour's shaded depth by more than
+//      MOTION_DEPTH_EPSILON, a static object hides the animated one there), else the camera
+//      reprojection of the pixel centre at that neighbour's depth;
 //   3. the previous output at that position (bilinear), clamped to the neighbours' min/max;
 //   4. confidence from the previous depth there against the best estimate of the pixel's depth
 //      now: 1 when it lies within the neighbours' view-depth range (shifted by the neighbour's own
@@ -50,6 +53,13 @@ struct Params {
 @group(0) @binding(5) var velocity: texture_2d<f32>;
 @group(0) @binding(6) var output: texture_storage_2d<rgba16float, write>;
 @group(0) @binding(7) var depth_out: texture_storage_2d<r32float, write>;
+// The motion pass's depth (reversed-Z, full resolution, 0 where it drew nothing).
+@group(0) @binding(8) var velocity_depth: texture_depth_2d;
+
+// `render::velocity::MOTION_DEPTH_EPSILON`: how much nearer (relative, reversed-Z) the shaded
+// depth may be than the motion pass's at the same pixel centre before a static object is taken
+// to hide the animated one (the two passes differ only by rounding there).
+const MOTION_DEPTH_EPSILON: f32 = 1e-4;
 
 // Mirror a coordinate into [0, n): -1 -> 1, n -> n - 2 (keeps the parity, so a neighbour of an
 // unshaded pixel stays a shaded pixel). n = 1: 0.
@@ -177,7 +187,12 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         var dz = 0.0;
         var v = vec4<f32>(0.0);
         if params.mode.y != 0u {
-            v = textureLoad(velocity, vec2<i32>(nx[closest], ny[closest]), 0);
+            let n = vec2<i32>(nx[closest], ny[closest]);
+            v = textureLoad(velocity, n, 0);
+            let vd = textureLoad(velocity_depth, n, 0);
+            if d_near - vd > MOTION_DEPTH_EPSILON * max(d_near, vd) {
+                v.z = 0.0;
+            }
         }
         let still = params.mode.w != 0u;
         if v.z > 0.5 {

@@ -1,11 +1,11 @@
 //! The GPU part of `taau`: per frame a `scene` render pass at the render size, jittered by the
-//! frame's Halton phase (`jitter.rs`); an output-resolution `velocity` pass when the scene has
-//! animated objects; the `resolve` compute pass (`resolve.wgsl`, CPU model in
+//! frame's Halton phase (`jitter.rs`); the shared motion provider's `velocity` pass
+//! (`render/velocity.rs`) when the scene has animated objects: the dynamic objects only, at the
+//! render size, through the same jittered view as the scene pass; the `resolve` compute pass (`resolve.wgsl`, CPU model in
 //! `model.rs`) writing the output with its accumulated weight in alpha and the depth of each
 //! output pixel's sample; and, with `rcas`, FSR 1's RCAS from the resolved colour to `color`.
 //! Colour and depth histories are one ping-pong pair of sides (`kit::PingPong`): frame parity k
-//! writes side k's colour and depth and reads the other's; the velocity pass is the kit's
-//! (`render/velocity.rs`).
+//! writes side k's colour and depth and reads the other's.
 
 use std::collections::HashMap;
 
@@ -21,7 +21,7 @@ use crate::render::kit::{
 use crate::render::renderer::{FrameInfo, Renderer};
 use crate::render::scene::{Objects, SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::render::timers::Timers;
-use crate::render::velocity::{self, VelocityPass, VELOCITY};
+use crate::render::velocity::{self, VelocityPass, VELOCITY, VELOCITY_DEPTH};
 use crate::techniques::fsr1::gpu::{rcas_pass, FsrPass};
 
 pub static RESOLVE_WGSL: &str = include_str!("resolve.wgsl");
@@ -66,7 +66,8 @@ pub fn graph(options: &Options, width: u32, height: u32, dynamic_scene: bool) ->
     g.resource(COLOR_LOW, tex(COLOR_FORMAT, lw, lh))
         .resource(DEPTH_LOW, tex(DEPTH_FORMAT, lw, lh))
         .pass("scene", PassKind::Render, &[], &[COLOR_LOW, DEPTH_LOW]);
-    velocity::declare(&mut g, width, height);
+    // Object motion at the render size: the resolve reads it at the sample it takes.
+    velocity::declare(&mut g, lw, lh);
     g.resource(resolved[0], tex(COLOR_FORMAT, width, height))
         .resource(resolved[1], tex(COLOR_FORMAT, width, height))
         .resource(DEPTHS[0], tex(HISTORY_DEPTH_FORMAT, width, height))
@@ -74,7 +75,7 @@ pub fn graph(options: &Options, width: u32, height: u32, dynamic_scene: bool) ->
     let use_velocity = options.velocity && dynamic_scene;
     let mut reads = vec![COLOR_LOW, DEPTH_LOW, resolved[1], DEPTHS[1]];
     if use_velocity {
-        reads.push(VELOCITY);
+        reads.extend([VELOCITY, VELOCITY_DEPTH]);
     }
     g.pass(
         "resolve",
@@ -187,6 +188,7 @@ impl TaauGpu {
                     (5, velocity.binding()),
                     (6, &view(*resolved)),
                     (7, &view(*depth)),
+                    (8, velocity.depth_binding()),
                 ],
             );
             let rcas = options.rcas_sharpness().map(|s| {
@@ -272,7 +274,7 @@ impl Renderer for TaauGpu {
         encoder: &mut wgpu::CommandEncoder,
         frame: FrameInfo,
     ) {
-        let j = jitter(frame.index, self.options.phases());
+        let j = jitter(frame.index, self.options.phases(self.width));
         let base = View::whole(frame.time, frame.prev_time);
         scene.write_view(
             &gpu.queue,
@@ -294,18 +296,12 @@ impl Renderer for TaauGpu {
             0,
             ScenePipeline::Forward { samples: 1 },
         );
-        // Every object, as Bevy's TAA renders motion: the resolve trusts the buffer's dynamic
-        // mark with no occluder test, so a static object in front of a moving one must be in it.
-        let use_velocity = self.velocity.record(
-            gpu,
-            scene,
-            timers,
-            encoder,
-            1,
-            frame.time,
-            frame.prev_time,
-            Objects::All,
-        );
+        // The dynamic objects only, in the scene pass's jittered view (slot 0): where the
+        // motion pass's depth equals the scene's, the sample shows a dynamic object; where the
+        // scene's is nearer, a static object hides it and the camera reprojects the sample.
+        let use_velocity =
+            self.velocity
+                .record_in(gpu, scene, timers, encoder, 0, Objects::Dynamic);
         let (cur, prev) = scene.view_projections(frame.time, frame.prev_time);
         // A still camera reprojects static content exactly onto itself.
         let camera_still = cur == prev;
@@ -323,13 +319,13 @@ impl Renderer for TaauGpu {
                 o.max_weight,
                 o.moving_weight,
                 FILL_WEIGHT,
-                f32::from(u8::from(o.hold)),
+                f32::from(u8::from(o.freeze_converged)),
             ],
             mode: [
                 u32::from(frame.history_valid),
                 u32::from(use_velocity),
                 u32::from(camera_still),
-                u32::from(o.clip_still),
+                u32::from(!o.clip_moving_only),
             ],
         };
         gpu.queue

@@ -20,13 +20,14 @@ pub fn halton(mut index: u32, base: u32) -> f32 {
     r as f32
 }
 
-/// Phases of the sequence for a render `scale` per axis: at least 8 per output pixel's worth of
-/// render pixels (DLSS's guide: 8 x ratio^2 for a ratio of output to render pixels per axis),
-/// and at least 32 (the converged reference's sample count), so a still camera accumulates as
-/// many distinct samples as the reference has.
-pub fn auto_phases(scale: f64) -> u32 {
-    let ratio = 1.0 / scale;
-    ((8.0 * ratio * ratio).ceil() as u32).max(32)
+/// Phases of the sequence for a render `render_width` pixels wide at an output `display_width`
+/// wide: FSR 2's `ffxFsr2GetJitterPhaseCount` (`src/ffx-fsr2-api/ffx_fsr2.cpp`), the f32
+/// `8 x (display / render)^2` truncated (DLSS's guide asks for the same 8 x ratio^2): 8 at
+/// native width, 18 at 1/1.5, 32 at 1/2. About that many frames fill every output pixel with
+/// samples from one whole cycle.
+pub fn auto_phases(render_width: u32, display_width: u32) -> u32 {
+    let ratio = display_width as f32 / render_width.max(1) as f32;
+    ((8.0 * ratio.powi(2)) as u32).max(1)
 }
 
 /// The jitter of frame `index` with `phases` phases: Halton (2, 3) from its first point (index
@@ -60,10 +61,13 @@ mod tests {
 
     #[test]
     fn phases_cover_the_ratio() {
-        assert_eq!(auto_phases(1.0), 32);
-        assert_eq!(auto_phases(0.5), 32);
-        // 1/3 per axis: 9 render pixels per... 8 x 9 = 72.
-        assert_eq!(auto_phases(1.0 / 3.0), 72);
+        // FSR 2's table: native 8, Quality (1.5) 18, Balanced (1.7) 23, Performance (2) 32,
+        // Ultra Performance (3) 72.
+        assert_eq!(auto_phases(1920, 1920), 8);
+        assert_eq!(auto_phases(1280, 1920), 18);
+        assert_eq!(auto_phases(1129, 1920), 23);
+        assert_eq!(auto_phases(960, 1920), 32);
+        assert_eq!(auto_phases(640, 1920), 72);
     }
 
     #[test]

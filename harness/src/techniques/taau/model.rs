@@ -5,6 +5,8 @@
 
 use glam::{IVec2, Mat4, Vec2, Vec3, Vec4};
 
+use crate::render::velocity::MOTION_DEPTH_EPSILON;
+
 const F16_MAX: f32 = 65504.0;
 
 /// Everything one resolve reads.
@@ -18,18 +20,21 @@ pub struct Inputs<'a> {
     /// The previous resolve's output: colour and accumulated weight (alpha).
     pub history: &'a [Vec4],
     pub depth_history: &'a [f32],
+    /// The motion provider's velocity and depth at the render size (`low`), if recorded.
     pub velocity: Option<&'a [Vec4]>,
+    pub velocity_depth: Option<&'a [f32]>,
     pub prev_from_cur: Mat4,
     pub history_valid: bool,
     pub camera_still: bool,
+    /// Clip where nothing moved too (the default; off with `clip_moving_only`).
     pub clip_still: bool,
     pub clip_gamma: f32,
     pub depth_tolerance: f32,
     pub max_weight: f32,
     pub moving_weight: f32,
     pub fill_weight: f32,
-    /// Still pixels at `max_weight` keep their history.
-    pub hold: bool,
+    /// Still pixels at `max_weight` keep their history (`freeze_converged`).
+    pub freeze_converged: bool,
 }
 
 /// What the resolve did at one pixel.
@@ -176,9 +181,15 @@ pub fn resolve(inp: &Inputs, x: u32, y: u32) -> Resolved {
     let mut prev_pos = centre;
     let mut prev_depth = depth;
     let mut moving = false;
-    let v = inp
-        .velocity
-        .map_or(Vec4::ZERO, |v| v[(y * inp.out.0 + x) as usize]);
+    let qi = (q.y as u32 * inp.low.0 + q.x as u32) as usize;
+    let mut v = inp.velocity.map_or(Vec4::ZERO, |v| v[qi]);
+    if let Some(vd) = inp.velocity_depth {
+        // A static object in front of the dynamic one the motion pass drew.
+        let vd = vd[qi];
+        if depth - vd > MOTION_DEPTH_EPSILON * depth.max(vd) {
+            v.z = 0.0;
+        }
+    }
     if v.z > 0.5 {
         dynamic_here = true;
         prev_pos = centre - Vec2::new(v.x, v.y);
@@ -266,7 +277,7 @@ pub fn resolve(inp: &Inputs, x: u32, y: u32) -> Resolved {
     if weight == 0.0 && !lands {
         w = inp.fill_weight;
     }
-    if inp.hold && !moving && weight >= inp.max_weight {
+    if inp.freeze_converged && !moving && weight >= inp.max_weight {
         w = 0.0;
     }
     let total = weight + w;
@@ -350,6 +361,7 @@ mod tests {
             history,
             depth_history,
             velocity: None,
+            velocity_depth: None,
             prev_from_cur: Mat4::IDENTITY,
             history_valid: true,
             camera_still: true,
@@ -359,7 +371,7 @@ mod tests {
             max_weight: 32.0,
             moving_weight: 8.0,
             fill_weight: 1.0 / 256.0,
-            hold: true,
+            freeze_converged: true,
         }
     }
 

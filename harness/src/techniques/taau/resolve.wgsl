@@ -8,9 +8,13 @@
 //    pixel; it *lands* here when its position (q + 0.5 + jitter) / scale falls inside this pixel
 //    (a box reconstruction filter: at scale 1 every frame's sample lands, so a still camera
 //    accumulates the box-filtered pixel, the converged reference's estimate).
-// 2. Motion: dynamic objects from the velocity pass (unjittered, output resolution); everything
-//    else from the sample's depth through the cameras (prev_from_cur). A still camera on a
-//    static object is exactly still (no rounding noise).
+// 2. Motion: dynamic objects from the shared motion provider's velocity pass
+//    (render/velocity.rs: the dynamic objects only, at the render size, rasterised in the same
+//    jittered view as the scene pass, motion in output pixels), read at the sample's render
+//    pixel q and trusted where its depth equals the scene's there (within MOTION_DEPTH_EPSILON;
+//    a nearer scene depth is a static object in front); everything else from the sample's depth
+//    through the cameras (prev_from_cur). A still camera on a static object is exactly still (no
+//    rounding noise).
 // 3. History: Catmull-Rom (4x4 taps) of the previous output at the previous position (survey
 //    4.2; Bevy uses 5 bilinear taps for the same filter), its accumulated weight at the nearest
 //    texel. No history on a cut, off screen, or where every one of the 3x3 previous depths around
@@ -20,19 +24,22 @@
 //    a sub-pixel feature that this jitter phase hits and others miss, and is kept. Where one of
 //    those nearer previous depths was a dynamic object (the depth history marks them, +2), the
 //    pixel counts as moving: an animated object left it, and its colour must be clipped away.
-// 4. Rectification where anything moved: variance clipping in YCoCg (Salvi 2016, survey 5.2.2)
-//    of the history towards the centre of mean +- gamma * sigma of the 3x3 render neighbourhood;
-//    the weight is capped to `moving_weight` (a faster response, Bevy's reset on motion). Where
-//    nothing moved and nothing was disoccluded the history is left as is (no clip: thin geometry
-//    that one jitter phase misses is not erased) unless `clip_still`.
+// 4. Rectification every frame, as Bevy's TAA and FSR 2 do: variance clipping in YCoCg (Salvi
+//    2016, survey 5.2.2) of the history towards the centre of mean +- gamma * sigma of the 3x3
+//    render neighbourhood; where anything moved the weight is also capped to `moving_weight` (a
+//    faster response, Bevy's reset on motion). With `clip_moving_only` (the still-scene
+//    accumulator, mode.w = 0) a pixel where nothing moved and nothing was disoccluded keeps its
+//    history as is (thin geometry that one jitter phase misses is not erased; a change of
+//    shading without motion ghosts).
 // 5. Blend as a running mean: out = mix(history, sample, w / (W + w)), W the accumulated weight
 //    (capped at `max_weight`), w = 1 where the sample lands, else 0; with no history and no
 //    landing sample the nearest sample is taken with a weight of 1/256, replaced by the first
-//    sample that lands. With `hold`, a still pixel whose history holds `max_weight` samples
-//    keeps it (progressive accumulation that stops, as a path tracer's does: with as many
-//    phases as `max_weight`, the mean of one whole cycle of the jitter); without, the mean goes
-//    on as an exponential one and a still image keeps changing by 1/(1 + max_weight) of each
-//    sample's difference.
+//    sample that lands. By default the mean goes on as an exponential one once W reaches
+//    `max_weight`: each landing sample is blended in with at least 1/(1 + max_weight) (Bevy's
+//    MIN_HISTORY_BLEND_RATE), so a change of shading without motion reaches the output. With
+//    `freeze_converged` (mode: weights.w = 1), a still pixel whose history holds `max_weight`
+//    samples keeps it (progressive accumulation that stops, as a path tracer's does: with as
+//    many phases as `max_weight`, the mean of one whole cycle of the jitter).
 //
 // Deliberate differences from Bevy: linear colour throughout (no reversible tonemap: the
 // running mean then equals the reference's mean of linear samples), no closest-depth motion
@@ -49,9 +56,10 @@ struct Params {
     size: vec4<u32>,
     // xy: this frame's jitter in render pixels; z: clip gamma; w: depth tolerance.
     jitter: vec4<f32>,
-    // x: max weight; y: moving weight; z: 1/256 fill weight; w: 1 to hold converged still pixels.
+    // x: max weight; y: moving weight; z: 1/256 fill weight; w: 1 to freeze converged still pixels.
     weights: vec4<f32>,
-    // x: history valid; y: velocity bound; z: camera still; w: clip still pixels too.
+    // x: history valid; y: velocity bound; z: camera still; w: clip still pixels too (0 with
+    // `clip_moving_only`).
     mode: vec4<u32>,
 }
 
@@ -63,6 +71,14 @@ struct Params {
 @group(0) @binding(5) var velocity: texture_2d<f32>;
 @group(0) @binding(6) var out_color: texture_storage_2d<rgba16float, write>;
 @group(0) @binding(7) var out_depth: texture_storage_2d<r32float, write>;
+// The motion pass's depth (reversed-Z, render size, 0 where it drew nothing).
+@group(0) @binding(8) var velocity_depth: texture_depth_2d;
+
+// How much nearer (relative, reversed-Z) the scene's depth may be than the motion pass's at the
+// same sample before a static object is taken to hide the dynamic one: both passes rasterise
+// the same triangles in the same view, and differ only by the rounding of two vertex transforms
+// (`view_proj * model * p` against `view_proj * (model * p)`).
+const MOTION_DEPTH_EPSILON: f32 = 1e-4;
 
 const F16_MAX: f32 = 65504.0;
 
@@ -169,7 +185,11 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     var v = vec4<f32>(0.0);
     var dynamic_here = false;
     if params.mode.y != 0u {
-        v = textureLoad(velocity, vec2<i32>(id.xy), 0);
+        v = textureLoad(velocity, q, 0);
+        let vd = textureLoad(velocity_depth, q, 0);
+        if depth - vd > MOTION_DEPTH_EPSILON * max(depth, vd) {
+            v.z = 0.0;
+        }
     }
     if v.z > 0.5 {
         dynamic_here = true;
@@ -240,7 +260,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     if weight == 0.0 && !lands {
         w = params.weights.z;
     }
-    // A still pixel that holds `max_weight` samples keeps them (`hold`).
+    // A still pixel that holds `max_weight` samples keeps them (`freeze_converged`).
     if params.weights.w > 0.5 && !moving && weight >= params.weights.x {
         w = 0.0;
     }

@@ -79,7 +79,8 @@ impl Definition for Upscale {
         };
         let make: MakeResample =
             Box::new(move |gpu, src, dst| upscale_pipeline(gpu, src, dst, filter));
-        // Textures sampled as at the output resolution (the upscalers' mip bias).
+        // Textures and the ground sampled as at the output resolution (the LOD policy of the
+        // parameter table: mip bias log2(render / output)).
         let lod_bias = -(cx.target.width as f32 / w as f32).log2();
         Ok(Box::new(
             Forward::new(cx.gpu, w, h, Some((resample, make))).with_lod_bias(lod_bias),
