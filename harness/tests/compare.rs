@@ -55,6 +55,7 @@ fn run_info(run_id: &str, sha: &str, adapter: AdapterInfo) -> RunInfo {
         conditions: None,
         suite: Some("scenarios".into()),
         branch: Some("main".into()),
+        adapter_class: None,
     }
 }
 
@@ -486,13 +487,13 @@ fn exit_codes_of_the_command() {
 
     let newer = dir.path().join("newer");
     std::fs::create_dir_all(&newer).unwrap();
-    std::fs::write(newer.join("run.json"), r#"{"schema_version": 3}"#).unwrap();
+    std::fs::write(newer.join("run.json"), r#"{"schema_version": 4}"#).unwrap();
     let (code, _, err) = tessera(&["compare", &a, newer.to_str().unwrap()]);
     assert_eq!(code, 2);
     assert_eq!(
         err,
         format!(
-            "error: {}/run.json has schema_version 3; this reader knows versions 1 to 2: read it with the newer tessera or tessera-dashboard that wrote it\n",
+            "error: {}/run.json has schema_version 4; this reader knows versions 1 to 3: read it with the newer tessera or tessera-dashboard that wrote it\n",
             newer.display()
         )
     );

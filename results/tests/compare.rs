@@ -49,6 +49,7 @@ fn info(run_id: &str, sha: &str) -> RunInfo {
         conditions: None,
         suite: Some("smoke".into()),
         branch: Some("main".into()),
+        adapter_class: None,
     }
 }
 

@@ -7,6 +7,7 @@ pub mod alerts;
 pub mod browse;
 pub mod delete;
 pub mod extras;
+pub mod frames;
 pub mod groups;
 pub mod ingest;
 pub mod outbox;

@@ -36,6 +36,7 @@ pub fn finish(
         wall_ms: start.elapsed().as_secs_f64() * 1000.0,
         peak_rss_bytes: super::memory::peak_bytes(),
         peak_heap_bytes: super::memory::peak_heap_bytes(),
+        reference_digests: Vec::new(),
     }
 }
 
@@ -75,6 +76,8 @@ pub fn empty_result(v: &Variant, status: Status) -> VariantResult {
         conditions: None,
         sampling: None,
         pacing: None,
+        frame_digests: Vec::new(),
+        expectation: None,
     }
 }
 
