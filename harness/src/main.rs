@@ -1,8 +1,10 @@
 //! `tessera`: the command line. Parses arguments, calls the library, prints, and picks the exit code.
 //!
-//! Exit codes (documented in README.md): 0 ok, 1 a gate failed or a variant failed, 2 bad input
-//! (scenario, arguments, images, output folder), 3 no usable adapter or a device failure, 4 the
-//! upload to a dashboard failed (results are on disk).
+//! Exit codes (documented in README.md): 0 ok (expected failures included), 1 a gate failed or a
+//! variant failed, an unexpected pass, or an unapproved frame (`--expect`), 2 bad input
+//! (scenario, expectations or digest file, arguments, images, output folder), 3 no usable adapter
+//! or a device failure, 4 the upload to a dashboard failed (results are on disk) or `--expect URL`
+//! could not reach it.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
