@@ -116,6 +116,8 @@ fn variant(name: &str, samples: &[f64], quality: Option<(f64, f64, f64)>) -> Var
         conditions: None,
         sampling: None,
         pacing: None,
+        frame_digests: Vec::new(),
+        expectation: None,
     }
 }
 
@@ -135,6 +137,7 @@ fn scenario(run_id: &str, name: &str, results: Vec<VariantResult>) -> ScenarioRe
         wall_ms: 100.0,
         peak_rss_bytes: None,
         peak_heap_bytes: None,
+        reference_digests: Vec::new(),
     }
 }
 

@@ -93,6 +93,8 @@ fn variant(name: &str, samples: &[f64], psnr: f64) -> VariantResult {
         conditions: None,
         sampling: None,
         pacing: None,
+        frame_digests: Vec::new(),
+        expectation: None,
     }
 }
 
@@ -112,6 +114,7 @@ fn scenario(run_id: &str, results: Vec<VariantResult>) -> ScenarioResult {
         wall_ms: 100.0,
         peak_rss_bytes: None,
         peak_heap_bytes: None,
+        reference_digests: Vec::new(),
     }
 }
 

@@ -53,27 +53,35 @@ pub async fn list_page(State(state): State<AppState>) -> Result<Html<String>, Ap
     if rows.is_empty() {
         body.push_str("<p class=muted>No untriaged frames.</p>");
     } else {
-        let _ = write!(
-            body,
-            "<p>{} untriaged frames.</p><div class=scroll><table><thead><tr><th>run</th><th>commit</th><th>scenario</th><th>variant</th><th>frame</th><th>adapter class</th><th>digest</th></tr></thead><tbody>",
-            rows.len()
-        );
+        let _ = write!(body, "<p>{} untriaged frames.</p>", rows.len());
+        // One table per run (rows come newest run first), so that narrow screens keep columns.
+        let mut current: Option<&str> = None;
         for f in &rows {
+            if current != Some(f.run_id.as_str()) {
+                if current.is_some() {
+                    body.push_str("</tbody></table>");
+                }
+                current = Some(f.run_id.as_str());
+                let _ = write!(
+                    body,
+                    "<h2 style=\"font-size:1em;overflow-wrap:anywhere\">run <a href=\"/runs/{}\">{}</a> · commit <code>{}</code> · adapter class {}</h2><table><thead><tr><th>scenario</th><th>variant</th><th>frame</th><th>digest</th></tr></thead><tbody>",
+                    enc(&f.run_id),
+                    esc(&f.run_id),
+                    esc(f.commit.as_deref().map_or("", |c| &c[..c.len().min(10)])),
+                    esc(&f.adapter_class)
+                );
+            }
             let _ = write!(
                 body,
-                "<tr><td><a href=\"/runs/{}\">{}</a></td><td><code>{}</code></td><td>{}</td><td><a href=\"{}\">{}</a></td><td>{}</td><td>{}</td><td><code>{}</code></td></tr>",
-                enc(&f.run_id),
-                esc(&f.run_id),
-                esc(f.commit.as_deref().map_or("", |c| &c[..c.len().min(10)])),
+                "<tr><td>{}</td><td><a href=\"{}\">{}</a></td><td>{}</td><td><code>{}</code></td></tr>",
                 esc(&f.scenario),
                 frame_url(f),
                 esc(&f.variant),
                 f.frame,
-                esc(&f.adapter_class),
                 esc(short(&f.digest))
             );
         }
-        body.push_str("</tbody></table></div>");
+        body.push_str("</tbody></table>");
     }
     Ok(Html(layout("untriaged frames", "frames", &body)))
 }
@@ -161,7 +169,7 @@ pub async fn detail_page(
     let mut body = String::new();
     let _ = write!(
         body,
-        "<p>Run <a href=\"/runs/{}\">{}</a>, adapter class <b>{}</b>, frame {} of <b>{}</b> / <b>{}</b>: triage <b class=\"triage-{}\">{}</b>, digest <code>{}</code>.</p>",
+        "<p style=\"overflow-wrap:anywhere\">Run <a href=\"/runs/{}\">{}</a>, adapter class <b>{}</b>, frame {} of <b>{}</b> / <b>{}</b>: triage <b class=\"triage-{}\">{}</b>, digest <code>{}</code>.</p>",
         enc(&f.run_id),
         esc(&f.run_id),
         esc(&f.adapter_class),
@@ -176,7 +184,7 @@ pub async fn detail_page(
         Some(a) => {
             let _ = write!(
                 body,
-                "<p>Closest approved frame: digest <code>{}</code> from run {}, approved by {} at {}.</p>",
+                "<p style=\"overflow-wrap:anywhere\">Closest approved frame: digest <code>{}</code> from run {}, approved by {} at {}.</p>",
                 esc(&a.digest),
                 a.run_id.as_deref().map_or("?".to_string(), |r| format!(
                     "<a href=\"/runs/{}\">{}</a>",

@@ -197,6 +197,8 @@ pub(crate) mod tests {
             conditions: None,
             sampling: None,
             pacing: None,
+            frame_digests: Vec::new(),
+            expectation: None,
         }
     }
 
