@@ -267,6 +267,18 @@ fn digests_repeat_and_expect_catches_a_changed_colour() {
     assert_eq!(code, 0, "{stdout}");
     assert!(stdout.contains("4 matched, 0 unapproved"), "{stdout}");
 
+    // The same digests from a dashboard: `--expect URL` asks `/api/approved-frames?class=`.
+    let body = std::fs::read_to_string(&file).unwrap();
+    let (url, asked) = serve_once(body);
+    let (code, stdout, _, _) = run(&s, &out, &["--expect", &url]);
+    assert_eq!(code, 0, "{stdout}");
+    assert!(stdout.contains("4 matched, 0 unapproved"), "{stdout}");
+    let request = asked.join().unwrap();
+    assert!(
+        request.starts_with("GET /api/approved-frames?class=llvmpipe "),
+        "{request}"
+    );
+
     // One object's colour changes: every frame of the scenario is unapproved, exit 1.
     std::fs::write(
         s.join("passes.toml"),
@@ -295,4 +307,31 @@ fn digests_repeat_and_expect_catches_a_changed_colour() {
         stderr.contains("holds digests of adapter class `llvmpipe`"),
         "{stderr}"
     );
+}
+
+/// A one-request HTTP server answering `body` as JSON; returns its URL and the request line.
+fn serve_once(body: String) -> (String, std::thread::JoinHandle<String>) {
+    use std::io::{BufRead, BufReader, Write};
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let url = format!("http://{}", listener.local_addr().unwrap());
+    let handle = std::thread::spawn(move || {
+        let (mut stream, _) = listener.accept().unwrap();
+        let mut reader = BufReader::new(stream.try_clone().unwrap());
+        let mut first = String::new();
+        reader.read_line(&mut first).unwrap();
+        loop {
+            let mut line = String::new();
+            if reader.read_line(&mut line).unwrap() == 0 || line == "\r\n" {
+                break;
+            }
+        }
+        write!(
+            stream,
+            "HTTP/1.1 200 OK\r\ncontent-type: application/json\r\ncontent-length: {}\r\nconnection: close\r\n\r\n{body}",
+            body.len()
+        )
+        .unwrap();
+        first
+    });
+    (url, handle)
 }

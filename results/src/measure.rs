@@ -749,4 +749,15 @@ mod tests {
             Some(HigherIsBetter)
         );
     }
+
+    #[test]
+    fn no_perf_results_have_no_timing_series() {
+        assert!(is_timing_key("gpu_ms.median"));
+        assert!(is_timing_key("pass.reconstruct.gpu_ms.median"));
+        assert!(is_timing_key("cpu_ms.median"));
+        assert!(is_timing_key("speedup"));
+        assert!(!is_timing_key("psnr"));
+        assert!(!is_timing_key("allocated_bytes"));
+        assert!(!is_timing_key("pass.gpu_ms_like.psnr"));
+    }
 }
