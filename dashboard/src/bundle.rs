@@ -324,7 +324,7 @@ mod tests {
         .unwrap_err();
         assert_eq!(
             err.to_string(),
-            "run.json has schema_version 99; this dashboard reads versions 1 to 2: upgrade tessera-dashboard to store it"
+            "run.json has schema_version 99; this dashboard reads versions 1 to 3: upgrade tessera-dashboard to store it"
         );
     }
 }

@@ -27,6 +27,28 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Approve a stored run's frames (or one scenario's) as a reviewer would after looking: their
+    /// digests become the approved frames of their adapter class, and the frame alerts they
+    /// raised are withdrawn. With --regression, mark them as a regression instead.
+    Approve {
+        /// The run id.
+        #[arg(long)]
+        run: String,
+        /// Only this scenario's frames.
+        #[arg(long)]
+        scenario: Option<String>,
+        /// Only this variant's frames (`(reference)` for a separate reference).
+        #[arg(long)]
+        variant: Option<String>,
+        /// Mark the frames as a regression (`negative`) instead of approving them.
+        #[arg(long)]
+        regression: bool,
+        /// Who approves, as recorded (default: $USER).
+        #[arg(long)]
+        by: Option<String>,
+        #[arg(long, env = "TESSERA_DASHBOARD_DB", default_value = DEFAULT_DB)]
+        db: String,
+    },
     /// Store a run folder, or every run folder inside a folder (idempotent by run id).
     Import {
         /// A run folder (with run.json) or a folder of run folders.
@@ -236,6 +258,35 @@ fn retention(rule: Retention, apply: bool, db: &str) -> anyhow::Result<()> {
 
 fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
+        Command::Approve {
+            run,
+            scenario,
+            variant,
+            regression,
+            by,
+            db,
+        } => {
+            use tessera_dashboard::store::frames;
+            let pool = db::open(&db)?;
+            let mut conn = pool.get()?;
+            let state = if regression {
+                frames::NEGATIVE
+            } else {
+                frames::POSITIVE
+            };
+            let j = frames::Judge {
+                run_id: run.clone(),
+                scenario,
+                variant,
+                frame: None,
+                state: state.to_string(),
+                by: by
+                    .or_else(|| std::env::var("USER").ok())
+                    .unwrap_or_else(|| "command line".into()),
+            };
+            let n = tessera_dashboard::db::transaction(&mut *conn, |c| frames::judge(c, &j))?;
+            println!("{n} frames of run {run} are now {state}");
+        }
         Command::Import { folder, db } => {
             let pool = db::open(&db)?;
             let summary = import::import(&pool, &folder, &Params::default())?;

@@ -574,10 +574,14 @@ pub fn update(
     Ok(update_all(conn, series, params)?.detected)
 }
 
-/// Every series in the store (for `tessera-dashboard detect`).
+/// Every series in the store (for `tessera-dashboard detect`), but the frame alerts' series
+/// (`frames.untriaged`, which have no points: their alerts are triaged, not detected).
 pub fn all_series(conn: &mut dyn Connection) -> Result<Vec<i64>, StoreError> {
     Ok(conn
-        .query("SELECT id FROM series ORDER BY id", &[])?
+        .query(
+            "SELECT id FROM series WHERE measure <> $1 ORDER BY id",
+            &[crate::store::frames::UNTRIAGED_MEASURE.into()],
+        )?
         .iter()
         .map(|r| r.i64(0))
         .collect::<Result<_, _>>()?)

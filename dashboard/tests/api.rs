@@ -250,12 +250,12 @@ async fn bad_uploads_get_4xx_and_store_nothing() {
         ),
     ];
     let mut future = template_body();
-    future["run"]["schema_version"] = 3.into();
+    future["run"]["schema_version"] = 4.into();
     cases.push((
         "future schema",
         future.to_string(),
         StatusCode::UNPROCESSABLE_ENTITY,
-        "reads versions 1 to 2",
+        "reads versions 1 to 3",
     ));
     let mut bad_id = template_body();
     bad_id["run"]["run_id"] = "../../x".into();

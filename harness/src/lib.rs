@@ -5,6 +5,7 @@
 
 pub mod compare;
 pub mod conditions;
+pub mod expect;
 pub mod gpu;
 pub mod metrics_device;
 pub mod params;

@@ -1,8 +1,10 @@
 //! `tessera`: the command line. Parses arguments, calls the library, prints, and picks the exit code.
 //!
-//! Exit codes (documented in README.md): 0 ok, 1 a gate failed or a variant failed, 2 bad input
-//! (scenario, arguments, images, output folder), 3 no usable adapter or a device failure, 4 the
-//! upload to a dashboard failed (results are on disk).
+//! Exit codes (documented in README.md): 0 ok (expected failures included), 1 a gate failed or a
+//! variant failed, an unexpected pass, or an unapproved frame (`--expect`), 2 bad input
+//! (scenario, expectations or digest file, arguments, images, output folder), 3 no usable adapter
+//! or a device failure, 4 the upload to a dashboard failed (results are on disk) or `--expect URL`
+//! could not reach it.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -38,7 +40,8 @@ enum Command {
     Run {
         #[arg(required = true)]
         paths: Vec<PathBuf>,
-        /// Adapter whose name, driver or backend contains this text (case-insensitive).
+        /// Adapter whose name, driver or backend contains this text, or its vendor (nvidia, amd, intel,
+        /// 0x10de), case-insensitive.
         #[arg(long)]
         adapter: Option<String>,
         /// Folder that receives `<run-id>/`.
@@ -71,6 +74,28 @@ enum Command {
         /// a match are left out.
         #[arg(long, value_name = "PATTERN")]
         variants: Option<String>,
+        /// Also run the variants the suite's expectations label `slow`.
+        #[arg(long)]
+        slow: bool,
+        /// Approved frame digests to check every frame against (exit 1 on an unapproved
+        /// change): a dashboard URL (`GET /api/approved-frames`) or a digest file such as
+        /// `scenarios/smoke/digests/llvmpipe.json`. Read before the run starts.
+        #[arg(long, value_name = "URL|FILE")]
+        expect: Option<String>,
+        /// The adapter class the run declares (e.g. a runner's label); default: derived from the
+        /// adapter (`llvmpipe`, `nvidia`, `amd`, `intel`).
+        #[arg(long, value_name = "CLASS")]
+        adapter_class: Option<String>,
+    },
+    /// Approved frame digests committed beside a suite (`scenarios/<suite>/digests/<class>.json`).
+    Digests {
+        #[command(subcommand)]
+        command: DigestsCommand,
+    },
+    /// A suite's expectations (`scenarios/<suite>/expectations.toml`).
+    Expectations {
+        #[command(subcommand)]
+        command: ExpectationsCommand,
     },
     /// Check scenarios without a GPU.
     Validate {
@@ -82,7 +107,8 @@ enum Command {
     Load {
         #[arg(required = true)]
         paths: Vec<PathBuf>,
-        /// Adapter whose name, driver or backend contains this text (case-insensitive).
+        /// Adapter whose name, driver or backend contains this text, or its vendor (nvidia, amd, intel,
+        /// 0x10de), case-insensitive.
         #[arg(long)]
         adapter: Option<String>,
     },
@@ -153,6 +179,35 @@ enum Command {
     },
 }
 
+#[derive(Subcommand)]
+enum ExpectationsCommand {
+    /// Rewrite each suite's expectations.toml from run folders: a failure without an entry becomes
+    /// a `broken` entry with the error as its reason, an entry whose results passed is removed;
+    /// prints the change as a unified diff, then writes it.
+    Update {
+        #[arg(required = true)]
+        runs: Vec<PathBuf>,
+        /// Print the diff without writing (exit 1 when something would change).
+        #[arg(long)]
+        dry_run: bool,
+    },
+    /// Check expectations files without running anything.
+    Check {
+        #[arg(required = true)]
+        files: Vec<PathBuf>,
+    },
+}
+
+#[derive(Subcommand)]
+enum DigestsCommand {
+    /// Approve run folders' frames: write their digests as `positive` into
+    /// `<suite folder>/digests/<adapter class>.json`, replacing the same frames' entries.
+    Approve {
+        #[arg(required = true)]
+        runs: Vec<PathBuf>,
+    },
+}
+
 fn main() -> ExitCode {
     quiet_headless_probing();
     // `tessera validate ... | head`: a closed pipe ends the process quietly, as for any Unix tool,
@@ -183,6 +238,9 @@ fn main() -> ExitCode {
             metrics_device,
             timings,
             variants,
+            slow,
+            expect,
+            adapter_class,
         } => run_command(
             &paths,
             adapter,
@@ -192,9 +250,29 @@ fn main() -> ExitCode {
             upload,
             branch,
             metrics_device,
-            timings,
-            variants,
+            RunFlags {
+                timings,
+                slow,
+                expect,
+                adapter_class,
+                variants,
+            },
         ),
+        Command::Digests {
+            command: DigestsCommand::Approve { runs },
+        } => match tessera::expect::digests::approve(&runs) {
+            Ok(files) => {
+                for (path, n) in files {
+                    println!("{}: {n} frames approved", path.display());
+                }
+                0
+            }
+            Err(e) => {
+                eprintln!("error: {e}");
+                EXIT_INPUT
+            }
+        },
+        Command::Expectations { command } => expectations_command(command),
         Command::Validate { paths } => validate_command(&paths),
         Command::Load { paths, adapter } => load_command(&paths, adapter),
         Command::Adapters { json } => adapters_command(json),
@@ -348,6 +426,15 @@ fn load_command(paths: &[PathBuf], adapter: Option<String>) -> u8 {
     }
 }
 
+/// `tessera run`'s switches beyond where and how to run.
+struct RunFlags {
+    timings: bool,
+    slow: bool,
+    expect: Option<String>,
+    adapter_class: Option<String>,
+    variants: Option<String>,
+}
+
 #[allow(clippy::too_many_arguments)]
 fn run_command(
     paths: &[PathBuf],
@@ -358,9 +445,15 @@ fn run_command(
     upload: Option<String>,
     branch: Option<String>,
     metrics_device: Option<tessera::metrics_device::Backend>,
-    timings: bool,
-    variants: Option<String>,
+    flags: RunFlags,
 ) -> u8 {
+    let RunFlags {
+        timings,
+        slow,
+        expect,
+        adapter_class,
+        variants,
+    } = flags;
     let started = std::time::Instant::now();
     let Some(mut scenarios) = load_all(paths) else {
         return EXIT_INPUT;
@@ -382,6 +475,15 @@ fn run_command(
             }
         }
     }
+    let expectations = match tessera::expect::Book::load_for(&scenarios) {
+        Ok(b) => b,
+        Err(errors) => {
+            for e in errors {
+                eprintln!("error: {e}");
+            }
+            return EXIT_INPUT;
+        }
+    };
     if let Some(device) = metrics_device {
         for s in &mut scenarios {
             s.metrics_device = Some(device);
@@ -394,6 +496,33 @@ fn run_command(
             return EXIT_INPUT;
         }
     }
+    // Approved frame digests, read before the run (the adapter's class picks them).
+    let approved = match &expect {
+        Some(source) => {
+            let class = match &adapter_class {
+                Some(c) => c.clone(),
+                None => match tessera::gpu::select(adapter.as_deref()) {
+                    Ok(a) => tessera_results::adapter::class(&tessera::gpu::describe(&a)),
+                    Err(e) => {
+                        eprintln!("error: {e}");
+                        return EXIT_DEVICE;
+                    }
+                },
+            };
+            match tessera::expect::digests::load(source, &class) {
+                Ok(f) => Some(f),
+                Err(e @ tessera::expect::digests::DigestError::Fetch { .. }) => {
+                    eprintln!("error: --expect: {e}");
+                    return EXIT_UPLOAD;
+                }
+                Err(e) => {
+                    eprintln!("error: --expect: {e}");
+                    return EXIT_INPUT;
+                }
+            }
+        }
+        None => None,
+    };
     let opts = run::Options {
         adapter,
         out,
@@ -403,6 +532,9 @@ fn run_command(
         suite: run::suite_name(paths),
         branch,
         timings,
+        expectations,
+        slow,
+        adapter_class,
     };
     let outcome = match run::run_suite(&scenarios, &opts) {
         Ok(o) => o,
@@ -425,10 +557,28 @@ fn run_command(
     let tally = console::tally(&outcome.scenarios);
     eprintln!("results: {}", outcome.run_dir.display());
     println!("{}", console::stability_summary(&outcome.scenarios));
+    let frames_changed = match (&approved, &expect) {
+        (Some(file), Some(source)) => {
+            let check = tessera::expect::digests::check(&outcome.scenarios, file);
+            for at in &check.unapproved {
+                eprintln!("error: unapproved frame: {at}");
+            }
+            for at in &check.negative {
+                eprintln!("error: frame marked as a regression: {at}");
+            }
+            println!("{}", check.summary(source));
+            check.failed()
+        }
+        _ => false,
+    };
     println!("{}", console::verdict(&tally));
     let code = if outcome.device_lost {
         EXIT_DEVICE
-    } else if tally.failed > 0 || tally.gate_failures > 0 {
+    } else if tally.failed > 0
+        || tally.gate_failures > 0
+        || tally.unexpected_passes > 0
+        || frames_changed
+    {
         EXIT_GATE
     } else {
         0
@@ -452,6 +602,75 @@ fn run_command(
             code
         }
         None => code,
+    }
+}
+
+fn expectations_command(command: ExpectationsCommand) -> u8 {
+    use tessera::expect::update;
+    match command {
+        ExpectationsCommand::Check { files } => {
+            let mut bad = false;
+            for f in &files {
+                match tessera::expect::load(f) {
+                    Ok(Some(e)) => println!("{}: {} entries valid", f.display(), e.entries.len()),
+                    Ok(None) => {
+                        eprintln!("error: {}: no such file", f.display());
+                        bad = true;
+                    }
+                    Err(errors) => {
+                        for e in errors {
+                            eprintln!("error: {e}");
+                        }
+                        bad = true;
+                    }
+                }
+            }
+            if bad {
+                EXIT_INPUT
+            } else {
+                0
+            }
+        }
+        ExpectationsCommand::Update { runs, dry_run } => {
+            let updates = match update::plan(&runs) {
+                Ok(u) => u,
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    return EXIT_INPUT;
+                }
+            };
+            let mut changed = 0;
+            for u in &updates {
+                for note in &u.notes {
+                    eprintln!("note: {note}");
+                }
+                if !u.changed() {
+                    continue;
+                }
+                changed += 1;
+                print!("{}", u.diff());
+                if !dry_run {
+                    if let Err(e) = update::write(u) {
+                        eprintln!("error: {e}");
+                        return EXIT_INPUT;
+                    }
+                }
+            }
+            match (changed, dry_run) {
+                (0, _) => {
+                    eprintln!("expectations are up to date with these runs");
+                    0
+                }
+                (n, true) => {
+                    eprintln!("{n} expectations files would change (--dry-run: nothing written)");
+                    EXIT_GATE
+                }
+                (n, false) => {
+                    eprintln!("{n} expectations files updated");
+                    0
+                }
+            }
+        }
     }
 }
 

@@ -55,6 +55,7 @@ fn run_info(run_id: &str, sha: &str, adapter: AdapterInfo) -> RunInfo {
         conditions: None,
         suite: Some("scenarios".into()),
         branch: Some("main".into()),
+        adapter_class: None,
     }
 }
 
@@ -116,6 +117,8 @@ fn variant(name: &str, samples: &[f64], quality: Option<(f64, f64, f64)>) -> Var
         sampling: None,
         pacing: None,
         convergence: None,
+        frame_digests: Vec::new(),
+        expectation: None,
     }
 }
 
@@ -135,6 +138,7 @@ fn scenario(run_id: &str, name: &str, results: Vec<VariantResult>) -> ScenarioRe
         wall_ms: 100.0,
         peak_rss_bytes: None,
         peak_heap_bytes: None,
+        reference_digests: Vec::new(),
     }
 }
 
@@ -487,13 +491,13 @@ fn exit_codes_of_the_command() {
 
     let newer = dir.path().join("newer");
     std::fs::create_dir_all(&newer).unwrap();
-    std::fs::write(newer.join("run.json"), r#"{"schema_version": 3}"#).unwrap();
+    std::fs::write(newer.join("run.json"), r#"{"schema_version": 4}"#).unwrap();
     let (code, _, err) = tessera(&["compare", &a, newer.to_str().unwrap()]);
     assert_eq!(code, 2);
     assert_eq!(
         err,
         format!(
-            "error: {}/run.json has schema_version 3; this reader knows versions 1 to 2: read it with the newer tessera or tessera-dashboard that wrote it\n",
+            "error: {}/run.json has schema_version 4; this reader knows versions 1 to 3: read it with the newer tessera or tessera-dashboard that wrote it\n",
             newer.display()
         )
     );

@@ -28,6 +28,9 @@ fn options(out: &std::path::Path, junit: bool) -> Options {
         suite: None,
         branch: None,
         timings: false,
+        expectations: Default::default(),
+        slow: false,
+        adapter_class: None,
     }
 }
 

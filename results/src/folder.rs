@@ -50,6 +50,8 @@ pub struct SchemaError {
 ///   measure's canonical name (`non-finite` → `non_finite_values`, `spread-non-finite` →
 ///   `spread_non_finite`, `unrecovered-cuts` → `unrecovered_cuts`). `run.json` only changes its
 ///   version.
+/// - version 2 → 3: only the version changes; version 3 added optional fields (a result's
+///   `frame_digests` and `expectation`, a scenario's `reference_digests`) that version 2 lacks.
 ///
 /// Anything else is refused with the version found, before the record is parsed, so that a newer
 /// format is named as such rather than as a parse error.
@@ -67,6 +69,9 @@ pub fn upgrade(what: &str, mut value: serde_json::Value) -> Result<serde_json::V
     };
     if version == 1 {
         v1_to_v2(&mut value);
+    }
+    if version <= 2 {
+        value["schema_version"] = 3.into();
     }
     Ok(value)
 }
@@ -270,7 +275,7 @@ mod tests {
             assert_eq!(e.found, found);
             assert_eq!(
                 e.to_string(),
-                format!("run.json has schema_version {found}; this reader knows versions 1 to 2: read it with the newer tessera or tessera-dashboard that wrote it")
+                format!("run.json has schema_version {found}; this reader knows versions 1 to 3: read it with the newer tessera or tessera-dashboard that wrote it")
             );
         }
     }
@@ -281,15 +286,20 @@ mod tests {
             "metrics": [{"name": "psnr", "series": {"mean": 1.0}}],
             "gates": [{"measure": "non-finite"}, {"measure": "psnr"}, {"measure": "unknown"}],
         }]});
-        let v2 = upgrade("x", v1).unwrap();
+        let v3 = upgrade("x", v1).unwrap();
         assert_eq!(
-            v2,
-            serde_json::json!({"schema_version": 2, "results": [{
+            v3,
+            serde_json::json!({"schema_version": 3, "results": [{
                 "metrics": [{"name": "psnr", "frame_stats": {"mean": 1.0}}],
                 "gates": [{"measure": "non_finite_values"}, {"measure": "psnr"}, {"measure": "unknown"}],
             }]})
         );
-        // The current version passes through unchanged.
-        assert_eq!(upgrade("x", v2.clone()).unwrap(), v2);
+        // The current version passes through unchanged; version 2 only changes its number.
+        assert_eq!(upgrade("x", v3.clone()).unwrap(), v3);
+        let v2 = serde_json::json!({"schema_version": 2, "results": []});
+        assert_eq!(
+            upgrade("x", v2).unwrap(),
+            serde_json::json!({"schema_version": 3, "results": []})
+        );
     }
 }

@@ -12,8 +12,11 @@ use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
+pub mod adapter;
 pub mod compare;
 pub mod conditions;
+pub mod digest;
+pub mod expectation;
 pub mod folder;
 pub mod measure;
 pub mod upload;
@@ -46,9 +49,9 @@ pub mod layout {
 
 pub mod stats;
 
-/// Version of the result format written now. Readers refuse versions they do not know; version 1
-/// folders are read through [`folder::upgrade`] (`results/README.md`, "Compatibility").
-pub const SCHEMA_VERSION: u32 = 2;
+/// Version of the result format written now. Readers refuse versions they do not know; versions 1
+/// and 2 are read through [`folder::upgrade`] (`results/README.md`, "Compatibility").
+pub const SCHEMA_VERSION: u32 = 3;
 
 /// The oldest version [`folder`] still reads.
 pub const OLDEST_SCHEMA_VERSION: u32 = 1;
@@ -88,6 +91,11 @@ pub struct RunInfo {
     /// in files written before it existed.
     #[serde(default)]
     pub branch: Option<String>,
+    /// The adapter class the run declares (`tessera run --adapter-class`, a runner's label):
+    /// what approved frames are kept per. `None`: derived from the adapter
+    /// ([`adapter::class`]); absent before version 3.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub adapter_class: Option<String>,
 }
 
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
@@ -173,6 +181,11 @@ pub struct ScenarioResult {
     /// allocations are not in it. Absent where not counted and in older files.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub peak_heap_bytes: Option<u64>,
+    /// The digests of the separately rendered reference's frames ([`digest::frame_digest`], one
+    /// per measured frame); empty when the reference is the scenario's own `native` variant (its
+    /// `frame_digests` are the reference's), without a reference, and before version 3.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub reference_digests: Vec<String>,
 }
 
 /// One (run, scenario, variant) record.
@@ -225,6 +238,15 @@ pub struct VariantResult {
     /// Frame-time stability of the per-frame GPU times; `None` with fewer than 2 of them.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pacing: Option<conditions::Pacing>,
+    /// The digest of every compared frame's 8-bit display output ([`digest::frame_digest`]), one
+    /// per measured frame in order (index = measured-frame index); empty for a variant that did
+    /// not render and in files written before version 3.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub frame_digests: Vec<String>,
+    /// The suite's expectation that applied to this result and what came of it; absent where
+    /// none applied and in files written before version 3.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub expectation: Option<expectation::ExpectationRecord>,
     /// The frames the variant's history needs against the warm-up it had. Absent for variants
     /// that did not render and in files written before it was recorded.
     #[serde(default, skip_serializing_if = "Option::is_none")]

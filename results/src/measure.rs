@@ -528,11 +528,30 @@ fn push_named(out: &mut Vec<Point>, key: String, value: Option<f64>, higher_is_b
 
 /// The series values of one result among its scenario's: the measures marked `stored`, per pass
 /// for GPU time, `speedup` for every technique but the baseline. Skipped and failed results have
-/// none; non-finite values (infinite PSNR of identical frames) are left out.
+/// none; non-finite values (infinite PSNR of identical frames) are left out. A result whose
+/// expectation is `no-perf` has no timing series (GPU and CPU time, per pass, speed-up, energy):
+/// its timings are not measurements.
 pub fn points(results: &[VariantResult], r: &VariantResult) -> Vec<Point> {
     if r.status != Status::Ok {
         return Vec::new();
     }
+    let mut out = points_of_ok(results, r);
+    if r.expectation.as_ref().is_some_and(|e| !e.timings_count()) {
+        out.retain(|p| !is_timing_key(&p.key));
+    }
+    out
+}
+
+/// Whether a stored key is a timing (what `no-perf` leaves out).
+pub fn is_timing_key(key: &str) -> bool {
+    let base = key.rsplit('.').nth(1).unwrap_or(key);
+    key == Measure::Speedup.store_key()
+        || key == Measure::EnergyMj.store_key()
+        || base == Measure::GpuMs.name()
+        || base == Measure::CpuMs.name()
+}
+
+fn points_of_ok(results: &[VariantResult], r: &VariantResult) -> Vec<Point> {
     let mut out = Vec::new();
     let hib = |m: Measure| m.direction().higher_is_better();
     push_named(
@@ -729,5 +748,16 @@ mod tests {
             direction_of("speedup.native-deferred"),
             Some(HigherIsBetter)
         );
+    }
+
+    #[test]
+    fn no_perf_results_have_no_timing_series() {
+        assert!(is_timing_key("gpu_ms.median"));
+        assert!(is_timing_key("pass.reconstruct.gpu_ms.median"));
+        assert!(is_timing_key("cpu_ms.median"));
+        assert!(is_timing_key("speedup"));
+        assert!(!is_timing_key("psnr"));
+        assert!(!is_timing_key("allocated_bytes"));
+        assert!(!is_timing_key("pass.gpu_ms_like.psnr"));
     }
 }

@@ -49,6 +49,7 @@ fn info(run_id: &str, sha: &str) -> RunInfo {
         conditions: None,
         suite: Some("smoke".into()),
         branch: Some("main".into()),
+        adapter_class: None,
     }
 }
 
@@ -93,6 +94,8 @@ fn variant(name: &str, samples: &[f64], psnr: f64) -> VariantResult {
         sampling: None,
         pacing: None,
         convergence: None,
+        frame_digests: Vec::new(),
+        expectation: None,
     }
 }
 
@@ -112,6 +115,7 @@ fn scenario(run_id: &str, results: Vec<VariantResult>) -> ScenarioResult {
         wall_ms: 100.0,
         peak_rss_bytes: None,
         peak_heap_bytes: None,
+        reference_digests: Vec::new(),
     }
 }
 

@@ -201,6 +201,39 @@ ALTER TABLE regressions ADD COLUMN last_candidate BIGINT;
 CREATE INDEX regressions_group ON regressions (group_id);
 CREATE INDEX regressions_before ON regressions (run_pk_before);
 "#,
+    // i35: approved frames. Per scenario, variant, adapter class and frame, the digests people
+    // judged (`positive`: approved, `negative`: a regression) and the run they judged them from;
+    // per uploaded run, every frame's digest with its triage (`positive`, `negative`,
+    // `untriaged`) and how it matched (`exact`, `none`). See store/frames.rs.
+    r#"
+CREATE TABLE approved_frames (
+    id {id},
+    scenario TEXT NOT NULL,
+    variant TEXT NOT NULL,
+    adapter_class TEXT NOT NULL,
+    frame BIGINT NOT NULL,
+    digest TEXT NOT NULL,
+    state TEXT NOT NULL,
+    run_pk BIGINT REFERENCES runs (id),
+    updated_by TEXT NOT NULL,
+    updated_at TEXT NOT NULL,
+    UNIQUE (scenario, variant, adapter_class, frame, digest)
+);
+CREATE INDEX approved_frames_class ON approved_frames (adapter_class, scenario);
+CREATE TABLE run_frames (
+    run_pk BIGINT NOT NULL REFERENCES runs (id),
+    scenario TEXT NOT NULL,
+    variant TEXT NOT NULL,
+    frame BIGINT NOT NULL,
+    adapter_class TEXT NOT NULL,
+    digest TEXT NOT NULL,
+    triage TEXT NOT NULL,
+    matched TEXT NOT NULL,
+    PRIMARY KEY (run_pk, scenario, variant, frame)
+);
+CREATE INDEX run_frames_triage ON run_frames (triage, run_pk);
+CREATE INDEX run_frames_digest ON run_frames (scenario, variant, adapter_class, frame, digest);
+"#,
 ];
 
 fn render(step: &str, backend: Backend) -> String {

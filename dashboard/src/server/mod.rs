@@ -15,6 +15,7 @@ pub mod delete;
 pub mod error;
 pub mod export;
 pub mod frame_charts;
+pub mod frames;
 pub mod headers;
 pub mod health;
 pub mod images;
@@ -129,6 +130,18 @@ pub fn app(state: AppState) -> Router {
         .route("/api/pareto", get(pareto::api))
         .route("/healthz", get(health::healthz))
         .route("/api/runs/{run_id}", delete(delete::api))
+        .route("/frames", get(frames::list_page))
+        .route("/api/frames", get(frames::list_api))
+        .route(
+            "/frames/{run_id}/{scenario}/{variant}/{frame}",
+            get(frames::detail_page).post(frames::judge_form),
+        )
+        .route(
+            "/api/frames/{run_id}/{scenario}/{variant}/{frame}",
+            get(frames::detail_api),
+        )
+        .route("/api/frames/judge", post(frames::judge_api))
+        .route("/api/approved-frames", get(frames::approved_api))
         .fallback(|| async { AppError::NotFound("no such page".into()) })
         .layer(DefaultBodyLimit::max(state.max_upload_bytes))
         // gzip (or deflate, br) for clients that accept it: pages and JSON shrink about 6x.

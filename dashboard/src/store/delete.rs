@@ -76,6 +76,12 @@ pub fn delete_in_transaction(
             &[d.into()],
         )?;
     }
+    // Its frame digests go; a frame approved from it stays approved, without its run.
+    c.execute("DELETE FROM run_frames WHERE run_pk = $1", &pk)?;
+    c.execute(
+        "UPDATE approved_frames SET run_pk = NULL WHERE run_pk = $1",
+        &pk,
+    )?;
     let results = c.execute("DELETE FROM results WHERE run_pk = $1", &pk)?;
     c.execute("DELETE FROM scenario_results WHERE run_pk = $1", &pk)?;
     c.execute("DELETE FROM runs WHERE id = $1", &pk)?;

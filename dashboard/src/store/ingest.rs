@@ -375,6 +375,7 @@ fn ingest_once(conn: &mut dyn Connection, bundle: &RunBundle) -> Result<Ingested
         series.push(id);
     }
     super::extras::store(conn, run_pk, adapter, bundle)?;
+    super::frames::store(conn, run_pk, adapter, run, &bundle.scenarios)?;
     Ok(Ingested::Stored {
         run_pk,
         results,

@@ -8,6 +8,7 @@ pub mod blobs;
 pub mod browse;
 pub mod delete;
 pub mod extras;
+pub mod frames;
 pub mod groups;
 pub mod ingest;
 pub mod outbox;

@@ -153,8 +153,9 @@ fn rank(info: &wgpu::AdapterInfo) -> (u8, u8) {
     (backend, kind)
 }
 
-/// Picks an adapter: the first whose name, driver or backend contains `wanted` (case-insensitive),
-/// or by default the best-ranked one.
+/// Picks an adapter: the first that `wanted` names ([`tessera_results::adapter::matches`]: its
+/// name, driver or backend contains it, or it is the vendor, case-insensitive), or by default the
+/// best-ranked one.
 ///
 /// Runs search Vulkan, Metal and DX12 only, unless `WGPU_BACKEND` says otherwise: the GL backend
 /// mis-times render passes and cannot read multisampled textures in compute (DESIGN.md).
@@ -165,17 +166,17 @@ pub fn select(wanted: Option<&str>) -> Result<wgpu::Adapter, GpuError> {
     }
     match wanted {
         Some(w) => {
-            let needle = w.to_lowercase();
+            // The one matching rule, shared with expectations' `adapter` key.
             let found = adapters.iter().position(|a| {
                 let i = a.get_info();
-                [
-                    i.name.as_str(),
-                    i.driver.as_str(),
-                    i.driver_info.as_str(),
+                tessera_results::adapter::matches(
+                    w,
+                    &i.name,
+                    i.vendor,
+                    &i.driver,
+                    &i.driver_info,
                     i.backend.to_str(),
-                ]
-                .iter()
-                .any(|s| s.to_lowercase().contains(&needle))
+                )
             });
             match found {
                 Some(i) => Ok(adapters.swap_remove(i)),

@@ -30,6 +30,8 @@ pub struct ReferenceFrames {
     pub gpu: Vec<GpuFrame>,
     /// The saved frames' sRGB images (measured-frame index, image).
     pub saved: Vec<(u32, Rgb8Image)>,
+    /// Per measured frame, the digest of its 8-bit output (`Rendered::digests`).
+    pub digests: Vec<String>,
 }
 
 impl ReferenceFrames {
@@ -48,6 +50,7 @@ impl ReferenceFrames {
             non_finite: std::mem::take(&mut r.non_finite_counts),
             gpu: std::mem::take(&mut r.gpu_frames),
             saved: std::mem::take(&mut r.saved),
+            digests: std::mem::take(&mut r.digests),
         }
     }
 }

@@ -5,6 +5,7 @@
 use std::fmt::Write as _;
 
 use tessera_results::conditions::{SamplingMode, StopReason};
+use tessera_results::expectation::Outcome;
 use tessera_results::measure::Measure;
 use tessera_results::{GateLevel, ScenarioResult, Status, VariantResult};
 
@@ -25,6 +26,38 @@ fn psnr(r: &VariantResult) -> String {
 }
 
 fn status(r: &VariantResult) -> String {
+    if let Some(e) = &r.expectation {
+        let entry = format!("{}: {}", e.label.as_str(), e.reason);
+        match e.outcome {
+            Outcome::ExpectedFailure => {
+                return format!(
+                    "expected failure ({entry}): {}",
+                    e.error.as_deref().unwrap_or("")
+                )
+            }
+            Outcome::UnexpectedPass => {
+                return format!(
+                    "UNEXPECTED PASS: remove the entry at {} ({entry})",
+                    e.source
+                )
+            }
+            Outcome::PassedOnRetry => {
+                return format!(
+                    "ok on retry (flaky: {}; first attempt: {})",
+                    e.reason,
+                    e.error.as_deref().unwrap_or("")
+                )
+            }
+            Outcome::NotRun => return format!("not run ({entry})"),
+            Outcome::FailedOnRetry | Outcome::Ran => {
+                return format!("{} [{entry}]", plain_status(r))
+            }
+        }
+    }
+    plain_status(r)
+}
+
+fn plain_status(r: &VariantResult) -> String {
     let gate = r
         .gates
         .iter()
@@ -114,6 +147,19 @@ pub fn scenario_table(s: &ScenarioResult) -> String {
     for r in &s.results {
         for f in stability_findings(r) {
             let _ = writeln!(out, "  stability: {}: {f}", r.variant);
+        }
+    }
+    for r in &s.results {
+        if let Some(e) = &r.expectation {
+            let _ = writeln!(
+                out,
+                "  expectation: {}: {} ({}): {}: {}",
+                r.variant,
+                e.label.as_str(),
+                e.source,
+                e.outcome.as_str(),
+                e.reason
+            );
         }
     }
     for r in &s.results {
@@ -267,11 +313,28 @@ pub struct Tally {
     pub failed: usize,
     pub gate_warnings: usize,
     pub gate_failures: usize,
+    /// Failures an expectation (`broken`) said would happen: counted here, not as failures.
+    pub expected_failures: usize,
+    /// Passes of results labelled `broken`: they fail the run until the entry is removed.
+    pub unexpected_passes: usize,
+    /// `flaky` results that failed once and passed when run again.
+    pub passed_on_retry: usize,
 }
 
 pub fn tally(scenarios: &[ScenarioResult]) -> Tally {
     let mut t = Tally::default();
     for r in scenarios.iter().flat_map(|s| &s.results) {
+        if let Some(e) = &r.expectation {
+            match e.outcome {
+                Outcome::ExpectedFailure => {
+                    t.expected_failures += 1;
+                    continue;
+                }
+                Outcome::UnexpectedPass => t.unexpected_passes += 1,
+                Outcome::PassedOnRetry => t.passed_on_retry += 1,
+                _ => {}
+            }
+        }
         match r.status {
             Status::Ok => t.ok += 1,
             Status::Skipped { .. } => t.skipped += 1,
@@ -293,11 +356,18 @@ pub fn tally(scenarios: &[ScenarioResult]) -> Tally {
 
 /// The one verdict line.
 pub fn verdict(t: &Tally) -> String {
-    let counts = format!(
+    let mut counts = format!(
         "{} ok, {} skipped, {} failed; gates: {} failed, {} warned",
         t.ok, t.skipped, t.failed, t.gate_failures, t.gate_warnings
     );
-    if t.failed > 0 || t.gate_failures > 0 {
+    if t.expected_failures + t.unexpected_passes + t.passed_on_retry > 0 {
+        let _ = write!(
+            counts,
+            "; expectations: {} expected failures, {} unexpected passes, {} passed on retry",
+            t.expected_failures, t.unexpected_passes, t.passed_on_retry
+        );
+    }
+    if t.failed > 0 || t.gate_failures > 0 || t.unexpected_passes > 0 {
         format!("FAILED: {counts}")
     } else if t.gate_warnings > 0 {
         format!("PASSED with warnings: {counts}")

@@ -83,6 +83,9 @@ pub struct Rendered {
     /// Per measured frame, a hash of its exact bits, when `TESSERA_FRAME_HASHES` is set (see
     /// [`frame_hash_file`]); empty otherwise.
     pub hashes: Vec<u64>,
+    /// Per measured frame, the digest of its 8-bit display output
+    /// ([`tessera_results::digest::frame_digest`]): what approved frames are matched by.
+    pub digests: Vec<String>,
 }
 
 /// Where to append every measured frame's bit hash (`<scenario> <variant> <frame> <hash>`), from the
@@ -306,6 +309,7 @@ pub fn render_sampled(
         energy_window: None,
         clock_warmup_ms: 0.0,
         hashes: Vec::new(),
+        digests: Vec::new(),
     };
     let hash_frames = frame_hash_file().is_some();
 
@@ -537,9 +541,11 @@ pub fn render_sampled(
             // An sRGB frame the CPU needs (a saved frame; the frames of ColorVideoVDP, which
             // reads CPU images) comes from the metrics' copy, encoded on the device (half the
             // float frame's bytes, no CPU encode), unless the floats themselves are needed.
-            let ldr_from_device =
-                (saved || keep.frames) && metric_copy.is_some() && !(keep.hdr || hash_frames);
-            let on_cpu = keep.hdr || hash_frames || ((saved || keep.frames) && !ldr_from_device);
+            // Every measured frame's 8-bit form is digested (approved frames), so each comes
+            // back as 8-bit sRGB: encoded on the device where the metrics keep frames there
+            // (the same bytes as the CPU's encode: metrics-gpu's `encode` test), else here.
+            let ldr_from_device = metric_copy.is_some() && !(keep.hdr || hash_frames);
+            let on_cpu = keep.hdr || hash_frames || !ldr_from_device;
             let last = index + 1 == scenario.total_frames();
             let compare = last && compared_last.is_some();
             let output = technique.output();
@@ -642,12 +648,18 @@ pub fn render_sampled(
             // The sRGB frame: encoded on the device, or here from the read-back floats.
             let srgb = match (device_srgb, &frame) {
                 (Some(img), _) => Some(img),
-                (None, Some(f)) if keep.frames || saved => {
+                (None, Some(f)) => {
                     let _span = phases::span("capture: srgb encode");
                     Some(encode_srgb8(&f.image))
                 }
                 _ => None,
             };
+            if let Some(img) = &srgb {
+                let _span = phases::span("capture: digests");
+                rendered.digests.push(tessera_results::digest::frame_digest(
+                    img.width, img.height, &img.data,
+                ));
+            }
             let extras_span = phases::span("capture: technique extras");
             // Techniques read the frame only for the images of saved frames.
             let empty = Rgb8Image {

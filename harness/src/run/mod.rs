@@ -55,6 +55,12 @@ pub struct Options {
     pub branch: Option<String>,
     /// Print where the wall time went and write `timings.json` (`tessera run --timings`).
     pub timings: bool,
+    /// The suites' expectations (`scenarios/<suite>/expectations.toml`, see [`crate::expect`]).
+    pub expectations: crate::expect::Book,
+    /// Run the variants an expectation labels `slow` (`tessera run --slow`).
+    pub slow: bool,
+    /// The adapter class the run declares (`--adapter-class`); `None` derives it.
+    pub adapter_class: Option<String>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -132,6 +138,7 @@ pub fn run_with_sensors(
         conditions: Some(sensors.device_record()),
         suite: opts.suite.clone(),
         branch: opts.branch.clone().or_else(git_branch),
+        adapter_class: opts.adapter_class.clone(),
     };
     let total: u64 = scenarios
         .iter()
@@ -174,7 +181,7 @@ pub fn run_with_sensors(
         let result = if lost.load(Ordering::SeqCst) {
             device_lost_result(s, &run_id)
         } else {
-            scenario::run(gpu, s, &run_id, &run_dir, sensors, &mut || bar.inc(1))
+            run_expecting(gpu, s, &run_id, &run_dir, sensors, opts, &mut || bar.inc(1))
         };
         results.push(result);
         phases::time("result files", || -> Result<(), SuiteError> {
@@ -249,6 +256,53 @@ mod timings {
         let json = serde_json::to_string_pretty(&file).expect("plain data serialises");
         super::output::write_atomic(&run_dir.join("timings.json"), json.as_bytes())
     }
+}
+
+/// Runs one scenario as its suite's expectations say: without the variants not to run here
+/// (`skip`, `slow`), a failed `flaky` variant once more, and each result with the entry that
+/// applied to it (`crate::expect::apply`).
+fn run_expecting(
+    gpu: &Gpu,
+    s: &Scenario,
+    run_id: &str,
+    run_dir: &Path,
+    sensors: &Sensors,
+    opts: &Options,
+    on_frame: &mut dyn FnMut(),
+) -> ScenarioResult {
+    use crate::expect::apply;
+    let exp = opts.expectations.for_scenario(s);
+    let adapter = &gpu.info;
+    let split = apply::split(s, exp, adapter, opts.slow);
+    let start = std::time::Instant::now();
+    let mut result = if split.to_run.variants.is_empty() {
+        record::finish(s, run_id, Vec::new(), start)
+    } else {
+        scenario::run(gpu, &split.to_run, run_id, run_dir, sensors, on_frame)
+    };
+    let retry = apply::to_retry(&s.name, &result.results, exp, adapter);
+    let mut first_errors = Vec::new();
+    if !retry.is_empty() {
+        for r in result.results.iter().filter(|r| retry.contains(&r.variant)) {
+            let error = apply::failure_text(r).unwrap_or_default();
+            eprintln!(
+                "note: {} / {} is labelled flaky and failed ({error}): running it once more",
+                s.name, r.variant
+            );
+            first_errors.push((r.variant.clone(), error));
+        }
+        let mut again = split.to_run.clone();
+        again.variants.retain(|v| retry.contains(&v.name));
+        let second = scenario::run(gpu, &again, run_id, run_dir, sensors, on_frame);
+        for r in second.results {
+            if let Some(slot) = result.results.iter_mut().find(|x| x.variant == r.variant) {
+                *slot = r;
+            }
+        }
+    }
+    apply::judge(&s.name, &mut result.results, exp, adapter, &first_errors);
+    apply::merge_in_order(s, &mut result.results, split.not_run);
+    result
 }
 
 fn device_lost_result(s: &Scenario, run_id: &str) -> ScenarioResult {

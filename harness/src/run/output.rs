@@ -7,6 +7,7 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+use tessera_results::expectation::Outcome;
 use tessera_results::measure::{self, Key, Measure, DEFAULT_BASELINE};
 use tessera_results::{GateLevel, RunInfo, ScenarioResult, Status, VariantResult, CSV_COLUMNS};
 
@@ -218,7 +219,10 @@ pub fn junit(run: &RunInfo, scenarios: &[ScenarioResult]) -> Vec<u8> {
         let skipped = s
             .results
             .iter()
-            .filter(|r| matches!(r.status, Status::Skipped { .. }))
+            .filter(|r| {
+                matches!(r.status, Status::Skipped { .. })
+                    || crate::expect::apply::expected_failure(r)
+            })
             .count();
         let _ = writeln!(
             out,
@@ -236,9 +240,23 @@ pub fn junit(run: &RunInfo, scenarios: &[ScenarioResult]) -> Vec<u8> {
                 xml(&r.variant)
             );
             let mut body = String::new();
-            // Every metric as a property, its direction in the name: `cvvdp (higher is better)`.
-            if !r.metrics.is_empty() {
+            // Every metric as a property, its direction in the name: `cvvdp (higher is better)`;
+            // the expectation that applied, as `expectation`.
+            if !r.metrics.is_empty() || r.expectation.is_some() {
                 body.push_str("      <properties>\n");
+                if let Some(e) = &r.expectation {
+                    let _ = writeln!(
+                        body,
+                        "        <property name=\"expectation\" value=\"{}\"/>",
+                        xml(&format!(
+                            "{} ({}): {}: {}",
+                            e.label.as_str(),
+                            e.source,
+                            e.outcome.as_str(),
+                            e.reason
+                        ))
+                    );
+                }
                 for m in &r.metrics {
                     let dir = if m.higher_is_better {
                         "higher"
@@ -254,7 +272,37 @@ pub fn junit(run: &RunInfo, scenarios: &[ScenarioResult]) -> Vec<u8> {
                 }
                 body.push_str("      </properties>\n");
             }
+            let outcome = r.expectation.as_ref().map(|e| (e, e.outcome));
             match &r.status {
+                // A failure an expectation said would happen is reported as pytest reports an
+                // expected failure: skipped, with why.
+                _ if matches!(outcome, Some((_, Outcome::ExpectedFailure))) => {
+                    let e = outcome.expect("matched").0;
+                    let _ = writeln!(
+                        body,
+                        "      <skipped message=\"{}\"/>",
+                        xml(&format!(
+                            "expected failure ({}: {}, {}): {}",
+                            e.label.as_str(),
+                            e.reason,
+                            e.source,
+                            e.error.as_deref().unwrap_or("")
+                        ))
+                    );
+                }
+                _ if matches!(outcome, Some((_, Outcome::UnexpectedPass))) => {
+                    let e = outcome.expect("matched").0;
+                    let _ = writeln!(
+                        body,
+                        "      <failure message=\"{}\"/>",
+                        xml(&format!(
+                            "unexpected pass: remove the entry at {} ({}: {})",
+                            e.source,
+                            e.label.as_str(),
+                            e.reason
+                        ))
+                    );
+                }
                 Status::Skipped { reason } => {
                     let _ = writeln!(body, "      <skipped message=\"{}\"/>", xml(reason));
                 }
@@ -301,8 +349,11 @@ pub fn junit(run: &RunInfo, scenarios: &[ScenarioResult]) -> Vec<u8> {
     out.into_bytes()
 }
 
+/// Whether JUnit counts a result as a failure: it failed and no expectation said it would, or it
+/// passed where one said it would not.
 fn failed(r: &tessera_results::VariantResult) -> bool {
-    matches!(r.status, Status::Failed { .. }) || r.gates.iter().any(|g| g.level == GateLevel::Fail)
+    use crate::expect::apply;
+    (apply::failed(r) && !apply::expected_failure(r)) || apply::unexpected_pass(r)
 }
 
 /// The first lines of a GPU error, joined: enough to tell what failed.

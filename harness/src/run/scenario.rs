@@ -137,6 +137,7 @@ pub fn run(
             }
         };
         result.non_finite_values = rendered.non_finite;
+        result.frame_digests = std::mem::take(&mut rendered.digests);
         frames::append_hashes(&scenario.name, &variant.name, &rendered.hashes);
         phases::time("images", || {
             images::save_frames(&mut result, &rendered.saved, &image_dir, run_dir, "output")
@@ -311,7 +312,14 @@ pub fn run(
     let failed = phases::time("images", images::finish_writes);
     images::forget_failed(&mut results, &failed, run_dir);
     gates::apply(scenario, &mut results);
-    finish(scenario, run_id, results, start)
+    let mut record = finish(scenario, run_id, results, start);
+    // The separately rendered reference's digests (a native reference's are its variant's).
+    if scenario.needs_separate_reference() {
+        if let Some(Ok(r)) = &reference {
+            record.reference_digests = r.digests.clone();
+        }
+    }
+    record
 }
 
 type VariantOutcome = Result<Result<(Rendered, PlanRecord), Unsupported>, String>;

@@ -379,9 +379,23 @@ pub fn collect(inputs: &[PathBuf]) -> Result<Vec<PathBuf>, ScenarioError> {
     Ok(files)
 }
 
+/// Files and folders of a suite that are not scenarios: its expectations
+/// (`crate::expect::FILE_NAME`) and its approved frame digests (`digests/`).
+fn not_a_scenario(path: &Path) -> bool {
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
+    if path.is_dir() {
+        name == "digests"
+    } else {
+        name == crate::expect::FILE_NAME
+    }
+}
+
 fn find_toml(dir: &Path, out: &mut Vec<PathBuf>) -> std::io::Result<()> {
     for entry in std::fs::read_dir(dir)? {
         let path = entry?.path();
+        if not_a_scenario(&path) {
+            continue;
+        }
         if path.is_dir() {
             find_toml(&path, out)?;
         } else if path.extension().is_some_and(|x| x == "toml") {

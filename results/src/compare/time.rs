@@ -198,6 +198,8 @@ pub(crate) mod tests {
             sampling: None,
             pacing: None,
             convergence: None,
+            frame_digests: Vec::new(),
+            expectation: None,
         }
     }
 
