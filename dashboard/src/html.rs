@@ -160,6 +160,7 @@ pub fn page(title: &str, active: &str, body: &str) -> String {
         ("/compare/runs", "compare"),
         ("/compare", "adapters"),
         ("/pareto", "error vs time"),
+        ("/queue", "queue"),
     ] {
         let class = if label == active { " class=on" } else { "" };
         let _ = write!(out, "<a href=\"{href}\"{class}>{label}</a>");

@@ -16,6 +16,7 @@ pub mod compare;
 pub mod conditions;
 pub mod folder;
 pub mod measure;
+pub mod queue;
 pub mod upload;
 
 /// The run folder's layout (`results/README.md`): where each file of a run lives. Both the

@@ -10,6 +10,7 @@ pub mod extras;
 pub mod groups;
 pub mod ingest;
 pub mod outbox;
+pub mod queue;
 pub mod read;
 pub mod tokens;
 pub mod triage;
