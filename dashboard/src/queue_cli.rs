@@ -70,6 +70,7 @@ pub fn request(
         }
     }
     let pool = db::open(db)?;
+    queue::check_labels_known(&mut *pool.get()?, labels)?;
     let spec = serde_json::json!({"commit": commit, "suites": suites, "labels": labels});
     let (id, job_ids) = queue::enqueue(
         &mut *pool.get()?,
@@ -131,6 +132,7 @@ pub fn ab(
         });
     }
     let pool = db::open(db)?;
+    queue::check_labels_known(&mut *pool.get()?, labels)?;
     let spec = serde_json::json!({"scenario": scenario, "variant": variant, "a": a, "b": b});
     let (id, job_ids) = queue::enqueue(
         &mut *pool.get()?,
@@ -181,6 +183,7 @@ pub fn bisect(
     p.good = resolve(repository, "--good", &p.good)?;
     p.bad = resolve(repository, "--bad", &p.bad)?;
     let pool = db::open(db)?;
+    queue::check_labels_known(&mut *pool.get()?, std::slice::from_ref(&p.label))?;
     let id = transaction(&mut *pool.get()?, |c| {
         bisect::create(c, &p, CLI, queue::DEFAULT_MAX_ATTEMPTS)
     })?;

@@ -11,6 +11,7 @@ pub mod params;
 pub mod regimes;
 pub mod render;
 pub mod run;
+pub mod runner;
 pub mod scenario;
 pub mod techniques;
 pub mod timing;

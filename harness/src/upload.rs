@@ -108,6 +108,17 @@ pub fn token_from_env() -> Result<String, UploadError> {
 /// POSTs `body` (JSON) and reads the answer: 200 and 201 are success, anything else is
 /// [`UploadError::Refused`] with the dashboard's `{"error"}` message.
 pub fn post(url: &str, token: &str, body: &[u8]) -> Result<Reply, UploadError> {
+    post_for_job(url, token, body, None)
+}
+
+/// [`post`] for a queue job: the `X-Tessera-Job` header names it, which a runner-scope token
+/// needs to store a run (`tessera runner`).
+pub fn post_for_job(
+    url: &str,
+    token: &str,
+    body: &[u8],
+    job: Option<i64>,
+) -> Result<Reply, UploadError> {
     let url = endpoint(url)?;
     let transport = |source| UploadError::Transport {
         url: url.clone(),
@@ -118,8 +129,11 @@ pub fn post(url: &str, token: &str, body: &[u8]) -> Result<Reply, UploadError> {
         .timeout_global(Some(TIMEOUT))
         .build()
         .into();
-    let mut response = agent
-        .post(&url)
+    let mut request = agent.post(&url);
+    if let Some(job) = job {
+        request = request.header(tessera_results::queue::JOB_HEADER, &job.to_string());
+    }
+    let mut response = request
         .header("Authorization", &format!("Bearer {token}"))
         .header("Content-Type", "application/json")
         // The dashboard checks the token before it reads a body: with 100-continue a refused

@@ -84,8 +84,10 @@ pub async fn create(
     }
     let max_attempts = state.queue.max_attempts;
     let spec = serde_json::to_value(&req).expect("a request serialises");
+    let labels = req.labels.clone();
     let (request_id, jobs) = state
         .db(move |c| {
+            queue::check_labels_known(c, &labels)?;
             Ok(queue::enqueue(
                 c,
                 "ab",
@@ -159,6 +161,7 @@ async fn start(state: &AppState, mut p: bisect::Params, who: String) -> Result<i
     let max_attempts = state.queue.max_attempts;
     state
         .db(move |c| {
+            queue::check_labels_known(c, std::slice::from_ref(&p.label))?;
             transaction(c, |c| {
                 Ok::<_, AppError>(bisect::create(c, &p, &who, max_attempts)?)
             })

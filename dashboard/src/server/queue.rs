@@ -322,8 +322,10 @@ pub async fn request(
     }
     let max_attempts = state.queue.max_attempts;
     let spec = serde_json::to_value(&req).expect("a request serialises");
+    let labels = req.labels.clone();
     let (request_id, jobs) = state
         .db(move |c| {
+            queue::check_labels_known(c, &labels)?;
             Ok(queue::enqueue(
                 c,
                 &req.kind,

@@ -18,7 +18,9 @@ const STYLE: &str = "<style>
 .st{padding:0 5px;border-radius:3px;white-space:nowrap}.st.queued{background:#eef}.st.in_progress{background:#e6f4ff}
 .st.done{background:#e2f3e7}.st.failed,.st.build_failed{background:#fde8e6}
 .err{color:#a1140f;max-width:420px;overflow-wrap:anywhere}
-.wrap{overflow-x:auto}.chips span{background:#e8ebf0;border-radius:3px;padding:0 4px;margin-right:3px}
+.wrap{overflow-x:auto}.wrap table{min-width:760px}.wrap td{overflow-wrap:normal;word-break:normal}
+.chips span{background:#e8ebf0;border-radius:3px;padding:0 4px;margin-right:3px;white-space:nowrap}
+@media (max-width:600px){.wide{display:none}.wrap table{min-width:0}.wrap td,.wrap th{padding:3px 4px}}
 </style>";
 
 fn ago(now_ms: i64, then_ms: i64) -> String {
@@ -79,7 +81,7 @@ fn job_row(out: &mut String, j: &JobRow, now: i64) {
     };
     let _ = write!(
         out,
-        "<tr><td class=num>{}<td>{}<td><code>{}</code><td><span class=\"st {status}\">{status}</span><td class=num>{}/{}<td>{}<td>{}<td>{}<td class=err>{}</tr>",
+        "<tr><td class=num>{}<td class=wide>{}<td><code>{}</code><td><span class=\"st {status}\">{status}</span><td class=\"num wide\">{}/{}<td>{}<td class=wide>{}<td>{}<td class=err>{}</tr>",
         j.id,
         esc(&j.kind),
         esc(&j.label),
@@ -93,7 +95,7 @@ fn job_row(out: &mut String, j: &JobRow, now: i64) {
 }
 
 const JOB_HEAD: &str =
-    "<tr><th>job<th>kind<th>label<th>status<th>tries<th>runner<th>what<th>state<th>error</tr>";
+    "<tr><th>job<th class=wide>kind<th>label<th>status<th class=wide>tries<th>runner<th class=wide>what<th>state<th>error</tr>";
 
 pub async fn page(State(state): State<AppState>) -> Result<Html<String>, AppError> {
     let offline = state.queue.offline_after_ms;
@@ -116,11 +118,11 @@ pub async fn page(State(state): State<AppState>) -> Result<Html<String>, AppErro
                 .join(", ")
         }
     );
-    body.push_str("<h2>Runners</h2><div class=wrap><table><tr><th>runner<th>labels<th>adapter<th>driver<th>host<th>last heartbeat<th>current job</tr>");
+    body.push_str("<h2>Runners</h2><div class=wrap><table><tr><th>runner<th>labels<th class=wide>adapter<th class=wide>driver<th class=wide>host<th>last heartbeat<th>current job</tr>");
     for r in &o.runners {
         let _ = write!(
             body,
-            "<tr><td><span class=\"dot {}\"></span>{} <small>{}</small><td class=chips>{}<td>{}<td>{}<td>{}<td>{}<td>{}</tr>",
+            "<tr><td><span class=\"dot {}\"></span>{} <small>{}</small><td class=chips>{}<td class=wide>{}<td class=wide>{}<td class=wide>{}<td>{}<td>{}</tr>",
             if r.online { "on" } else { "off" },
             esc(&r.name),
             if r.online { "online" } else { "offline" },

@@ -795,3 +795,30 @@ pub fn upload_refusal(
     }
     Ok(None)
 }
+
+/// Refuses labels no runner has ever registered with (a typo would otherwise queue jobs that
+/// wait for ever); labels whose runners are only offline are fine: their jobs wait, visibly.
+pub fn check_labels_known(conn: &mut dyn Connection, labels: &[String]) -> Result<(), StoreError> {
+    let known: Vec<String> = conn
+        .query(
+            "SELECT DISTINCT label FROM runner_labels ORDER BY label",
+            &[],
+        )?
+        .iter()
+        .map(|r| r.string(0))
+        .collect::<Result<_, _>>()?;
+    for l in labels {
+        check_name("label", l)?;
+        if !known.contains(l) {
+            return Err(invalid(format!(
+                "label {l:?}: no runner has registered with it (known labels: {})",
+                if known.is_empty() {
+                    "none yet".to_string()
+                } else {
+                    known.join(", ")
+                }
+            )));
+        }
+    }
+    Ok(())
+}
