@@ -9,7 +9,7 @@
 #   2. a dashboard on a fresh SQLite store (lease LEASE s) and a runner-scope token;
 #   3. two `tessera runner` processes (label llvmpipe) sharing one target directory;
 #   4. three bisections C0..C15: gpu_ms.median of shading-bound/checkerboard (expect C9),
-#      frames_changed and psnr of basic/checkerboard (expect C5);
+#      frames_changed and psnr of basic/interlace (expect C5);
 #   5. runner 2 is killed with SIGKILL while it holds a job, after JOBS_BEFORE_KILL jobs are done;
 #      its job returns to the queue after the lease and runner 1 finishes;
 #   6. checks the culprits and that no job is left queued or in progress; prints wall time, builds,
@@ -109,8 +109,8 @@ bisect() {
     --attempts "$ATTEMPTS" --good "$C0" --bad "$C15" "$@" 2>/dev/null
 }
 B_GPU=$(bisect --scenario scenarios/smoke/shading-bound.toml --variant checkerboard --measure gpu_ms.median)
-B_FRAMES=$(bisect --scenario scenarios/smoke/basic.toml --variant checkerboard --measure frames_changed)
-B_PSNR=$(bisect --scenario scenarios/smoke/basic.toml --variant checkerboard --measure psnr)
+B_FRAMES=$(bisect --scenario scenarios/smoke/basic.toml --variant interlace --measure frames_changed)
+B_PSNR=$(bisect --scenario scenarios/smoke/basic.toml --variant interlace --measure psnr)
 echo "bisections: gpu_ms.median $B_GPU, frames_changed $B_FRAMES, psnr $B_PSNR"
 
 json() { curl -fsS "$URL$1" | python3 -c "import json,sys; d=json.load(sys.stdin); print($2)"; }
