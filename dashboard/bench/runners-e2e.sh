@@ -85,7 +85,8 @@ fi
 export TESSERA_DASHBOARD_TOKEN=$(cat "$WORK/token")
 "$BIN/tessera-dashboard" serve --db "$DB" --listen 127.0.0.1:0 --lease-secs "$LEASE" \
   --repository "$WORK/repo" 2> "$WORK/serve.log" &
-PIDS+=($!)
+SERVE_PID=$!
+PIDS+=($SERVE_PID)
 for _ in $(seq 1 100); do grep -q "serving" "$WORK/serve.log" && break; sleep 0.1; done
 URL=$(sed -n 's/.* on \(http:\/\/[0-9.:]*\).*/\1/p' "$WORK/serve.log" | head -1)
 echo "dashboard: $URL"
@@ -113,7 +114,13 @@ B_FRAMES=$(bisect --scenario scenarios/smoke/basic.toml --variant interlace --me
 B_PSNR=$(bisect --scenario scenarios/smoke/basic.toml --variant interlace --measure psnr)
 echo "bisections: gpu_ms.median $B_GPU, frames_changed $B_FRAMES, psnr $B_PSNR"
 
-json() { curl -fsS "$URL$1" | python3 -c "import json,sys; d=json.load(sys.stdin); print($2)"; }
+json() {
+  if ! kill -0 "$SERVE_PID" 2>/dev/null; then
+    wait "$SERVE_PID" && rc=0 || rc=$?
+    echo "FAIL: the dashboard exited (status $rc)" >&2; exit 1
+  fi
+  curl -fsS "$URL$1" | python3 -c "import json,sys; d=json.load(sys.stdin); print($2)"
+}
 
 # 5. Kill runner 2 (SIGKILL) while it holds a job, once enough jobs are done.
 KILLED_JOB=""

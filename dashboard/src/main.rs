@@ -191,7 +191,7 @@ enum Command {
         scenario: String,
         #[arg(long)]
         variant: String,
-        /// A measure name (gpu_ms.median, psnr, flip, jod, ...) or frames_changed.
+        /// A measure name (gpu_ms.median, psnr, flip, cvvdp (JOD), ...) or frames_changed.
         #[arg(long)]
         measure: String,
         #[arg(long)]

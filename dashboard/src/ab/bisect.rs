@@ -87,7 +87,7 @@ pub fn create(
         || tessera_results::measure::Key::parse(&p.measure).is_some();
     if !measure_ok {
         return Err(invalid(format!(
-            "measure {:?} is not a measure name (gpu_ms.median, psnr, flip, jod, ...) or {}",
+            "measure {:?} is not a measure name (gpu_ms.median, psnr, flip, cvvdp, ...) or {}",
             p.measure,
             super::FRAMES_CHANGED
         )));

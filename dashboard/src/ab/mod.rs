@@ -5,7 +5,7 @@
 //! An A/B is one job of kind `ab` per label: its order holds N pairs, each `[A, B]` or `[B, A]`
 //! at random, and the runner sends one sample per run. Pair i of the comparison is the two
 //! samples of the i-th pair. Besides the measures of the result (`gpu_ms.median`, `psnr`,
-//! `flip`, `jod`, ...) every sample gives `frames_changed`: 1 when its frames' digest differs
+//! `flip`, `cvvdp` (JOD), ...) every sample gives `frames_changed`: 1 when its frames' digest differs
 //! from the first A attempt's, else 0, so "the frames changed" is tested like any other measure.
 //!
 //! Not for: HTTP (see `server/ab.rs`), the queue's SQL (see [`crate::store::queue`]), bisection

@@ -126,11 +126,17 @@ pub fn execute(job: &Claimed, cx: &mut Context) -> Outcome {
                     .first()
                     .and_then(|sc| sample(&run_dir, sc, spec.variant.as_deref(), i, seq))
                 else {
+                    let names: Vec<&str> = run
+                        .scenarios
+                        .iter()
+                        .flat_map(|s| s.results.iter().map(|r| r.variant.as_str()))
+                        .collect();
                     return failed(
                         format!(
-                            "the run has no variant {:?} in {}",
+                            "the run has no variant {:?} in {} (it has: {})",
                             spec.variant,
-                            spec.scenarios.join(" ")
+                            spec.scenarios.join(" "),
+                            names.join(", ")
                         ),
                         &commits,
                     );
