@@ -2,8 +2,9 @@
 //! is left, or the change is shown to be spread over several.
 //!
 //! Step 0 is an A/B of the good commit against the bad one; its runner also lists the
-//! first-parent commits between them. Its estimate of the measure is the full change; if it is
-//! not significant the bisection ends `no_change`. Every later step is an A/B of the good commit
+//! first-parent commits between them. Its estimate of the measure is the full change (for a time,
+//! relative to A's median: see [`effect`]); if it is not significant the bisection ends
+//! `no_change`. Every later step is an A/B of the good commit
 //! (A) against a commit in the middle of what is left (B), and reads the fraction of the full
 //! change that commit already shows: at most 1/4 (or not significant) is good, at least 3/4 is
 //! bad, anything between is `spread` (part of the change before it, part after). A commit that
@@ -51,7 +52,7 @@ pub struct Progress {
     pub lo: usize,
     /// Index of the oldest commit known bad.
     pub hi: usize,
-    /// B - A of step 0 (good against bad).
+    /// [`effect`] of step 0 (good against bad).
     pub full_effect: Option<f64>,
     /// Why the bisection ended, in words.
     pub message: String,
@@ -250,6 +251,21 @@ fn save(conn: &mut dyn Connection, b: &Bisection) -> Result<(), StoreError> {
     Ok(())
 }
 
+/// The size of a step's change that fractions compare: for a time (GPU or CPU ms, of the frame or
+/// of a pass) B − A relative to A's median, since a CPU adapter's times scale with the machine's
+/// load, which changes between steps but not within a back-to-back pair; for anything else
+/// (PSNR, FLIP, JOD, `frames_changed`) B − A itself.
+pub fn effect(row: &Row) -> f64 {
+    use tessera_results::measure::{Key, Measure};
+    let is_time = Key::parse(&row.measure)
+        .is_some_and(|k| matches!(k.measure, Measure::GpuMs | Measure::CpuMs));
+    if is_time {
+        row.relative.unwrap_or(0.0)
+    } else {
+        row.estimate
+    }
+}
+
 /// How a step's commit reads against the full change.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
@@ -265,7 +281,7 @@ pub fn decide(row: Option<&Row>, full_effect: f64) -> (Option<f64>, Decision) {
         return (None, Decision::Good);
     };
     let fraction = if full_effect != 0.0 {
-        row.estimate / full_effect
+        effect(row) / full_effect
     } else {
         0.0
     };
@@ -334,7 +350,7 @@ pub fn on_job_finished(conn: &mut dyn Connection, job_id: i64) -> Result<(), Sto
         b.progress.hi = b.commits.len() - 1;
         match row {
             Some(r) if r.verdict == "changed" => {
-                b.progress.full_effect = Some(r.estimate);
+                b.progress.full_effect = Some(effect(r));
             }
             _ => {
                 b.state = "no_change".into();
