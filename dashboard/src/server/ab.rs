@@ -261,7 +261,7 @@ pub async fn bisect_page(
             .as_deref()
             .map(|c| format!(" · culprit <code>{}</code>", esc(c)))
             .unwrap_or_default(),
-        if b.progress.message.is_empty() {
+        if b.progress.message.is_empty() || b.culprit.is_some() {
             String::new()
         } else {
             format!(" · {}", esc(&b.progress.message))
