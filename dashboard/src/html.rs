@@ -161,6 +161,7 @@ pub fn page(title: &str, active: &str, body: &str) -> String {
         ("/compare", "adapters"),
         ("/pareto", "error vs time"),
         ("/frames", "frames"),
+        ("/queue", "queue"),
     ] {
         let class = if label == active { " class=on" } else { "" };
         let _ = write!(out, "<a href=\"{href}\"{class}>{label}</a>");

@@ -5,6 +5,7 @@
 //! queries, [`bundle`] checks incoming runs, [`detect`] finds change points, [`regressions`]
 //! applies it to stored series, [`server`] serves pages and API, [`html`] and [`svg`] draw them.
 
+pub mod ab;
 pub mod bundle;
 pub mod chart;
 pub mod db;
@@ -12,6 +13,7 @@ pub mod detect;
 pub mod html;
 pub mod import;
 pub mod notify;
+pub mod queue_cli;
 pub mod regressions;
 pub mod replay;
 pub mod server;

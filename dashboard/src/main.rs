@@ -13,7 +13,7 @@ use tessera_dashboard::store::delete::{expired, Retention};
 use tessera_dashboard::store::ingest::{ingest, Ingested};
 use tessera_dashboard::store::tokens;
 use tessera_dashboard::{
-    bundle::RunBundle, db, detect::Params, import, regressions, replay, server, synth,
+    bundle::RunBundle, db, detect::Params, import, queue_cli, regressions, replay, server, synth,
 };
 
 const DEFAULT_DB: &str = "tessera-dashboard.sqlite";
@@ -101,6 +101,16 @@ enum Command {
         /// Seconds between two looks for newly confirmed groups.
         #[arg(long, default_value_t = 30)]
         webhook_poll_s: u64,
+        /// A claimed job goes back to the queue this many seconds after its runner's last
+        /// heartbeat; a runner not heard from for twice as long is shown offline.
+        #[arg(long, default_value_t = 60, value_parser = clap::value_parser!(u64).range(1..=86400))]
+        lease_secs: u64,
+        /// Claims of one job before it is marked failed.
+        #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(i64).range(1..=10))]
+        max_job_attempts: i64,
+        /// A clone of the project: queue requests naming a commit it lacks are refused.
+        #[arg(long)]
+        repository: Option<PathBuf>,
     },
     /// Named API tokens with read or write scope, stored hashed.
     Token {
@@ -151,6 +161,79 @@ enum Command {
         #[arg(long)]
         verbose: bool,
     },
+    /// Queue a nightly run (or backfill) of suites at a commit: one job per suite and label.
+    Request {
+        #[arg(long)]
+        commit: String,
+        /// Folders under scenarios/, comma-separated.
+        #[arg(long, value_delimiter = ',', required = true)]
+        suites: Vec<String>,
+        /// Adapter classes, comma-separated (one job per suite and label).
+        #[arg(long, value_delimiter = ',', required = true)]
+        labels: Vec<String>,
+        /// `nightly` or `backfill`.
+        #[arg(long, default_value = "nightly")]
+        kind: String,
+        /// A clone of the project: unknown commits are refused, short ones expanded.
+        #[arg(long)]
+        repository: Option<PathBuf>,
+        #[arg(long, env = "TESSERA_DASHBOARD_DB", default_value = DEFAULT_DB)]
+        db: String,
+    },
+    /// A/B two environments (`COMMIT [KEY=VALUE ...]`) on one runner of each label, back to back
+    /// in random order; with --wait, print the paired comparison per measure (exit 1 if a job
+    /// failed).
+    Ab {
+        /// Scenario file, relative to the repository root.
+        #[arg(long)]
+        scenario: String,
+        #[arg(long)]
+        variant: Option<String>,
+        #[arg(long, value_name = "COMMIT_OR_ENV")]
+        a: String,
+        #[arg(long, value_name = "COMMIT_OR_ENV")]
+        b: String,
+        #[arg(long, value_delimiter = ',', required = true)]
+        labels: Vec<String>,
+        /// Attempts of each environment (1 to 100).
+        #[arg(long, default_value_t = tessera_dashboard::ab::DEFAULT_ATTEMPTS)]
+        attempts: usize,
+        #[arg(long)]
+        repository: Option<PathBuf>,
+        /// Wait for the result and print it.
+        #[arg(long)]
+        wait: bool,
+        #[arg(long, env = "TESSERA_DASHBOARD_DB", default_value = DEFAULT_DB)]
+        db: String,
+    },
+    /// Bisect a change of one measure between a good and a bad commit with A/B steps on one
+    /// label's runners; with --wait, print the steps and the culprit (exit 1 without one).
+    Bisect {
+        #[arg(long)]
+        scenario: String,
+        #[arg(long)]
+        variant: String,
+        /// A measure name (gpu_ms.median, psnr, flip, cvvdp (JOD), ...) or frames_changed.
+        #[arg(long)]
+        measure: String,
+        #[arg(long)]
+        good: String,
+        #[arg(long)]
+        bad: String,
+        #[arg(long)]
+        labels: String,
+        #[arg(long, default_value_t = tessera_dashboard::ab::DEFAULT_ATTEMPTS)]
+        attempts: usize,
+        /// Record the result on this alert.
+        #[arg(long)]
+        alert: Option<i64>,
+        #[arg(long)]
+        repository: Option<PathBuf>,
+        #[arg(long)]
+        wait: bool,
+        #[arg(long, env = "TESSERA_DASHBOARD_DB", default_value = DEFAULT_DB)]
+        db: String,
+    },
     /// Print a run folder as the JSON body that `POST /api/runs` takes.
     Bundle { folder: PathBuf },
     /// Store generated runs made from a real one (for benchmarks): timings scaled with 1% noise.
@@ -182,7 +265,7 @@ enum TokenCommand {
     /// Make a token and print its secret (shown only this once).
     Add {
         name: String,
-        #[arg(long, value_parser = ["read", "write"])]
+        #[arg(long, value_parser = ["read", "runner", "write"])]
         scope: String,
     },
     /// List tokens: name, scope, creation time (never secrets).
@@ -316,6 +399,9 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             webhook_url,
             webhook_timeout_s,
             webhook_poll_s,
+            lease_secs,
+            max_job_attempts,
+            repository,
         } => {
             let pool = db::open(&db)?;
             let named = tokens::list(&mut *pool.get()?)?;
@@ -338,6 +424,12 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 }
             }
             state.public_url = public_url.clone();
+            state.queue = server::queue::QueueConfig {
+                lease_ms: lease_secs as i64 * 1000,
+                offline_after_ms: lease_secs as i64 * 2000,
+                max_attempts: max_job_attempts,
+                repository,
+            };
             if let Some(url) = webhook_url.filter(|u| !u.is_empty()) {
                 if !(url.starts_with("http://") || url.starts_with("https://")) {
                     anyhow::bail!("--webhook-url must start with http:// or https://");
@@ -374,6 +466,67 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             })?;
         }
         Command::Token { command, db } => token_command(command, &db)?,
+        Command::Request {
+            commit,
+            suites,
+            labels,
+            kind,
+            repository,
+            db,
+        } => queue_cli::request(&db, &kind, &commit, &suites, &labels, repository.as_deref())?,
+        Command::Ab {
+            scenario,
+            variant,
+            a,
+            b,
+            labels,
+            attempts,
+            repository,
+            wait,
+            db,
+        } => {
+            let ok = queue_cli::ab(
+                &db,
+                &scenario,
+                variant.as_deref(),
+                &a,
+                &b,
+                &labels,
+                attempts,
+                repository.as_deref(),
+                wait,
+            )?;
+            if !ok {
+                anyhow::bail!("an A/B job failed");
+            }
+        }
+        Command::Bisect {
+            scenario,
+            variant,
+            measure,
+            good,
+            bad,
+            labels,
+            attempts,
+            alert,
+            repository,
+            wait,
+            db,
+        } => {
+            let p = tessera_dashboard::ab::bisect::Params {
+                scenario,
+                variant,
+                measure,
+                good,
+                bad,
+                label: labels,
+                attempts,
+                regression_id: alert,
+            };
+            if !queue_cli::bisect(&db, p, repository.as_deref(), wait)? {
+                anyhow::bail!("the bisection ended without a culprit");
+            }
+        }
         Command::Retention {
             keep_days,
             keep_runs,

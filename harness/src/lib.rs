@@ -12,6 +12,7 @@ pub mod params;
 pub mod regimes;
 pub mod render;
 pub mod run;
+pub mod runner;
 pub mod scenario;
 pub mod tables;
 pub mod techniques;

@@ -5,6 +5,8 @@
 //! (scenario, expectations or digest file, arguments, images, output folder), 3 no usable adapter
 //! or a device failure, 4 the upload to a dashboard failed (results are on disk) or `--expect URL`
 //! could not reach it.
+//! `tessera runner`: 0 after SIGTERM, 2 bad setup (repository, work folder, token), 4 the
+//! dashboard refused or could not be reached.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -153,6 +155,37 @@ enum Command {
         #[arg(long)]
         url: String,
     },
+    /// Claim jobs of these labels from a dashboard's queue, build each job's commit in a worktree
+    /// of REPOSITORY, run it and report back, until SIGTERM (token in TESSERA_DASHBOARD_TOKEN).
+    Runner {
+        /// The dashboard, e.g. http://dashboard:8080.
+        #[arg(long, value_name = "URL")]
+        dashboard: String,
+        /// Adapter classes this runner serves, comma-separated (llvmpipe, nvidia, amd, ...).
+        #[arg(long, value_delimiter = ',', required = true)]
+        labels: Vec<String>,
+        /// A git clone of the project; the runner adds its own worktree to it.
+        #[arg(long)]
+        repository: PathBuf,
+        /// Worktree and results folder (default: beside the repository).
+        #[arg(long)]
+        work: Option<PathBuf>,
+        /// Cargo target directory; several runners on one machine may share one.
+        #[arg(long)]
+        target_dir: Option<PathBuf>,
+        /// Unique runner name (default: host and process id).
+        #[arg(long)]
+        name: Option<String>,
+        /// Seconds between claims while the queue is empty.
+        #[arg(long, default_value_t = 5)]
+        poll_secs: u64,
+        /// Adapter whose name, driver or backend contains this text, as reported at registration.
+        #[arg(long)]
+        adapter: Option<String>,
+        /// Stop after the queue has been empty this many seconds (scripts, tests).
+        #[arg(long)]
+        exit_when_idle_secs: Option<u64>,
+    },
     /// Compare two images (PSNR, SSIM, FLIP and more), or two image sequences (folders of
     /// numbered PNG/EXR frames, or run-folder variant stems like `<run>/<scenario>/checkerboard`):
     /// the same averaged over frames, plus ColorVideoVDP (JOD).
@@ -284,6 +317,27 @@ fn main() -> ExitCode {
         Command::Upload { run, url } => upload_command(&run, &url),
         Command::Regimes { runs } => regimes_command(&runs),
         Command::Report { runs, format } => report_command(&runs, format),
+        Command::Runner {
+            dashboard,
+            labels,
+            repository,
+            work,
+            target_dir,
+            name,
+            poll_secs,
+            adapter,
+            exit_when_idle_secs,
+        } => runner_command(&tessera::runner::Options {
+            dashboard,
+            labels,
+            repository,
+            work,
+            target_dir,
+            name,
+            poll_secs,
+            adapter,
+            exit_when_idle_secs,
+        }),
         Command::Diff {
             reference,
             test,
@@ -686,6 +740,20 @@ fn upload_command(run: &std::path::Path, url: &str) -> u8 {
                 EXIT_INPUT
             } else {
                 EXIT_UPLOAD
+            }
+        }
+    }
+}
+
+fn runner_command(opts: &tessera::runner::Options) -> u8 {
+    use tessera::runner::RunnerError;
+    match tessera::runner::run(opts) {
+        Ok(()) => 0,
+        Err(e) => {
+            eprintln!("error: {e}");
+            match e {
+                RunnerError::Client(_) => EXIT_UPLOAD,
+                _ => EXIT_INPUT,
             }
         }
     }

@@ -145,6 +145,7 @@ fn send(
     token: &str,
     content_type: &str,
     body: &[u8],
+    job: Option<i64>,
 ) -> Result<(u16, String), UploadError> {
     let transport = |source| UploadError::Transport {
         url: url.to_string(),
@@ -157,8 +158,11 @@ fn send(
         .into();
     let mut attempt = 0;
     loop {
-        let mut response = agent
-            .post(url)
+        let mut request = agent.post(url);
+        if let Some(job) = job {
+            request = request.header(tessera_results::queue::JOB_HEADER, &job.to_string());
+        }
+        let mut response = request
             .header("Authorization", &format!("Bearer {token}"))
             .header("Content-Type", content_type)
             // The dashboard checks the token before it reads a body: with 100-continue a refused
@@ -205,8 +209,20 @@ fn refused(url: &str, status: u16, text: String) -> UploadError {
 /// POSTs `body` (JSON) to `<url>/api/runs` and reads the answer: 200 and 201 are success,
 /// anything else is [`UploadError::Refused`] with the dashboard's `{"error"}` message.
 pub fn post(url: &str, token: &str, body: &[u8]) -> Result<Reply, UploadError> {
+    post_for_job(url, token, body, None)
+}
+
+/// [`post`] for a queue job: the `X-Tessera-Job` header names it, which a runner-scope token
+/// needs to store a run (`tessera runner`; a runner sends its images inline, since blob routes
+/// take a write token).
+pub fn post_for_job(
+    url: &str,
+    token: &str,
+    body: &[u8],
+    job: Option<i64>,
+) -> Result<Reply, UploadError> {
     let url = endpoint(url)?;
-    let (status, text) = send(&url, token, "application/json", body)?;
+    let (status, text) = send(&url, token, "application/json", body, job)?;
     if status == 200 || status == 201 {
         let mut reply: Reply = serde_json::from_str(&text).map_err(|e| UploadError::Refused {
             url: url.clone(),
@@ -242,7 +258,7 @@ fn send_blobs(
     };
     let ask = serde_json::to_vec(&ask).expect("the question serialises");
     let missing_url = format!("{base}/api/blobs/missing");
-    let (status, text) = send(&missing_url, token, "application/json", &ask)?;
+    let (status, text) = send(&missing_url, token, "application/json", &ask, None)?;
     if status == 404 || status == 405 {
         return Ok(None);
     }
@@ -264,7 +280,7 @@ fn send_blobs(
         if batch.is_empty() {
             return Ok(());
         }
-        let (status, text) = send(&blobs_url, token, "application/octet-stream", batch)?;
+        let (status, text) = send(&blobs_url, token, "application/octet-stream", batch, None)?;
         if status != 200 && status != 201 {
             return Err(refused(&blobs_url, status, text));
         }

@@ -19,6 +19,7 @@ pub mod digest;
 pub mod expectation;
 pub mod folder;
 pub mod measure;
+pub mod queue;
 pub mod upload;
 
 /// The run folder's layout (`results/README.md`): where each file of a run lives. Both the

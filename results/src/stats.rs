@@ -13,6 +13,7 @@
 use crate::{Summary, VariantResult};
 
 pub mod shift;
+pub mod signed_rank;
 
 pub use shift::{hodges_lehmann, Shift};
 

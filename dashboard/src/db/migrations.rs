@@ -233,6 +233,74 @@ CREATE TABLE run_frames (
 );
 CREATE INDEX run_frames_triage ON run_frames (triage, run_pk);
 CREATE INDEX run_frames_digest ON run_frames (scenario, variant, adapter_class, frame, digest);
+    // i34: the job queue (`store/queue.rs`): requests split into jobs per adapter-class label,
+    // claimed with a lease (epoch milliseconds) kept alive by heartbeats; runners and the labels
+    // they serve; bisections whose steps are A/B requests.
+    r#"
+CREATE TABLE runners (
+    id {id},
+    name TEXT NOT NULL UNIQUE,
+    token_name TEXT NOT NULL,
+    adapter TEXT NOT NULL,
+    driver TEXT NOT NULL,
+    host TEXT NOT NULL,
+    registered_at TEXT NOT NULL,
+    last_heartbeat_ms BIGINT NOT NULL
+);
+CREATE TABLE runner_labels (
+    runner_id BIGINT NOT NULL REFERENCES runners (id),
+    label TEXT NOT NULL,
+    PRIMARY KEY (runner_id, label)
+);
+CREATE INDEX runner_labels_label ON runner_labels (label, runner_id);
+CREATE TABLE bisections (
+    id {id},
+    regression_id BIGINT REFERENCES regressions (id),
+    scenario TEXT NOT NULL,
+    variant TEXT NOT NULL,
+    measure TEXT NOT NULL,
+    label TEXT NOT NULL,
+    good TEXT NOT NULL,
+    bad TEXT NOT NULL,
+    attempts BIGINT NOT NULL,
+    state TEXT NOT NULL,
+    commits TEXT NOT NULL,
+    skipped TEXT NOT NULL,
+    culprit TEXT,
+    detail TEXT NOT NULL,
+    created_by TEXT NOT NULL,
+    created_at TEXT NOT NULL,
+    updated_at TEXT NOT NULL
+);
+CREATE INDEX bisections_regression ON bisections (regression_id);
+CREATE TABLE queue_requests (
+    id {id},
+    kind TEXT NOT NULL,
+    spec TEXT NOT NULL,
+    bisection_id BIGINT REFERENCES bisections (id),
+    created_by TEXT NOT NULL,
+    created_at TEXT NOT NULL
+);
+CREATE INDEX queue_requests_bisection ON queue_requests (bisection_id, id);
+CREATE TABLE queue_jobs (
+    id {id},
+    request_id BIGINT NOT NULL REFERENCES queue_requests (id),
+    label TEXT NOT NULL,
+    spec TEXT NOT NULL,
+    status TEXT NOT NULL,
+    attempts BIGINT NOT NULL,
+    max_attempts BIGINT NOT NULL,
+    runner_id BIGINT REFERENCES runners (id),
+    lease_expires_ms BIGINT,
+    error TEXT NOT NULL,
+    outcome TEXT,
+    created_at TEXT NOT NULL,
+    started_at TEXT,
+    finished_at TEXT
+);
+CREATE INDEX queue_jobs_claim ON queue_jobs (status, label, id);
+CREATE INDEX queue_jobs_request ON queue_jobs (request_id);
+CREATE INDEX queue_jobs_runner ON queue_jobs (runner_id, status);
 "#,
 ];
 

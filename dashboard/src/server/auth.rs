@@ -1,4 +1,4 @@
-//! Who may do what: named tokens with a `read` or `write` scope (stored hashed, managed with
+//! Who may do what: named tokens with a `read`, `runner` or `write` scope (stored hashed, managed with
 //! `tessera-dashboard token`), plus the legacy `--token` / `TESSERA_DASHBOARD_TOKEN`, which is a
 //! write token named `legacy`. A secret is hashed (SHA-256) and compared with every known hash in
 //! constant time (`subtle`).
@@ -176,11 +176,11 @@ pub fn require_token(
     given: Option<&str>,
     scope: Scope,
 ) -> Result<Principal, AppError> {
-    if scope == Scope::Write && !any_token_for(state, Scope::Write) {
+    if scope != Scope::Read && !any_token_for(state, scope) {
         return Err(AppError::WritesDisabled);
     }
     let unauthorized = || match scope {
-        Scope::Write => AppError::Unauthorized,
+        Scope::Write | Scope::Runner => AppError::Unauthorized,
         Scope::Read => AppError::ReadUnauthorized,
     };
     let principal = given
@@ -253,6 +253,22 @@ impl FromRequestParts<AppState> for Writer {
     }
 }
 
+/// Extractor for the queue's runner endpoints: a runner or write token.
+pub struct RunnerAuth(pub Principal);
+
+impl FromRequestParts<AppState> for RunnerAuth {
+    type Rejection = AppError;
+
+    async fn from_request_parts(parts: &mut Parts, state: &AppState) -> Result<Self, AppError> {
+        if let Some(p) = parts.extensions.get::<Principal>() {
+            if p.scope.allows(Scope::Runner) {
+                return Ok(RunnerAuth(p.clone()));
+            }
+        }
+        require(state, &parts.headers, Scope::Runner).map(RunnerAuth)
+    }
+}
+
 fn is_form(headers: &HeaderMap) -> bool {
     headers
         .get(header::CONTENT_TYPE)
@@ -299,7 +315,9 @@ async fn check(state: &AppState, mut req: Request) -> Result<Request, AppError> 
             req.map(|b| axum::body::Body::new(http_body_util::Limited::new(b, FORM_MAX_BYTES)))
         );
     }
-    let p = require(state, req.headers(), Scope::Write)?;
+    // Runner tokens pass here too; each handler then asks for the scope it needs ([`Writer`],
+    // [`RunnerAuth`]), so a runner token reaches only the queue endpoints and job uploads.
+    let p = require(state, req.headers(), Scope::Runner)?;
     rate_limit(state, &p)?;
     if let Some(n) = content_length(req.headers()) {
         if n > state.max_upload_bytes as u64 {

@@ -6,6 +6,7 @@
 //!
 //! Not for: SQL (see [`crate::store`]) or chart drawing (see [`crate::svg`]).
 
+pub mod ab;
 pub mod assets;
 pub mod auth;
 pub mod blobs;
@@ -21,6 +22,8 @@ pub mod health;
 pub mod images;
 pub mod listen;
 pub mod pareto;
+pub mod queue;
+pub mod queue_page;
 pub mod regressions;
 pub mod run;
 pub mod run_frame_charts;
@@ -58,6 +61,8 @@ pub struct AppState {
     pub timeouts: Timeouts,
     /// The dashboard's public URL for absolute links (feed, Markdown); `None`: from `Host`.
     pub public_url: Option<String>,
+    /// Lease, offline threshold, retries and repository of the job queue (see [`queue`]).
+    pub queue: queue::QueueConfig,
 }
 
 impl AppState {
@@ -70,6 +75,7 @@ impl AppState {
             auth: auth::Auth::default(),
             timeouts: Timeouts::default(),
             public_url: None,
+            queue: queue::QueueConfig::default(),
         }
     }
 
@@ -142,6 +148,25 @@ pub fn app(state: AppState) -> Router {
         )
         .route("/api/frames/judge", post(frames::judge_api))
         .route("/api/approved-frames", get(frames::approved_api))
+        .route("/api/runners/register", post(queue::register))
+        .route("/api/runners/heartbeat", post(queue::heartbeat))
+        .route("/api/queue", get(queue::overview))
+        .route("/api/queue/claim", post(queue::claim))
+        .route("/api/queue/requests", post(queue::request))
+        .route("/api/queue/jobs/{id}", get(queue::job))
+        .route("/api/queue/jobs/{id}/complete", post(queue::complete))
+        .route("/api/queue/jobs/{id}/fail", post(queue::fail))
+        .route("/api/queue/jobs/{id}/return", post(queue::give_back))
+        .route("/queue", get(queue_page::page))
+        .route("/api/ab", post(ab::create))
+        .route("/api/ab/{request_id}", get(ab::get))
+        .route("/api/bisections", post(ab::bisect_create))
+        .route("/api/bisections/{id}", get(ab::bisect_get))
+        .route("/bisections/{id}", get(ab::bisect_page))
+        .route(
+            "/regressions/{id}/bisect",
+            get(ab::bisect_form_page).post(ab::bisect_form),
+        )
         .fallback(|| async { AppError::NotFound("no such page".into()) })
         .layer(DefaultBodyLimit::max(state.max_upload_bytes))
         // gzip (or deflate, br) for clients that accept it: pages and JSON shrink about 6x.

@@ -2,7 +2,9 @@
 //! README). Needs the bearer token. Answers 201 with `{"run_id", "stored": true, ...}` for a new run,
 //! 200 with `"stored": false` for a run id already stored (idempotent), 4xx with a JSON error for
 //! bad or oversized input, in which case nothing is stored. The token is checked by
-//! [`super::auth::guard`] before the body is read; the [`Writer`] extractor comes first for the same reason.
+//! [`super::auth::guard`] before the body is read; the [`RunnerAuth`] extractor comes first for the
+//! same reason. A write token uploads any run; a runner token only a run of a job one of its
+//! runners holds, named by the `X-Tessera-Job` header, at one of that job's commits (403 otherwise).
 
 use axum::body::Bytes;
 use axum::extract::rejection::BytesRejection;
@@ -12,7 +14,7 @@ use axum::response::{IntoResponse, Response};
 use axum::Json;
 use serde::Serialize;
 
-use super::auth::Writer;
+use super::auth::{RunnerAuth, Scope};
 use super::{AppError, AppState};
 use crate::bundle::{RunBundle, UploadBody};
 use crate::store::ingest::Ingested;
@@ -27,7 +29,8 @@ pub struct UploadResponse {
 
 pub async fn api(
     State(state): State<AppState>,
-    Writer(_who): Writer,
+    RunnerAuth(who): RunnerAuth,
+    headers: axum::http::HeaderMap,
     body: Result<Bytes, BytesRejection>,
 ) -> Result<Response, AppError> {
     let body = body.map_err(|e| {
@@ -61,9 +64,32 @@ pub async fn api(
         .map_err(|e| AppError::Internal(e.to_string()))??;
     let run_id = bundle.run.run_id.clone();
     let params = state.detect;
+    let job = if who.scope.allows(Scope::Write) {
+        None
+    } else {
+        let header = tessera_results::queue::JOB_HEADER;
+        let id = headers
+            .get(header)
+            .and_then(|v| v.to_str().ok())
+            .and_then(|v| v.trim().parse::<i64>().ok())
+            .ok_or_else(|| {
+                AppError::Forbidden(format!(
+                    "token {:?} has scope runner: it uploads only the run of a job it holds, \
+                     named by the {header} header",
+                    who.name
+                ))
+            })?;
+        Some((id, who.name.clone()))
+    };
     let (status, response) = state
-        .db(
-            move |conn| match crate::regressions::ingest_and_detect(conn, &bundle, &params)? {
+        .db(move |conn| {
+            if let Some((id, token)) = &job {
+                let commit = bundle.run.commit.as_ref().map(|c| c.sha.as_str());
+                if let Some(why) = crate::store::queue::upload_refusal(conn, *id, token, commit)? {
+                    return Err(AppError::Forbidden(why));
+                }
+            }
+            match crate::regressions::ingest_and_detect(conn, &bundle, &params)? {
                 (Ingested::Stored { results, .. }, changes) => {
                     let new_regressions = changes.detected;
                     Ok((
@@ -85,8 +111,8 @@ pub async fn api(
                         new_regressions: 0,
                     },
                 )),
-            },
-        )
+            }
+        })
         .await?;
     Ok((status, Json(response)).into_response())
 }

@@ -639,7 +639,7 @@ pub fn set_status(
 }
 
 /// Kinds of `regression_events`.
-pub const EVENTS: [&str; 8] = [
+pub const EVENTS: [&str; 9] = [
     "detected",
     "moved",
     "merged",
@@ -648,6 +648,8 @@ pub const EVENTS: [&str; 8] = [
     "pending",
     "reinstated",
     "repointed",
+    // A bisection of the alert's range ended (`ab/bisect.rs`): its culprit or why none.
+    "bisected",
 ];
 
 /// Appends to alert `id`'s history.

@@ -12,6 +12,7 @@ pub mod frames;
 pub mod groups;
 pub mod ingest;
 pub mod outbox;
+pub mod queue;
 pub mod read;
 pub mod tokens;
 pub mod triage;

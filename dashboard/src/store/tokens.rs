@@ -1,4 +1,4 @@
-//! Named API tokens: each has a name, a scope (`read` or `write`) and a secret that is shown once
+//! Named API tokens: each has a name, a scope (`read`, `runner` or `write`) and a secret that is shown once
 //! when it is made and stored only as its SHA-256, so a copy of the store never holds a usable
 //! token. Revoking a token deletes its row; its name can then be used again.
 //!
@@ -10,11 +10,14 @@ use sha2::{Digest, Sha256};
 use super::StoreError;
 use crate::db::{Connection, Value};
 
-/// What a token may do. `Write` includes `Read`.
+/// What a token may do. `Write` includes `Runner`, which includes `Read`. A `Runner` token may
+/// register runners, claim, heartbeat, complete and fail jobs, and upload the runs of jobs its
+/// runners hold: nothing else.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Scope {
     Read,
+    Runner,
     Write,
 }
 
@@ -22,6 +25,7 @@ impl Scope {
     pub fn as_str(self) -> &'static str {
         match self {
             Scope::Read => "read",
+            Scope::Runner => "runner",
             Scope::Write => "write",
         }
     }
@@ -37,8 +41,9 @@ impl std::str::FromStr for Scope {
     fn from_str(s: &str) -> Result<Scope, String> {
         match s {
             "read" => Ok(Scope::Read),
+            "runner" => Ok(Scope::Runner),
             "write" => Ok(Scope::Write),
-            _ => Err(format!("scope {s:?} is not one of read, write")),
+            _ => Err(format!("scope {s:?} is not one of read, runner, write")),
         }
     }
 }

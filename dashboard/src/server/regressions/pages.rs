@@ -390,13 +390,21 @@ pub fn render_group(g: &Group, charts: &[(Alert, read::SeriesDetail)]) -> String
             .collect();
         let _ = write!(
             b,
-            "<h3><a href=\"/series/{}\">{} · {} · {} · {}</a> {}</h3>",
+            "<h3><a href=\"/series/{}\">{} · {} · {} · {}</a> {}{}</h3>",
             a.series.id,
             esc(&a.series.adapter),
             esc(&a.series.scenario),
             esc(&a.series.variant),
             esc(&a.series.measure),
-            change_cell(a)
+            change_cell(a),
+            // Runners can search a range of several commits (`server/ab.rs`).
+            match (&a.commit_before, &a.commit_after) {
+                (Some(x), Some(y)) if x != y => format!(
+                    " <a class=bisect href=\"/regressions/{}/bisect\">bisect</a>",
+                    a.id
+                ),
+                _ => String::new(),
+            }
         );
         b.push_str(&series_chart(
             &marks,
