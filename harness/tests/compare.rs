@@ -135,6 +135,7 @@ fn scenario(run_id: &str, name: &str, results: Vec<VariantResult>) -> ScenarioRe
         wall_ms: 100.0,
         peak_rss_bytes: None,
         peak_heap_bytes: None,
+        reference_noise: None,
     }
 }
 

@@ -112,6 +112,7 @@ fn scenario(run_id: &str, results: Vec<VariantResult>) -> ScenarioResult {
         wall_ms: 100.0,
         peak_rss_bytes: None,
         peak_heap_bytes: None,
+        reference_noise: None,
     }
 }
 

@@ -36,6 +36,7 @@ pub fn finish(
         wall_ms: start.elapsed().as_secs_f64() * 1000.0,
         peak_rss_bytes: super::memory::peak_bytes(),
         peak_heap_bytes: super::memory::peak_heap_bytes(),
+        reference_noise: None,
     }
 }
 

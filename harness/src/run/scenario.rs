@@ -84,6 +84,10 @@ pub fn run(
             reference::render(gpu, &mut scene, scenario, on_gpu, on_frame)
         }));
     }
+    // The reference's own noise on the first compared frame (the converged reference only).
+    let reference_noise = phases::time("reference noise", || {
+        super::reference_noise::measure(gpu, &mut scene, scenario, on_frame)
+    });
     // The renderer's exact motion for `tde`, rendered once, outside any timed work.
     let motion: Result<Vec<Option<motion::MotionField>>, String> =
         if needs_reference && scenario.metrics.contains(&MetricKind::Tde) {
@@ -311,7 +315,9 @@ pub fn run(
     let failed = phases::time("images", images::finish_writes);
     images::forget_failed(&mut results, &failed, run_dir);
     gates::apply(scenario, &mut results);
-    finish(scenario, run_id, results, start)
+    let mut out = finish(scenario, run_id, results, start);
+    out.reference_noise = reference_noise;
+    out
 }
 
 type VariantOutcome = Result<Result<(Rendered, PlanRecord), Unsupported>, String>;
