@@ -9,6 +9,11 @@
 //! Several runs of one scenario on one adapter (repeats) make one table: a row's values are the
 //! median of the runs' values, and its run ids list them all.
 //!
+//! A ground-truth scenario that measured its reference's own noise (`reference_noise`) prints it
+//! under the table, and differences smaller than it are ties on the fronts
+//! ([`tessera_results::ReferenceNoise::tied`]): a row is not dominated by one that is better
+//! only by less than the noise, and a faster row at a tied value dominates.
+//!
 //! Values are those of `results.csv` (the same medians, the same `measure::speedup`), rounded for
 //! print only. Not for: comparing two runs (`compare.rs`), pixel-bound regimes (`regimes.rs`),
 //! history (the dashboard).
@@ -17,7 +22,7 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
 use tessera_results::measure::{self, Direction, DEFAULT_BASELINE};
-use tessera_results::{ScenarioResult, Status, VariantResult};
+use tessera_results::{ReferenceNoise, ScenarioResult, Status, VariantResult};
 
 use crate::compare::Run;
 
@@ -48,6 +53,9 @@ pub struct Table {
     pub metrics: Vec<(String, String, Direction)>,
     pub rows: Vec<Row>,
     pub run_ids: Vec<String>,
+    /// The reference's own noise (of the newest run that measured it): differences below it
+    /// are ties.
+    pub noise: Option<ReferenceNoise>,
 }
 
 /// One variant's row.
@@ -139,8 +147,12 @@ fn table(group: &[(&Run, &ScenarioResult)]) -> Table {
         }
     }
     let clock_mhz = median(clock_medians).map(|m| (clock_min, m, clock_max));
+    let noise = group
+        .iter()
+        .rev()
+        .find_map(|(_, s)| s.reference_noise.clone());
     let mut rows: Vec<Row> = variants.iter().map(|v| row(group, v, &metrics)).collect();
-    mark_fronts(&mut rows, &metrics);
+    mark_fronts(&mut rows, &metrics, noise.as_ref());
     let mut run_ids: Vec<String> = Vec::new();
     for (run, _) in group {
         if !run_ids.contains(&run.info.run_id) {
@@ -160,6 +172,7 @@ fn table(group: &[(&Run, &ScenarioResult)]) -> Table {
         metrics,
         rows,
         run_ids,
+        noise,
     }
 }
 
@@ -223,8 +236,13 @@ fn row(
 /// Marks, per quality metric, the rows no other row dominates: none is at least as fast and at
 /// least as good with one of the two strictly better. Rows without a GPU time or without the
 /// metric are on no front; the reference itself (an infinite PSNR, a FLIP of 0) takes part like
-/// any other row.
-fn mark_fronts(rows: &mut [Row], metrics: &[(String, String, Direction)]) {
+/// any other row. With the reference's `noise`, two values it ties are equal: being better by
+/// less than the noise dominates nothing, and a faster row at a tied value dominates.
+pub fn mark_fronts(
+    rows: &mut [Row],
+    metrics: &[(String, String, Direction)],
+    noise: Option<&ReferenceNoise>,
+) {
     for (i, (name, _, dir)) in metrics.iter().enumerate() {
         if *dir == Direction::Neither {
             continue;
@@ -236,11 +254,23 @@ fn mark_fronts(rows: &mut [Row], metrics: &[(String, String, Direction)]) {
         };
         let points: Vec<Option<(f64, f64)>> =
             rows.iter().map(|r| Some((r.gpu_ms?, q(r)?))).collect();
+        let tied = |a: f64, b: f64| {
+            let sign = if dir.higher_is_better() { 1.0 } else { -1.0 };
+            noise.is_some_and(|n| n.tied(name, sign * a, sign * b))
+        };
         for (a, pa) in points.iter().enumerate() {
             let Some((ta, qa)) = pa else { continue };
             let dominated = points.iter().enumerate().any(|(b, pb)| {
                 let Some((tb, qb)) = pb else { return false };
-                b != a && tb <= ta && qb >= qa && (tb < ta || qb > qa)
+                let (ta, qa, tb, qb) = (*ta, *qa, *tb, *qb);
+                if b == a || tb > ta {
+                    return false;
+                }
+                if tied(qa, qb) {
+                    tb < ta
+                } else {
+                    qb >= qa && (tb < ta || qb > qa)
+                }
             });
             if !dominated {
                 rows[a].front.push(name.clone());
@@ -306,6 +336,32 @@ fn cells(t: &Table) -> (Vec<String>, Vec<Vec<String>>) {
     (head, rows)
 }
 
+/// The reference's noise as one line: what it was measured against and its value per metric.
+pub fn noise_line(n: &ReferenceNoise) -> String {
+    let mut s = format!(
+        "reference noise ({} samples against {}, measured frame {}):",
+        n.reference_samples, n.samples, n.frame
+    );
+    if n.metrics.is_empty() {
+        s.push_str(" not measured");
+    }
+    for (i, (name, v)) in n.metrics.iter().enumerate() {
+        let unit = tessera_results::measure::Measure::from_name(name).map_or("", |m| m.unit());
+        let sep = if i == 0 { " " } else { ", " };
+        let _ = write!(s, "{sep}{name} {}", metric_text(Some(*v), unit));
+        if !unit.is_empty() {
+            let _ = write!(s, " {unit}");
+        }
+    }
+    if let Some(e) = &n.error {
+        let _ = write!(s, " ({e})");
+    }
+    if !n.metrics.is_empty() {
+        s.push_str("; differences below it are ties");
+    }
+    s
+}
+
 fn preamble(t: &Table) -> String {
     let clock = match t.clock_mhz {
         Some((lo, med, hi)) => format!("graphics clock {med:.0} MHz (min {lo:.0}, max {hi:.0})"),
@@ -359,6 +415,9 @@ pub fn render(tables: &[Table], format: Format) -> String {
                 for r in rows {
                     let _ = writeln!(out, "| {} |", r.join(" | "));
                 }
+                if let Some(n) = &t.noise {
+                    let _ = writeln!(out, "\n{}", noise_line(n));
+                }
             }
             Format::Text => {
                 let _ = writeln!(out, "{}", preamble(t));
@@ -382,6 +441,9 @@ pub fn render(tables: &[Table], format: Format) -> String {
                 let _ = writeln!(out, "{}", line(&head));
                 for r in &rows {
                     let _ = writeln!(out, "{}", line(r));
+                }
+                if let Some(n) = &t.noise {
+                    let _ = writeln!(out, "  {}", noise_line(n));
                 }
             }
         }
@@ -429,4 +491,96 @@ fn collect(
 /// Tables keyed by scenario name, for tests and callers that want one.
 pub fn by_scenario(tables: &[Table]) -> BTreeMap<&str, &Table> {
     tables.iter().map(|t| (t.scenario.as_str(), t)).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(variant: &str, gpu_ms: f64, psnr: f64, flip: f64) -> Row {
+        Row {
+            variant: variant.into(),
+            status: "ok".into(),
+            gpu_ms: Some(gpu_ms),
+            speedup: None,
+            metrics: vec![Some(psnr), Some(flip)],
+            front: Vec::new(),
+            run_ids: Vec::new(),
+        }
+    }
+
+    fn metrics() -> Vec<(String, String, Direction)> {
+        vec![
+            ("psnr".into(), "dB".into(), Direction::HigherIsBetter),
+            ("flip".into(), "".into(), Direction::LowerIsBetter),
+        ]
+    }
+
+    fn noise(psnr: f64, flip: f64) -> ReferenceNoise {
+        ReferenceNoise {
+            reference_samples: 32,
+            samples: 128,
+            frame: 0,
+            metrics: [("psnr".to_string(), psnr), ("flip".to_string(), flip)].into(),
+            error: None,
+        }
+    }
+
+    fn fronts(noise: Option<&ReferenceNoise>) -> Vec<Vec<String>> {
+        // `b` is 0.1 ms slower than `a` and better by a hair in both metrics; `c` is slower
+        // still and better by far more than any noise below.
+        let mut rows = vec![
+            row("a", 1.0, 30.0, 0.0500),
+            row("b", 1.1, 30.02, 0.0498),
+            row("c", 2.0, 36.0, 0.0200),
+        ];
+        mark_fronts(&mut rows, &metrics(), noise);
+        rows.into_iter().map(|r| r.front).collect()
+    }
+
+    #[test]
+    fn without_noise_a_hair_better_is_a_front() {
+        let all = vec!["psnr".to_string(), "flip".to_string()];
+        assert_eq!(fronts(None), vec![all.clone(), all.clone(), all]);
+    }
+
+    #[test]
+    fn a_near_tie_within_the_noise_is_a_tie() {
+        // A reference 40 dB and 0.001 FLIP from a denser one: `b`'s 0.02 dB and 0.0002 FLIP
+        // are below it, so the faster `a` dominates it; `c` is better by more than the noise.
+        let n = noise(40.0, 0.001);
+        let all = vec!["psnr".to_string(), "flip".to_string()];
+        assert_eq!(fronts(Some(&n)), vec![all.clone(), vec![], all]);
+    }
+
+    #[test]
+    fn at_equal_time_better_by_less_than_the_noise_does_not_dominate() {
+        let n = noise(40.0, 0.001);
+        let mut rows = vec![row("a", 1.0, 30.0, 0.0500), row("b", 1.0, 30.02, 0.0498)];
+        mark_fronts(&mut rows, &metrics(), Some(&n));
+        assert!(rows.iter().all(|r| r.front.len() == 2), "{rows:?}");
+        // Without the noise the better one wins alone.
+        let mut rows = vec![row("a", 1.0, 30.0, 0.0500), row("b", 1.0, 30.02, 0.0498)];
+        mark_fronts(&mut rows, &metrics(), None);
+        assert_eq!(rows[0].front, Vec::<String>::new());
+    }
+
+    #[test]
+    fn psnr_ties_grow_as_the_variant_nears_the_reference_noise() {
+        let n = noise(40.0, 0.001);
+        // Far below the noise's PSNR a tenth of a dB is a ranking; at it, a dB is not.
+        assert!(!n.tied("psnr", 20.0, 20.1));
+        assert!(n.tied("psnr", 39.0, 40.0));
+        assert!(!n.tied("flip", 0.05, 0.0489));
+        assert!(n.tied("flip", 0.05, 0.0491));
+    }
+
+    #[test]
+    fn the_noise_line_says_ties() {
+        let line = noise_line(&noise(41.234, 0.00312));
+        assert_eq!(
+            line,
+            "reference noise (32 samples against 128, measured frame 0): flip 0.00312, psnr 41.23 dB; differences below it are ties"
+        );
+    }
 }

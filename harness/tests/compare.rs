@@ -139,6 +139,7 @@ fn scenario(run_id: &str, name: &str, results: Vec<VariantResult>) -> ScenarioRe
         peak_rss_bytes: None,
         peak_heap_bytes: None,
         reference_digests: Vec::new(),
+        reference_noise: None,
     }
 }
 

@@ -187,6 +187,53 @@ pub struct ScenarioResult {
     /// `frame_digests` are the reference's), without a reference, and before version 3.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub reference_digests: Vec<String>,
+    /// The reference's own error (a ground-truth scenario with `samples`): on the first compared
+    /// frame, the reference against one of more samples, on the scenario's metrics. Differences
+    /// between variants smaller than it are ties. Absent without it and in older files.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference_noise: Option<ReferenceNoise>,
+}
+
+/// How far the scenario's reference is from a reference of more samples, on its first compared
+/// frame: the floor under which two variants' metric values cannot be told apart.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct ReferenceNoise {
+    /// Jittered samples per pixel of the scenario's reference.
+    pub reference_samples: u32,
+    /// Samples per pixel of the reference it was measured against.
+    pub samples: u32,
+    /// Measured-frame index compared.
+    pub frame: u32,
+    /// Per metric name (as in the variants' `metrics`), the reference's value against the
+    /// denser one: PSNR in dB, FLIP, JOD, ... Infinite values are left out.
+    pub metrics: std::collections::BTreeMap<String, f64>,
+    /// Why a metric could not be measured, when one could not.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub error: Option<String>,
+}
+
+impl ReferenceNoise {
+    /// Whether values `a` and `b` of metric `name` differ by less than the reference's own error
+    /// (a tie). The margin is the reference's distance from perfect in the metric's units: its
+    /// FLIP (or any error) itself, `10 - JOD` for `cvvdp`, `1 - SSIM`; for PSNR, what the
+    /// reference's noise power adds to the better value's error power,
+    /// `10 log10(1 + 10^((max(a, b) - noise) / 10))` dB. A metric without a recorded noise ties
+    /// nothing, and an infinite value ties only an infinite one.
+    pub fn tied(&self, name: &str, a: f64, b: f64) -> bool {
+        let Some(&n) = self.metrics.get(name) else {
+            return false;
+        };
+        if !a.is_finite() || !b.is_finite() {
+            return a == b;
+        }
+        let margin = match name {
+            "psnr" | "psnr-luma" => 10.0 * (1.0 + 10f64.powf((a.max(b) - n) / 10.0)).log10(),
+            "cvvdp" | "cvvdp-flicker" => 10.0 - n,
+            "ssim" | "ssim-luma" => 1.0 - n,
+            _ => n,
+        };
+        (a - b).abs() < margin
+    }
 }
 
 /// One (run, scenario, variant) record.

@@ -116,6 +116,7 @@ fn scenario(run_id: &str, results: Vec<VariantResult>) -> ScenarioResult {
         peak_rss_bytes: None,
         peak_heap_bytes: None,
         reference_digests: Vec::new(),
+        reference_noise: None,
     }
 }
 

@@ -144,6 +144,9 @@ pub fn scenario_table(s: &ScenarioResult) -> String {
     for row in &rows {
         let _ = writeln!(out, "{}", line(row));
     }
+    if let Some(n) = &s.reference_noise {
+        let _ = writeln!(out, "  {}", crate::tables::noise_line(n));
+    }
     for r in &s.results {
         for f in stability_findings(r) {
             let _ = writeln!(out, "  stability: {}: {f}", r.variant);

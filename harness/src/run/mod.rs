@@ -23,6 +23,7 @@ pub mod output;
 pub mod phases;
 pub mod record;
 pub mod reference;
+pub mod reference_noise;
 pub mod report;
 pub mod scenario;
 pub mod select;

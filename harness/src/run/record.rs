@@ -37,6 +37,7 @@ pub fn finish(
         peak_rss_bytes: super::memory::peak_bytes(),
         peak_heap_bytes: super::memory::peak_heap_bytes(),
         reference_digests: Vec::new(),
+        reference_noise: None,
     }
 }
 

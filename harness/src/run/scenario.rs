@@ -84,6 +84,10 @@ pub fn run(
             reference::render(gpu, &mut scene, scenario, on_gpu, on_frame)
         }));
     }
+    // The reference's own noise on the first compared frame (the converged reference only).
+    let reference_noise = phases::time("reference noise", || {
+        super::reference_noise::measure(gpu, &mut scene, scenario, on_frame)
+    });
     // The renderer's exact motion for `tde`, rendered once, outside any timed work.
     let motion: Result<Vec<Option<motion::MotionField>>, String> =
         if needs_reference && scenario.metrics.contains(&MetricKind::Tde) {
@@ -319,6 +323,7 @@ pub fn run(
             record.reference_digests = r.digests.clone();
         }
     }
+    record.reference_noise = reference_noise;
     record
 }
 

@@ -57,6 +57,10 @@ pub struct Scenario {
     pub save_worst: bool,
     pub time_step: f64,
     pub reference: Reference,
+    /// `reference.noise_samples`: the samples per pixel of the denser reference the converged
+    /// reference is measured against on its first compared frame, to state its own error
+    /// (`run/reference_noise.rs`); `None` when not measured.
+    pub reference_noise: Option<u32>,
     /// `reference.motion_blur`: every compared frame (the reference's and each variant's) is
     /// filtered by a box of its pixels' motion along that motion before the metrics
     /// (`run/motion_blur.rs`).

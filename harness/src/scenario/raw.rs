@@ -122,6 +122,10 @@ pub struct RawReference {
     /// Ground truth: jittered samples per pixel at the output resolution (the converged
     /// reference). Default 32 when `supersample` is not given.
     pub samples: Option<i64>,
+    /// Ground truth with `samples`: samples per pixel of the denser reference the reference is
+    /// measured against on its first compared frame (its own noise, a result's
+    /// `reference_noise`). Default 4 x `samples` (at most 1024); 0 turns it off.
+    pub noise_samples: Option<i64>,
     /// Compare after motion blur: reference and variants filtered by a box along each pixel's
     /// motion (NVIDIA adaptive shading, section 4 and Fig. 9). Default false.
     pub motion_blur: Option<bool>,

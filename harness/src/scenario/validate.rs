@@ -296,6 +296,7 @@ fn build(ctx: &mut Ctx, path: &Path, raw: RawScenario) -> Scenario {
     ctx.positive(&root.key("time_step"), time_step);
 
     let reference = reference(ctx, &root.key("reference"), &raw.reference);
+    let reference_noise = reference_noise(ctx, &root.key("reference"), &raw.reference, reference);
     let motion_blur = raw.reference.motion_blur.unwrap_or(false);
     if motion_blur && reference == Reference::None {
         ctx.err(
@@ -341,6 +342,7 @@ fn build(ctx: &mut Ctx, path: &Path, raw: RawScenario) -> Scenario {
         motion_blur,
         time_step,
         reference,
+        reference_noise,
         metrics,
         display,
         metrics_device,
@@ -431,6 +433,42 @@ fn reference(ctx: &mut Ctx, path: &KeyPath, raw: &RawReference) -> Reference {
                 Reference::Native
             }
         }
+    }
+}
+
+/// `reference.noise_samples`: on by default for the converged reference (4 x its samples, at
+/// most 1024), more samples than the reference's, and for no other kind.
+fn reference_noise(
+    ctx: &mut Ctx,
+    path: &KeyPath,
+    raw: &RawReference,
+    reference: Reference,
+) -> Option<u32> {
+    let key = path.key("noise_samples");
+    match (reference, raw.noise_samples) {
+        (_, Some(0)) => None,
+        (Reference::Converged { samples }, None) => {
+            Some((samples * 4).min(1024)).filter(|&n| n > samples)
+        }
+        (Reference::Converged { samples }, Some(n)) => {
+            let n = ctx.count(&key, n, 0, 4096);
+            if n <= samples {
+                ctx.err(
+                    &key,
+                    format!("the reference's noise is measured against more samples than its own {samples}: give more than {samples}, or 0 to turn it off"),
+                );
+                return None;
+            }
+            Some(n)
+        }
+        (_, Some(_)) => {
+            ctx.err(
+                &key,
+                "`noise_samples` applies only to kind = \"ground-truth\" with `samples` (the converged reference)",
+            );
+            None
+        }
+        (_, None) => None,
     }
 }
 
