@@ -126,7 +126,7 @@ nav{background:#1d2733;padding:8px 16px}nav a{color:#dde;margin-right:18px;text-
 nav a.on{color:#fff;font-weight:bold}main{padding:12px 16px;max-width:1600px}h1{font-size:20px;overflow-wrap:anywhere}h2{font-size:16px;margin-top:24px}
 table{border-collapse:collapse;margin:8px 0}td,th{border-bottom:1px solid #ddd;padding:3px 8px;text-align:left;vertical-align:top}
 td.n,th.n{text-align:right;font-variant-numeric:tabular-nums}.ok{color:#17803d}.skipped{color:#8a6d00}.failed{color:#b3261e}
-.worse{color:#b3261e}.better{color:#17803d}.muted{color:#777}svg{background:#fff;border:1px solid #eee;max-width:100%;height:auto}
+.worse{color:#b3261e}.better{color:#17803d}.muted{color:#777}.neutral{color:#444;background:#eceff3;padding:0 4px;border-radius:3px}svg{background:#fff;border:1px solid #eee;max-width:100%;height:auto}
 form.inline{display:inline}.scroll{overflow-x:auto;max-width:100%}td.wrap{max-width:28em;overflow-wrap:anywhere;font-size:12px}
 .chart{width:100%;max-width:1400px;margin:8px 0}.chart-controls{margin:4px 0;font-size:13px}.chart-hover{font-size:12px;color:#444;min-height:1.4em;font-variant-numeric:tabular-nums}
 .alert{background:#b3261e;color:#fff;border-radius:8px;padding:0 6px;font-size:12px}.pager{margin:8px 0}.pager a{margin-right:12px}

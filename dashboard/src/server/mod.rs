@@ -10,6 +10,7 @@ pub mod assets;
 pub mod auth;
 pub mod compare;
 pub mod compare_runs;
+pub mod conditions_view;
 pub mod delete;
 pub mod error;
 pub mod export;

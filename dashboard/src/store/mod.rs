@@ -3,12 +3,15 @@
 //!
 //! Not for: SQL dialect details (see [`crate::db`]), HTTP or HTML.
 
+pub mod adapter_pairs;
 pub mod alerts;
+pub mod baseline_moves;
 pub mod browse;
 pub mod delete;
 pub mod extras;
 pub mod groups;
 pub mod ingest;
+pub mod noise;
 pub mod outbox;
 pub mod read;
 pub mod tokens;
