@@ -167,11 +167,13 @@ fn scenario_section(d: &RunDetail, prev: Option<&Previous>, s: &ScenarioResult, 
         } else {
             format!(" ({})", i.unit)
         };
+        // The unit in the header itself: a column of numbers says what they count.
         format!(
-            "<th class=n title=\"{}{unit}, {}\">{}</th>",
+            "<th class=n title=\"{}{unit}, {}\">{}{}</th>",
             esc(i.label),
             i.direction.phrase(),
-            esc(i.name)
+            esc(i.name),
+            esc(&unit)
         )
     };
     let _ = write!(

@@ -298,7 +298,9 @@ fn baseline_title(commit_after: &str, alerts: &[&Alert], code: bool) -> Option<S
             s.to_string()
         }
     };
-    let mut by_base: BTreeMap<(&str, &str), (Vec<f64>, BTreeSet<&str>)> = BTreeMap::new();
+    // (baseline, scenario) → (the baseline's changes, the variants whose speed-ups moved).
+    type Moved<'a> = BTreeMap<(&'a str, &'a str), (Vec<f64>, BTreeSet<&'a str>)>;
+    let mut by_base: Moved = BTreeMap::new();
     for a in alerts {
         let m = a.moved_with_change?;
         let base = baseline_moves::baseline_of(&a.series.measure)?;

@@ -150,7 +150,7 @@ fn passes_cell(passes: &[PassComparison], counts: bool) -> String {
         .map(|p| {
             let change = p.time.tested().map_or("–".into(), |t| pct(t.change));
             format!(
-                "{} <span class={}>{change} {}</span>",
+                "<span class=nw>{} <span class={}>{change} {}</span></span>",
                 esc(&p.name),
                 time_class(&p.time, counts),
                 esc(p.time.words())
@@ -164,12 +164,18 @@ fn metrics_cell(v: &VariantComparison) -> String {
     v.metrics
         .iter()
         .map(|m| {
+            let unit = tessera_results::measure::Measure::from_name(&m.name)
+                .map(|x| x.unit())
+                .filter(|u| !u.is_empty())
+                .map_or(String::new(), |u| format!(" {u}"));
+            // One item never breaks inside: `psnr 18.85 → 18.85 dB`.
             format!(
-                "{} {} → <span class={}>{}</span>",
+                "<span class=nw>{} {} → <span class={}>{}</span>{}</span>",
                 esc(&m.name),
                 opt(m.values.a),
                 verdict_class(m.verdict),
-                opt(m.values.b)
+                opt(m.values.b),
+                esc(&unit)
             )
         })
         .collect::<Vec<_>>()
@@ -223,7 +229,7 @@ fn scenario_table(b: &mut String, c: &Comparison, s: &ScenarioComparison) {
     };
     let _ = write!(
         b,
-        "<h2 id=\"s-{}\">{}{only}</h2><div class=scroll><table class=compare><tr><th>variant</th><th>status A → B</th><th class=n>GPU ms A</th><th class=n>GPU ms B</th><th class=n>change [{:.0}% interval]</th><th>verdict</th><th class=n>speedup A → B</th><th>passes (change, verdict)</th><th>metrics A → B</th><th>images</th></tr>",
+        "<h2 id=\"s-{}\">{}{only}</h2><div class=scroll><table class=compare><tr><th>variant</th><th>status A → B</th><th class=n>GPU A (ms)</th><th class=n>GPU B (ms)</th><th class=n>change [{:.0}% interval]</th><th>verdict</th><th class=n>speed-up A → B (×)</th><th>passes (change, verdict)</th><th>metrics A → B</th><th>images</th></tr>",
         esc(&s.scenario),
         esc(&s.scenario),
         c.rule.confidence * 100.0
