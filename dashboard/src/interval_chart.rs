@@ -96,7 +96,7 @@ pub fn chart(rows: &[Row], axis: &str) -> String {
         };
         let _ = write!(
             out,
-            "<circle class=ratio cx='{:.1}' cy='{py:.1}' r='{size}' fill='{fill}'><title>{}</title></circle>",
+            "<circle class='point ratio' cx='{:.1}' cy='{py:.1}' r='{size}' fill='{fill}'><title>{}</title></circle>",
             x(r.value),
             esc(&tip)
         );
@@ -126,7 +126,7 @@ mod tests {
             },
         ];
         let svg = chart(&rows, "speed-up ratio B / A");
-        assert_eq!(svg.matches("class=ratio").count(), 2);
+        assert_eq!(svg.matches("class='point ratio'").count(), 2);
         assert_eq!(svg.matches("class=whisker").count(), 1);
         assert!(svg.contains("class=reference"));
         assert_eq!(chart(&[], "x"), "");

@@ -511,3 +511,76 @@ async fn adapters_without_a_shared_scenario_say_what_each_has() {
         "{page}"
     );
 }
+
+#[test]
+fn an_adapter_that_stops_reporting_a_suite_raises_a_stoppage() {
+    use tessera_dashboard::store::stoppage::stoppages;
+    let store = common::sqlite();
+    let h = StepHistory::h200(10, 99, "native", 1.0);
+    let mut c = store.pool.get().unwrap();
+    for run in h.runs(&common::template()) {
+        ingest_and_detect(&mut *c, &run, &Params::default()).unwrap();
+    }
+    // Night 9's commit is at day 9 00:00: a night later is within the nightly gap...
+    let at = |day: u64| tessera_dashboard::synth::time_after(day * 1440 + 600);
+    assert!(stoppages(&mut *c, &at(10)).unwrap().is_empty());
+    // ...four nights later is not.
+    let s = stoppages(&mut *c, &at(13)).unwrap();
+    assert_eq!(s.len(), 1, "{s:?}");
+    assert_eq!(
+        s[0].message,
+        "NVIDIA H200 (replay): no fx run for 4 nights (usually every night)"
+    );
+    assert_eq!((s[0].nights, s[0].usual_gap), (4, 1));
+    assert_eq!(s[0].last_run, "h200-0009");
+    // A year of silence is a retired adapter, not a stoppage.
+    assert!(stoppages(&mut *c, &at(300)).unwrap().is_empty());
+
+    // Against today's clock: the same history moved to end 4 nights ago, on the page and in
+    // the feed.
+    let recent = common::sqlite();
+    let now = chrono::Utc::now();
+    let day = |n: usize| {
+        (now - chrono::Duration::days(13 - n as i64))
+            .to_rfc3339_opts(chrono::SecondsFormat::Secs, true)
+    };
+    let mut c = recent.pool.get().unwrap();
+    for (n, mut run) in h.runs(&common::template()).into_iter().enumerate() {
+        run.run.commit_time = Some(day(n));
+        run.run.started_at = day(n);
+        run.run.finished_at = Some(day(n));
+        ingest_and_detect(&mut *c, &run, &Params::default()).unwrap();
+    }
+    let app = app(AppState::new(recent.pool.clone(), None));
+    block_on(async {
+        let page = get(&app, "/regressions").await;
+        assert!(
+            page.contains("<h2 class=worse>Data stopped</h2>")
+                && page
+                    .contains("NVIDIA H200 (replay): no fx run for 4 nights (usually every night)"),
+            "{page}"
+        );
+        let feed = get(&app, "/regressions/feed.atom").await;
+        let doc = roxmltree::Document::parse(&feed).unwrap();
+        let entry = doc
+            .descendants()
+            .find(|n| n.has_tag_name("category") && n.attribute("term") == Some("data-stoppage"))
+            .and_then(|n| n.parent())
+            .unwrap();
+        let text = |tag: &str| {
+            entry
+                .children()
+                .find(|n| n.has_tag_name(tag))
+                .unwrap()
+                .text()
+                .unwrap()
+                .to_string()
+        };
+        assert_eq!(
+            text("title"),
+            "NVIDIA H200 (replay): no fx run for 4 nights (usually every night)"
+        );
+        // The newest run, plus the usual gap and one night.
+        assert_eq!(text("updated"), day(11));
+    });
+}

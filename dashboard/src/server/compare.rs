@@ -130,11 +130,13 @@ async fn load(state: &AppState, q: CompareQuery) -> Result<Comparison, AppError>
                         };
                         let speedup_a = speedup(&s.results, v, DEFAULT_BASELINE);
                         let speedup_b = speedup(&t.results, w, DEFAULT_BASELINE);
-                        let tested = cmp
+                        let time = cmp
                             .variants()
                             .find(|(x, y)| x.scenario == s.scenario && y.variant == v.variant)
-                            .map(|(_, y)| ratio_of(&y.time));
-                        let (ratio, interval) = match (tested, speedup_a, speedup_b) {
+                            .map(|(_, y)| &y.time);
+                        let (ratio, interval) = match (time.map(ratio_of), speedup_a, speedup_b) {
+                            // The baseline's own speed-up is 1 on both: not a ratio to count.
+                            _ if matches!(time, Some(Time::Baseline)) => (None, None),
                             (Some((Some(r), i)), _, _) if !cmp.same_adapter => (Some(r), i),
                             (_, Some(x), Some(y)) if x > 0.0 => (Some(y / x), None),
                             _ => (None, None),
@@ -321,7 +323,7 @@ pub fn render(c: &Comparison) -> String {
     ));
     b.push_str("</div>");
     b.push_str("<p class=muted>Speed-up: the baseline's median GPU time over the variant's, in its own run. Ratio B / A: the speed-up on b over that on a; above 1 the technique saves more on b. Its interval is the 99% interval of the change of each variant's per-frame cost relative to its baseline (the test of <code>tessera compare</code>).</p>");
-    b.push_str("<div class=scroll><table id=compare><tr><th>scenario</th><th>variant</th><th class=n>speed-up a (×)</th><th class=n>speed-up b (×)</th><th class=n>ratio B / A</th><th class=n>99% interval</th><th class=n>GPU a (ms)</th><th class=n>GPU b (ms)</th></tr>");
+    b.push_str("<div class=scroll><table id=compare><tr><th>scenario</th><th>variant</th><th class=n>speed-up a (×)</th><th class=n>speed-up b (×)</th><th class=n>ratio B / A</th><th class=n>99% interval</th><th class=\"n wide\">GPU a (ms)</th><th class=\"n wide\">GPU b (ms)</th></tr>");
     for r in &c.rows {
         let ratio = r.ratio.map_or("–".into(), |x| format!("{x:.3}"));
         let interval = r
@@ -329,7 +331,7 @@ pub fn render(c: &Comparison) -> String {
             .map_or("–".into(), |[lo, hi]| format!("{lo:.3}–{hi:.3}"));
         let _ = write!(
             b,
-            "<tr><td>{}</td><td>{}</td><td class=n>{}</td><td class=n>{}</td><td class=n>{ratio}</td><td class=n>{interval}</td><td class=n>{}</td><td class=n>{}</td></tr>",
+            "<tr><td>{}</td><td>{}</td><td class=n>{}</td><td class=n>{}</td><td class=n>{ratio}</td><td class=n>{interval}</td><td class=\"n wide\">{}</td><td class=\"n wide\">{}</td></tr>",
             name_cell(&r.scenario),
             name_cell(&r.variant),
             if r.status_a == "ok" { speed(r.speedup_a) } else { esc(&r.status_a) },

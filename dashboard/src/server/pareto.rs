@@ -31,9 +31,25 @@ pub struct ParetoQuery {
 #[derive(Debug, Serialize, Clone, PartialEq)]
 pub struct ParetoPoint {
     pub variant: String,
+    /// The variant's technique: points are coloured by it.
+    pub technique: String,
     pub gpu_ms: f64,
     pub value: f64,
+    /// The baseline's median GPU time over this variant's (`None` for the baseline itself).
+    pub speedup: Option<f64>,
     pub on_front: bool,
+}
+
+/// Whether `name` is an error measure: an image metric of the measure table (PSNR, SSIM, FLIP,
+/// ColorVideoVDP, ...), not a technique's own check (`shading-rate`, `model-shades`) or a count.
+pub fn is_error_measure(name: &str) -> bool {
+    tessera_results::measure::Measure::from_name(name)
+        .is_some_and(|m| m.info().source == tessera_results::measure::Source::Metric)
+}
+
+/// The colour of technique `t` among `all` (in first-seen order).
+fn technique_colour(all: &[String], t: &str) -> &'static str {
+    crate::svg::colour(all.iter().position(|x| x == t).unwrap_or(0))
 }
 
 #[derive(Debug, Serialize)]
@@ -52,7 +68,8 @@ pub struct ParetoView {
     pub metrics: Vec<String>,
 }
 
-/// Metric names of ok, timed variants with a finite value, in first-seen order.
+/// Error-measure names ([`is_error_measure`]) of ok, timed variants with a finite value, in
+/// first-seen order.
 pub fn metrics_present(s: &ScenarioResult) -> Vec<String> {
     let mut out: Vec<String> = Vec::new();
     for v in s
@@ -60,7 +77,11 @@ pub fn metrics_present(s: &ScenarioResult) -> Vec<String> {
         .iter()
         .filter(|v| v.status == Status::Ok && v.gpu_frame_ms.is_some())
     {
-        for m in v.metrics.iter().filter(|m| m.value.is_finite()) {
+        for m in v
+            .metrics
+            .iter()
+            .filter(|m| m.value.is_finite() && is_error_measure(&m.name))
+        {
             if !out.contains(&m.name) {
                 out.push(m.name.clone());
             }
@@ -87,6 +108,12 @@ pub fn points(s: &ScenarioResult, metric: &str) -> (Vec<ParetoPoint>, bool) {
         if m.value.is_finite() {
             pts.push(ParetoPoint {
                 variant: v.variant.clone(),
+                technique: v.technique.clone(),
+                speedup: tessera_results::measure::speedup(
+                    &s.results,
+                    v,
+                    tessera_results::measure::DEFAULT_BASELINE,
+                ),
                 gpu_ms: g.median,
                 value: m.value,
                 on_front: false,
@@ -221,6 +248,12 @@ pub fn render(v: &ParetoView) -> String {
         esc(&v.metric),
         if v.higher_is_better { "higher" } else { "lower" }
     );
+    let mut techniques: Vec<String> = Vec::new();
+    for p in v.points.iter().chain(&v.base_points) {
+        if !techniques.contains(&p.technique) {
+            techniques.push(p.technique.clone());
+        }
+    }
     // Row numbers: the newer run's points in table order; a base-only variant gets its own.
     let mut order: Vec<&str> = v.points.iter().map(|p| p.variant.as_str()).collect();
     for p in &v.base_points {
@@ -261,6 +294,7 @@ pub fn render(v: &ParetoView) -> String {
                 num: num_of(&p.variant),
                 label: p.variant.clone(),
                 front: p.on_front,
+                colour: technique_colour(&techniques, &p.technique).to_string(),
             })
             .collect(),
     };
@@ -274,22 +308,44 @@ pub fn render(v: &ParetoView) -> String {
     } else {
         b.push_str(&chart("pareto-chart", &script_json(&spec), &fallback));
     }
-    b.push_str("<table id=pareto><tr><th class=n>#</th><th>variant</th><th class=n>GPU ms</th><th class=n>value</th><th>front</th><th class=n>before: GPU ms</th><th class=n>value</th></tr>");
+    // The legend of the colours: one per technique.
+    b.push_str("<ul class=\"legend techniques\">");
+    for t in &techniques {
+        let _ = write!(
+            b,
+            "<li style=\"display:inline-block;margin-right:12px\"><span class=swatch style=\"background:{}\"></span>{}</li>",
+            technique_colour(&techniques, t),
+            esc(t)
+        );
+    }
+    b.push_str("</ul>");
+    let unit = tessera_results::measure::Measure::from_name(&v.metric)
+        .map(|m| m.unit())
+        .filter(|u| !u.is_empty())
+        .map_or(String::new(), |u| format!(" ({u})"));
+    let _ = write!(
+        b,
+        "<div class=scroll><table id=pareto><tr><th class=n>#</th><th>variant</th><th class=n>GPU (ms)</th><th class=n>speed-up (×)</th><th class=n>{m}{unit}</th><th>front</th><th class=n>before: GPU (ms)</th><th class=n>before: {m}{unit}</th></tr>",
+        m = esc(&v.metric)
+    );
     for p in &v.points {
         let old = v.base_points.iter().find(|q| q.variant == p.variant);
         let _ = write!(
             b,
-            "<tr><td class=n>{}</td><td>{}</td><td class=n>{}</td><td class=n>{}</td><td>{}</td><td class=n>{}</td><td class=n>{}</td></tr>",
+            "<tr><td class=n>{}</td><td><span class=swatch style=\"background:{}\" title=\"{}\"></span>{}</td><td class=n>{}</td><td class=n>{}</td><td class=n>{}</td><td>{}</td><td class=n>{}</td><td class=n>{}</td></tr>",
             num_of(&p.variant),
-            esc(&p.variant),
+            technique_colour(&techniques, &p.technique),
+            esc(&p.technique),
+            crate::html::name(&p.variant),
             num(p.gpu_ms),
+            p.speedup.map_or("–".into(), |x| format!("{x:.2}")),
             num(p.value),
             if p.on_front { "on front" } else { "dominated" },
             old.map_or("–".into(), |q| num(q.gpu_ms)),
             old.map_or("–".into(), |q| num(q.value))
         );
     }
-    b.push_str("</table>");
+    b.push_str("</table></div>");
     b
 }
 

@@ -14,6 +14,7 @@ pub mod ingest;
 pub mod noise;
 pub mod outbox;
 pub mod read;
+pub mod stoppage;
 pub mod tokens;
 pub mod triage;
 

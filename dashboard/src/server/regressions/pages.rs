@@ -348,11 +348,28 @@ pub async fn page(
     Query(q): Query<GroupsQuery>,
 ) -> Result<Html<String>, AppError> {
     let (groups, facets) = load_groups(&state, &q).await?;
-    Ok(Html(layout(
-        "Regressions",
-        "regressions",
-        &render(&groups, &facets, &q),
-    )))
+    let stopped = state
+        .db(|c| Ok(crate::store::stoppage::stoppages(c, &crate::now_rfc3339())?))
+        .await?;
+    let mut body = render(&groups, &facets, &q);
+    // Data stoppages first: a silent adapter hides every change it would have shown.
+    if !stopped.is_empty() {
+        let mut s = String::from("<div id=stoppages><h2 class=worse>Data stopped</h2><ul>");
+        for x in &stopped {
+            let _ = write!(
+                s,
+                "<li class=stoppage>{} <span class=muted>(last run <a href=\"/runs/{}\">{}</a> at {})</span></li>",
+                esc(&x.message),
+                enc(&x.last_run),
+                esc(&x.last_run),
+                esc(&x.last_at)
+            );
+        }
+        s.push_str("</ul></div>");
+        let at = body.find("<p id=count>").unwrap_or(0);
+        body.insert_str(at, &s);
+    }
+    Ok(Html(layout("Regressions", "regressions", &body)))
 }
 
 /// Most series charted on a group's page; the rest are listed.
