@@ -584,3 +584,88 @@ fn an_adapter_that_stops_reporting_a_suite_raises_a_stoppage() {
         assert_eq!(text("updated"), day(11));
     });
 }
+
+#[test]
+fn a_wrong_token_is_called_unknown_not_missing() {
+    let store = common::sqlite();
+    let app = app(AppState::new(store.pool.clone(), Some("right".into())));
+    block_on(async {
+        let send = |auth: Option<&'static str>| {
+            let mut req = Request::delete("/api/runs/nothing");
+            if let Some(a) = auth {
+                req = req.header("Authorization", a);
+            }
+            app.clone().oneshot(req.body(Body::empty()).unwrap())
+        };
+        let body = |res: axum::response::Response| async move {
+            let status = res.status();
+            let b = res.into_body().collect().await.unwrap().to_bytes();
+            (status, String::from_utf8_lossy(&b).into_owned())
+        };
+        let (status, missing) = body(send(None).await.unwrap()).await;
+        assert_eq!(status, StatusCode::UNAUTHORIZED);
+        assert!(missing.contains("needs the header"), "{missing}");
+        let (status, wrong) = body(send(Some("Bearer wrong")).await.unwrap()).await;
+        assert_eq!(status, StatusCode::UNAUTHORIZED);
+        assert!(
+            wrong.contains("is not a known write token") && !wrong.contains("needs the header"),
+            "{wrong}"
+        );
+    });
+}
+
+#[test]
+fn error_against_time_lists_only_error_measures_and_shows_two_beside_each_other() {
+    let store = common::sqlite();
+    let viewer =
+        std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/viewer-runs");
+    tessera_dashboard::import::import(&store.pool, &viewer, &Params::default()).unwrap();
+    let app = app(AppState::new(store.pool.clone(), None));
+    block_on(async {
+        let v: serde_json::Value =
+            serde_json::from_str(&get(&app, "/api/pareto?scenario=adaptive").await).unwrap();
+        let metrics: Vec<&str> = v["metrics"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|m| m.as_str().unwrap())
+            .collect();
+        assert!(!metrics.is_empty());
+        for m in &metrics {
+            assert!(
+                tessera_dashboard::server::pareto::is_error_measure(m),
+                "{m} in {metrics:?}"
+            );
+        }
+        // The raw records do hold technique checks the menu leaves out.
+        let run: serde_json::Value = serde_json::from_str(
+            &get(&app, &format!("/api/runs/{}", v["run"].as_str().unwrap())).await,
+        )
+        .unwrap();
+        let raw = run.to_string();
+        assert!(
+            raw.contains("\"shading-rate") || raw.contains("\"model-"),
+            "{raw}"
+        );
+        let v: serde_json::Value =
+            serde_json::from_str(&get(&app, "/api/pareto?scenario=basic&metric=flip").await)
+                .unwrap();
+        let second = v["metric2"].as_str().unwrap();
+        assert_ne!(second, "flip");
+        assert_eq!(
+            v["points2"].as_array().unwrap().len(),
+            v["points"].as_array().unwrap().len()
+        );
+        let page = get(&app, "/pareto?scenario=basic&metric=flip").await;
+        assert!(
+            page.contains("id=pareto-second")
+                && page.contains("<th class=n>speed-up (×)</th>")
+                && page.contains("<ul class=\"legend techniques\">")
+                && page.contains("></span>checkerboard</li>")
+                && page.contains(&format!("<th>front ({second})</th>")),
+            "{page}"
+        );
+        let one = get(&app, "/pareto?scenario=basic&metric=flip&metric2=none").await;
+        assert!(!one.contains("id=pareto-second"));
+    });
+}

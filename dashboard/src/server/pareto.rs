@@ -24,6 +24,9 @@ pub struct ParetoQuery {
     pub adapter: Option<i64>,
     /// `flip` (default), `psnr` or any stored metric.
     pub metric: Option<String>,
+    /// A second error measure shown beside the first (`none` for one chart); by default the
+    /// first other error measure the scenario has: a front can change with the measure.
+    pub metric2: Option<String>,
     pub run: Option<String>,
     pub base: Option<String>,
 }
@@ -66,6 +69,10 @@ pub struct ParetoView {
     pub base_points: Vec<ParetoPoint>,
     /// Metrics of the run's scenario with a finite value for some timed variant.
     pub metrics: Vec<String>,
+    /// The second measure and its points (the newer run's), when shown.
+    pub metric2: Option<String>,
+    pub higher_is_better2: bool,
+    pub points2: Vec<ParetoPoint>,
 }
 
 /// Error-measure names ([`is_error_measure`]) of ok, timed variants with a finite value, in
@@ -151,6 +158,9 @@ async fn load(state: &AppState, q: ParetoQuery) -> Result<ParetoView, AppError> 
                 points: vec![],
                 base_points: vec![],
                 metrics: vec![],
+                metric2: None,
+                higher_is_better2: false,
+                points2: vec![],
             };
             let (Some(scenario), Some(adapter)) = (scenario, adapter) else {
                 return Ok(view);
@@ -176,6 +186,17 @@ async fn load(state: &AppState, q: ParetoQuery) -> Result<ParetoView, AppError> 
                 let (p, hib) = points(&record, &metric);
                 view.points = p;
                 view.higher_is_better = hib;
+                let second = match q.metric2.as_deref().filter(|m| !m.is_empty()) {
+                    Some("none") => None,
+                    Some(m) => Some(m.to_string()),
+                    None => view.metrics.iter().find(|m| **m != metric).cloned(),
+                };
+                if let Some(m2) = second.filter(|m| *m != metric) {
+                    let (p2, hib2) = points(&record, &m2);
+                    view.points2 = p2;
+                    view.higher_is_better2 = hib2;
+                    view.metric2 = Some(m2);
+                }
             }
             if let Some(base) = &base {
                 view.base_points = points(&read::scenario_result(c, base, &scenario)?, &metric).0;
@@ -227,6 +248,15 @@ pub fn render(v: &ParetoView) -> String {
     }
     for m in &names {
         let sel = if *m == v.metric { " selected" } else { "" };
+        let _ = write!(b, "<option{sel}>{}</option>", esc(m));
+    }
+    b.push_str("</select> beside it <select name=metric2><option value=none>none</option>");
+    for m in &v.metrics {
+        let sel = if Some(m) == v.metric2.as_ref() {
+            " selected"
+        } else {
+            ""
+        };
         let _ = write!(b, "<option{sel}>{}</option>", esc(m));
     }
     b.push_str("</select> <button>show</button></form>");
@@ -303,10 +333,40 @@ pub fn render(v: &ParetoView) -> String {
         "GPU time, median (ms)",
         &crate::html::axis_label(&v.metric),
     );
-    if spec.points.is_empty() {
-        b.push_str(&fallback);
+    let first = if spec.points.is_empty() {
+        fallback
     } else {
-        b.push_str(&chart("pareto-chart", &script_json(&spec), &fallback));
+        chart("pareto-chart", &script_json(&spec), &fallback)
+    };
+    match &v.metric2 {
+        Some(m2) => {
+            // The second measure beside the first, its own front: a technique on one front may
+            // be dominated on the other.
+            let pts2: Vec<ScatterPoint> = v
+                .points2
+                .iter()
+                .map(|p| ScatterPoint {
+                    label: format!("#{} {}", num_of(&p.variant), p.variant),
+                    x: p.gpu_ms,
+                    y: p.value,
+                    group: 0,
+                    on_front: p.on_front,
+                    tag: num_of(&p.variant).to_string(),
+                })
+                .collect();
+            let _ = write!(
+                b,
+                "<div class=pareto-pair style=\"display:flex;flex-wrap:wrap;gap:12px\"><div style=\"flex:1 1 480px;min-width:0\">{first}</div><div id=pareto-second style=\"flex:1 1 480px;min-width:0\"><p class=muted>{} ({} is better) against the same GPU time</p>{}</div></div>",
+                esc(m2),
+                if v.higher_is_better2 { "higher" } else { "lower" },
+                scatter(
+                    &pts2,
+                    "GPU time, median (ms)",
+                    &crate::html::axis_label(m2)
+                )
+            );
+        }
+        None => b.push_str(&first),
     }
     // The legend of the colours: one per technique.
     b.push_str("<ul class=\"legend techniques\">");
@@ -325,14 +385,23 @@ pub fn render(v: &ParetoView) -> String {
         .map_or(String::new(), |u| format!(" ({u})"));
     let _ = write!(
         b,
-        "<div class=scroll><table id=pareto><tr><th class=n>#</th><th>variant</th><th class=n>GPU (ms)</th><th class=n>speed-up (×)</th><th class=n>{m}{unit}</th><th>front</th><th class=n>before: GPU (ms)</th><th class=n>before: {m}{unit}</th></tr>",
-        m = esc(&v.metric)
+        "<div class=scroll><table id=pareto><tr><th class=n>#</th><th>variant</th><th class=n>GPU (ms)</th><th class=n>speed-up (×)</th><th class=n>{m}{unit}</th><th>front</th>{second}<th class=n>before: GPU (ms)</th><th class=n>before: {m}{unit}</th></tr>",
+        m = esc(&v.metric),
+        second = v.metric2.as_ref().map_or(String::new(), |m2| format!(
+            "<th class=n>{}{}</th><th>front ({})</th>",
+            esc(m2),
+            tessera_results::measure::Measure::from_name(m2)
+                .map(|m| m.unit())
+                .filter(|u| !u.is_empty())
+                .map_or(String::new(), |u| format!(" ({u})")),
+            esc(m2)
+        ))
     );
     for p in &v.points {
         let old = v.base_points.iter().find(|q| q.variant == p.variant);
         let _ = write!(
             b,
-            "<tr><td class=n>{}</td><td><span class=swatch style=\"background:{}\" title=\"{}\"></span>{}</td><td class=n>{}</td><td class=n>{}</td><td class=n>{}</td><td>{}</td><td class=n>{}</td><td class=n>{}</td></tr>",
+            "<tr><td class=n>{}</td><td><span class=swatch style=\"background:{}\" title=\"{}\"></span>{}</td><td class=n>{}</td><td class=n>{}</td><td class=n>{}</td><td>{}</td>{}<td class=n>{}</td><td class=n>{}</td></tr>",
             num_of(&p.variant),
             technique_colour(&techniques, &p.technique),
             esc(&p.technique),
@@ -341,6 +410,17 @@ pub fn render(v: &ParetoView) -> String {
             p.speedup.map_or("–".into(), |x| format!("{x:.2}")),
             num(p.value),
             if p.on_front { "on front" } else { "dominated" },
+            match &v.metric2 {
+                Some(_) => {
+                    let q = v.points2.iter().find(|q| q.variant == p.variant);
+                    format!(
+                        "<td class=n>{}</td><td>{}</td>",
+                        q.map_or("–".into(), |q| num(q.value)),
+                        q.map_or("–", |q| if q.on_front { "on front" } else { "dominated" })
+                    )
+                }
+                None => String::new(),
+            },
             old.map_or("–".into(), |q| num(q.gpu_ms)),
             old.map_or("–".into(), |q| num(q.value))
         );
