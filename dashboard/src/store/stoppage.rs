@@ -59,8 +59,10 @@ pub fn stoppages(conn: &mut dyn Connection, now: &str) -> Result<Vec<Stoppage>, 
          ORDER BY r.adapter_id, r.suite, COALESCE(r.commit_time, r.started_at), r.id",
         &[],
     )?;
+    // (adapter id, suite), adapter name, runs as (run id, time, seconds since the epoch).
     type Key = (i64, Option<String>);
-    let mut groups: Vec<(Key, String, Vec<(String, String, i64)>)> = Vec::new();
+    type Runs = Vec<(String, String, i64)>;
+    let mut groups: Vec<(Key, String, Runs)> = Vec::new();
     for r in &rows {
         let key = (r.i64(0)?, r.opt_string(2)?);
         let at = r.string(4)?;
