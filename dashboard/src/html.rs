@@ -153,7 +153,7 @@ kbd{border:1px solid #aaa;border-radius:3px;padding:0 4px;font-size:12px}
 .run-frames summary{cursor:pointer;color:#444;margin:6px 0}.run-frame-charts{display:flex;flex-wrap:wrap;gap:12px;margin:4px 0}.run-frame-chart{margin:0;max-width:100%;width:420px}
 .run-frame-chart figcaption{font-size:12px;color:#444}ul.legend{list-style:none;padding:0;margin:2px 0;font-size:12px}ul.legend li{overflow-wrap:anywhere}.swatch{display:inline-block;width:10px;height:10px;margin-right:4px}
 main table{display:block;overflow-x:auto;max-width:100%}td{overflow-wrap:break-word}.name{overflow-wrap:normal;word-break:normal}.name>span{white-space:nowrap}td.links{white-space:nowrap;overflow-wrap:normal}
-@media (max-width:700px){.wide{display:none}#runs tr{display:block;border-bottom:1px solid #ddd;padding:4px 0}#runs tr:first-child{display:none}#runs td{display:inline-block;border:0;padding:1px 8px 1px 0}nav{padding:6px 8px}nav a{display:inline-block;margin:2px 10px 2px 0}main{padding:8px}
+@media (max-width:700px){.wide{display:none}#runs tr{display:block;border-bottom:1px solid #ddd;padding:4px 0}#runs tr:first-child{display:none}#runs td{display:inline-block;border:0;padding:1px 8px 1px 0}#runs td.wide{display:none}nav{padding:6px 8px}nav a{display:inline-block;margin:2px 10px 2px 0}main{padding:8px}
 h1{font-size:17px}td,th{padding:3px 4px}select,input{max-width:100%}.pane{max-height:70vh}
 .chart{max-width:100%}form#filters label{display:inline-block;margin:2px 8px 2px 0}form.triage input{max-width:100%}}";
 
@@ -254,7 +254,7 @@ mod tests {
         );
         assert_eq!(
             short_id("nightly-20261122T030520Z-34ab2b4-retry"),
-            "nightly-20…4ab2b4-retry"
+            "nightly-20…b2b4-retry"
         );
     }
 

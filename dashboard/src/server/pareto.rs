@@ -189,7 +189,12 @@ async fn load(state: &AppState, q: ParetoQuery) -> Result<ParetoView, AppError> 
                 let second = match q.metric2.as_deref().filter(|m| !m.is_empty()) {
                     Some("none") => None,
                     Some(m) => Some(m.to_string()),
-                    None => view.metrics.iter().find(|m| **m != metric).cloned(),
+                    // A perceptual or structural measure beside a per-pixel one, where present.
+                    None => ["cvvdp", "psnr", "ssim", "flip"]
+                        .iter()
+                        .map(|m| m.to_string())
+                        .find(|m| *m != metric && view.metrics.contains(m))
+                        .or_else(|| view.metrics.iter().find(|m| **m != metric).cloned()),
                 };
                 if let Some(m2) = second.filter(|m| *m != metric) {
                     let (p2, hib2) = points(&record, &m2);

@@ -57,7 +57,7 @@ const STYLE: &str = "<style>
 .meta{margin:2px 0 6px;color:#444}.meta code{background:#e8ebf0;padding:0 3px}
 .chg{display:inline-block;white-space:nowrap;min-width:84px;padding:0 6px;border-radius:3px;font-weight:600;font-variant-numeric:tabular-nums;text-align:right}
 .chg.worse{background:#fde8e6;color:#a1140f}.chg.better{background:#e2f3e7;color:#0d6b2c}
-.chg.via{background:#eceff3;color:#444}.count.worse{color:#a1140f;font-weight:600}.count.better{color:#0d6b2c;font-weight:600}
+.chg.via{background:#eceff3;color:#444;white-space:normal}.count.worse{color:#a1140f;font-weight:600}.count.better{color:#0d6b2c;font-weight:600}
 .badge{display:inline-block;padding:0 7px;border-radius:9px;font-size:12px;border:1px solid #aaa;background:#fff}
 .st-new{background:#fff3d1;border-color:#d9a521}.st-acknowledged{background:#e3ebfb;border-color:#6f93dd}
 .st-fixed{background:#e2f3e7;border-color:#5aa772}.st-invalid,.st-ignored{background:#eee;color:#555}
