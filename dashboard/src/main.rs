@@ -490,6 +490,23 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             db,
             verbose,
         } => {
+            // The default template is the repository's fixture wherever the command runs from,
+            // and it is read before a store is made: a bad path leaves no empty store behind.
+            let template = if template.is_relative() && !template.exists() {
+                let fixture = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+                    .join("..")
+                    .join(&template);
+                if fixture.exists() {
+                    fixture
+                } else {
+                    template
+                }
+            } else {
+                template
+            };
+            let template = RunBundle::read_folder(&template).map_err(|e| {
+                anyhow::anyhow!("reading the template run {}: {e}", template.display())
+            })?;
             let dir = tempfile_dir()?;
             let url = db.unwrap_or_else(|| dir.join("replay.sqlite").display().to_string());
             let pool = db::open(&url)?;
@@ -500,7 +517,6 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                     anyhow::bail!("{url} already holds {runs} runs; replay needs an empty store");
                 }
             }
-            let template = RunBundle::read_folder(&template)?;
             let config = replay::Config {
                 nights,
                 scenarios,
