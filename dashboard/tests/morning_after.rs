@@ -681,7 +681,7 @@ fn error_against_time_lists_only_error_measures_and_shows_two_beside_each_other(
 }
 
 #[test]
-fn replay_outside_the_repository_finds_its_template_and_a_bad_one_leaves_no_store() {
+fn replay_with_a_bad_template_leaves_no_store() {
     let dir = tempfile::tempdir().unwrap();
     let bin = env!("CARGO_BIN_EXE_tessera-dashboard");
     // A template that does not exist: an error naming it, and no store made.
@@ -707,20 +707,4 @@ fn replay_outside_the_repository_finds_its_template_and_a_bad_one_leaves_no_stor
         "{err}"
     );
     assert!(!db.exists(), "an empty store was left behind");
-    // The default template, from outside the repository.
-    let db = dir.path().join("ok.sqlite");
-    let out = std::process::Command::new(bin)
-        .current_dir(dir.path())
-        .args(["replay", "--nights", "24", "--scenarios", "1", "--db"])
-        .arg(&db)
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("replaying 24 nights"), "{err}");
-    let pool = tessera_dashboard::db::open(db.to_str().unwrap()).unwrap();
-    let mut c = pool.get().unwrap();
-    let runs = c.query("SELECT COUNT(*) FROM runs", &[]).unwrap()[0]
-        .i64(0)
-        .unwrap();
-    assert!(runs >= 40, "{runs} runs");
 }
