@@ -198,12 +198,30 @@
           draw: [u => {
             const ctx = u.ctx;
             ctx.save();
-            ctx.font = (11 * devicePixelRatio) + 'px sans-serif';
-            ctx.fillStyle = '#222';
+            const d = devicePixelRatio;
+            ctx.font = (11 * d) + 'px sans-serif';
+            // Each point of the newer run in its technique's colour; its number placed where it
+            // overlaps no number already placed (right-up, right-down, left-up, left-down, further out).
+            const placed = [];
+            const overlaps = (r) => placed.some(q => r.x < q.x + q.w && q.x < r.x + r.w && r.y < q.y + q.h && q.y < r.y + r.h);
             spec.points.filter(p => p.group === 0).forEach(p => {
               const px = u.valToPos(p.x, 'x', true), py = u.valToPos(p.y, 'y', true);
               if (px < u.bbox.left || px > u.bbox.left + u.bbox.width || py < u.bbox.top || py > u.bbox.top + u.bbox.height) return;
-              ctx.fillText(String(p.num), px + 6 * devicePixelRatio, py - 5 * devicePixelRatio);
+              ctx.fillStyle = p.colour || '#4e79a7';
+              ctx.beginPath(); ctx.arc(px, py, 4.5 * d, 0, 2 * Math.PI); ctx.fill();
+              const text = String(p.num), w = ctx.measureText(text).width, h = 11 * d;
+              let spot = null;
+              for (const k of [1, 2, 3]) {
+                for (const [dx, dy] of [[6, -5], [6, 12], [-6 - w / d, -5], [-6 - w / d, 12], [0, -12], [0, 20]]) {
+                  const r = { x: px + dx * d * k, y: py + dy * d * k - h, w, h };
+                  if (!overlaps(r)) { spot = r; break; }
+                }
+                if (spot) break;
+              }
+              if (!spot) spot = { x: px + 6 * d, y: py - 5 * d - h, w, h };
+              placed.push(spot);
+              ctx.fillStyle = '#222';
+              ctx.fillText(text, spot.x, spot.y + h);
             });
             ctx.restore();
           }],

@@ -119,6 +119,8 @@ pub struct ScatterPoint {
     pub num: usize,
     pub label: String,
     pub front: bool,
+    /// The point's colour (by technique on the error-against-time page).
+    pub colour: String,
 }
 
 #[derive(Clone, Debug, Serialize, PartialEq)]

@@ -121,13 +121,25 @@ pub fn commit(c: Option<&str>) -> String {
     )
 }
 
+/// A long id for a table cell: ids up to 24 characters as they are, longer ones as their first 10
+/// and last 10 characters around an ellipsis (the whole id goes in the cell's `title`).
+pub fn short_id(id: &str) -> String {
+    let n = id.chars().count();
+    if n <= 24 {
+        return id.to_string();
+    }
+    let head: String = id.chars().take(10).collect();
+    let tail: String = id.chars().skip(n - 10).collect();
+    format!("{head}…{tail}")
+}
+
 const STYLE: &str = "body{font:14px/1.4 system-ui,sans-serif;margin:0;color:#222}
 nav{background:#1d2733;padding:8px 16px}nav a{color:#dde;margin-right:18px;text-decoration:none}
 nav a.on{color:#fff;font-weight:bold}main{padding:12px 16px;max-width:1600px}h1{font-size:20px;overflow-wrap:anywhere}h2{font-size:16px;margin-top:24px}
 table{border-collapse:collapse;margin:8px 0}td,th{border-bottom:1px solid #ddd;padding:3px 8px;text-align:left;vertical-align:top}
-td.n,th.n{text-align:right;font-variant-numeric:tabular-nums}.ok{color:#17803d}.skipped{color:#8a6d00}.failed{color:#b3261e}
-.worse{color:#b3261e}.better{color:#17803d}.muted{color:#777}svg{background:#fff;border:1px solid #eee;max-width:100%;height:auto}
-form.inline{display:inline}.scroll{overflow-x:auto;max-width:100%}td.wrap{max-width:28em;overflow-wrap:anywhere;font-size:12px}
+td.n,th.n{text-align:right;font-variant-numeric:tabular-nums}td.n{white-space:nowrap;overflow-wrap:normal}.nw{white-space:nowrap}.ok{color:#17803d}.skipped{color:#8a6d00}.failed{color:#b3261e}
+.worse{color:#b3261e}.better{color:#17803d}.muted{color:#777}.neutral{color:#444;background:#eceff3;padding:0 4px;border-radius:3px}svg{background:#fff;border:1px solid #eee;max-width:100%;height:auto}
+form.inline{display:inline}.scroll{overflow-x:auto;max-width:100%}td.wrap{max-width:28em;overflow-wrap:break-word;font-size:12px}
 .chart{width:100%;max-width:1400px;margin:8px 0}.chart-controls{margin:4px 0;font-size:13px}.chart-hover{font-size:12px;color:#444;min-height:1.4em;font-variant-numeric:tabular-nums}
 .alert{background:#b3261e;color:#fff;border-radius:8px;padding:0 6px;font-size:12px}.pager{margin:8px 0}.pager a{margin-right:12px}
 .viewer .panes{display:flex;flex-wrap:wrap;gap:8px}.viewer figure{margin:0}.viewer figcaption{font-size:12px;color:#555}
@@ -140,8 +152,8 @@ kbd{border:1px solid #aaa;border-radius:3px;padding:0 4px;font-size:12px}
 .frame-charts{display:flex;flex-wrap:wrap;gap:8px;margin:8px 0}.frame-chart{margin:0}.frame-chart svg{border:1px solid #eee}
 .run-frames summary{cursor:pointer;color:#444;margin:6px 0}.run-frame-charts{display:flex;flex-wrap:wrap;gap:12px;margin:4px 0}.run-frame-chart{margin:0;max-width:100%;width:420px}
 .run-frame-chart figcaption{font-size:12px;color:#444}ul.legend{list-style:none;padding:0;margin:2px 0;font-size:12px}ul.legend li{overflow-wrap:anywhere}.swatch{display:inline-block;width:10px;height:10px;margin-right:4px}
-main table{display:block;overflow-x:auto;max-width:100%}td{overflow-wrap:anywhere}.name{overflow-wrap:normal;word-break:normal}.name>span{white-space:nowrap}td.links{white-space:nowrap;overflow-wrap:normal}
-@media (max-width:700px){nav{padding:6px 8px}nav a{display:inline-block;margin:2px 10px 2px 0}main{padding:8px}
+main table{display:block;overflow-x:auto;max-width:100%}td{overflow-wrap:break-word}.name{overflow-wrap:normal;word-break:normal}.name>span{white-space:nowrap}td.links{white-space:nowrap;overflow-wrap:normal}
+@media (max-width:700px){.wide{display:none}#runs tr{display:block;border-bottom:1px solid #ddd;padding:4px 0}#runs tr:first-child{display:none}#runs td{display:inline-block;border:0;padding:1px 8px 1px 0}#runs td.wide{display:none}nav{padding:6px 8px}nav a{display:inline-block;margin:2px 10px 2px 0}main{padding:8px}
 h1{font-size:17px}td,th{padding:3px 4px}select,input{max-width:100%}.pane{max-height:70vh}
 .chart{max-width:100%}form#filters label{display:inline-block;margin:2px 8px 2px 0}form.triage input{max-width:100%}}";
 
@@ -233,6 +245,18 @@ mod tests {
         assert_eq!(
             name("a[b=1,c<2]"),
             "<span class=name><span>a[</span><wbr><span>b=1,</span><wbr><span>c&lt;2]</span></span>"
+        );
+    }
+
+    #[test]
+    fn long_ids_are_shortened_around_an_ellipsis() {
+        assert_eq!(
+            short_id("20261122T030520Z-34ab2b4"),
+            "20261122T030520Z-34ab2b4"
+        );
+        assert_eq!(
+            short_id("nightly-20261122T030520Z-34ab2b4-retry"),
+            "nightly-20…b2b4-retry"
         );
     }
 

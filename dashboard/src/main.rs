@@ -258,6 +258,35 @@ enum Command {
         #[arg(long)]
         upload_scenarios: Option<usize>,
     },
+    /// Store a nightly history with one injected step, made from a real run, as uploads store it
+    /// (detection on each run): the morning-after case of the compare, run and regressions pages.
+    Steps {
+        /// The run folder to copy (default: the committed lavapipe fixture).
+        #[arg(long)]
+        template: Option<PathBuf>,
+        #[arg(long, default_value_t = 24)]
+        nights: usize,
+        /// First night with the step.
+        #[arg(long, default_value_t = 20)]
+        step_night: usize,
+        /// The variant that steps.
+        #[arg(long, default_value = "native")]
+        variant: String,
+        /// Its times are multiplied by this from the step's night on.
+        #[arg(long, default_value_t = 1.05)]
+        factor: f64,
+        /// Measured frames per result.
+        #[arg(long, default_value_t = 30)]
+        frames: usize,
+        /// `h200` (GPU, 0.1% nightly noise, recorded conditions) or `lavapipe` (CPU, 2%).
+        #[arg(long, default_value = "h200", value_parser = ["h200", "lavapipe"])]
+        profile: String,
+        /// From this night on the H200's graphics clock reads lower (and it is throttled).
+        #[arg(long)]
+        clock_from: Option<usize>,
+        #[arg(long, env = "TESSERA_DASHBOARD_DB", default_value = DEFAULT_DB)]
+        db: String,
+    },
 }
 
 #[derive(Subcommand)]
@@ -616,6 +645,47 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 );
             }
         }
+        Command::Steps {
+            template,
+            nights,
+            step_night,
+            variant,
+            factor,
+            frames,
+            profile,
+            clock_from,
+            db,
+        } => {
+            let gpu = profile == "h200";
+            let template = template.unwrap_or_else(|| {
+                PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+                    .join("tests/fixtures/runs/20261122T030520Z-34ab2b4")
+            });
+            let template = RunBundle::read_folder(&template).map_err(|e| {
+                anyhow::anyhow!("reading the template run {}: {e}", template.display())
+            })?;
+            let history = tessera_dashboard::steps::StepHistory {
+                name: profile.clone(),
+                nights,
+                step_night,
+                variant,
+                factor,
+                frames,
+                gpu,
+                clock_from,
+                seed: 38,
+            };
+            let pool = db::open(&db)?;
+            let mut conn = pool.get()?;
+            for run in history.runs(&template) {
+                regressions::ingest_and_detect(&mut *conn, &run, &Params::default())?;
+            }
+            println!(
+                "stored {nights} {profile} nights into {db}: {} x{factor} from night {step_night} ({})",
+                history.variant,
+                history.run_id(step_night)
+            );
+        }
         Command::Replay {
             template,
             nights,
@@ -624,6 +694,23 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             db,
             verbose,
         } => {
+            // The default template is the repository's fixture wherever the command runs from,
+            // and it is read before a store is made: a bad path leaves no empty store behind.
+            let template = if template.is_relative() && !template.exists() {
+                let fixture = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+                    .join("..")
+                    .join(&template);
+                if fixture.exists() {
+                    fixture
+                } else {
+                    template
+                }
+            } else {
+                template
+            };
+            let template = RunBundle::read_folder(&template).map_err(|e| {
+                anyhow::anyhow!("reading the template run {}: {e}", template.display())
+            })?;
             let dir = tempfile_dir()?;
             let url = db.unwrap_or_else(|| dir.join("replay.sqlite").display().to_string());
             let pool = db::open(&url)?;
@@ -634,7 +721,6 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                     anyhow::bail!("{url} already holds {runs} runs; replay needs an empty store");
                 }
             }
-            let template = RunBundle::read_folder(&template)?;
             let config = replay::Config {
                 nights,
                 scenarios,

@@ -9,12 +9,15 @@ use std::fmt::Write;
 
 use crate::html::{esc, num};
 
-const PALETTE: [&str; 10] = [
+/// Tableau 10, then 14 more hues and shades apart from them (Kelly's and Glasbey's lists), so a
+/// scene with 21 passes (the city) has 21 colours a reader can tell apart.
+const PALETTE: [&str; 24] = [
     "#4e79a7", "#f28e2b", "#59a14f", "#e15759", "#76b7b2", "#edc948", "#b07aa1", "#ff9da7",
-    "#9c755f", "#bab0ac",
+    "#9c755f", "#bab0ac", "#1b3a6b", "#a6d854", "#8c2d04", "#17becf", "#6a3d9a", "#fdbf6f",
+    "#2ca02c", "#d62728", "#000000", "#c7e9c0", "#7f7f00", "#e7298a", "#66c2a5", "#5c3566",
 ];
 
-/// A colour per index, repeating.
+/// A colour per index, distinct for the first 24, then repeating.
 pub fn colour(i: usize) -> &'static str {
     PALETTE[i % PALETTE.len()]
 }
@@ -416,6 +419,14 @@ mod tests {
             x - 6.0 * title.len() as f64 >= 0.0,
             "title at x = {x}: {svg}"
         );
+    }
+
+    #[test]
+    fn the_palette_stays_distinct_past_twenty_passes() {
+        let first: Vec<&str> = (0..24).map(colour).collect();
+        for (i, c) in first.iter().enumerate() {
+            assert!(!first[..i].contains(c), "colour {i} {c} repeats");
+        }
     }
 
     #[test]

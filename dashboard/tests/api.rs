@@ -456,6 +456,8 @@ fn regression_summary_text() {
         change_high: Some(0.119),
         is_regression: true,
         via_baseline: false,
+        moved_with: None,
+        moved_with_change: None,
         confidence: 0.9995,
         location_probability: Some(0.62),
         first_candidate: Some("a2".into()),

@@ -772,7 +772,14 @@ fn compare_command(a: &std::path::Path, b: &std::path::Path, threshold_pct: f64)
             return EXIT_INPUT;
         }
     };
-    let c = compare::compare(&a, &b, &compare::Options { threshold_pct });
+    let c = compare::compare(
+        &a,
+        &b,
+        &compare::Options {
+            threshold_pct,
+            ..Default::default()
+        },
+    );
     print!("{}", compare::markdown::render(&c));
     if c.regressed() {
         EXIT_GATE

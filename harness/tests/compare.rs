@@ -286,6 +286,7 @@ fn slower_variant_and_worse_psnr_are_regressions_on_one_adapter() {
         &b,
         &Options {
             threshold_pct: 20.0,
+            ..Default::default()
         },
     );
     let md = compare::markdown::render(&c);

@@ -207,7 +207,7 @@ fn four_frames_cannot_tell_even_a_1531_percent_slowdown() {
 
 The time test cannot reach p < 0.01 with so few measured frames, whatever the change: `basic` / `native` (4 vs 4), `basic` / `upscale` (4 vs 4). It takes 5 frames per side (`frames.measured`).
 
-**Verdict: too few frames to tell** (0 regressions, 0 improvements, 2 too few frames; time: Mann-Whitney U p < 0.01 and a Hodges-Lehmann shift of at least 5%; too few frames below 5 per side)
+**Verdict: inconclusive**: too few frames in 2 of 2 timed variants (5 per side needed) (0 regressions, 0 improvements, 2 too few frames; time: Mann-Whitney U p < 0.01 and a Hodges-Lehmann shift of at least 5%; too few frames below 5 per side)
 "
         )
     );
@@ -399,4 +399,38 @@ fn names_with_pipes_and_backticks_stay_inside_their_cells() {
         md.contains("| x\\|`y` (only in B) | - → 1.000 | - | not in both |"),
         "{md}"
     );
+}
+
+#[test]
+fn a_change_many_sigma_outside_its_series_noise_is_called_below_the_fixed_threshold() {
+    // 30 frames per side, +3%: significant, below the fixed 5%.
+    let a = vec![variant("native", &frames(30, 1.0, 0.0005), f64::INFINITY)];
+    let b = vec![variant("native", &frames(30, 1.03, 0.0005), f64::INFINITY)];
+    let (c, _) = run(a.clone(), b.clone(), &Options::default());
+    assert_eq!(c.count_time(TimeVerdict::BelowThreshold), 1);
+    assert_eq!(c.decision(), compare::Decision::NoRegression);
+    // The series' nightly noise is 0.1%: 5σ is 0.5%, floored at 1%; +3% is slower.
+    let mut opts = Options::default();
+    opts.noise.insert(
+        "basic".into(),
+        BTreeMap::from([("native".to_string(), 0.001)]),
+    );
+    assert_eq!(opts.threshold_for("basic", "native"), (1.0, Some(0.001)));
+    // A noisy series keeps the fixed threshold.
+    assert_eq!(opts.threshold_for("basic", "other"), (5.0, None));
+    let (c, md) = run(a, b, &opts);
+    assert_eq!(c.count_time(TimeVerdict::Slower), 1, "{md}");
+    assert_eq!(c.decision(), compare::Decision::Regressed);
+    let v = &c.scenarios[0].variants[0];
+    assert_eq!((v.threshold_pct, v.noise), (1.0, Some(0.001)));
+    assert!(
+        md.contains("(or 5σ of the series' nightly noise, at least 1%, where a history gives it)"),
+        "{md}"
+    );
+    let mut loud = Options::default();
+    loud.noise.insert(
+        "basic".into(),
+        BTreeMap::from([("native".to_string(), 0.02)]),
+    );
+    assert_eq!(loud.threshold_for("basic", "native"), (5.0, Some(0.02)));
 }

@@ -6,6 +6,7 @@
 use std::fmt::Write;
 
 use crate::store::groups::Group;
+use crate::store::stoppage::Stoppage;
 
 /// Escapes text for XML content and attribute values.
 pub fn xml(s: &str) -> String {
@@ -28,6 +29,28 @@ pub fn xml(s: &str) -> String {
 /// The feed of `groups` (already chosen and ordered); links absolute under `base`. `now` is
 /// the feed's `updated` when it has no entries.
 pub fn feed(groups: &[Group], base: &str, now: &str) -> String {
+    feed_with_stoppages(groups, &[], base, now)
+}
+
+/// When a stoppage began: its newest run's time plus its usual gap and one night.
+fn stopped_at(s: &Stoppage) -> String {
+    chrono::DateTime::parse_from_rfc3339(&s.last_at)
+        .map(|t| {
+            (t + chrono::Duration::days(s.usual_gap + 1))
+                .with_timezone(&chrono::Utc)
+                .to_rfc3339_opts(chrono::SecondsFormat::Secs, true)
+        })
+        .unwrap_or_else(|_| s.last_at.clone())
+}
+
+/// The feed of `groups` with an entry per data stoppage before them (its id names the adapter,
+/// the suite and the newest run, so a reader shows it once per silence).
+pub fn feed_with_stoppages(
+    groups: &[Group],
+    stopped: &[Stoppage],
+    base: &str,
+    now: &str,
+) -> String {
     let updated = groups
         .iter()
         .map(|g| g.detected_at.as_str())
@@ -43,6 +66,22 @@ pub fn feed(groups: &[Group], base: &str, now: &str) -> String {
         xml(&self_url),
         xml(&format!("{base}/regressions"))
     );
+    for x in stopped {
+        let url = format!("{base}/regressions#stoppages");
+        let id = format!(
+            "{base}/regressions/stoppages/{}/{}/{}",
+            x.adapter_id, x.suite, x.last_run
+        );
+        let _ = write!(
+            out,
+            "<entry>\n<id>{}</id>\n<title>{}</title>\n<updated>{}</updated>\n<link rel=\"alternate\" type=\"text/html\" href=\"{}\"/>\n<category term=\"data-stoppage\"/>\n<summary type=\"text\">{}</summary>\n</entry>\n",
+            xml(&id),
+            xml(&x.message),
+            xml(&stopped_at(x)),
+            xml(&url),
+            xml(&format!("last run {} at {}", x.last_run, x.last_at))
+        );
+    }
     for g in groups {
         let url = super::group_url(base, g.id);
         let summary = format!(

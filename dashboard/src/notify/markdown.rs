@@ -6,7 +6,7 @@ use std::fmt::Write;
 
 use crate::html::{commit, num, pct};
 use crate::store::alerts::Alert;
-use crate::store::groups::{title, Group};
+use crate::store::groups::{group_title, Group};
 
 /// Most series rows written; the rest are counted.
 pub const MAX_ROWS: usize = 50;
@@ -61,7 +61,7 @@ pub fn render(g: &Group, base: &str) -> String {
     let _ = writeln!(
         out,
         "### Regression group {}\n",
-        title(&commit(g.commit_after.as_deref()), &shown, true).replace('\n', " ")
+        group_title(&commit(g.commit_after.as_deref()), &shown, true).replace('\n', " ")
     );
     let _ = writeln!(
         out,

@@ -183,10 +183,15 @@ pub fn require_token(
         Scope::Write | Scope::Runner => AppError::Unauthorized,
         Scope::Read => AppError::ReadUnauthorized,
     };
-    let principal = given
-        .filter(|g| !g.is_empty())
-        .and_then(|g| identify(state, g))
-        .ok_or_else(unauthorized)?;
+    let given = given.filter(|g| !g.is_empty());
+    let principal = match given {
+        None => return Err(unauthorized()),
+        Some(g) => identify(state, g).ok_or(match scope {
+            // Sent, but unknown: not "the header is missing".
+            Scope::Write | Scope::Runner => AppError::UnknownToken,
+            Scope::Read => AppError::ReadUnauthorized,
+        })?,
+    };
     if !principal.scope.allows(scope) {
         return Err(AppError::Forbidden(format!(
             "token {:?} has scope {}; this request needs {}",

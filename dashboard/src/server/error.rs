@@ -33,6 +33,9 @@ pub enum AppError {
         "this request needs the header `Authorization: Bearer <token>` with a write token (`tessera-dashboard token add NAME --scope write`, or the server's --token)"
     )]
     Unauthorized,
+    /// A token was sent and is not a known token (it was not missing: say so).
+    #[error("the token sent in `Authorization: Bearer` is not a known write token (revoked, mistyped, or another dashboard's): `tessera-dashboard token list` shows the names of the known ones")]
+    UnknownToken,
     #[error("this dashboard needs a read token: `Authorization: Bearer <token>`, or the token as the password of HTTP Basic")]
     ReadUnauthorized,
     #[error("{0}")]
@@ -55,7 +58,9 @@ impl AppError {
             AppError::Unprocessable(_) | AppError::Field { .. } => StatusCode::UNPROCESSABLE_ENTITY,
             AppError::Conflict(_) => StatusCode::CONFLICT,
             AppError::PayloadTooLarge(_) => StatusCode::PAYLOAD_TOO_LARGE,
-            AppError::Unauthorized | AppError::ReadUnauthorized => StatusCode::UNAUTHORIZED,
+            AppError::Unauthorized | AppError::UnknownToken | AppError::ReadUnauthorized => {
+                StatusCode::UNAUTHORIZED
+            }
             AppError::Forbidden(_) | AppError::WritesDisabled => StatusCode::FORBIDDEN,
             AppError::TooManyRequests { .. } => StatusCode::TOO_MANY_REQUESTS,
             AppError::RequestTimeout(_) => StatusCode::REQUEST_TIMEOUT,
@@ -78,7 +83,7 @@ impl IntoResponse for AppError {
         let mut res = (self.status(), Json(body)).into_response();
         let headers = res.headers_mut();
         match self {
-            AppError::Unauthorized => {
+            AppError::Unauthorized | AppError::UnknownToken => {
                 headers.insert(header::WWW_AUTHENTICATE, HeaderValue::from_static("Bearer"));
             }
             AppError::ReadUnauthorized => {

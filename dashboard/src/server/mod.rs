@@ -12,6 +12,7 @@ pub mod auth;
 pub mod blobs;
 pub mod compare;
 pub mod compare_runs;
+pub mod conditions_view;
 pub mod delete;
 pub mod error;
 pub mod export;

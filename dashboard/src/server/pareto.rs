@@ -24,6 +24,9 @@ pub struct ParetoQuery {
     pub adapter: Option<i64>,
     /// `flip` (default), `psnr` or any stored metric.
     pub metric: Option<String>,
+    /// A second error measure shown beside the first (`none` for one chart); by default the
+    /// first other error measure the scenario has: a front can change with the measure.
+    pub metric2: Option<String>,
     pub run: Option<String>,
     pub base: Option<String>,
 }
@@ -31,9 +34,25 @@ pub struct ParetoQuery {
 #[derive(Debug, Serialize, Clone, PartialEq)]
 pub struct ParetoPoint {
     pub variant: String,
+    /// The variant's technique: points are coloured by it.
+    pub technique: String,
     pub gpu_ms: f64,
     pub value: f64,
+    /// The baseline's median GPU time over this variant's (`None` for the baseline itself).
+    pub speedup: Option<f64>,
     pub on_front: bool,
+}
+
+/// Whether `name` is an error measure: an image metric of the measure table (PSNR, SSIM, FLIP,
+/// ColorVideoVDP, ...), not a technique's own check (`shading-rate`, `model-shades`) or a count.
+pub fn is_error_measure(name: &str) -> bool {
+    tessera_results::measure::Measure::from_name(name)
+        .is_some_and(|m| m.info().source == tessera_results::measure::Source::Metric)
+}
+
+/// The colour of technique `t` among `all` (in first-seen order).
+fn technique_colour(all: &[String], t: &str) -> &'static str {
+    crate::svg::colour(all.iter().position(|x| x == t).unwrap_or(0))
 }
 
 #[derive(Debug, Serialize)]
@@ -50,9 +69,14 @@ pub struct ParetoView {
     pub base_points: Vec<ParetoPoint>,
     /// Metrics of the run's scenario with a finite value for some timed variant.
     pub metrics: Vec<String>,
+    /// The second measure and its points (the newer run's), when shown.
+    pub metric2: Option<String>,
+    pub higher_is_better2: bool,
+    pub points2: Vec<ParetoPoint>,
 }
 
-/// Metric names of ok, timed variants with a finite value, in first-seen order.
+/// Error-measure names ([`is_error_measure`]) of ok, timed variants with a finite value, in
+/// first-seen order.
 pub fn metrics_present(s: &ScenarioResult) -> Vec<String> {
     let mut out: Vec<String> = Vec::new();
     for v in s
@@ -60,7 +84,11 @@ pub fn metrics_present(s: &ScenarioResult) -> Vec<String> {
         .iter()
         .filter(|v| v.status == Status::Ok && v.gpu_frame_ms.is_some())
     {
-        for m in v.metrics.iter().filter(|m| m.value.is_finite()) {
+        for m in v
+            .metrics
+            .iter()
+            .filter(|m| m.value.is_finite() && is_error_measure(&m.name))
+        {
             if !out.contains(&m.name) {
                 out.push(m.name.clone());
             }
@@ -87,6 +115,12 @@ pub fn points(s: &ScenarioResult, metric: &str) -> (Vec<ParetoPoint>, bool) {
         if m.value.is_finite() {
             pts.push(ParetoPoint {
                 variant: v.variant.clone(),
+                technique: v.technique.clone(),
+                speedup: tessera_results::measure::speedup(
+                    &s.results,
+                    v,
+                    tessera_results::measure::DEFAULT_BASELINE,
+                ),
                 gpu_ms: g.median,
                 value: m.value,
                 on_front: false,
@@ -124,6 +158,9 @@ async fn load(state: &AppState, q: ParetoQuery) -> Result<ParetoView, AppError> 
                 points: vec![],
                 base_points: vec![],
                 metrics: vec![],
+                metric2: None,
+                higher_is_better2: false,
+                points2: vec![],
             };
             let (Some(scenario), Some(adapter)) = (scenario, adapter) else {
                 return Ok(view);
@@ -149,6 +186,22 @@ async fn load(state: &AppState, q: ParetoQuery) -> Result<ParetoView, AppError> 
                 let (p, hib) = points(&record, &metric);
                 view.points = p;
                 view.higher_is_better = hib;
+                let second = match q.metric2.as_deref().filter(|m| !m.is_empty()) {
+                    Some("none") => None,
+                    Some(m) => Some(m.to_string()),
+                    // A perceptual or structural measure beside a per-pixel one, where present.
+                    None => ["cvvdp", "psnr", "ssim", "flip"]
+                        .iter()
+                        .map(|m| m.to_string())
+                        .find(|m| *m != metric && view.metrics.contains(m))
+                        .or_else(|| view.metrics.iter().find(|m| **m != metric).cloned()),
+                };
+                if let Some(m2) = second.filter(|m| *m != metric) {
+                    let (p2, hib2) = points(&record, &m2);
+                    view.points2 = p2;
+                    view.higher_is_better2 = hib2;
+                    view.metric2 = Some(m2);
+                }
             }
             if let Some(base) = &base {
                 view.base_points = points(&read::scenario_result(c, base, &scenario)?, &metric).0;
@@ -202,6 +255,15 @@ pub fn render(v: &ParetoView) -> String {
         let sel = if *m == v.metric { " selected" } else { "" };
         let _ = write!(b, "<option{sel}>{}</option>", esc(m));
     }
+    b.push_str("</select> beside it <select name=metric2><option value=none>none</option>");
+    for m in &v.metrics {
+        let sel = if Some(m) == v.metric2.as_ref() {
+            " selected"
+        } else {
+            ""
+        };
+        let _ = write!(b, "<option{sel}>{}</option>", esc(m));
+    }
     b.push_str("</select> <button>show</button></form>");
     let link = |r: &Option<String>| {
         r.as_ref().map_or("–".into(), |r| {
@@ -221,6 +283,12 @@ pub fn render(v: &ParetoView) -> String {
         esc(&v.metric),
         if v.higher_is_better { "higher" } else { "lower" }
     );
+    let mut techniques: Vec<String> = Vec::new();
+    for p in v.points.iter().chain(&v.base_points) {
+        if !techniques.contains(&p.technique) {
+            techniques.push(p.technique.clone());
+        }
+    }
     // Row numbers: the newer run's points in table order; a base-only variant gets its own.
     let mut order: Vec<&str> = v.points.iter().map(|p| p.variant.as_str()).collect();
     for p in &v.base_points {
@@ -261,6 +329,7 @@ pub fn render(v: &ParetoView) -> String {
                 num: num_of(&p.variant),
                 label: p.variant.clone(),
                 front: p.on_front,
+                colour: technique_colour(&techniques, &p.technique).to_string(),
             })
             .collect(),
     };
@@ -269,27 +338,99 @@ pub fn render(v: &ParetoView) -> String {
         "GPU time, median (ms)",
         &crate::html::axis_label(&v.metric),
     );
-    if spec.points.is_empty() {
-        b.push_str(&fallback);
+    let first = if spec.points.is_empty() {
+        fallback
     } else {
-        b.push_str(&chart("pareto-chart", &script_json(&spec), &fallback));
+        chart("pareto-chart", &script_json(&spec), &fallback)
+    };
+    match &v.metric2 {
+        Some(m2) => {
+            // The second measure beside the first, its own front: a technique on one front may
+            // be dominated on the other.
+            let pts2: Vec<ScatterPoint> = v
+                .points2
+                .iter()
+                .map(|p| ScatterPoint {
+                    label: format!("#{} {}", num_of(&p.variant), p.variant),
+                    x: p.gpu_ms,
+                    y: p.value,
+                    group: 0,
+                    on_front: p.on_front,
+                    tag: num_of(&p.variant).to_string(),
+                })
+                .collect();
+            let _ = write!(
+                b,
+                "<div class=pareto-pair style=\"display:flex;flex-wrap:wrap;gap:12px\"><div style=\"flex:1 1 480px;min-width:0\">{first}</div><div id=pareto-second style=\"flex:1 1 480px;min-width:0\"><p class=muted>{} ({} is better) against the same GPU time</p>{}</div></div>",
+                esc(m2),
+                if v.higher_is_better2 { "higher" } else { "lower" },
+                scatter(
+                    &pts2,
+                    "GPU time, median (ms)",
+                    &crate::html::axis_label(m2)
+                )
+            );
+        }
+        None => b.push_str(&first),
     }
-    b.push_str("<table id=pareto><tr><th class=n>#</th><th>variant</th><th class=n>GPU ms</th><th class=n>value</th><th>front</th><th class=n>before: GPU ms</th><th class=n>value</th></tr>");
+    // The legend of the colours: one per technique.
+    b.push_str("<ul class=\"legend techniques\">");
+    for t in &techniques {
+        let _ = write!(
+            b,
+            "<li style=\"display:inline-block;margin-right:12px\"><span class=swatch style=\"background:{}\"></span>{}</li>",
+            technique_colour(&techniques, t),
+            esc(t)
+        );
+    }
+    b.push_str("</ul>");
+    let unit = tessera_results::measure::Measure::from_name(&v.metric)
+        .map(|m| m.unit())
+        .filter(|u| !u.is_empty())
+        .map_or(String::new(), |u| format!(" ({u})"));
+    let _ = write!(
+        b,
+        "<div class=scroll><table id=pareto><tr><th class=n>#</th><th>variant</th><th class=n>GPU (ms)</th><th class=n>speed-up (×)</th><th class=n>{m}{unit}</th><th>front</th>{second}<th class=n>before: GPU (ms)</th><th class=n>before: {m}{unit}</th></tr>",
+        m = esc(&v.metric),
+        second = v.metric2.as_ref().map_or(String::new(), |m2| format!(
+            "<th class=n>{}{}</th><th>front ({})</th>",
+            esc(m2),
+            tessera_results::measure::Measure::from_name(m2)
+                .map(|m| m.unit())
+                .filter(|u| !u.is_empty())
+                .map_or(String::new(), |u| format!(" ({u})")),
+            esc(m2)
+        ))
+    );
     for p in &v.points {
         let old = v.base_points.iter().find(|q| q.variant == p.variant);
         let _ = write!(
             b,
-            "<tr><td class=n>{}</td><td>{}</td><td class=n>{}</td><td class=n>{}</td><td>{}</td><td class=n>{}</td><td class=n>{}</td></tr>",
+            "<tr><td class=n>{}</td><td><span class=swatch style=\"background:{}\" title=\"{}\"></span>{}</td><td class=n>{}</td><td class=n>{}</td><td class=n>{}</td><td>{}</td>{}<td class=n>{}</td><td class=n>{}</td></tr>",
             num_of(&p.variant),
-            esc(&p.variant),
+            technique_colour(&techniques, &p.technique),
+            esc(&p.technique),
+            crate::html::name(&p.variant),
             num(p.gpu_ms),
+            p.speedup.map_or("–".into(), |x| format!("{x:.2}")),
             num(p.value),
             if p.on_front { "on front" } else { "dominated" },
+            match &v.metric2 {
+                Some(_) => {
+                    let q = v.points2.iter().find(|q| q.variant == p.variant);
+                    format!(
+                        "<td class=n>{}</td><td>{}</td>",
+                        q.map_or("–".into(), |q| num(q.value)),
+                        q.map_or("–", |q| if q.on_front { "on front" } else { "dominated" })
+                    )
+                }
+                None => String::new(),
+            },
             old.map_or("–".into(), |q| num(q.gpu_ms)),
             old.map_or("–".into(), |q| num(q.value))
         );
     }
-    b.push_str("</table>");
+    b.push_str("</table></div>");
     b
 }
 

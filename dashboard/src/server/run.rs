@@ -74,6 +74,8 @@ pub async fn api(
 pub struct Previous {
     pub run_id: String,
     pub scenarios: Vec<ScenarioResult>,
+    /// The fixed threshold and each frame-time series' own noise ([`crate::store::noise`]).
+    pub options: tessera_results::compare::Options,
 }
 
 /// GPU time of `variant` against the previous run: change and verdict, as a table cell.
@@ -94,7 +96,8 @@ fn change_cell(
     let (Some(a), Some(b)) = (before.and_then(frame_samples), frame_samples(v)) else {
         return "<td class=n>–</td>".into();
     };
-    match compare_times(&a, &b, DEFAULT_THRESHOLD_PCT) {
+    let (threshold, noise) = prev.options.threshold_for(scenario, &v.variant);
+    match compare_times(&a, &b, threshold) {
         Some(c) => {
             let (class, word) = match c.verdict {
                 TimeVerdict::Slower => ("worse", "slower"),
@@ -102,10 +105,19 @@ fn change_cell(
                 // The engine's other words: within noise, below threshold, too few frames.
                 v => ("muted", v.words()),
             };
+            let noise = noise.map_or(String::new(), |s| {
+                format!(", nightly noise {:.2}%", s * 100.0)
+            });
+            // Said, not only coloured: grey cannot tell "too few frames" from "within noise".
+            let shown = match c.verdict {
+                TimeVerdict::TooFewFrames => {
+                    format!("{} <span class=muted>?</span>", pct(c.change))
+                }
+                _ => pct(c.change),
+            };
             format!(
-                "<td class=\"n {class}\" title=\"{word}, Mann-Whitney U p={:.4}\">{}</td>",
+                "<td class=\"n {class}\" title=\"{word}, Mann-Whitney U p={:.4}, threshold {threshold:.1}%{noise}\">{shown}</td>",
                 c.p,
-                pct(c.change)
             )
         }
         None => "<td class=n>–</td>".into(),
@@ -155,11 +167,13 @@ fn scenario_section(d: &RunDetail, prev: Option<&Previous>, s: &ScenarioResult, 
         } else {
             format!(" ({})", i.unit)
         };
+        // The unit in the header itself: a column of numbers says what they count.
         format!(
-            "<th class=n title=\"{}{unit}, {}\">{}</th>",
+            "<th class=n title=\"{}{unit}, {}\">{}{}</th>",
             esc(i.label),
             i.direction.phrase(),
-            esc(i.name)
+            esc(i.name),
+            esc(&unit)
         )
     };
     let _ = write!(
@@ -254,6 +268,7 @@ fn scenario_section(d: &RunDetail, prev: Option<&Previous>, s: &ScenarioResult, 
         );
     }
     out.push_str("</table></div>");
+    out.push_str(&super::conditions_view::table(s));
     // Per-frame charts of every measure with per-frame values, a line per variant; the worst
     // frame links to the viewer when its image was saved.
     let outputs: std::collections::HashSet<(&str, i64)> = d
@@ -333,6 +348,10 @@ pub async fn page(
                 Some(p) => Some(Previous {
                     scenarios: read::run_scenarios(c, &p)?,
                     run_id: p,
+                    options: tessera_results::compare::Options {
+                        threshold_pct: DEFAULT_THRESHOLD_PCT,
+                        noise: crate::store::noise::frame_time_noise(c, &run_id)?,
+                    },
                 }),
                 None => None,
             };

@@ -14,7 +14,7 @@ use axum::Json;
 use serde::Deserialize;
 
 use super::{AppError, AppState};
-use crate::html::{commit, enc, esc, page as layout, pager};
+use crate::html::{commit, enc, esc, page as layout, pager, short_id};
 use crate::store::browse::{self, RunFilter, RunList, RunListRow};
 
 #[derive(Debug, Deserialize, Default)]
@@ -96,7 +96,7 @@ fn options(b: &mut String, name: &str, values: &[String], chosen: Option<&str>) 
 /// The runs table as HTML, with a tick box per run for the compare page.
 pub fn render(runs: &[RunListRow]) -> String {
     let mut b = String::from(
-        "<div class=scroll><table id=runs><tr><th title=\"tick two runs to compare\">pick</th><th>run</th><th>suite</th><th>branch</th><th>commit</th><th>started</th><th>adapter</th><th>driver</th><th>status</th><th class=n>ok</th><th class=n>skipped</th><th class=n>failed</th><th>alerts</th></tr>",
+        "<div class=scroll><table id=runs><tr><th title=\"tick two runs to compare\">pick</th><th>run</th><th>suite</th><th class=wide>branch</th><th>commit</th><th class=wide>started (UTC)</th><th>adapter</th><th class=wide>driver</th><th class=wide>status</th><th class=n>ok</th><th class=n>skipped</th><th class=n>failed</th><th>alerts</th></tr>",
     );
     for row in runs {
         let r = &row.run;
@@ -110,13 +110,15 @@ pub fn render(runs: &[RunListRow]) -> String {
         };
         let _ = write!(
             b,
-            "<tr><td><input type=checkbox name=pick value=\"{}\" aria-label=\"pick {}\"></td><td><a href=\"/runs/{}\">{}</a></td><td>{}</td><td>{}</td><td><code>{}</code>{}</td><td>{}</td><td><a href=\"/?adapter={}\">{}</a> <span class=muted>{}</span></td><td>{} <span class=muted>{}</span></td><td>{}</td><td class=\"n ok\">{}</td><td class=\"n skipped\">{}</td><td class=\"n failed\">{}</td><td>{alerts}</td></tr>",
+            "<tr><td><input type=checkbox name=pick value=\"{}\" aria-label=\"pick {}\"></td><td class=nw><a href=\"/runs/{}\" title=\"{}\">{}</a></td><td>{}</td><td class=wide>{}</td><td class=nw><code title=\"{}\">{}</code>{}</td><td class=\"wide nw\">{}</td><td><a href=\"/?adapter={}\">{}</a> <span class=\"muted wide\">{}</span></td><td class=wide>{} <span class=muted>{}</span></td><td class=wide>{}</td><td class=\"n ok\">{}</td><td class=\"n skipped\">{}</td><td class=\"n failed\">{}</td><td>{alerts}</td></tr>",
             esc(&r.run_id),
             esc(&r.run_id),
             enc(&r.run_id),
             esc(&r.run_id),
+            esc(&short_id(&r.run_id)),
             r.suite.as_deref().map_or("–".into(), |s| format!("<a href=\"/?suite={}\">{}</a>", enc(s), esc(s))),
             r.branch.as_deref().map_or("–".into(), |s| format!("<a href=\"/?branch={}\">{}</a>", enc(s), esc(s))),
+            esc(r.commit.as_deref().unwrap_or("")),
             esc(&commit(r.commit.as_deref())),
             if r.dirty { " <span class=muted>dirty</span>" } else { "" },
             esc(&r.started_at),

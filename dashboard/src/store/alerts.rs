@@ -159,6 +159,13 @@ pub struct Alert {
     /// A speed-up that moved because its baseline did (set when grouping, see
     /// [`super::groups`]); not counted as a change of its own.
     pub via_baseline: bool,
+    /// For a speed-up that moved with its baseline: the baseline and its frame-time change
+    /// (`native GPU time +5.0%`), read from the data (see [`super::baseline_moves`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub moved_with: Option<String>,
+    /// The baseline's relative change behind `moved_with`.
+    #[serde(skip)]
+    pub moved_with_change: Option<f64>,
     /// How sure detection is that *a* change happened (1 − tail probability).
     pub confidence: f64,
     /// How likely the change lies exactly at `run_after` among the candidate splits (0 to 1).
@@ -340,6 +347,8 @@ fn alert(r: &Row, suites: &BTreeMap<String, String>) -> Result<Alert, StoreError
         group_id: r.i64(26)?,
         is_regression: (relative_change > 0.0) != series.higher_is_better,
         via_baseline: false,
+        moved_with: None,
+        moved_with_change: None,
         suite,
         run_pk_before: r.i64(8)?,
         run_before: r.string(9)?,
@@ -601,9 +610,16 @@ pub fn insert(conn: &mut dyn Connection, series_id: i64, p: &Placement) -> Resul
     Ok(id)
 }
 
-/// Alert `id` now describes placement `p` (the same row: its group and triage stay). A new
-/// commit range is remembered as one of its group's keys.
+/// Alert `id` now describes placement `p` (the same row: its triage stays). A new commit range is
+/// remembered as one of its group's keys. An alert that moves to another commit range leaves a
+/// group whose other alerts stay where they were ([`regroup_target`]): a change placed a night
+/// early and moved the next night joins the change it belongs to instead of staying for good in
+/// the other.
 pub fn place(conn: &mut dyn Connection, id: i64, p: &Placement) -> Result<(), StoreError> {
+    let old = conn.query_opt(
+        "SELECT group_id, run_pk_before, run_pk_after FROM regressions WHERE id = $1",
+        &[Value::Int(id)],
+    )?;
     let mut params = placement_values(p);
     params.push(Value::Int(id));
     conn.execute(
@@ -614,15 +630,94 @@ pub fn place(conn: &mut dyn Connection, id: i64, p: &Placement) -> Result<(), St
         &params,
     )?;
     let k = key_of_runs(conn, p.run_pk_before, p.run_pk_after)?;
-    if let Some(row) = conn.query_opt(
-        "SELECT group_id FROM regressions WHERE id = $1",
-        &[Value::Int(id)],
+    let Some(row) = old else {
+        return Ok(());
+    };
+    let Some(g) = row.opt_i64(0)? else {
+        return Ok(());
+    };
+    let old_key = key_of_runs(conn, row.i64(1)?, row.i64(2)?)?;
+    let target = if old_key == k {
+        g
+    } else {
+        regroup_target(conn, id, g, &k)?
+    };
+    if target != g {
+        conn.execute(
+            "UPDATE regressions SET group_id = $1 WHERE id = $2",
+            &[Value::Int(target), Value::Int(id)],
+        )?;
+        event(
+            conn,
+            id,
+            "regrouped",
+            format!("left group {g} for group {target} (moved to {k})"),
+        )?;
+    }
+    remember_key(conn, &k, target)?;
+    Ok(())
+}
+
+/// The group alert `id` (in group `g`) belongs to after moving to commit range `k`: the group the
+/// range names, else the group an earlier alert of `g` moved to at `k`, else a new group when
+/// other live alerts of `g` stay at other ranges, else `g` (a group that moves as a whole keeps
+/// its id).
+fn regroup_target(conn: &mut dyn Connection, id: i64, g: i64, k: &str) -> Result<i64, StoreError> {
+    if let Some(r) = conn.query_opt(
+        "SELECT group_id FROM alert_group_keys WHERE key = $1",
+        &[k.into()],
     )? {
-        if let Some(g) = row.opt_i64(0)? {
-            remember_key(conn, &k, g)?;
+        let named = r.i64(0)?;
+        if named != g {
+            return Ok(named);
         }
     }
-    Ok(())
+    let moved = format!("left group {g} for group %(moved to {k})");
+    if let Some(r) = conn.query_opt(
+        "SELECT e.detail FROM regression_events e WHERE e.kind = 'regrouped' AND e.detail LIKE $1
+         ORDER BY e.id DESC LIMIT 1",
+        &[moved.as_str().into()],
+    )? {
+        if let Some(to) = group_in_detail(&r.string(0)?) {
+            return Ok(to);
+        }
+    }
+    let others = conn.query(
+        "SELECT run_pk_before, run_pk_after FROM regressions
+         WHERE group_id = $1 AND id <> $2 AND status <> 'withdrawn'",
+        &[Value::Int(g), Value::Int(id)],
+    )?;
+    for r in &others {
+        if key_of_runs(conn, r.i64(0)?, r.i64(1)?)? != k {
+            return Ok(conn.query(
+                "INSERT INTO alert_groups (created_at) VALUES ($1) RETURNING id",
+                &[crate::now_rfc3339().into()],
+            )?[0]
+                .i64(0)?);
+        }
+    }
+    Ok(g)
+}
+
+/// The group a `regrouped` event's detail names as the new one.
+fn group_in_detail(detail: &str) -> Option<i64> {
+    let rest = detail.split_once(" for group ")?.1;
+    rest.split_whitespace().next()?.parse().ok()
+}
+
+/// Where the alerts of group `id` went when all of them moved to other groups: the newest group
+/// one of them joined (`None` when none left it).
+pub fn successor(conn: &mut dyn Connection, id: i64) -> Result<Option<i64>, StoreError> {
+    let left = format!("left group {id} for group %");
+    Ok(conn
+        .query_opt(
+            "SELECT detail FROM regression_events WHERE kind = 'regrouped' AND detail LIKE $1
+             ORDER BY id DESC LIMIT 1",
+            &[left.as_str().into()],
+        )?
+        .map(|r| r.string(0))
+        .transpose()?
+        .and_then(|d| group_in_detail(&d)))
 }
 
 /// Sets detection's status of alert `id`.
@@ -639,7 +734,7 @@ pub fn set_status(
 }
 
 /// Kinds of `regression_events`.
-pub const EVENTS: [&str; 9] = [
+pub const EVENTS: [&str; 10] = [
     "detected",
     "moved",
     "merged",
@@ -650,6 +745,7 @@ pub const EVENTS: [&str; 9] = [
     "repointed",
     // A bisection of the alert's range ended (`ab/bisect.rs`): its culprit or why none.
     "bisected",
+    "regrouped",
 ];
 
 /// Appends to alert `id`'s history.

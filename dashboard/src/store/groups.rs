@@ -18,6 +18,7 @@ use serde::Serialize;
 use tessera_results::measure::Measure;
 
 use super::alerts::{self, Alert, DetectionStatus, Select, TriageState};
+use super::baseline_moves::{self, BaselineMove};
 use super::StoreError;
 use crate::db::Connection;
 
@@ -184,6 +185,12 @@ fn median(mut v: Vec<f64>) -> f64 {
 
 /// The group's one-line title. With `code`, names are wrapped in backticks (Markdown).
 pub fn title(commit_after: &str, alerts: &[&Alert], code: bool) -> String {
+    counted_title(commit_after, alerts, alerts, code)
+}
+
+/// The title naming the changes of `alerts`, with the series and adapters of `all` counted (so
+/// the HTML and the Markdown of a group count the same series).
+fn counted_title(commit_after: &str, alerts: &[&Alert], all: &[&Alert], code: bool) -> String {
     // In Markdown, names are code spans, in which nothing can be escaped: backticks and pipes
     // are replaced (names are validated on upload; older stores may hold anything).
     let q = |s: &str| {
@@ -198,11 +205,11 @@ pub fn title(commit_after: &str, alerts: &[&Alert], code: bool) -> String {
             s.to_string()
         }
     };
-    let adapters: BTreeSet<&str> = alerts.iter().map(|a| a.series.adapter.as_str()).collect();
+    let adapters: BTreeSet<&str> = all.iter().map(|a| a.series.adapter.as_str()).collect();
     let mut t = format!(
         "{}: {} series on {} adapter{}",
         q(commit_after),
-        alerts.len(),
+        all.len(),
         adapters.len(),
         if adapters.len() == 1 { "" } else { "s" }
     );
@@ -281,9 +288,75 @@ fn via_baseline(a: &Alert, group: &[Alert]) -> bool {
     })
 }
 
+/// The title of a group whose only changes are speed-ups that moved with their baseline (the
+/// baseline's own alert not detected yet, or in another group): led by the baseline's change.
+fn baseline_title(commit_after: &str, alerts: &[&Alert], code: bool) -> Option<String> {
+    let q = |s: &str| {
+        if code {
+            format!("`{s}`")
+        } else {
+            s.to_string()
+        }
+    };
+    // (baseline, scenario) → (the baseline's changes, the variants whose speed-ups moved).
+    type Moved<'a> = BTreeMap<(&'a str, &'a str), (Vec<f64>, BTreeSet<&'a str>)>;
+    let mut by_base: Moved = BTreeMap::new();
+    for a in alerts {
+        let m = a.moved_with_change?;
+        let base = baseline_moves::baseline_of(&a.series.measure)?;
+        let e = by_base.entry((base, &a.series.scenario)).or_default();
+        e.0.push(m);
+        e.1.insert(&a.series.variant);
+    }
+    let adapters: BTreeSet<&str> = alerts.iter().map(|a| a.series.adapter.as_str()).collect();
+    let mut parts: Vec<(f64, String)> = by_base
+        .into_iter()
+        .map(|((base, scenario), (changes, variants))| {
+            let m = median(changes);
+            (
+                m.abs(),
+                format!(
+                    "{} GPU time {} on {} (the speed-ups of {} moved with it)",
+                    q(base),
+                    crate::html::pct(m),
+                    q(scenario),
+                    variants.into_iter().map(q).collect::<Vec<_>>().join(", ")
+                ),
+            )
+        })
+        .collect();
+    parts.sort_by(|x, y| y.0.total_cmp(&x.0).then(x.1.cmp(&y.1)));
+    let lead = parts
+        .into_iter()
+        .map(|p| p.1)
+        .collect::<Vec<_>>()
+        .join("; ");
+    Some(format!(
+        "{}: {} series on {} adapter{}; {lead}",
+        q(commit_after),
+        alerts.len(),
+        adapters.len(),
+        if adapters.len() == 1 { "" } else { "s" }
+    ))
+}
+
+/// The one-line title of a group's alerts: led by the changes of their own, else by the
+/// baseline change the speed-ups moved with.
+pub fn group_title(commit_after: &str, basis: &[&Alert], code: bool) -> String {
+    let own: Vec<&Alert> = basis.iter().copied().filter(|a| !a.via_baseline).collect();
+    if own.is_empty() {
+        if let Some(t) = baseline_title(commit_after, basis, code) {
+            return t;
+        }
+        return title(commit_after, basis, code);
+    }
+    counted_title(commit_after, &own, basis, code)
+}
+
 /// Builds the groups of `alerts` (in their order: newest first); `filter` picks the alerts
-/// listed and the groups kept.
-fn build(all: Vec<Alert>, filter: &Filter) -> Vec<Group> {
+/// listed and the groups kept. `moves`: the speed-up alerts that moved with their baseline
+/// ([`baseline_moves::of_alerts`]), whether or not the baseline's alert is in the group.
+fn build(all: Vec<Alert>, filter: &Filter, moves: &BTreeMap<i64, BaselineMove>) -> Vec<Group> {
     let mut order: Vec<i64> = Vec::new();
     let mut by_id: BTreeMap<i64, Vec<Alert>> = BTreeMap::new();
     for a in all {
@@ -297,7 +370,15 @@ fn build(all: Vec<Alert>, filter: &Filter) -> Vec<Group> {
         let mut members = by_id.remove(&id).unwrap_or_default();
         let flags: Vec<bool> = members.iter().map(|a| via_baseline(a, &members)).collect();
         for (a, f) in members.iter_mut().zip(flags) {
-            a.via_baseline = f;
+            a.via_baseline = f || moves.contains_key(&a.id);
+            if let Some(m) = moves.get(&a.id) {
+                a.moved_with = Some(format!(
+                    "{} GPU time {}",
+                    m.baseline,
+                    crate::html::pct(m.baseline_change)
+                ));
+                a.moved_with_change = Some(m.baseline_change);
+            }
         }
         let live: Vec<&Alert> = members
             .iter()
@@ -340,14 +421,9 @@ fn build(all: Vec<Alert>, filter: &Filter) -> Vec<Group> {
         let commit_after = crate::html::commit(first.commit_after.as_deref());
         let own: Vec<&Alert> = basis.iter().copied().filter(|a| !a.via_baseline).collect();
         let worse = own.iter().filter(|a| a.is_regression).count();
-        let titled: Vec<&Alert> = if own.is_empty() {
-            basis.clone()
-        } else {
-            own.clone()
-        };
         let mut group = Group {
             id,
-            title: title(&commit_after, &titled, false),
+            title: group_title(&commit_after, &basis, false),
             key,
             commit_before: first.commit_before.clone(),
             commit_after: first.commit_after.clone(),
@@ -429,7 +505,9 @@ pub fn list(
     limit: usize,
 ) -> Result<Vec<Group>, StoreError> {
     filter.validate()?;
-    let mut groups = build(read_all(conn, None)?, filter);
+    let all = read_all(conn, None)?;
+    let moves = baseline_moves::of_alerts(conn, &all)?;
+    let mut groups = build(all, filter, &moves);
     sort_groups(&mut groups, sort);
     groups.truncate(limit);
     Ok(groups)
@@ -454,19 +532,42 @@ impl Named {
 /// The group `name` (an id or a key) refers to.
 pub fn resolve(conn: &mut dyn Connection, name: &str) -> Result<Named, StoreError> {
     let not_found = || StoreError::NotFound(format!("alert group {name:?}"));
-    if let Ok(id) = name.parse::<i64>() {
-        return if alerts::group_exists(conn, id)? {
-            Ok(Named::Id(id))
+    let named = if let Ok(id) = name.parse::<i64>() {
+        if alerts::group_exists(conn, id)? {
+            Named::Id(id)
         } else {
-            Err(not_found())
-        };
+            return Err(not_found());
+        }
+    } else {
+        if !is_key(name) {
+            return Err(not_found());
+        }
+        alerts::group_of_key(conn, name)?
+            .map(Named::Key)
+            .ok_or_else(not_found)?
+    };
+    // A group whose alerts all moved to other groups names where they went (a redirect).
+    let mut id = named.id();
+    let mut hops = 0;
+    while hops < 16
+        && conn
+            .query_opt(
+                "SELECT 1 FROM regressions WHERE group_id = $1 LIMIT 1",
+                &[crate::db::Value::Int(id)],
+            )?
+            .is_none()
+    {
+        match alerts::successor(conn, id)? {
+            Some(next) if next != id => id = next,
+            _ => break,
+        }
+        hops += 1;
     }
-    if !is_key(name) {
-        return Err(not_found());
-    }
-    alerts::group_of_key(conn, name)?
-        .map(Named::Key)
-        .ok_or_else(not_found)
+    Ok(if id == named.id() {
+        named
+    } else {
+        Named::Key(id)
+    })
 }
 
 /// One group with all its alerts (withdrawn ones included), by id.
@@ -475,7 +576,9 @@ pub fn get(conn: &mut dyn Connection, id: i64) -> Result<Group, StoreError> {
         status: Some("all".into()),
         ..Filter::default()
     };
-    build(read_all(conn, Some(id))?, &filter)
+    let all = read_all(conn, Some(id))?;
+    let moves = baseline_moves::of_alerts(conn, &all)?;
+    build(all, &filter, &moves)
         .into_iter()
         .next()
         .ok_or_else(|| StoreError::NotFound(format!("alert group {id}")))
@@ -517,7 +620,8 @@ pub fn list_with_facets(
         suites: suites.into_iter().collect(),
         measures: measures.into_iter().collect(),
     };
-    let mut groups = build(all, filter);
+    let moves = baseline_moves::of_alerts(conn, &all)?;
+    let mut groups = build(all, filter, &moves);
     sort_groups(&mut groups, sort);
     groups.truncate(limit);
     Ok((groups, facets))

@@ -3,7 +3,9 @@
 //!
 //! Not for: SQL dialect details (see [`crate::db`]), HTTP or HTML.
 
+pub mod adapter_pairs;
 pub mod alerts;
+pub mod baseline_moves;
 pub mod blobs;
 pub mod browse;
 pub mod delete;
@@ -11,9 +13,11 @@ pub mod extras;
 pub mod frames;
 pub mod groups;
 pub mod ingest;
+pub mod noise;
 pub mod outbox;
 pub mod queue;
 pub mod read;
+pub mod stoppage;
 pub mod tokens;
 pub mod triage;
 

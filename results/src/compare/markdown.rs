@@ -307,16 +307,10 @@ fn findings(out: &mut String, c: &Comparison) {
     }
 }
 
-/// The verdict line's first words: `regressed`, `too few frames to tell` (nothing regressed but
-/// some counted time had too few frames) or `no regression`.
+/// The verdict line's first words: `regressed`, `inconclusive` (nothing regressed but the times
+/// could not be judged: [`Comparison::undecided`]) or `no regression`.
 pub fn verdict_words(c: &Comparison) -> &'static str {
-    if c.regressed() {
-        "regressed"
-    } else if c.timings_count && c.too_few_frames().next().is_some() {
-        "too few frames to tell"
-    } else {
-        "no regression"
-    }
+    c.decision().words()
 }
 
 /// The whole comparison as Markdown, ending with the verdict line.
@@ -338,10 +332,16 @@ pub fn render(c: &Comparison) -> String {
     findings(&mut out, c);
     let plural = |n: usize, word: &str| format!("{n} {word}{}", if n == 1 { "" } else { "s" });
     let few = c.too_few_frames().count();
+    let why = c.undecided();
     let _ = writeln!(
         out,
-        "**Verdict: {}** ({}, {}{}; {})",
+        "**Verdict: {}**{} ({}, {}{}; {})",
         verdict_words(c),
+        if c.decision() == super::Decision::Inconclusive {
+            format!(": {}", cell(&why.join("; ")))
+        } else {
+            String::new()
+        },
         plural(c.findings_of(Verdict::Worse).count(), "regression"),
         plural(c.findings_of(Verdict::Better).count(), "improvement"),
         if few > 0 {

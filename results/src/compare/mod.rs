@@ -14,6 +14,8 @@
 //! Pure: records in, values out; no files, no store, no clock. Not for: history over many runs
 //! and change points (the dashboard's regression detection).
 
+use std::collections::BTreeMap;
+
 use serde::Serialize;
 
 use crate::{folder, measure, RunInfo, ScenarioResult, VariantResult};
@@ -32,17 +34,55 @@ pub use findings::{Finding, Verdict};
 pub use metrics::MetricComparison;
 pub use time::{PassComparison, Time};
 
+/// A frame-time change of at least this many σ of its series' night-to-night noise is large
+/// enough to be called slower or faster, even below the fixed threshold (`COMPARISON.md`, "Time").
+pub const NOISE_SIGMAS: f64 = 5.0;
+
+/// The noise rule never lowers the threshold below this (percent): the smallest change regression
+/// detection alerts on.
+pub const NOISE_FLOOR_PCT: f64 = 1.0;
+
 /// What the caller may choose.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Options {
     /// Smallest time change (percent) that can be called slower or faster.
     pub threshold_pct: f64,
+    /// Night-to-night noise of each variant's frame-time series on B's adapter, as a fraction of
+    /// its level (scenario → variant → σ), where a history knows it (the dashboard's detection
+    /// estimate). A variant with a noise σ is called slower or faster from
+    /// `max(NOISE_SIGMAS · σ, NOISE_FLOOR_PCT)` when that is below `threshold_pct`.
+    pub noise: BTreeMap<String, BTreeMap<String, f64>>,
 }
 
 impl Default for Options {
     fn default() -> Self {
         Options {
             threshold_pct: DEFAULT_THRESHOLD_PCT,
+            noise: BTreeMap::new(),
+        }
+    }
+}
+
+impl Options {
+    /// The threshold (percent) a variant's frame time is judged with, and the noise σ that set
+    /// it (`None` when the fixed threshold applies).
+    pub fn threshold_for(&self, scenario: &str, variant: &str) -> (f64, Option<f64>) {
+        let sigma = self
+            .noise
+            .get(scenario)
+            .and_then(|v| v.get(variant))
+            .copied()
+            .filter(|s| s.is_finite() && *s >= 0.0);
+        match sigma {
+            Some(s) => {
+                let by_noise = (NOISE_SIGMAS * s * 100.0).max(NOISE_FLOOR_PCT);
+                if by_noise < self.threshold_pct {
+                    (by_noise, Some(s))
+                } else {
+                    (self.threshold_pct, Some(s))
+                }
+            }
+            None => (self.threshold_pct, None),
         }
     }
 }
@@ -102,14 +142,23 @@ pub struct Rule {
     pub threshold_pct: f64,
     /// Frames per side at which the test can first reach p < `alpha`.
     pub frames_needed: usize,
+    /// Whether some variants' thresholds follow their series' noise ([`Options::noise`]): a
+    /// change of at least `noise_sigmas` σ (and [`NOISE_FLOOR_PCT`]) is then called too.
+    pub noise_sigmas: Option<f64>,
 }
 
 impl Rule {
     /// `time: Mann-Whitney U p < 0.01 and a Hodges-Lehmann shift of at least 5%; too few frames
     /// below 5 per side`.
     pub fn sentence(&self) -> String {
+        let noise = match self.noise_sigmas {
+            Some(k) => format!(
+                " (or {k}σ of the series' nightly noise, at least {NOISE_FLOOR_PCT}%, where a history gives it)"
+            ),
+            None => String::new(),
+        };
         format!(
-            "time: Mann-Whitney U p < {} and a Hodges-Lehmann shift of at least {}%; too few frames below {} per side",
+            "time: Mann-Whitney U p < {} and a Hodges-Lehmann shift of at least {}%{noise}; too few frames below {} per side",
             self.alpha, self.threshold_pct, self.frames_needed
         )
     }
@@ -152,6 +201,12 @@ pub struct VariantComparison {
     pub frames: Pair<usize>,
     /// The frame time's test ([`time`]).
     pub time: Time,
+    /// The threshold (percent) the frame time was judged with: the fixed one, or lower where its
+    /// series' noise says a smaller change stands out ([`Options::threshold_for`]).
+    pub threshold_pct: f64,
+    /// The night-to-night noise σ of the variant's frame-time series (fraction of its level),
+    /// where the caller knew it.
+    pub noise: Option<f64>,
     /// Per pass, on the same adapter: where a frame-time change is.
     pub passes: Vec<PassComparison>,
     /// The variant this one's speedup is computed against, in each run ([`baseline::of`]).
@@ -180,7 +235,74 @@ impl VariantComparison {
     }
 }
 
+/// What a comparison as a whole says.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Decision {
+    /// Something counted as a regression.
+    Regressed,
+    /// Every counted time, metric and status was judged and none got worse.
+    NoRegression,
+    /// Nothing got worse, but the times could not be judged ([`Comparison::undecided`] says why).
+    Inconclusive,
+}
+
+impl Decision {
+    /// `regressed`, `no regression`, `inconclusive`.
+    pub fn words(self) -> &'static str {
+        match self {
+            Decision::Regressed => "regressed",
+            Decision::NoRegression => "no regression",
+            Decision::Inconclusive => "inconclusive",
+        }
+    }
+}
+
 impl Comparison {
+    /// The comparison's verdict: regressed, no regression, or inconclusive when nothing regressed
+    /// but the times could not be judged.
+    pub fn decision(&self) -> Decision {
+        if self.regressed() {
+            Decision::Regressed
+        } else if self.undecided().is_empty() {
+            Decision::NoRegression
+        } else {
+            Decision::Inconclusive
+        }
+    }
+
+    /// Why the times could not be judged, one phrase each: a CPU adapter, too few frames, nothing
+    /// timed in both runs. Empty when they were.
+    pub fn undecided(&self) -> Vec<String> {
+        let mut why = Vec::new();
+        if !self.timings_count {
+            let cpu: Vec<&str> = [&self.a, &self.b]
+                .iter()
+                .filter(|r| r.adapter.device_type == "cpu")
+                .map(|r| r.adapter.name.as_str())
+                .collect();
+            let name = cpu.first().copied().unwrap_or("a CPU adapter");
+            why.push(format!(
+                "a CPU adapter ({name}): its times measure CPU work and the machine's load and are not judged"
+            ));
+            return why;
+        }
+        let timed = self
+            .variants()
+            .filter(|(_, v)| v.time.tested().is_some())
+            .count();
+        let few = self.too_few_frames().count();
+        if timed == 0 {
+            why.push("no variant was timed in both runs".to_string());
+        } else if few > 0 {
+            why.push(format!(
+                "too few frames in {few} of {timed} timed variants ({} per side needed)",
+                self.rule.frames_needed
+            ));
+        }
+        why
+    }
+
     /// Whether anything counted as a regression.
     pub fn regressed(&self) -> bool {
         self.findings.iter().any(|f| f.verdict == Verdict::Worse)
@@ -241,12 +363,19 @@ pub(crate) struct InRun<'a> {
 }
 
 fn compare_variant(
+    scenario: &str,
     a: Option<InRun>,
     b: Option<InRun>,
     same: bool,
     opts: &Options,
 ) -> VariantComparison {
     let first = a.or(b).expect("a variant is in at least one run");
+    // Noise of a series in milliseconds: only where times are compared in milliseconds.
+    let (threshold_pct, noise) = if same {
+        opts.threshold_for(scenario, &first.r.variant)
+    } else {
+        (opts.threshold_pct, None)
+    };
     let va = a.map(|x| x.r);
     let vb = b.map(|x| x.r);
     let base_a = a.and_then(baseline::of);
@@ -271,7 +400,9 @@ fn compare_variant(
             va.and_then(crate::stats::frame_samples).map(|s| s.len()),
             vb.and_then(crate::stats::frame_samples).map(|s| s.len()),
         ),
-        time: time::frame(a, b, same, opts),
+        time: time::frame(a, b, same, threshold_pct),
+        threshold_pct,
+        noise,
         passes: match (va, vb) {
             (Some(x), Some(y)) if same => time::passes(x, y, opts),
             _ => Vec::new(),
@@ -321,9 +452,10 @@ fn compare_scenario(
             r,
         })
     }
+    let scenario = a.or(b).map(|s| s.scenario.as_str()).unwrap_or_default();
     let mut variants: Vec<VariantComparison> = names
         .iter()
-        .map(|n| compare_variant(find(a, n), find(b, n), same, opts))
+        .map(|n| compare_variant(scenario, find(a, n), find(b, n), same, opts))
         .collect();
     if same {
         findings::attribute_speedups(&mut variants);
@@ -361,6 +493,7 @@ pub fn compare(a: RunRef, b: RunRef, opts: &Options) -> Comparison {
             confidence: 1.0 - ALPHA,
             threshold_pct: opts.threshold_pct,
             frames_needed: crate::stats::frames_needed(ALPHA),
+            noise_sigmas: (same && !opts.noise.is_empty()).then_some(NOISE_SIGMAS),
         },
         scenarios,
         findings,

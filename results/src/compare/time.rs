@@ -91,8 +91,8 @@ fn median(s: &[f64]) -> Option<f64> {
     Summary::of(s).map(|s| s.median)
 }
 
-/// The frame time of a variant found in both runs.
-pub(crate) fn frame(a: Option<InRun>, b: Option<InRun>, same: bool, opts: &Options) -> Time {
+/// The frame time of a variant found in both runs, judged with `threshold_pct`.
+pub(crate) fn frame(a: Option<InRun>, b: Option<InRun>, same: bool, threshold_pct: f64) -> Time {
     let (Some(a), Some(b)) = (a, b) else {
         return Time::NotCompared("not in both");
     };
@@ -118,7 +118,7 @@ pub(crate) fn frame(a: Option<InRun>, b: Option<InRun>, same: bool, opts: &Optio
         let scale = |s: Vec<f64>, u: f64| s.into_iter().map(|x| x / u).collect::<Vec<_>>();
         (scale(sa, ua), scale(sb, ub))
     };
-    match compare_times(&sa, &sb, opts.threshold_pct) {
+    match compare_times(&sa, &sb, threshold_pct) {
         Some(test) => Time::Tested { test, relative_to },
         None => Time::NotCompared("not timed"),
     }
@@ -164,6 +164,7 @@ pub(crate) mod tests {
     use std::collections::BTreeMap;
 
     use super::*;
+    use crate::stats::DEFAULT_THRESHOLD_PCT;
     use crate::PassRecord;
 
     /// An ok result of technique `name` (up to a `[`) with one pass timed `samples`.
@@ -218,7 +219,7 @@ pub(crate) mod tests {
     fn four_frames_are_too_few_whatever_the_change() {
         let a = vec![result("native", &frames(4, 1.0))];
         let b = vec![result("native", &frames(4, 16.31))];
-        let t = frame(in_run(&a, 0), in_run(&b, 0), true, &Options::default());
+        let t = frame(in_run(&a, 0), in_run(&b, 0), true, DEFAULT_THRESHOLD_PCT);
         assert_eq!(t.words(), "too few frames");
         assert!(t.tested().unwrap().change > 15.0);
     }
@@ -234,14 +235,14 @@ pub(crate) mod tests {
             result("native", &frames(10, 0.5)),
             result("upscale", &frames(10, 0.25)),
         ];
-        let t = frame(in_run(&a, 1), in_run(&b, 1), false, &Options::default());
+        let t = frame(in_run(&a, 1), in_run(&b, 1), false, DEFAULT_THRESHOLD_PCT);
         assert_eq!(t.words(), "within noise", "{t:?}");
         let Time::Tested { relative_to, .. } = &t else {
             unreachable!()
         };
         assert_eq!(relative_to.a.as_deref(), Some("native"));
         assert_eq!(
-            frame(in_run(&a, 0), in_run(&b, 0), false, &Options::default()),
+            frame(in_run(&a, 0), in_run(&b, 0), false, DEFAULT_THRESHOLD_PCT),
             Time::Baseline
         );
     }

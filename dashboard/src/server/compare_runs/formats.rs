@@ -18,6 +18,12 @@ use crate::server::export::{cell, csv, csv_response, md_response, Format};
 #[derive(Serialize)]
 struct Body<'a> {
     by_speedup: bool,
+    /// `regressed`, `no regression` or `inconclusive` (`Comparison::decision`).
+    decision: &'static str,
+    /// Why the times could not be judged (`Comparison::undecided`); empty when they were.
+    undecided: Vec<String>,
+    /// What differs between A's and B's conditions (driver, clocks, throttling).
+    environment: &'a [String],
     #[serde(flatten)]
     comparison: &'a Comparison,
 }
@@ -108,11 +114,14 @@ pub fn csv_rows(c: &Comparison) -> Vec<Vec<String>> {
 }
 
 /// The comparison in `format`.
-pub fn respond(c: &Comparison, format: Format) -> Response {
+pub fn respond(c: &Comparison, environment: &[String], format: Format) -> Response {
     let name = format!("compare-{}-{}", c.a.run_id, c.b.run_id);
     match format {
         Format::Json => Json(Body {
             by_speedup: !c.same_adapter,
+            decision: c.decision().words(),
+            undecided: c.undecided(),
+            environment,
             comparison: c,
         })
         .into_response(),

@@ -29,12 +29,12 @@ pub async fn api(
 ) -> Result<Response, AppError> {
     let q = query::parse(raw.as_deref())?;
     let format = q.format;
-    let Some(c) = query::load(&state, q).await? else {
+    let Some(l) = query::load(&state, q).await? else {
         return Err(AppError::BadRequest(
             "give a= and b= (run ids or commits)".into(),
         ));
     };
-    Ok(formats::respond(&c, format))
+    Ok(formats::respond(&l.comparison, &l.environment, format))
 }
 
 /// `GET /compare/runs`.
@@ -45,8 +45,9 @@ pub async fn page(
     let q = query::parse(raw.as_deref())?;
     let mut body = view::form(&q);
     match query::load(&state, q).await? {
-        Some(c) => {
-            body.push_str(&view::render(&c));
+        Some(l) => {
+            let c = &l.comparison;
+            body.push_str(&view::render_with(&l));
             Ok(Html(layout(
                 &format!("Compare {} with {}", c.b.run_id, c.a.run_id),
                 "compare",

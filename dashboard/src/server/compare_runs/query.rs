@@ -8,9 +8,11 @@
 use tessera_results::compare::{self, Comparison, Options, RunRef};
 use tessera_results::stats::DEFAULT_THRESHOLD_PCT;
 
+use crate::server::conditions_view;
 use crate::server::export::Format;
 use crate::server::{AppError, AppState};
 use crate::store::browse;
+use crate::store::noise;
 use crate::store::read;
 
 /// The request, parsed from the query string (`pick` may repeat).
@@ -97,8 +99,18 @@ fn resolve(
     })
 }
 
+/// A comparison with what the engine does not judge: the conditions of both runs.
+pub struct Loaded {
+    pub comparison: Comparison,
+    /// What differs between A's and B's conditions ([`conditions_view::differences`]).
+    pub environment: Vec<String>,
+    /// Both runs' scenario records (their conditions per variant).
+    pub a: Vec<tessera_results::ScenarioResult>,
+    pub b: Vec<tessera_results::ScenarioResult>,
+}
+
 /// The comparison the request names; `None` when it names no runs (the empty form).
-pub async fn load(state: &AppState, q: CompareRunsQuery) -> Result<Option<Comparison>, AppError> {
+pub async fn load(state: &AppState, q: CompareRunsQuery) -> Result<Option<Loaded>, AppError> {
     state
         .db(move |c| {
             let (a, b) = match (&q.a, &q.b, q.picks.as_slice()) {
@@ -125,7 +137,13 @@ pub async fn load(state: &AppState, q: CompareRunsQuery) -> Result<Option<Compar
             };
             let da = read::run(c, &a)?;
             let db = read::run(c, &b)?;
-            Ok(Some(compare::compare(
+            // The series' own noise, where a history on B's adapter gives it (times in ms only).
+            let noise = if compare::same_adapter(&da.info, &db.info) {
+                noise::frame_time_noise(c, &b)?
+            } else {
+                Default::default()
+            };
+            let comparison = compare::compare(
                 RunRef {
                     info: &da.info,
                     scenarios: &da.scenarios,
@@ -136,8 +154,20 @@ pub async fn load(state: &AppState, q: CompareRunsQuery) -> Result<Option<Compar
                 },
                 &Options {
                     threshold_pct: q.threshold,
+                    noise,
                 },
-            )))
+            );
+            Ok(Some(Loaded {
+                environment: conditions_view::differences(
+                    &da.info,
+                    &da.scenarios,
+                    &db.info,
+                    &db.scenarios,
+                ),
+                comparison,
+                a: da.scenarios,
+                b: db.scenarios,
+            }))
         })
         .await
 }

@@ -10,7 +10,7 @@ use std::fmt::Write;
 
 use tessera_results::compare::words::{change_with_interval, p_value, pct};
 use tessera_results::compare::{
-    markdown, Comparison, Finding, PassComparison, ScenarioComparison, Time, TimeVerdict,
+    Comparison, Decision, Finding, PassComparison, ScenarioComparison, Time, TimeVerdict,
     VariantComparison, Verdict,
 };
 use tessera_results::RunInfo;
@@ -40,6 +40,20 @@ fn verdict_class(v: Verdict) -> &'static str {
         Verdict::Worse => "worse",
         Verdict::Better => "better",
         Verdict::Same => "muted",
+    }
+}
+
+/// The threshold a variant's time was judged with, where its series' noise set it: `threshold
+/// 1.0% (5σ of 0.08% nightly noise)`.
+fn threshold_note(v: &VariantComparison, c: &Comparison) -> String {
+    match (v.noise, c.rule.noise_sigmas) {
+        (Some(sigma), Some(k)) if v.threshold_pct < c.rule.threshold_pct => format!(
+            " <span class=muted title=\"a change of {k}σ of this series' night-to-night noise stands out; the fixed threshold is {}%\">threshold {:.1}% ({k}σ of {:.2}% nightly noise)</span>",
+            c.rule.threshold_pct,
+            v.threshold_pct,
+            sigma * 100.0
+        ),
+        _ => String::new(),
     }
 }
 
@@ -136,7 +150,7 @@ fn passes_cell(passes: &[PassComparison], counts: bool) -> String {
         .map(|p| {
             let change = p.time.tested().map_or("–".into(), |t| pct(t.change));
             format!(
-                "{} <span class={}>{change} {}</span>",
+                "<span class=nw>{} <span class={}>{change} {}</span></span>",
                 esc(&p.name),
                 time_class(&p.time, counts),
                 esc(p.time.words())
@@ -150,12 +164,18 @@ fn metrics_cell(v: &VariantComparison) -> String {
     v.metrics
         .iter()
         .map(|m| {
+            let unit = tessera_results::measure::Measure::from_name(&m.name)
+                .map(|x| x.unit())
+                .filter(|u| !u.is_empty())
+                .map_or(String::new(), |u| format!(" {u}"));
+            // One item never breaks inside: `psnr 18.85 → 18.85 dB`.
             format!(
-                "{} {} → <span class={}>{}</span>",
+                "<span class=nw>{} {} → <span class={}>{}</span>{}</span>",
                 esc(&m.name),
                 opt(m.values.a),
                 verdict_class(m.verdict),
-                opt(m.values.b)
+                opt(m.values.b),
+                esc(&unit)
             )
         })
         .collect::<Vec<_>>()
@@ -209,7 +229,7 @@ fn scenario_table(b: &mut String, c: &Comparison, s: &ScenarioComparison) {
     };
     let _ = write!(
         b,
-        "<h2 id=\"s-{}\">{}{only}</h2><div class=scroll><table class=compare><tr><th>variant</th><th>status A → B</th><th class=n>GPU ms A</th><th class=n>GPU ms B</th><th class=n>change [{:.0}% interval]</th><th>verdict</th><th class=n>speedup A → B</th><th>passes (change, verdict)</th><th>metrics A → B</th><th>images</th></tr>",
+        "<h2 id=\"s-{}\">{}{only}</h2><div class=scroll><table class=compare><tr><th>variant</th><th>status A → B</th><th class=n>GPU A (ms)</th><th class=n>GPU B (ms)</th><th class=n>change [{:.0}% interval]</th><th>verdict</th><th class=n>speed-up A → B (×)</th><th>passes (change, verdict)</th><th>metrics A → B</th><th>images</th></tr>",
         esc(&s.scenario),
         esc(&s.scenario),
         c.rule.confidence * 100.0
@@ -240,7 +260,7 @@ fn scenario_table(b: &mut String, c: &Comparison, s: &ScenarioComparison) {
             opt(v.gpu_ms.a),
             opt(v.gpu_ms.b),
             change_cell(&v.time),
-            time_words(&v.time, c.rule.frames_needed),
+            time_words(&v.time, c.rule.frames_needed) + &threshold_note(v, c),
             speedup_cell(v),
             passes_cell(&v.passes, c.timings_count),
             metrics_cell(v),
@@ -268,11 +288,19 @@ pub fn render(c: &Comparison) -> String {
     );
     let _ = write!(
         b,
-        "<p class=muted>Time: a Mann-Whitney U test on per-frame GPU times, the test of <code>tessera compare</code>. <em>slower</em> or <em>faster</em> when p &lt; {alpha} and the Hodges-Lehmann shift (with its {conf:.0}% interval) is at least {thr}%; <em>below threshold</em> when significant but smaller; <em>within noise</em> when p ≥ {alpha}; <em>too few frames</em> when the frame counts cannot reach p &lt; {alpha} whatever the change (it takes {need} per side). Metrics by their direction beyond a tolerance; a baseline's change is counted once, on the baseline (<code>results/COMPARISON.md</code>).</p>",
+        "<p class=muted>Time: a Mann-Whitney U test on per-frame GPU times, the test of <code>tessera compare</code>. <em>slower</em> or <em>faster</em> when p &lt; {alpha} and the Hodges-Lehmann shift (with its {conf:.0}% interval) is at least {thr}%{noise}; <em>below threshold</em> when significant but smaller; <em>within noise</em> when p ≥ {alpha}; <em>too few frames</em> when the frame counts cannot reach p &lt; {alpha} whatever the change (it takes {need} per side). Metrics by their direction beyond a tolerance; a baseline's change is counted once, on the baseline (<code>results/COMPARISON.md</code>).</p>",
         alpha = c.rule.alpha,
         conf = c.rule.confidence * 100.0,
         thr = c.rule.threshold_pct,
         need = c.rule.frames_needed,
+        noise = match c.rule.noise_sigmas {
+            Some(k) => format!(
+                ", or at least {k}σ of the variant's own night-to-night noise on this adapter (never below {}%; from the history before B, where it has {} points)",
+                tessera_results::compare::NOISE_FLOOR_PCT,
+                crate::store::noise::MIN_POINTS
+            ),
+            None => String::new(),
+        },
     );
     if !c.same_adapter {
         b.push_str("<p class=worse>The adapters or drivers differ: times are relative to each variant's baseline in its own run (a change means its speedup changed); the baseline itself reads <em>baseline</em>.</p>");
@@ -280,15 +308,23 @@ pub fn render(c: &Comparison) -> String {
     if !c.timings_count {
         b.push_str("<p class=muted>A run is on a CPU adapter (lavapipe): its timings measure CPU work and the machine's load, so time verdicts are shown but never count as regressions.</p>");
     }
-    let verdict = markdown::verdict_words(c);
-    let class = match verdict {
-        "regressed" => "worse",
-        "no regression" => "better",
-        _ => "muted",
+    let decision = c.decision();
+    let (class, why) = match decision {
+        Decision::Regressed => ("worse", String::new()),
+        Decision::NoRegression => ("better", String::new()),
+        // Nothing could be decided: neither red nor green.
+        Decision::Inconclusive => (
+            "neutral",
+            format!(
+                " <span id=undecided>({})</span>",
+                esc(&c.undecided().join("; "))
+            ),
+        ),
     };
     let _ = write!(
         b,
-        "<p id=verdict><strong class={class}>Verdict: {verdict}</strong> · {} · {}</p><p id=tally><span class={slow}>{} slower</span> · <span class={fast}>{} faster</span> · {} within noise · {} below threshold · {} too few frames</p>",
+        "<p id=verdict><strong class={class}>Verdict: {}</strong>{why} · {} · {}</p><p id=tally><span class={slow}>{} slower</span> · <span class={fast}>{} faster</span> · {} within noise · {} below threshold · {} too few frames</p>",
+        decision.words(),
         plural(c.findings_of(Verdict::Worse).count(), "regression"),
         plural(c.findings_of(Verdict::Better).count(), "improvement"),
         c.count_time(TimeVerdict::Slower),
@@ -305,6 +341,68 @@ pub fn render(c: &Comparison) -> String {
         scenario_table(&mut b, c, s);
     }
     b
+}
+
+/// The page body below the form, with the conditions: the environment diff beside the verdict
+/// and each variant's conditions in A and B.
+pub fn render_with(l: &super::query::Loaded) -> String {
+    let mut b = render(&l.comparison);
+    let env = if l.environment.is_empty() {
+        "<p id=environment class=muted>Conditions: the same driver and harness; clocks, temperature and throttling alike where recorded.</p>".to_string()
+    } else {
+        format!(
+            "<p id=environment class=neutral><strong>Conditions differ:</strong> {}</p>",
+            esc(&l.environment.join("; "))
+        )
+    };
+    // Beside the verdict: right after its tally.
+    match b
+        .find("<p id=tally>")
+        .and_then(|i| b[i..].find("</p>").map(|j| i + j + 4))
+    {
+        Some(at) => b.insert_str(at, &env),
+        None => b.push_str(&env),
+    }
+    let table = conditions_table(l);
+    b.push_str(&table);
+    b
+}
+
+fn conditions_table(l: &super::query::Loaded) -> String {
+    use crate::server::conditions_view::{cells, HEADERS};
+    let any = |s: &[tessera_results::ScenarioResult]| {
+        s.iter().flat_map(|s| &s.results).any(|v| {
+            v.conditions
+                .as_ref()
+                .is_some_and(|c| c.recorded().is_some())
+        })
+    };
+    if !any(&l.a) && !any(&l.b) {
+        return String::new();
+    }
+    let mut out = format!(
+        "<h2 id=conditions>Conditions</h2><div class=scroll><table class=conditions><tr><th>scenario</th><th>variant</th><th>run</th>{HEADERS}</tr>"
+    );
+    for (s, v) in l.comparison.variants() {
+        for (side, runs) in [("A", &l.a), ("B", &l.b)] {
+            let Some(r) = runs
+                .iter()
+                .find(|x| x.scenario == s.scenario)
+                .and_then(|x| x.results.iter().find(|r| r.variant == v.variant))
+            else {
+                continue;
+            };
+            let _ = write!(
+                out,
+                "<tr><td>{}</td><td>{}</td><td>{side}</td>{}</tr>",
+                name(&s.scenario),
+                name(&v.variant),
+                cells(r)
+            );
+        }
+    }
+    out.push_str("</table></div>");
+    out
 }
 
 /// The form at the top of the page.

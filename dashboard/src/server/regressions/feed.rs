@@ -33,8 +33,15 @@ pub async fn feed(
     filter
         .validate()
         .map_err(|e| AppError::BadRequest(e.to_string()))?;
-    let mut groups = state
-        .db(move |c| Ok(groups::list(c, &filter, Sort::Date, usize::MAX)?))
+    let now = crate::now_rfc3339();
+    let at = now.clone();
+    let (mut groups, stopped) = state
+        .db(move |c| {
+            Ok((
+                groups::list(c, &filter, Sort::Date, usize::MAX)?,
+                crate::store::stoppage::stoppages(c, &at)?,
+            ))
+        })
         .await?;
     groups.sort_by(|x, y| {
         (y.detected_at.cmp(&x.detected_at))
@@ -42,7 +49,8 @@ pub async fn feed(
             .then(y.id.cmp(&x.id))
     });
     groups.truncate(50);
-    let xml = notify::atom::feed(&groups, &base_url(&state, &headers), &crate::now_rfc3339());
+    let xml =
+        notify::atom::feed_with_stoppages(&groups, &stopped, &base_url(&state, &headers), &now);
     Ok((
         [(header::CONTENT_TYPE, "application/atom+xml; charset=utf-8")],
         xml,

@@ -57,7 +57,7 @@ const STYLE: &str = "<style>
 .meta{margin:2px 0 6px;color:#444}.meta code{background:#e8ebf0;padding:0 3px}
 .chg{display:inline-block;white-space:nowrap;min-width:84px;padding:0 6px;border-radius:3px;font-weight:600;font-variant-numeric:tabular-nums;text-align:right}
 .chg.worse{background:#fde8e6;color:#a1140f}.chg.better{background:#e2f3e7;color:#0d6b2c}
-.count.worse{color:#a1140f;font-weight:600}.count.better{color:#0d6b2c;font-weight:600}
+.chg.via{background:#eceff3;color:#444;white-space:normal}.count.worse{color:#a1140f;font-weight:600}.count.better{color:#0d6b2c;font-weight:600}
 .badge{display:inline-block;padding:0 7px;border-radius:9px;font-size:12px;border:1px solid #aaa;background:#fff}
 .st-new{background:#fff3d1;border-color:#d9a521}.st-acknowledged{background:#e3ebfb;border-color:#6f93dd}
 .st-fixed{background:#e2f3e7;border-color:#5aa772}.st-invalid,.st-ignored{background:#eee;color:#555}
@@ -170,6 +170,19 @@ fn filters_form(q: &GroupsQuery, f: &Facets) -> String {
 }
 
 fn change_cell(a: &Alert) -> String {
+    if a.via_baseline {
+        // Counted on the baseline's change, not as a change of its own.
+        return format!(
+            "<span class=\"chg via\">{} {} <span class=muted>moved with {}</span></span>",
+            if a.relative_change >= 0.0 {
+                "▲"
+            } else {
+                "▼"
+            },
+            pct(a.relative_change),
+            esc(a.moved_with.as_deref().unwrap_or("its baseline"))
+        );
+    }
     let dir = if a.is_regression { "worse" } else { "better" };
     format!(
         "<span class=\"chg {dir}\">{} {} {dir}</span>",
@@ -195,7 +208,7 @@ fn group_head(g: &Group, b: &mut String, title_link: bool) {
     };
     let _ = write!(
         b,
-        "<h2>{title}</h2><p class=meta><span class=\"badge st-{}\" data-state-of=\"{}\">{}</span>{} <span class=\"badge stat-{}\">{}</span> · commits <code>{}</code> → <code>{}</code> · <span class=\"count worse\">{} worse</span>, <span class=\"count better\">{} better</span> on {} · newest run {} · <a href=\"/regressions/groups/{key}.md\">Markdown</a>",
+        "<h2>{title}</h2><p class=meta><span class=\"badge st-{}\" data-state-of=\"{}\">{}</span>{} <span class=\"badge stat-{}\">{}</span> · commits <code>{}</code> → <code>{}</code> · <span class=\"count worse\">{} worse</span>, <span class=\"count better\">{} better</span>{} on {} · newest run {} · <a href=\"/regressions/groups/{key}.md\">Markdown</a>",
         esc(g.state.as_str()),
         esc(&g.key),
         esc(g.state.as_str()),
@@ -206,6 +219,14 @@ fn group_head(g: &Group, b: &mut String, title_link: bool) {
         esc(&commit(g.commit_after.as_deref())),
         g.worse,
         g.better,
+        if g.via_baseline > 0 {
+            format!(
+                ", <span class=\"count via\">{} moved with their baseline</span>",
+                g.via_baseline
+            )
+        } else {
+            String::new()
+        },
         esc(&g.adapters.join(", ")),
         esc(&g.started_at),
     );
@@ -327,11 +348,28 @@ pub async fn page(
     Query(q): Query<GroupsQuery>,
 ) -> Result<Html<String>, AppError> {
     let (groups, facets) = load_groups(&state, &q).await?;
-    Ok(Html(layout(
-        "Regressions",
-        "regressions",
-        &render(&groups, &facets, &q),
-    )))
+    let stopped = state
+        .db(|c| Ok(crate::store::stoppage::stoppages(c, &crate::now_rfc3339())?))
+        .await?;
+    let mut body = render(&groups, &facets, &q);
+    // Data stoppages first: a silent adapter hides every change it would have shown.
+    if !stopped.is_empty() {
+        let mut s = String::from("<div id=stoppages><h2 class=worse>Data stopped</h2><ul>");
+        for x in &stopped {
+            let _ = write!(
+                s,
+                "<li class=stoppage>{} <span class=muted>(last run <a href=\"/runs/{}\">{}</a> at {})</span></li>",
+                esc(&x.message),
+                enc(&x.last_run),
+                esc(&x.last_run),
+                esc(&x.last_at)
+            );
+        }
+        s.push_str("</ul></div>");
+        let at = body.find("<p id=count>").unwrap_or(0);
+        body.insert_str(at, &s);
+    }
+    Ok(Html(layout("Regressions", "regressions", &body)))
 }
 
 /// Most series charted on a group's page; the rest are listed.

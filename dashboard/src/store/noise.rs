@@ -1,0 +1,109 @@
+//! The night-to-night noise of a run's frame-time series, as regression detection estimates it
+//! ([`crate::detect::noise_sigma`]: robust, from successive differences), read from the points
+//! stored before the run in its own environment (driver, driver version, harness version). The
+//! two-run comparison and the run page's "vs prev" judge a frame-time change against it as well
+//! as against the fixed threshold (`tessera_results::compare::Options::noise`), so a change many σ
+//! outside a quiet series' noise is called even when it is below the fixed percentage.
+//!
+//! Not for: detection itself ([`crate::regressions`]).
+
+use std::collections::BTreeMap;
+
+use crate::db::{Connection, Value};
+use crate::detect::noise_sigma;
+use crate::store::StoreError;
+
+/// Points read before the run (the newest ones).
+pub const NOISE_POINTS: i64 = 64;
+
+/// Fewest points in the run's environment for a noise estimate; with fewer the fixed threshold
+/// alone applies.
+pub const MIN_POINTS: usize = 8;
+
+/// The series measure read: median frame GPU time.
+const FRAME_TIME: &str = "gpu_ms.median";
+
+/// Relative noise σ (σ over the median level) of each frame-time series of run `run_id`'s adapter
+/// that has a point in the run, from the points before it: scenario → variant → σ. Series with
+/// fewer than [`MIN_POINTS`] earlier points in the run's environment are left out.
+pub fn frame_time_noise(
+    conn: &mut dyn Connection,
+    run_id: &str,
+) -> Result<BTreeMap<String, BTreeMap<String, f64>>, StoreError> {
+    let mut out: BTreeMap<String, BTreeMap<String, f64>> = BTreeMap::new();
+    let Some(run) = conn.query_opt(
+        "SELECT id, driver, driver_info, harness_version FROM runs WHERE run_id = $1",
+        &[run_id.into()],
+    )?
+    else {
+        return Ok(out);
+    };
+    let pk = run.i64(0)?;
+    let env = (run.string(1)?, run.string(2)?, run.string(3)?);
+    let series = conn.query(
+        "SELECT s.id, s.scenario, s.variant, p.ord FROM points p JOIN series s ON s.id = p.series_id
+         WHERE p.run_pk = $1 AND s.measure = $2 ORDER BY s.id",
+        &[Value::Int(pk), FRAME_TIME.into()],
+    )?;
+    for s in &series {
+        let (id, scenario, variant, ord) = (s.i64(0)?, s.string(1)?, s.string(2)?, s.string(3)?);
+        let rows = conn.query(
+            "SELECT p.value, r.driver, r.driver_info, r.harness_version
+             FROM points p JOIN runs r ON r.id = p.run_pk
+             WHERE p.series_id = $1 AND (p.ord < $2 OR (p.ord = $2 AND p.run_pk < $3))
+             ORDER BY p.ord DESC, p.run_pk DESC LIMIT $4",
+            &[
+                Value::Int(id),
+                ord.as_str().into(),
+                Value::Int(pk),
+                Value::Int(NOISE_POINTS),
+            ],
+        )?;
+        let mut values = Vec::new();
+        for r in &rows {
+            if (r.string(1)?, r.string(2)?, r.string(3)?) != env {
+                break;
+            }
+            values.push(r.f64(0)?);
+        }
+        if let Some(sigma) = relative_sigma(&mut values) {
+            out.entry(scenario).or_default().insert(variant, sigma);
+        }
+    }
+    Ok(out)
+}
+
+/// σ over the median of `values` (newest first), or `None` for fewer than [`MIN_POINTS`] or a
+/// level that is not positive.
+fn relative_sigma(values: &mut [f64]) -> Option<f64> {
+    if values.len() < MIN_POINTS {
+        return None;
+    }
+    values.reverse();
+    let sigma = noise_sigma(values);
+    let mut sorted = values.to_vec();
+    sorted.sort_by(|a, b| a.total_cmp(b));
+    let level = sorted[sorted.len() / 2];
+    (level > 0.0).then(|| sigma / level)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn relative_sigma_needs_enough_points_and_scales_by_the_level() {
+        assert_eq!(relative_sigma(&mut [1.0; 7]), None);
+        // Alternating ±0.01 around 2.0: successive differences of 0.02.
+        let mut v: Vec<f64> = (0..20)
+            .map(|i| if i % 2 == 0 { 2.01 } else { 1.99 })
+            .collect();
+        let s = relative_sigma(&mut v).unwrap();
+        assert!(s > 0.0 && s < 0.02, "{s}");
+        let mut scaled: Vec<f64> = (0..20)
+            .map(|i| if i % 2 == 0 { 20.1 } else { 19.9 })
+            .collect();
+        assert!((relative_sigma(&mut scaled).unwrap() - s).abs() < 1e-12);
+        assert_eq!(relative_sigma(&mut [0.0; 10]), None);
+    }
+}
