@@ -10,13 +10,22 @@ use sha2::{Digest, Sha256};
 use tessera_results::queue::Sample;
 use tessera_results::{ScenarioResult, VariantResult};
 
-/// A digest of the frames a result compared: SHA-256 over its saved output frames in frame
-/// order (each PNG's bytes, which the encoder writes the same for the same pixels). `None` when
-/// the result saved no output frame.
-///
-/// The one place that says what "the frames changed" reads: point it at a per-frame digest field
-/// of the result once results carry one.
+/// A digest of the frames a result compared: SHA-256 over its per-frame digests
+/// (`frame_digests`, every measured frame), or for results without them over its saved output
+/// frames in frame order. `None` when the result has neither. The one place that says what
+/// "the frames changed" reads.
 pub fn frames_digest(run_dir: &Path, result: &VariantResult) -> Option<String> {
+    // Every compared frame's digest, as the result records them (`frame_digests`, results
+    // README "Frame digests"): one hash over them all, so any changed frame changes it.
+    if !result.frame_digests.is_empty() {
+        let mut h = Sha256::new();
+        for (i, d) in result.frame_digests.iter().enumerate() {
+            h.update((i as u32).to_le_bytes());
+            h.update(d.as_bytes());
+        }
+        return Some(h.finalize().iter().map(|b| format!("{b:02x}")).collect());
+    }
+    // Results written before frame digests: the saved output PNGs.
     let mut frames: Vec<_> = result
         .images
         .iter()
