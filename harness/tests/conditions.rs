@@ -201,12 +201,16 @@ fn a_throttled_sample_is_flagged_and_fails_its_gate() {
             .starts_with("graphics clock fell to 1000 MHz, below 75% of the maximum 2000 MHz, in"));
         assert_eq!(c.throttle_reasons, vec!["sw-thermal-slowdown"]);
         // Energy over the window that follows the measured frames (sampled every millisecond):
-        // it ends after the counter's third step, 200 to 300 ms in, before the 500 ms default;
-        // the counter reads 5 W.
+        // it ends at the first frame after the counter's third step (200 ms at the least), and
+        // at the latest one frame past the 500 ms cap (a frame on a loaded CPU adapter can take
+        // 200 ms, and the sampler may be starved: the bound is the rule, not a timing); the
+        // counter reads 5 W.
         let e = c.energy.unwrap();
         assert_eq!(e.method, EnergyMethod::Counter);
+        assert!(e.frames > 0, "{e:?}");
+        let frame_ms = e.window_ms / f64::from(e.frames);
         assert!(
-            (190.0..480.0).contains(&e.window_ms) && e.frames > 0,
+            e.window_ms >= 190.0 && e.window_ms <= 500.0 + frame_ms + 1.0,
             "{e:?}"
         );
         let watts = e.mj_per_frame * f64::from(e.frames) / e.window_ms;

@@ -101,10 +101,17 @@ pub fn execute(job: &Claimed, cx: &mut Context) -> Outcome {
             .results
             .join(format!("job{}-a{}-{seq}", job.job_id, job.attempt));
         let _ = std::fs::remove_dir_all(&out);
+        // An A/B or bisection step renders only the variant it samples, with its baselines
+        // and reference (`tessera run --variants`); a whole run uploads every variant.
+        let only = match spec.kind {
+            JobKind::Ab => spec.variant.as_deref(),
+            JobKind::Run => None,
+        };
         let run_dir = match run_once(
             bin,
             &cx.work.checkout,
             &spec.scenarios,
+            only,
             &spec.arms[i].env,
             &out,
         ) {
@@ -156,24 +163,37 @@ pub fn execute(job: &Claimed, cx: &mut Context) -> Outcome {
     })
 }
 
-/// Runs `tessera run` once into the empty folder `out`; the run folder it wrote.
+/// Runs `tessera run` once into the empty folder `out`, with `--variants` where `only` names
+/// one (a commit built before that flag existed runs every variant); the run folder it wrote.
 fn run_once(
     bin: &Path,
     checkout: &Path,
     scenarios: &[String],
+    only: Option<&str>,
     env: &std::collections::BTreeMap<String, String>,
     out: &Path,
 ) -> Result<PathBuf, String> {
-    let output = Command::new(bin)
-        .arg("run")
-        .args(scenarios)
-        .arg("--out")
-        .arg(out)
-        .arg("--quiet")
-        .envs(env)
-        .current_dir(checkout)
-        .output()
-        .map_err(|e| format!("{}: {e}", bin.display()))?;
+    let run = |only: Option<&str>| {
+        let mut cmd = Command::new(bin);
+        cmd.arg("run").args(scenarios);
+        if let Some(v) = only {
+            cmd.args(["--variants", v]);
+        }
+        cmd.arg("--out")
+            .arg(out)
+            .arg("--quiet")
+            .envs(env)
+            .current_dir(checkout)
+            .output()
+            .map_err(|e| format!("{}: {e}", bin.display()))
+    };
+    let mut output = run(only)?;
+    if only.is_some()
+        && output.status.code() == Some(2)
+        && String::from_utf8_lossy(&output.stderr).contains("unexpected argument '--variants'")
+    {
+        output = run(None)?;
+    }
     // 0: ok, 1: a gate or variant failed (results written); anything else is an error.
     let code = output.status.code();
     if !matches!(code, Some(0) | Some(1)) {
