@@ -233,6 +233,7 @@ CREATE TABLE run_frames (
 );
 CREATE INDEX run_frames_triage ON run_frames (triage, run_pk);
 CREATE INDEX run_frames_digest ON run_frames (scenario, variant, adapter_class, frame, digest);
+"#,
     // i34: the job queue (`store/queue.rs`): requests split into jobs per adapter-class label,
     // claimed with a lease (epoch milliseconds) kept alive by heartbeats; runners and the labels
     // they serve; bisections whose steps are A/B requests.
