@@ -190,11 +190,13 @@ fn a_still_camera_accumulates_the_mean_of_the_claimed_samples() {
     let s = scenario(&[SCENE, STILL]);
     let gpu = common::gpu();
     let mut scene = SceneGpu::new(&gpu.device, &gpu.queue, &s).unwrap();
-    // The still-scene accumulator's options, 32 phases: the mean of one whole jitter cycle.
+    // The still-scene accumulator's options, 32 phases and a history weight that reaches 32:
+    // the mean of one whole jitter cycle.
     let v = common::variant(
         "taau",
         &[
             ("phases", ParamValue::Float(32.0)),
+            ("max_weight", ParamValue::Float(32.0)),
             ("clip_moving_only", ParamValue::Bool(true)),
             ("freeze_converged", ParamValue::Bool(true)),
         ],

@@ -19,12 +19,12 @@ use tessera_results::expectation::Label;
 use tessera_results::AdapterInfo;
 use toml_edit::{Document, Item, Value};
 
-use crate::run::gates::matches as pattern_matches;
+use crate::scenario::pattern::matches as pattern_matches;
 use crate::scenario::span::line_col;
 use crate::scenario::Scenario;
 
 /// The file name of a suite's expectations, in the suite's folder.
-pub const FILE_NAME: &str = "expectations.toml";
+pub const FILE_NAME: &str = crate::scenario::EXPECTATIONS_FILE;
 
 /// The keys of an `[[expectation]]` entry.
 pub const KEYS: [&str; 5] = ["scenario", "variant", "adapter", "label", "reason"];

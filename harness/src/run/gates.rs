@@ -41,30 +41,7 @@ pub fn throttled(r: &VariantResult) -> Option<bool> {
     Some(r.conditions.as_ref()?.recorded()?.throttled)
 }
 
-/// `*` matches any run of characters; everything else literally.
-pub fn matches(pattern: &str, name: &str) -> bool {
-    let parts: Vec<&str> = pattern.split('*').collect();
-    if parts.len() == 1 {
-        return pattern == name;
-    }
-    let mut rest = name;
-    for (i, part) in parts.iter().enumerate() {
-        if i == 0 {
-            let Some(r) = rest.strip_prefix(part) else {
-                return false;
-            };
-            rest = r;
-        } else if i == parts.len() - 1 {
-            return rest.ends_with(part);
-        } else {
-            let Some(pos) = rest.find(part) else {
-                return false;
-            };
-            rest = &rest[pos + part.len()..];
-        }
-    }
-    true
-}
+pub use crate::scenario::pattern::matches;
 
 fn applies(gate: &Gate, scenario: &Scenario, r: &VariantResult) -> bool {
     match &gate.variants {

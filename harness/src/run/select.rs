@@ -2,7 +2,7 @@
 //! and nothing more, so that an A/B or bisection step costs what it measures.
 //!
 //! `PATTERN` is a comma-separated list of variant names, each with `*` as a wildcard (the gates'
-//! [`super::gates::matches`]): `taau*`, `fsr1[scale=0.5],upscale*`. A matching variant keeps
+//! [`crate::scenario::pattern::matches`]): `taau*`, `fsr1[scale=0.5],upscale*`. A matching variant keeps
 //! `native` (its speed-up's baseline, and the reference where the scenario's reference is
 //! `native`) and its own same-pipeline baseline (`native-deferred`, `native-vrs`, a named
 //! variant such as `native[motion_pass=true]`). A scenario with no matching variant is left out
@@ -12,7 +12,7 @@
 
 use crate::scenario::Scenario;
 
-use super::gates::matches;
+use crate::scenario::pattern::matches;
 
 /// What [`select`] left in and out.
 #[derive(Debug, Default, PartialEq)]
@@ -61,7 +61,8 @@ pub fn select(scenarios: &mut Vec<Scenario>, pattern: &str) -> Result<Selection,
         keep
     });
     for s in scenarios.iter_mut() {
-        let mut needed: Vec<String> = vec!["native".to_string()];
+        // The speed-up's baseline (and the reference where it is `native`): the measure table's.
+        let mut needed: Vec<String> = vec![tessera_results::measure::DEFAULT_BASELINE.to_string()];
         for v in s.variants.iter().filter(|v| hit(&v.name)) {
             if let Some(b) = v.technique.baseline(v) {
                 needed.push(b.to_string());

@@ -6,6 +6,7 @@
 //! limits that depend on the adapter are checked when a scenario runs.
 
 mod raw;
+pub mod pattern;
 pub mod scene;
 pub mod span;
 pub mod sweep;
@@ -383,14 +384,17 @@ pub fn collect(inputs: &[PathBuf]) -> Result<Vec<PathBuf>, ScenarioError> {
     Ok(files)
 }
 
+/// A suite's expectations file, beside its scenarios (read by `crate::expect`).
+pub const EXPECTATIONS_FILE: &str = "expectations.toml";
+
 /// Files and folders of a suite that are not scenarios: its expectations
-/// (`crate::expect::FILE_NAME`) and its approved frame digests (`digests/`).
+/// ([`EXPECTATIONS_FILE`]) and its approved frame digests (`digests/`).
 fn not_a_scenario(path: &Path) -> bool {
     let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
     if path.is_dir() {
         name == "digests"
     } else {
-        name == crate::expect::FILE_NAME
+        name == EXPECTATIONS_FILE
     }
 }
 
