@@ -77,7 +77,10 @@ fn requirements_are_known_without_a_gpu() {
     let fsr1 = variant("fsr1", &[]);
     let reasons = techniques::skip_reasons(&fsr1);
     assert!(
-        !reasons.is_empty() && reasons.iter().all(|r| r.starts_with("needs MULTISAMPLE_X4")),
+        !reasons.is_empty()
+            && reasons
+                .iter()
+                .all(|r| r.starts_with("needs MULTISAMPLE_X4")),
         "{reasons:?}"
     );
     // Every other default variant runs on every adapter.

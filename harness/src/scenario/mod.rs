@@ -5,8 +5,8 @@
 //! names the file, line:column and dotted key, and says what is allowed. Nothing here touches a GPU:
 //! limits that depend on the adapter are checked when a scenario runs.
 
-mod raw;
 pub mod pattern;
+mod raw;
 pub mod scene;
 pub mod span;
 pub mod sweep;
