@@ -111,7 +111,32 @@ pub fn valid_run_id(id: &str) -> bool {
             .all(|c| c.is_ascii_alphanumeric() || matches!(c, '.' | '_' | '-'))
 }
 
-const PNG_SIGNATURE: &[u8] = b"\x89PNG\r\n\x1a\n";
+/// The first bytes of every PNG file.
+pub const PNG_SIGNATURE: &[u8] = b"\x89PNG\r\n\x1a\n";
+
+/// Every image path the results list.
+fn referenced_images(scenarios: &[ScenarioResult]) -> std::collections::BTreeSet<&str> {
+    scenarios
+        .iter()
+        .flat_map(|s| {
+            s.results
+                .iter()
+                .flat_map(|v| v.images.iter().map(|i| i.path.as_str()))
+        })
+        .collect()
+}
+
+/// What is wrong with an image's path, inline or sent as a blob: outside the run folder, or
+/// listed by no result.
+fn path_problem(path: &str, referenced: &std::collections::BTreeSet<&str>) -> Option<String> {
+    if !safe_relative_path(path) {
+        Some("must be a relative path inside the run folder".to_string())
+    } else if !referenced.contains(path) {
+        Some("is not listed in any result's images".to_string())
+    } else {
+        None
+    }
+}
 
 impl RunBundle {
     /// Checks the schema versions first (so a newer format is named as such rather than as a
@@ -171,19 +196,10 @@ impl RunBundle {
             parsed.push(s);
         }
         crate::validate::check(&run, &parsed, now)?;
-        let referenced: std::collections::BTreeSet<&str> = parsed
-            .iter()
-            .flat_map(|s| {
-                s.results
-                    .iter()
-                    .flat_map(|v| v.images.iter().map(|i| i.path.as_str()))
-            })
-            .collect();
+        let referenced = referenced_images(&parsed);
         for (path, bytes) in &images {
-            let problem = if !safe_relative_path(path) {
-                Some("must be a relative path inside the run folder".to_string())
-            } else if !referenced.contains(path.as_str()) {
-                Some("is not listed in any result's images".to_string())
+            let problem = if let Some(p) = path_problem(path, &referenced) {
+                Some(p)
             } else if bytes.len() > MAX_IMAGE_BYTES {
                 Some(format!(
                     "is {} bytes; the limit is {MAX_IMAGE_BYTES}",
@@ -215,20 +231,10 @@ impl RunBundle {
         mut self,
         digests: BTreeMap<String, String>,
     ) -> Result<RunBundle, BundleError> {
-        let referenced: std::collections::BTreeSet<&str> = self
-            .scenarios
-            .iter()
-            .flat_map(|s| {
-                s.results
-                    .iter()
-                    .flat_map(|v| v.images.iter().map(|i| i.path.as_str()))
-            })
-            .collect();
+        let referenced = referenced_images(&self.scenarios);
         for (path, digest) in &digests {
-            let problem = if !safe_relative_path(path) {
-                Some("must be a relative path inside the run folder".to_string())
-            } else if !referenced.contains(path.as_str()) {
-                Some("is not listed in any result's images".to_string())
+            let problem = if let Some(p) = path_problem(path, &referenced) {
+                Some(p)
             } else if self.images.contains_key(path) {
                 Some("is sent both inline and as a blob".to_string())
             } else if !tessera_results::upload::is_blob_digest(digest) {

@@ -20,6 +20,10 @@ pub struct Row {
 }
 
 /// The chart; `axis` titles the x axis (`speed-up ratio B / A`). Empty for no finite row.
+/// Widest label margin, in pixels: past it a label is cut at its start (no label runs off the
+/// chart's left edge).
+const LEFT_MAX: f64 = 420.0;
+
 pub fn chart(rows: &[Row], axis: &str) -> String {
     let rows: Vec<&Row> = rows.iter().filter(|r| r.value.is_finite()).collect();
     if rows.is_empty() {
@@ -43,7 +47,19 @@ pub fn chart(rows: &[Row], axis: &str) -> String {
         .map(|r| r.label.chars().count())
         .max()
         .unwrap_or(0);
-    let left = (longest as f64 * 6.6 + 12.0).clamp(80.0, 360.0);
+    let left = (longest as f64 * 6.6 + 12.0).clamp(80.0, LEFT_MAX);
+    // Labels longer than the margin holds keep their end (the variant's parameters) after an
+    // ellipsis; the whole label is the row's tooltip.
+    let fits = ((LEFT_MAX - 12.0) / 6.6) as usize;
+    let shown = |label: &str| {
+        let n = label.chars().count();
+        if n <= fits {
+            label.to_string()
+        } else {
+            let tail: String = label.chars().skip(n - (fits - 1)).collect();
+            format!("…{tail}")
+        }
+    };
     let (w, row_h) = (left + 480.0, 20.0);
     let h = 36.0 + rows.len() as f64 * row_h + 18.0;
     let x = |v: f64| left + (v - lo) / (hi - lo) * (w - left - 16.0);
@@ -75,7 +91,7 @@ pub fn chart(rows: &[Row], axis: &str) -> String {
             "<text x='{:.1}' y='{:.1}' font-size='11' text-anchor='end'{weight}>{}</text>",
             left - 6.0,
             py + 4.0,
-            esc(&r.label)
+            esc(&shown(&r.label))
         );
         let tip = match r.interval {
             Some([a, b]) => format!("{}: {:.3} [{a:.3}, {b:.3}]", r.label, r.value),

@@ -788,17 +788,25 @@ fn compare_command(a: &std::path::Path, b: &std::path::Path, threshold_pct: f64)
     }
 }
 
-fn regimes_command(dirs: &[PathBuf]) -> u8 {
+/// Reads run folders; the first that cannot be read is printed and ends the command.
+fn load_runs(dirs: &[PathBuf]) -> Option<Vec<tessera::compare::Run>> {
     let mut runs = Vec::new();
     for d in dirs {
         match tessera::compare::load_run(d) {
             Ok(r) => runs.push(r),
             Err(e) => {
                 eprintln!("error: {e}");
-                return EXIT_INPUT;
+                return None;
             }
         }
     }
+    Some(runs)
+}
+
+fn regimes_command(dirs: &[PathBuf]) -> u8 {
+    let Some(runs) = load_runs(dirs) else {
+        return EXIT_INPUT;
+    };
     let rows = tessera::regimes::rows(&runs);
     if rows.is_empty() {
         eprintln!("error: no scenario in these runs has a timed `native` variant");
@@ -816,16 +824,9 @@ fn report_command(args: &[PathBuf], format: tessera::tables::Format) -> u8 {
             return EXIT_INPUT;
         }
     };
-    let mut runs = Vec::new();
-    for d in &dirs {
-        match tessera::compare::load_run(d) {
-            Ok(r) => runs.push(r),
-            Err(e) => {
-                eprintln!("error: {e}");
-                return EXIT_INPUT;
-            }
-        }
-    }
+    let Some(runs) = load_runs(&dirs) else {
+        return EXIT_INPUT;
+    };
     let tables = tessera::tables::tables(&runs);
     if tables.is_empty() {
         eprintln!("error: these runs hold no scenario results");

@@ -21,12 +21,10 @@ use tessera_results::upload::{is_blob_digest, split_batch, MissingReply, Missing
 
 use super::auth::Writer;
 use super::{AppError, AppState};
-use crate::bundle::MAX_IMAGE_BYTES;
+use crate::bundle::{MAX_IMAGE_BYTES, PNG_SIGNATURE};
 
 /// Most digests one `missing` question may hold.
 pub const MAX_DIGESTS: usize = 100_000;
-
-const PNG_SIGNATURE: &[u8] = b"\x89PNG\r\n\x1a\n";
 
 pub async fn missing(
     State(state): State<AppState>,
