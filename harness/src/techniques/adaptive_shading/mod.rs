@@ -20,6 +20,7 @@ pub mod hardware;
 pub mod model;
 pub mod raw_material;
 pub mod raw_pass;
+mod raw_pipeline;
 
 use super::definition::{BuildContext, Definition, Shader, Target, Technique};
 use crate::gpu::{Extension, Requirements, Unsupported};

@@ -45,7 +45,8 @@
 use ash::vk;
 use wgpu::hal::api::Vulkan;
 
-use super::raw_material::RawMaterialSets;
+use super::raw_material::{raw_buffer, RawMaterialSets};
+use super::raw_pipeline::{ColorOut, RawPipeline};
 use crate::render::material::{Class, RawMaterials};
 use crate::render::scene::RawDraw;
 
@@ -154,20 +155,6 @@ enum Phase {
     Shade,
 }
 
-/// The shading pipelines' rate state: 1x1 from the pipeline, the attachment's rate replacing it
-/// (combiner ops KEEP, REPLACE): the attachment alone decides the rate.
-fn attachment_rates() -> vk::PipelineFragmentShadingRateStateCreateInfoKHR<'static> {
-    vk::PipelineFragmentShadingRateStateCreateInfoKHR::default()
-        .fragment_size(vk::Extent2D {
-            width: 1,
-            height: 1,
-        })
-        .combiner_ops([
-            vk::FragmentShadingRateCombinerOpKHR::KEEP,
-            vk::FragmentShadingRateCombinerOpKHR::REPLACE,
-        ])
-}
-
 /// SPIR-V of one entry point of `wgsl`, with the options wgpu-hal uses on Vulkan (bindings by
 /// group and binding, no coordinate adjustment).
 pub fn spirv(wgsl: &str, stage: naga::ShaderStage, entry: &str) -> Result<Vec<u32>, String> {
@@ -203,6 +190,116 @@ fn vk_err(what: &'static str) -> impl Fn(vk::Result) -> String {
     move |e| format!("{what}: {e}")
 }
 
+/// The SPIR-V of the passes: the untextured vertex, shading and motion fragment shaders, and
+/// the textured draws' [`MATERIAL_ENTRY_POINTS`] where the scene has textured models.
+struct PassSpirv {
+    vertex: Vec<u32>,
+    fragment: Vec<u32>,
+    motion: Option<Vec<u32>>,
+    material: Option<Vec<Vec<u32>>>,
+}
+
+impl PassSpirv {
+    fn compile(shaders: &Shaders<'_>, textured: bool) -> Result<PassSpirv, String> {
+        let material = match (textured, shaders.material) {
+            (false, _) => None,
+            (true, None) => {
+                return Err("the scene has textured draws and no material shader was given".into())
+            }
+            (true, Some(wgsl)) => Some(
+                MATERIAL_ENTRY_POINTS
+                    .iter()
+                    .map(|&(stage, entry)| spirv(wgsl, stage, entry))
+                    .collect::<Result<Vec<_>, String>>()?,
+            ),
+        };
+        let motion = match shaders.motion_fragment {
+            Some(entry) => Some(spirv(shaders.wgsl, naga::ShaderStage::Fragment, entry)?),
+            None => None,
+        };
+        Ok(PassSpirv {
+            vertex: spirv(shaders.wgsl, naga::ShaderStage::Vertex, shaders.vertex)?,
+            fragment: spirv(shaders.wgsl, naga::ShaderStage::Fragment, shaders.fragment)?,
+            motion,
+            material,
+        })
+    }
+}
+
+/// What the passes need of wgpu's Vulkan objects: the raw device, the physical device's memory
+/// types, and the raw formats of the colour, depth and motion targets.
+fn raw_device(
+    device: &wgpu::Device,
+    adapter: &wgpu::Adapter,
+    target: &Targets<'_>,
+) -> Result<
+    (
+        ash::Device,
+        vk::PhysicalDeviceMemoryProperties,
+        [vk::Format; 3],
+    ),
+    String,
+> {
+    // SAFETY: read-only access to the hal objects for their raw handles; wgpu keeps ownership
+    // and the pass's clones keep every object alive as long as it.
+    unsafe {
+        let hal_device = device.as_hal::<Vulkan>().ok_or("not a Vulkan device")?;
+        let hal_adapter = adapter.as_hal::<Vulkan>().ok_or("not a Vulkan adapter")?;
+        let instance = hal_device.shared_instance().raw_instance();
+        let memory =
+            instance.get_physical_device_memory_properties(hal_device.raw_physical_device());
+        let formats = [
+            hal_adapter.texture_format_as_raw(target.color.format()),
+            hal_adapter.texture_format_as_raw(target.depth.format()),
+            hal_adapter.texture_format_as_raw(
+                target
+                    .motion
+                    .map(|m| m.format())
+                    .unwrap_or(target.color.format()),
+            ),
+        ];
+        Ok((hal_device.raw_device().clone(), memory, formats))
+    }
+}
+
+fn image_of(t: &wgpu::Texture) -> Result<vk::Image, String> {
+    // SAFETY: the handle is only used while `t` (kept in `_keep_textures`) is alive.
+    unsafe { t.as_hal::<Vulkan>().map(|h| h.raw_handle()) }
+        .ok_or_else(|| "texture is not a Vulkan texture".to_string())
+}
+
+/// The untextured scene vertex's attributes (position, normal) at location 0 and 1.
+const SCENE_ATTRIBUTES: [(vk::Format, u32); 2] = [
+    (vk::Format::R32G32B32_SFLOAT, 0),
+    (vk::Format::R32G32B32_SFLOAT, 12),
+];
+
+fn attachment(
+    format: vk::Format,
+    layout: vk::ImageLayout,
+    load: vk::AttachmentLoadOp,
+) -> vk::AttachmentDescription2<'static> {
+    vk::AttachmentDescription2::default()
+        .format(format)
+        .samples(vk::SampleCountFlags::TYPE_1)
+        .load_op(load)
+        .store_op(vk::AttachmentStoreOp::STORE)
+        .stencil_load_op(vk::AttachmentLoadOp::DONT_CARE)
+        .stencil_store_op(vk::AttachmentStoreOp::DONT_CARE)
+        .initial_layout(layout)
+        .final_layout(layout)
+}
+
+fn reference(i: u32, layout: vk::ImageLayout) -> vk::AttachmentReference2<'static> {
+    vk::AttachmentReference2::default()
+        .attachment(i)
+        .layout(layout)
+}
+
+const COLOR_LAYOUT: vk::ImageLayout = vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL;
+const DEPTH_LAYOUT: vk::ImageLayout = vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
+const RATE_LAYOUT: vk::ImageLayout = vk::ImageLayout::FRAGMENT_SHADING_RATE_ATTACHMENT_OPTIMAL_KHR;
+
 impl RawVrsPass {
     /// Builds the passes for `targets` (one per frame parity) at `size`, with an attachment of
     /// `attachment_size` texels of `texel` pixels filled each frame from `staging` (tightly packed
@@ -210,6 +307,12 @@ impl RawVrsPass {
     /// is given (every target then needs its motion). Without `texel` the shading pass has no
     /// rate attachment and its pipelines no shading-rate state: every pixel shaded once, on any
     /// Vulkan device (how the raw drawing is tested where the extension is missing).
+    ///
+    /// The steps, each a method below: the attachment image, the render passes, the
+    /// framebuffers, the scene's descriptor set and shader modules, the untextured pipelines,
+    /// the textured draws' pipelines, the statistics queries. Each object is stored in the pass
+    /// as soon as it exists, so `Drop` destroys exactly what was made, also when a later step
+    /// fails.
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         device: &wgpu::Device,
@@ -227,59 +330,59 @@ impl RawVrsPass {
         if split && targets.iter().any(|t| t.motion.is_none()) {
             return Err("the motion pre-pass needs a motion target for every parity".into());
         }
-        let rated = texel.is_some();
-        let texel = texel.unwrap_or([1, 1]);
-        let material_spirv = match (materials, shaders.material) {
-            (None, _) => None,
-            (Some(_), None) => {
-                return Err("the scene has textured draws and no material shader was given".into())
-            }
-            (Some(_), Some(wgsl)) => Some(
-                MATERIAL_ENTRY_POINTS
-                    .iter()
-                    .map(|&(stage, entry)| spirv(wgsl, stage, entry))
-                    .collect::<Result<Vec<_>, String>>()?,
-            ),
-        };
+        let code = PassSpirv::compile(shaders, materials.is_some())?;
         let anisotropic = adapter
             .get_downlevel_capabilities()
             .flags
             .contains(wgpu::DownlevelFlags::ANISOTROPIC_FILTERING);
-        let vs = spirv(shaders.wgsl, naga::ShaderStage::Vertex, shaders.vertex)?;
-        let fs = spirv(shaders.wgsl, naga::ShaderStage::Fragment, shaders.fragment)?;
-        let fs_motion = match shaders.motion_fragment {
-            Some(entry) => Some(spirv(shaders.wgsl, naga::ShaderStage::Fragment, entry)?),
-            None => None,
-        };
-        // SAFETY: read-only access to the hal objects for their raw handles; wgpu keeps ownership
-        // and the clones below keep every object alive as long as this pass.
-        let (raw, memory_props, formats) = unsafe {
-            let hal_device = device.as_hal::<Vulkan>().ok_or("not a Vulkan device")?;
-            let hal_adapter = adapter.as_hal::<Vulkan>().ok_or("not a Vulkan adapter")?;
-            let instance = hal_device.shared_instance().raw_instance();
-            let memory =
-                instance.get_physical_device_memory_properties(hal_device.raw_physical_device());
-            let formats = [
-                hal_adapter.texture_format_as_raw(targets[0].color.format()),
-                hal_adapter.texture_format_as_raw(targets[0].depth.format()),
-                hal_adapter.texture_format_as_raw(
-                    targets[0]
-                        .motion
-                        .map(|m| m.format())
-                        .unwrap_or(targets[0].color.format()),
-                ),
-            ];
-            (hal_device.raw_device().clone(), memory, formats)
-        };
-        let image_of = |t: &wgpu::Texture| -> Result<vk::Image, String> {
-            // SAFETY: the handle is only used while `t` (kept in `_keep_textures`) is alive.
-            unsafe { t.as_hal::<Vulkan>().map(|h| h.raw_handle()) }
-                .ok_or_else(|| "texture is not a Vulkan texture".to_string())
-        };
+        let (raw, memory, formats) = raw_device(device, adapter, &targets[0])?;
+        let mut pass = RawVrsPass::empty(raw, size, attachment_size, texel.is_some());
+        pass._keep_textures = targets
+            .iter()
+            .flat_map(|t| [Some(t.color), Some(t.depth), t.motion])
+            .flatten()
+            .cloned()
+            .collect();
+        pass._keep_buffers = vec![
+            scene.vertex.clone(),
+            scene.index.clone(),
+            scene.frame.clone(),
+            scene.objects.clone(),
+            staging.clone(),
+        ];
         // The buffers are kept in `_keep_buffers` while the pass lives.
-        let buffer_of = super::raw_material::raw_buffer;
-        let mut pass = RawVrsPass {
-            device: raw,
+        pass.vertex = raw_buffer(scene.vertex)?;
+        pass.index = raw_buffer(scene.index)?;
+        pass.staging = raw_buffer(staging)?;
+        pass.draws = scene.draws.clone();
+
+        let rate_view = if pass.rated {
+            pass.create_attachment_image(&memory)?
+        } else {
+            vk::ImageView::null()
+        };
+        pass.create_render_passes(formats, texel.unwrap_or([1, 1]), split)?;
+        pass.create_framebuffers(targets, formats, rate_view, split)?;
+        pass.create_scene_set(scene)?;
+        pass.create_modules(&code)?;
+        pass.create_scene_pipelines(shaders, scene.vertex_stride, split)?;
+        if let (Some(raw), Some(code)) = (materials, &code.material) {
+            pass.materials = RawMaterialSets::new(&pass.device.clone(), raw, anisotropic)?;
+            pass.create_material_pipelines(code, split)?;
+        }
+        pass.create_statistics()?;
+        Ok(pass)
+    }
+
+    /// A pass with no Vulkan object made yet (every handle null).
+    fn empty(
+        device: ash::Device,
+        size: [u32; 2],
+        attachment_size: [u32; 2],
+        rated: bool,
+    ) -> RawVrsPass {
+        RawVrsPass {
+            device,
             size,
             attachment_size,
             shade_pass: vk::RenderPass::null(),
@@ -299,187 +402,159 @@ impl RawVrsPass {
             modules: [vk::ShaderModule::null(); 3],
             stats: vk::QueryPool::null(),
             recorded: [false; 2],
-            _keep_textures: targets
-                .iter()
-                .flat_map(|t| [Some(t.color), Some(t.depth), t.motion])
-                .flatten()
-                .cloned()
-                .collect(),
-            _keep_buffers: vec![
-                scene.vertex.clone(),
-                scene.index.clone(),
-                scene.frame.clone(),
-                scene.objects.clone(),
-                staging.clone(),
-            ],
-            vertex: buffer_of(scene.vertex)?,
-            index: buffer_of(scene.index)?,
-            staging: buffer_of(staging)?,
-            draws: scene.draws.clone(),
+            _keep_textures: Vec::new(),
+            _keep_buffers: Vec::new(),
+            vertex: vk::Buffer::null(),
+            index: vk::Buffer::null(),
+            staging: vk::Buffer::null(),
+            draws: Vec::new(),
             rated,
             materials: None,
             material_layout: vk::PipelineLayout::null(),
             material_modules: [vk::ShaderModule::null(); 5],
             material_shade: [vk::Pipeline::null(); 2],
             material_prepass: [vk::Pipeline::null(); 2],
-        };
-        let frame = buffer_of(scene.frame)?;
-        let objects = buffer_of(scene.objects)?;
-        let d = pass.device.clone();
-
-        // The attachment image: R8_UINT, device-local, written by a copy.
-        // SAFETY: every create call gets a fully initialised create-info that outlives the call;
-        // each object is stored in `pass` as soon as it exists, so `Drop` destroys exactly what
-        // was made, also when a later step fails.
-        if rated {
-            unsafe {
-                let info = vk::ImageCreateInfo::default()
-                    .image_type(vk::ImageType::TYPE_2D)
-                    .format(vk::Format::R8_UINT)
-                    .extent(vk::Extent3D {
-                        width: attachment_size[0],
-                        height: attachment_size[1],
-                        depth: 1,
-                    })
-                    .mip_levels(1)
-                    .array_layers(1)
-                    .samples(vk::SampleCountFlags::TYPE_1)
-                    .tiling(vk::ImageTiling::OPTIMAL)
-                    .usage(
-                        vk::ImageUsageFlags::FRAGMENT_SHADING_RATE_ATTACHMENT_KHR
-                            | vk::ImageUsageFlags::TRANSFER_DST,
-                    )
-                    .initial_layout(vk::ImageLayout::UNDEFINED);
-                pass.rate_image = d
-                    .create_image(&info, None)
-                    .map_err(vk_err("attachment image"))?;
-                let req = d.get_image_memory_requirements(pass.rate_image);
-                let types = &memory_props.memory_types[..memory_props.memory_type_count as usize];
-                let pick = |flags: vk::MemoryPropertyFlags| {
-                    types.iter().enumerate().position(|(i, t)| {
-                        req.memory_type_bits & (1 << i) != 0 && t.property_flags.contains(flags)
-                    })
-                };
-                let type_index = pick(vk::MemoryPropertyFlags::DEVICE_LOCAL)
-                    .or_else(|| pick(vk::MemoryPropertyFlags::empty()))
-                    .ok_or("no memory type for the attachment image")?;
-                let alloc = vk::MemoryAllocateInfo::default()
-                    .allocation_size(req.size)
-                    .memory_type_index(type_index as u32);
-                pass.rate_memory = d
-                    .allocate_memory(&alloc, None)
-                    .map_err(vk_err("attachment memory"))?;
-                d.bind_image_memory(pass.rate_image, pass.rate_memory, 0)
-                    .map_err(vk_err("binding attachment memory"))?;
-            }
         }
+    }
 
-        let view =
-            |pass: &mut RawVrsPass, image, format, aspect| -> Result<vk::ImageView, String> {
-                let info = vk::ImageViewCreateInfo::default()
-                    .image(image)
-                    .view_type(vk::ImageViewType::TYPE_2D)
-                    .format(format)
-                    .subresource_range(vk::ImageSubresourceRange {
-                        aspect_mask: aspect,
-                        base_mip_level: 0,
-                        level_count: 1,
-                        base_array_layer: 0,
-                        layer_count: 1,
-                    });
-                // SAFETY: `image` is alive (ours or a kept wgpu texture's) and the view matches its
-                // format, type and single mip and layer.
-                let v =
-                    unsafe { d.create_image_view(&info, None) }.map_err(vk_err("image view"))?;
-                pass.views.push(v);
-                Ok(v)
+    /// A 2D view of one mip and layer of `image`, kept in `views` (destroyed in `Drop`).
+    fn view(
+        &mut self,
+        image: vk::Image,
+        format: vk::Format,
+        aspect: vk::ImageAspectFlags,
+    ) -> Result<vk::ImageView, String> {
+        let info = vk::ImageViewCreateInfo::default()
+            .image(image)
+            .view_type(vk::ImageViewType::TYPE_2D)
+            .format(format)
+            .subresource_range(vk::ImageSubresourceRange {
+                aspect_mask: aspect,
+                base_mip_level: 0,
+                level_count: 1,
+                base_array_layer: 0,
+                layer_count: 1,
+            });
+        // SAFETY: `image` is alive (ours or a kept wgpu texture's) and the view matches its
+        // format, type and single mip and layer.
+        let v =
+            unsafe { self.device.create_image_view(&info, None) }.map_err(vk_err("image view"))?;
+        self.views.push(v);
+        Ok(v)
+    }
+
+    /// The attachment image (R8_UINT, device-local, written by a copy) and its view.
+    fn create_attachment_image(
+        &mut self,
+        memory: &vk::PhysicalDeviceMemoryProperties,
+    ) -> Result<vk::ImageView, String> {
+        let d = self.device.clone();
+        let info = vk::ImageCreateInfo::default()
+            .image_type(vk::ImageType::TYPE_2D)
+            .format(vk::Format::R8_UINT)
+            .extent(vk::Extent3D {
+                width: self.attachment_size[0],
+                height: self.attachment_size[1],
+                depth: 1,
+            })
+            .mip_levels(1)
+            .array_layers(1)
+            .samples(vk::SampleCountFlags::TYPE_1)
+            .tiling(vk::ImageTiling::OPTIMAL)
+            .usage(
+                vk::ImageUsageFlags::FRAGMENT_SHADING_RATE_ATTACHMENT_KHR
+                    | vk::ImageUsageFlags::TRANSFER_DST,
+            )
+            .initial_layout(vk::ImageLayout::UNDEFINED);
+        // SAFETY: the create-infos outlive their calls; the image and memory are stored in the
+        // pass as soon as they exist.
+        unsafe {
+            self.rate_image = d
+                .create_image(&info, None)
+                .map_err(vk_err("attachment image"))?;
+            let req = d.get_image_memory_requirements(self.rate_image);
+            let types = &memory.memory_types[..memory.memory_type_count as usize];
+            let pick = |flags: vk::MemoryPropertyFlags| {
+                types.iter().enumerate().position(|(i, t)| {
+                    req.memory_type_bits & (1 << i) != 0 && t.property_flags.contains(flags)
+                })
             };
-        let rate_image = pass.rate_image;
-        let rate_view = if rated {
-            view(
-                &mut pass,
-                rate_image,
-                vk::Format::R8_UINT,
-                vk::ImageAspectFlags::COLOR,
-            )?
-        } else {
-            vk::ImageView::null()
-        };
+            let type_index = pick(vk::MemoryPropertyFlags::DEVICE_LOCAL)
+                .or_else(|| pick(vk::MemoryPropertyFlags::empty()))
+                .ok_or("no memory type for the attachment image")?;
+            let alloc = vk::MemoryAllocateInfo::default()
+                .allocation_size(req.size)
+                .memory_type_index(type_index as u32);
+            self.rate_memory = d
+                .allocate_memory(&alloc, None)
+                .map_err(vk_err("attachment memory"))?;
+            d.bind_image_memory(self.rate_image, self.rate_memory, 0)
+                .map_err(vk_err("binding attachment memory"))?;
+        }
+        self.view(
+            self.rate_image,
+            vk::Format::R8_UINT,
+            vk::ImageAspectFlags::COLOR,
+        )
+    }
 
-        // Render passes. Colour targets begin and end in COLOR_ATTACHMENT_OPTIMAL, depth in
-        // DEPTH_STENCIL_ATTACHMENT_OPTIMAL (what wgpu's transitions left them in); a cleared
-        // target's old contents are not read.
-        let attachment = |format, layout, load| {
-            vk::AttachmentDescription2::default()
-                .format(format)
-                .samples(vk::SampleCountFlags::TYPE_1)
-                .load_op(load)
-                .store_op(vk::AttachmentStoreOp::STORE)
-                .stencil_load_op(vk::AttachmentLoadOp::DONT_CARE)
-                .stencil_store_op(vk::AttachmentStoreOp::DONT_CARE)
-                .initial_layout(layout)
-                .final_layout(layout)
-        };
-        let color_layout = vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL;
-        let depth_layout = vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
-        let rate_layout = vk::ImageLayout::FRAGMENT_SHADING_RATE_ATTACHMENT_OPTIMAL_KHR;
+    /// Render passes. Colour targets begin and end in COLOR_ATTACHMENT_OPTIMAL, depth in
+    /// DEPTH_STENCIL_ATTACHMENT_OPTIMAL (what wgpu's transitions left them in); a cleared
+    /// target's old contents are not read.
+    fn create_render_passes(
+        &mut self,
+        formats: [vk::Format; 3],
+        texel: [u32; 2],
+        split: bool,
+    ) -> Result<(), String> {
         let clear = vk::AttachmentLoadOp::CLEAR;
-        let reference = |i, layout| {
-            vk::AttachmentReference2::default()
-                .attachment(i)
-                .layout(layout)
+        // The shading pass: colour (cleared), depth (the pre-pass's in the split shape, else
+        // cleared), the rate attachment (read only).
+        let depth_load = if split {
+            vk::AttachmentLoadOp::LOAD
+        } else {
+            clear
         };
-        {
-            // The shading pass: colour (cleared), depth (the pre-pass's in the split shape, else
-            // cleared), the rate attachment (read only).
-            let depth_load = if split {
-                vk::AttachmentLoadOp::LOAD
-            } else {
-                clear
-            };
-            let all_attachments = [
-                attachment(formats[0], color_layout, clear),
-                attachment(formats[1], depth_layout, depth_load),
-                attachment(vk::Format::R8_UINT, rate_layout, vk::AttachmentLoadOp::LOAD)
-                    .store_op(vk::AttachmentStoreOp::DONT_CARE),
-            ];
-            let attachments = &all_attachments[..if rated { 3 } else { 2 }];
-            let color_refs = [reference(0, color_layout)];
-            let depth_ref = reference(1, depth_layout);
-            let rate_ref = reference(2, rate_layout);
-            let mut rate_info = vk::FragmentShadingRateAttachmentInfoKHR::default()
-                .fragment_shading_rate_attachment(&rate_ref)
-                .shading_rate_attachment_texel_size(vk::Extent2D {
-                    width: texel[0],
-                    height: texel[1],
-                });
-            let subpass = vk::SubpassDescription2::default()
-                .pipeline_bind_point(vk::PipelineBindPoint::GRAPHICS)
-                .color_attachments(&color_refs)
-                .depth_stencil_attachment(&depth_ref);
-            let subpass = if rated {
-                subpass.push_next(&mut rate_info)
-            } else {
-                subpass
-            };
-            let subpasses = [subpass];
-            let rp_info = vk::RenderPassCreateInfo2::default()
-                .attachments(attachments)
-                .subpasses(&subpasses);
-            // SAFETY: the create-info chain (attachments, subpass, shading-rate attachment info)
-            // lives across the call; the extension is enabled on this device (`open`).
-            pass.shade_pass =
-                unsafe { d.create_render_pass2(&rp_info, None) }.map_err(vk_err("render pass"))?;
-        }
+        let all_attachments = [
+            attachment(formats[0], COLOR_LAYOUT, clear),
+            attachment(formats[1], DEPTH_LAYOUT, depth_load),
+            attachment(vk::Format::R8_UINT, RATE_LAYOUT, vk::AttachmentLoadOp::LOAD)
+                .store_op(vk::AttachmentStoreOp::DONT_CARE),
+        ];
+        let attachments = &all_attachments[..if self.rated { 3 } else { 2 }];
+        let color_refs = [reference(0, COLOR_LAYOUT)];
+        let depth_ref = reference(1, DEPTH_LAYOUT);
+        let rate_ref = reference(2, RATE_LAYOUT);
+        let mut rate_info = vk::FragmentShadingRateAttachmentInfoKHR::default()
+            .fragment_shading_rate_attachment(&rate_ref)
+            .shading_rate_attachment_texel_size(vk::Extent2D {
+                width: texel[0],
+                height: texel[1],
+            });
+        let subpass = vk::SubpassDescription2::default()
+            .pipeline_bind_point(vk::PipelineBindPoint::GRAPHICS)
+            .color_attachments(&color_refs)
+            .depth_stencil_attachment(&depth_ref);
+        let subpass = if self.rated {
+            subpass.push_next(&mut rate_info)
+        } else {
+            subpass
+        };
+        let subpasses = [subpass];
+        let rp_info = vk::RenderPassCreateInfo2::default()
+            .attachments(attachments)
+            .subpasses(&subpasses);
+        // SAFETY: the create-info chain (attachments, subpass, shading-rate attachment info)
+        // lives across the call; the extension is enabled on this device (`open`).
+        self.shade_pass = unsafe { self.device.create_render_pass2(&rp_info, None) }
+            .map_err(vk_err("render pass"))?;
         if split {
             // The motion pre-pass: motion (not cleared: read only where depth is drawn), depth
             // (cleared).
             let attachments = [
-                attachment(formats[2], color_layout, vk::AttachmentLoadOp::DONT_CARE),
-                attachment(formats[1], depth_layout, clear),
+                attachment(formats[2], COLOR_LAYOUT, vk::AttachmentLoadOp::DONT_CARE),
+                attachment(formats[1], DEPTH_LAYOUT, clear),
             ];
-            let color_refs = [reference(0, color_layout)];
-            let depth_ref = reference(1, depth_layout);
             let subpass = vk::SubpassDescription2::default()
                 .pipeline_bind_point(vk::PipelineBindPoint::GRAPHICS)
                 .color_attachments(&color_refs)
@@ -489,11 +564,22 @@ impl RawVrsPass {
                 .attachments(&attachments)
                 .subpasses(&subpasses);
             // SAFETY: as above.
-            pass.motion_pass = unsafe { d.create_render_pass2(&rp_info, None) }
+            self.motion_pass = unsafe { self.device.create_render_pass2(&rp_info, None) }
                 .map_err(vk_err("motion render pass"))?;
         }
+        Ok(())
+    }
 
-        let framebuffer = |render_pass, views: &[vk::ImageView]| {
+    /// One framebuffer per target (and per motion target in the split shape).
+    fn create_framebuffers(
+        &mut self,
+        targets: &[Targets<'_>],
+        formats: [vk::Format; 3],
+        rate_view: vk::ImageView,
+        split: bool,
+    ) -> Result<(), String> {
+        let size = self.size;
+        let framebuffer = |d: &ash::Device, render_pass, views: &[vk::ImageView]| {
             let info = vk::FramebufferCreateInfo::default()
                 .render_pass(render_pass)
                 .attachments(views)
@@ -504,35 +590,28 @@ impl RawVrsPass {
             // view covers ceil(size / texel) texels as the framebuffer size requires.
             unsafe { d.create_framebuffer(&info, None) }.map_err(vk_err("framebuffer"))
         };
+        let d = self.device.clone();
         for t in targets {
-            let c = view(
-                &mut pass,
-                image_of(t.color)?,
-                formats[0],
-                vk::ImageAspectFlags::COLOR,
-            )?;
-            let z = view(
-                &mut pass,
-                image_of(t.depth)?,
-                formats[1],
-                vk::ImageAspectFlags::DEPTH,
-            )?;
+            let c = self.view(image_of(t.color)?, formats[0], vk::ImageAspectFlags::COLOR)?;
+            let z = self.view(image_of(t.depth)?, formats[1], vk::ImageAspectFlags::DEPTH)?;
             let all_views = [c, z, rate_view];
-            let fb = framebuffer(pass.shade_pass, &all_views[..if rated { 3 } else { 2 }])?;
-            pass.shade_framebuffers.push(fb);
+            let views = &all_views[..if self.rated { 3 } else { 2 }];
+            let fb = framebuffer(&d, self.shade_pass, views)?;
+            self.shade_framebuffers.push(fb);
             if let (true, Some(m)) = (split, t.motion) {
-                let m = view(
-                    &mut pass,
-                    image_of(m)?,
-                    formats[2],
-                    vk::ImageAspectFlags::COLOR,
-                )?;
-                let fb = framebuffer(pass.motion_pass, &[m, z])?;
-                pass.motion_framebuffers.push(fb);
+                let m = self.view(image_of(m)?, formats[2], vk::ImageAspectFlags::COLOR)?;
+                let fb = framebuffer(&d, self.motion_pass, &[m, z])?;
+                self.motion_framebuffers.push(fb);
             }
         }
+        Ok(())
+    }
 
-        // Descriptor set: group 0 of scene.wgsl (frame uniforms, objects).
+    /// The descriptor set of group 0 of scene.wgsl (frame uniforms, objects) and its pipeline
+    /// layout.
+    fn create_scene_set(&mut self, scene: &RawDraw<'_>) -> Result<(), String> {
+        let frame = raw_buffer(scene.frame)?;
+        let objects = raw_buffer(scene.objects)?;
         let stages = vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT;
         let bindings: Vec<vk::DescriptorSetLayoutBinding> = scene_bindings()
             .into_iter()
@@ -554,16 +633,17 @@ impl RawVrsPass {
                 descriptor_count: 1,
             },
         ];
+        let d = self.device.clone();
         // SAFETY: create-infos outlive their calls; the set is written with buffers that the
         // pass keeps alive, at the offset and size scene.wgsl's layout expects.
         unsafe {
-            pass.set_layout = d
+            self.set_layout = d
                 .create_descriptor_set_layout(
                     &vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings),
                     None,
                 )
                 .map_err(vk_err("descriptor set layout"))?;
-            pass.pool = d
+            self.pool = d
                 .create_descriptor_pool(
                     &vk::DescriptorPoolCreateInfo::default()
                         .max_sets(1)
@@ -571,11 +651,11 @@ impl RawVrsPass {
                     None,
                 )
                 .map_err(vk_err("descriptor pool"))?;
-            let layouts = [pass.set_layout];
-            pass.set = d
+            let layouts = [self.set_layout];
+            self.set = d
                 .allocate_descriptor_sets(
                     &vk::DescriptorSetAllocateInfo::default()
-                        .descriptor_pool(pass.pool)
+                        .descriptor_pool(self.pool)
                         .set_layouts(&layouts),
                 )
                 .map_err(vk_err("descriptor set"))?[0];
@@ -591,277 +671,196 @@ impl RawVrsPass {
             }];
             let writes = [
                 vk::WriteDescriptorSet::default()
-                    .dst_set(pass.set)
+                    .dst_set(self.set)
                     .dst_binding(0)
                     .descriptor_type(vk::DescriptorType::UNIFORM_BUFFER)
                     .buffer_info(&frame_info),
                 vk::WriteDescriptorSet::default()
-                    .dst_set(pass.set)
+                    .dst_set(self.set)
                     .dst_binding(1)
                     .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
                     .buffer_info(&objects_info),
             ];
             d.update_descriptor_sets(&writes, &[]);
-            pass.layout = d
+            self.layout = d
                 .create_pipeline_layout(
                     &vk::PipelineLayoutCreateInfo::default().set_layouts(&layouts),
                     None,
                 )
                 .map_err(vk_err("pipeline layout"))?;
-            pass.modules[0] = d
-                .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&vs), None)
-                .map_err(vk_err("vertex shader"))?;
-            pass.modules[1] = d
-                .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&fs), None)
-                .map_err(vk_err("fragment shader"))?;
-            if let Some(code) = &fs_motion {
-                pass.modules[2] = d
-                    .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(code), None)
-                    .map_err(vk_err("motion fragment shader"))?;
+        }
+        Ok(())
+    }
+
+    /// The shader modules of the untextured draws.
+    fn create_modules(&mut self, code: &PassSpirv) -> Result<(), String> {
+        let words = [
+            Some(&code.vertex),
+            Some(&code.fragment),
+            code.motion.as_ref(),
+        ];
+        let names = ["vertex shader", "fragment shader", "motion fragment shader"];
+        for (i, (words, what)) in words.into_iter().zip(names).enumerate() {
+            if let Some(words) = words {
+                // SAFETY: the create-info outlives the call; the module is stored at once.
+                self.modules[i] = unsafe {
+                    self.device.create_shader_module(
+                        &vk::ShaderModuleCreateInfo::default().code(words),
+                        None,
+                    )
+                }
+                .map_err(vk_err(what))?;
             }
         }
+        Ok(())
+    }
 
-        // Pipelines: scene.wgsl's vertex layout, reversed-Z depth, no culling, one colour target
-        // without blending.
+    /// The untextured pipelines: the shading draw (EQUAL against the pre-pass's depth, no depth
+    /// writes: each covered pixel is shaded by its visible primitive only, so at 1x1 the
+    /// invocation count is the covered pixels exactly, the shade-count model's premise), and the
+    /// pre-pass (depth test GREATER and write): with the motion target in its own render pass
+    /// (split) or depth alone in the shading render pass (single). The same vertex shader
+    /// throughout (its position is `@invariant`).
+    fn create_scene_pipelines(
+        &mut self,
+        shaders: &Shaders<'_>,
+        stride: u32,
+        split: bool,
+    ) -> Result<(), String> {
         let vs_name = std::ffi::CString::new(shaders.vertex).map_err(|e| e.to_string())?;
         let fs_name = std::ffi::CString::new(shaders.fragment).map_err(|e| e.to_string())?;
         let motion_name = std::ffi::CString::new(shaders.motion_fragment.unwrap_or("none"))
             .map_err(|e| e.to_string())?;
-        fn stage(
-            flags: vk::ShaderStageFlags,
-            module: vk::ShaderModule,
-            name: &std::ffi::CStr,
-        ) -> vk::PipelineShaderStageCreateInfo<'_> {
-            vk::PipelineShaderStageCreateInfo::default()
-                .stage(flags)
-                .module(module)
-                .name(name)
-        }
-        let vertex_stage = stage(vk::ShaderStageFlags::VERTEX, pass.modules[0], &vs_name);
-        let shade_stages = [
-            vertex_stage,
-            stage(vk::ShaderStageFlags::FRAGMENT, pass.modules[1], &fs_name),
-        ];
-        let motion_stages = [
-            vertex_stage,
-            stage(
-                vk::ShaderStageFlags::FRAGMENT,
-                pass.modules[2],
-                &motion_name,
-            ),
-        ];
-        let vertex_bindings = [vk::VertexInputBindingDescription {
-            binding: 0,
-            stride: scene.vertex_stride,
-            input_rate: vk::VertexInputRate::VERTEX,
-        }];
-        let vertex_attributes = [
-            vk::VertexInputAttributeDescription {
-                location: 0,
-                binding: 0,
-                format: vk::Format::R32G32B32_SFLOAT,
-                offset: 0,
-            },
-            vk::VertexInputAttributeDescription {
-                location: 1,
-                binding: 0,
-                format: vk::Format::R32G32B32_SFLOAT,
-                offset: 12,
-            },
-        ];
-        let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
-            .vertex_binding_descriptions(&vertex_bindings)
-            .vertex_attribute_descriptions(&vertex_attributes);
-        let assembly = vk::PipelineInputAssemblyStateCreateInfo::default()
-            .topology(vk::PrimitiveTopology::TRIANGLE_LIST);
-        let viewport = vk::PipelineViewportStateCreateInfo::default()
-            .viewport_count(1)
-            .scissor_count(1);
-        let raster = vk::PipelineRasterizationStateCreateInfo::default()
-            .polygon_mode(vk::PolygonMode::FILL)
-            .cull_mode(vk::CullModeFlags::NONE)
-            .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
-            .line_width(1.0);
-        let multisample = vk::PipelineMultisampleStateCreateInfo::default()
-            .rasterization_samples(vk::SampleCountFlags::TYPE_1);
-        // The shading draw tests EQUAL against the depth pre-pass and writes no depth: each
-        // covered pixel is shaded by its visible primitive only (no overdraw), so at 1x1 the
-        // invocation count is the covered pixels exactly (the shade-count model's premise).
-        let depth = vk::PipelineDepthStencilStateCreateInfo::default()
-            .depth_test_enable(true)
-            .depth_write_enable(false)
-            .depth_compare_op(vk::CompareOp::EQUAL);
-        let prepass_depth = vk::PipelineDepthStencilStateCreateInfo::default()
-            .depth_test_enable(true)
-            .depth_write_enable(true)
-            .depth_compare_op(vk::CompareOp::GREATER);
-        let no_color = [vk::PipelineColorBlendAttachmentState::default()];
-        let prepass_blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&no_color);
-        let blend_attachments = [vk::PipelineColorBlendAttachmentState::default()
-            .color_write_mask(vk::ColorComponentFlags::RGBA)];
-        let blend =
-            vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
-        let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
-        let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
-        let mut rate_state = attachment_rates();
-        let info = vk::GraphicsPipelineCreateInfo::default()
-            .stages(&shade_stages)
-            .vertex_input_state(&vertex_input)
-            .input_assembly_state(&assembly)
-            .viewport_state(&viewport)
-            .rasterization_state(&raster)
-            .multisample_state(&multisample)
-            .depth_stencil_state(&depth)
-            .color_blend_state(&blend)
-            .dynamic_state(&dynamic)
-            .layout(pass.layout)
-            .render_pass(pass.shade_pass)
-            .subpass(0);
-        let info = if rated {
-            info.push_next(&mut rate_state)
-        } else {
-            info
+        let shade = RawPipeline {
+            layout: self.layout,
+            render_pass: self.shade_pass,
+            stride,
+            attributes: &SCENE_ATTRIBUTES,
+            vertex: (self.modules[0], &vs_name),
+            fragment: Some((self.modules[1], &fs_name)),
+            depth: (vk::CompareOp::EQUAL, false),
+            color: ColorOut::Write,
+            rates: self.rated,
         };
-        // SAFETY: every state struct and the shading-rate chain live across the calls; the
-        // render passes and layout are alive; the pipeline features are enabled on this device
-        // (`open`).
+        let d = self.device.clone();
+        // SAFETY: the modules, layout and render passes are alive; the shading-rate state is
+        // chained only where the device has the extension (`rated`).
         unsafe {
-            pass.pipeline = d
-                .create_graphics_pipelines(vk::PipelineCache::null(), &[info], None)
-                .map_err(|(_, e)| format!("VRS pipeline: {e}"))?[0];
-        }
-        if split {
-            // The motion pre-pass: the same vertex shader (its position is `@invariant`), depth
-            // test greater and write, the motion written where the depth test passes.
-            let motion_info = vk::GraphicsPipelineCreateInfo::default()
-                .stages(&motion_stages)
-                .vertex_input_state(&vertex_input)
-                .input_assembly_state(&assembly)
-                .viewport_state(&viewport)
-                .rasterization_state(&raster)
-                .multisample_state(&multisample)
-                .depth_stencil_state(&prepass_depth)
-                .color_blend_state(&blend)
-                .dynamic_state(&dynamic)
-                .layout(pass.layout)
-                .render_pass(pass.motion_pass)
-                .subpass(0);
-            // SAFETY: as above.
-            unsafe {
-                pass.motion_prepass = d
-                    .create_graphics_pipelines(vk::PipelineCache::null(), &[motion_info], None)
-                    .map_err(|(_, e)| format!("motion pre-pass pipeline: {e}"))?[0];
+            self.pipeline = shade.create(&d, "VRS pipeline")?;
+            if split {
+                let motion = RawPipeline {
+                    render_pass: self.motion_pass,
+                    fragment: Some((self.modules[2], &motion_name)),
+                    depth: (vk::CompareOp::GREATER, true),
+                    rates: false,
+                    ..shade
+                };
+                self.motion_prepass = motion.create(&d, "motion pre-pass pipeline")?;
+            } else {
+                let depth = RawPipeline {
+                    fragment: None,
+                    depth: (vk::CompareOp::GREATER, true),
+                    color: ColorOut::None,
+                    rates: false,
+                    ..shade
+                };
+                self.depth_prepass = depth.create(&d, "depth pre-pass pipeline")?;
             }
+        }
+        Ok(())
+    }
+
+    /// The textured draws' layout (sets 0 and 1), modules and pipelines: shading (opaque and
+    /// alpha-tested at EQUAL, blended at GREATER), and the pre-pass's opaque and alpha-tested
+    /// draws (the alpha test at full rate).
+    fn create_material_pipelines(&mut self, code: &[Vec<u32>], split: bool) -> Result<(), String> {
+        let Some(sets) = &self.materials else {
+            return Ok(());
+        };
+        let layouts = [self.set_layout, sets.layout];
+        let stride = sets.vertex_stride;
+        let d = self.device.clone();
+        // SAFETY: create-infos outlive their calls; the set layouts are alive; each object is
+        // stored in the pass as soon as it exists (destroyed in Drop).
+        unsafe {
+            self.material_layout = d
+                .create_pipeline_layout(
+                    &vk::PipelineLayoutCreateInfo::default().set_layouts(&layouts),
+                    None,
+                )
+                .map_err(vk_err("material pipeline layout"))?;
+            for (i, words) in code.iter().enumerate() {
+                self.material_modules[i] = d
+                    .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(words), None)
+                    .map_err(vk_err("material shader"))?;
+            }
+        }
+        let names: Vec<std::ffi::CString> = MATERIAL_ENTRY_POINTS
+            .iter()
+            .map(|(_, e)| std::ffi::CString::new(*e).expect("entry names have no NUL"))
+            .collect();
+        let modules = self.material_modules;
+        let module = |i: usize| (modules[i], names[i].as_c_str());
+        let base = RawPipeline {
+            layout: self.material_layout,
+            render_pass: self.shade_pass,
+            stride,
+            attributes: &MATERIAL_ATTRIBUTES,
+            vertex: module(0),
+            fragment: Some(module(1)),
+            depth: (vk::CompareOp::EQUAL, false),
+            color: ColorOut::Write,
+            rates: self.rated,
+        };
+        let blend = RawPipeline {
+            depth: (vk::CompareOp::GREATER, false),
+            color: ColorOut::Blend,
+            ..base
+        };
+        let (prepass_opaque, prepass_mask) = if split {
+            let opaque = RawPipeline {
+                render_pass: self.motion_pass,
+                fragment: Some(module(2)),
+                depth: (vk::CompareOp::GREATER, true),
+                rates: false,
+                ..base
+            };
+            let mask = RawPipeline {
+                fragment: Some(module(3)),
+                ..opaque
+            };
+            (opaque, mask)
         } else {
-            // The depth pre-pass of the single shape: the same vertex shader, no fragment
-            // shader, no colour writes, depth test greater and write.
-            let prepass_info = vk::GraphicsPipelineCreateInfo::default()
-                .stages(&shade_stages[..1])
-                .vertex_input_state(&vertex_input)
-                .input_assembly_state(&assembly)
-                .viewport_state(&viewport)
-                .rasterization_state(&raster)
-                .multisample_state(&multisample)
-                .depth_stencil_state(&prepass_depth)
-                .color_blend_state(&prepass_blend)
-                .dynamic_state(&dynamic)
-                .layout(pass.layout)
-                .render_pass(pass.shade_pass)
-                .subpass(0);
-            // SAFETY: as above.
-            unsafe {
-                pass.depth_prepass = d
-                    .create_graphics_pipelines(vk::PipelineCache::null(), &[prepass_info], None)
-                    .map_err(|(_, e)| format!("depth pre-pass pipeline: {e}"))?[0];
-            }
+            let opaque = RawPipeline {
+                fragment: None,
+                depth: (vk::CompareOp::GREATER, true),
+                color: ColorOut::None,
+                rates: false,
+                ..base
+            };
+            let mask = RawPipeline {
+                fragment: Some(module(4)),
+                ..opaque
+            };
+            (opaque, mask)
+        };
+        // SAFETY: the modules, layout and render passes are alive; the shading-rate state is
+        // chained only where the device has the extension.
+        unsafe {
+            self.material_shade[0] = base.create(&d, "material shading pipeline")?;
+            self.material_shade[1] = blend.create(&d, "blended material pipeline")?;
+            self.material_prepass[0] = prepass_opaque.create(&d, "material pre-pass pipeline")?;
+            self.material_prepass[1] = prepass_mask.create(&d, "alpha-tested pre-pass pipeline")?;
         }
-        if let (Some(raw), Some(code)) = (materials, &material_spirv) {
-            pass.materials = RawMaterialSets::new(&d, raw, anisotropic)?;
-            if let Some(sets) = &pass.materials {
-                let layouts = [pass.set_layout, sets.layout];
-                let stride = sets.vertex_stride;
-                // SAFETY: create-infos outlive their calls; the set layouts are alive; each
-                // object is stored in `pass` as soon as it exists (destroyed in Drop).
-                unsafe {
-                    pass.material_layout = d
-                        .create_pipeline_layout(
-                            &vk::PipelineLayoutCreateInfo::default().set_layouts(&layouts),
-                            None,
-                        )
-                        .map_err(vk_err("material pipeline layout"))?;
-                    for (i, words) in code.iter().enumerate() {
-                        pass.material_modules[i] = d
-                            .create_shader_module(
-                                &vk::ShaderModuleCreateInfo::default().code(words),
-                                None,
-                            )
-                            .map_err(vk_err("material shader"))?;
-                    }
-                }
-                let names: Vec<std::ffi::CString> = MATERIAL_ENTRY_POINTS
-                    .iter()
-                    .map(|(_, e)| std::ffi::CString::new(*e).expect("entry names have no NUL"))
-                    .collect();
-                let module = |i: usize| (pass.material_modules[i], names[i].as_c_str());
-                let base = MaterialPipeline {
-                    layout: pass.material_layout,
-                    render_pass: pass.shade_pass,
-                    stride,
-                    vertex: module(0),
-                    fragment: Some(module(1)),
-                    depth: (vk::CompareOp::EQUAL, false),
-                    color: ColorOut::Write,
-                    rates: rated,
-                };
-                let blend = MaterialPipeline {
-                    depth: (vk::CompareOp::GREATER, false),
-                    color: ColorOut::Blend,
-                    ..base
-                };
-                let (prepass_opaque, prepass_mask) = if split {
-                    let opaque = MaterialPipeline {
-                        render_pass: pass.motion_pass,
-                        fragment: Some(module(2)),
-                        depth: (vk::CompareOp::GREATER, true),
-                        rates: false,
-                        ..base
-                    };
-                    let mask = MaterialPipeline {
-                        fragment: Some(module(3)),
-                        ..opaque
-                    };
-                    (opaque, mask)
-                } else {
-                    let opaque = MaterialPipeline {
-                        fragment: None,
-                        depth: (vk::CompareOp::GREATER, true),
-                        color: ColorOut::None,
-                        rates: false,
-                        ..base
-                    };
-                    let mask = MaterialPipeline {
-                        fragment: Some(module(4)),
-                        ..opaque
-                    };
-                    (opaque, mask)
-                };
-                // SAFETY: the modules, layout and render passes are alive; the shading-rate
-                // state is chained only where the device has the extension.
-                unsafe {
-                    pass.material_shade[0] = base.create(&d, "material shading pipeline")?;
-                    pass.material_shade[1] = blend.create(&d, "blended material pipeline")?;
-                    pass.material_prepass[0] =
-                        prepass_opaque.create(&d, "material pre-pass pipeline")?;
-                    pass.material_prepass[1] =
-                        prepass_mask.create(&d, "alpha-tested pre-pass pipeline")?;
-                }
-            }
-        }
-        // SAFETY: a two-query pool of fragment-shader invocations (shading pass, motion pre-pass);
-        // pipelineStatisticsQuery is on when wgpu has PIPELINE_STATISTICS_QUERY (the caller
-        // checks).
-        pass.stats = unsafe {
-            d.create_query_pool(
+        Ok(())
+    }
+
+    /// A two-query pool of fragment-shader invocations (shading pass, motion pre-pass).
+    fn create_statistics(&mut self) -> Result<(), String> {
+        // SAFETY: pipelineStatisticsQuery is on when wgpu has PIPELINE_STATISTICS_QUERY (the
+        // caller checks); the pool is stored in the pass at once.
+        self.stats = unsafe {
+            self.device.create_query_pool(
                 &vk::QueryPoolCreateInfo::default()
                     .query_type(vk::QueryType::PIPELINE_STATISTICS)
                     .query_count(2)
@@ -872,9 +871,8 @@ impl RawVrsPass {
             )
         }
         .map_err(vk_err("statistics query pool"))?;
-        Ok(pass)
+        Ok(())
     }
-
     /// The viewport (wgpu-hal's convention: flipped, negative height, so that clip space is
     /// WebGPU's, y up) and the render area.
     fn area(&self) -> (vk::Viewport, vk::Rect2D) {
@@ -1258,132 +1256,5 @@ impl Drop for RawVrsPass {
             d.destroy_image(self.rate_image, None);
             d.free_memory(self.rate_memory, None);
         }
-    }
-}
-
-/// What a textured draw writes to the colour attachment.
-#[derive(Clone, Copy)]
-enum ColorOut {
-    /// Nothing (write mask 0): `native-vrs`'s depth pre-pass.
-    None,
-    /// Every channel, no blending.
-    Write,
-    /// glTF BLEND: wgpu's `BlendState::ALPHA_BLENDING` (colour `src_alpha`, `1 - src_alpha`;
-    /// alpha `1`, `1 - src_alpha`), what `material.rs`'s blended pipeline uses.
-    Blend,
-}
-
-/// One pipeline of the textured draws: `MaterialVertex`'s layout, triangles, no culling, one
-/// sample, dynamic viewport and scissor, as `material.rs`'s wgpu pipelines and the untextured raw
-/// ones.
-#[derive(Clone, Copy)]
-struct MaterialPipeline<'a> {
-    layout: vk::PipelineLayout,
-    render_pass: vk::RenderPass,
-    stride: u32,
-    vertex: (vk::ShaderModule, &'a std::ffi::CStr),
-    fragment: Option<(vk::ShaderModule, &'a std::ffi::CStr)>,
-    /// Depth compare op and whether depth is written.
-    depth: (vk::CompareOp, bool),
-    color: ColorOut,
-    /// Whether the attachment decides the fragment size (the shading draws on a device with
-    /// the extension), as the untextured shading pipeline: 1x1, combiners (KEEP, REPLACE).
-    rates: bool,
-}
-
-impl MaterialPipeline<'_> {
-    /// # Safety
-    /// The modules, layout and render pass are alive on `d`; `rates` only where the device has
-    /// VK_KHR_fragment_shading_rate turned on.
-    unsafe fn create(&self, d: &ash::Device, what: &str) -> Result<vk::Pipeline, String> {
-        let mut stages = vec![vk::PipelineShaderStageCreateInfo::default()
-            .stage(vk::ShaderStageFlags::VERTEX)
-            .module(self.vertex.0)
-            .name(self.vertex.1)];
-        if let Some((module, name)) = self.fragment {
-            stages.push(
-                vk::PipelineShaderStageCreateInfo::default()
-                    .stage(vk::ShaderStageFlags::FRAGMENT)
-                    .module(module)
-                    .name(name),
-            );
-        }
-        let bindings = [vk::VertexInputBindingDescription {
-            binding: 0,
-            stride: self.stride,
-            input_rate: vk::VertexInputRate::VERTEX,
-        }];
-        let attributes: Vec<vk::VertexInputAttributeDescription> = MATERIAL_ATTRIBUTES
-            .iter()
-            .enumerate()
-            .map(
-                |(i, &(format, offset))| vk::VertexInputAttributeDescription {
-                    location: i as u32,
-                    binding: 0,
-                    format,
-                    offset,
-                },
-            )
-            .collect();
-        let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
-            .vertex_binding_descriptions(&bindings)
-            .vertex_attribute_descriptions(&attributes);
-        let assembly = vk::PipelineInputAssemblyStateCreateInfo::default()
-            .topology(vk::PrimitiveTopology::TRIANGLE_LIST);
-        let viewport = vk::PipelineViewportStateCreateInfo::default()
-            .viewport_count(1)
-            .scissor_count(1);
-        let raster = vk::PipelineRasterizationStateCreateInfo::default()
-            .polygon_mode(vk::PolygonMode::FILL)
-            .cull_mode(vk::CullModeFlags::NONE)
-            .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
-            .line_width(1.0);
-        let multisample = vk::PipelineMultisampleStateCreateInfo::default()
-            .rasterization_samples(vk::SampleCountFlags::TYPE_1);
-        let depth = vk::PipelineDepthStencilStateCreateInfo::default()
-            .depth_test_enable(true)
-            .depth_write_enable(self.depth.1)
-            .depth_compare_op(self.depth.0);
-        let attachment = match self.color {
-            ColorOut::None => vk::PipelineColorBlendAttachmentState::default(),
-            ColorOut::Write => vk::PipelineColorBlendAttachmentState::default()
-                .color_write_mask(vk::ColorComponentFlags::RGBA),
-            ColorOut::Blend => vk::PipelineColorBlendAttachmentState::default()
-                .blend_enable(true)
-                .src_color_blend_factor(vk::BlendFactor::SRC_ALPHA)
-                .dst_color_blend_factor(vk::BlendFactor::ONE_MINUS_SRC_ALPHA)
-                .color_blend_op(vk::BlendOp::ADD)
-                .src_alpha_blend_factor(vk::BlendFactor::ONE)
-                .dst_alpha_blend_factor(vk::BlendFactor::ONE_MINUS_SRC_ALPHA)
-                .alpha_blend_op(vk::BlendOp::ADD)
-                .color_write_mask(vk::ColorComponentFlags::RGBA),
-        };
-        let attachments = [attachment];
-        let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&attachments);
-        let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
-        let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
-        let mut rate_state = attachment_rates();
-        let info = vk::GraphicsPipelineCreateInfo::default()
-            .stages(&stages)
-            .vertex_input_state(&vertex_input)
-            .input_assembly_state(&assembly)
-            .viewport_state(&viewport)
-            .rasterization_state(&raster)
-            .multisample_state(&multisample)
-            .depth_stencil_state(&depth)
-            .color_blend_state(&blend)
-            .dynamic_state(&dynamic)
-            .layout(self.layout)
-            .render_pass(self.render_pass)
-            .subpass(0);
-        let info = if self.rates {
-            info.push_next(&mut rate_state)
-        } else {
-            info
-        };
-        // SAFETY: every state struct lives across the call; the caller's contract.
-        unsafe { d.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None) }
-            .map(|p| p[0])
-            .map_err(|(_, e)| format!("{what}: {e}"))
     }
 }
