@@ -2,7 +2,6 @@
 //! command's exit codes on run folders written from those records. No GPU needed. The rules are
 //! `results/COMPARISON.md`'s; the engine's own cases are in `results/tests/compare.rs`.
 
-use std::collections::BTreeMap;
 use std::path::Path;
 use std::process::Command;
 
@@ -10,7 +9,7 @@ use tessera::compare::{self, Options, Run};
 use tessera_results::conditions::{Conditions, Energy, EnergyMethod, RecordedConditions};
 use tessera_results::{
     AdapterFeatures, AdapterInfo, CommitInfo, GateLevel, GateOutcome, HostInfo, MetricRecord,
-    PassRecord, RunInfo, RunStatus, ScenarioResult, Status, Summary, VariantResult, SCHEMA_VERSION,
+    RunInfo, RunStatus, ScenarioResult, Status, VariantResult, SCHEMA_VERSION,
 };
 
 fn adapter(name: &str, device_type: &str, driver_info: &str) -> AdapterInfo {
@@ -79,47 +78,16 @@ fn metric(name: &str, value: f64, higher_is_better: bool) -> MetricRecord {
 
 /// A variant with one pass timed `samples` and PSNR, SSIM and FLIP as given.
 fn variant(name: &str, samples: &[f64], quality: Option<(f64, f64, f64)>) -> VariantResult {
-    VariantResult {
-        variant: name.into(),
-        technique: name.split('[').next().unwrap().into(),
-        baseline: None,
-        params: BTreeMap::new(),
-        status: Status::Ok,
-        reference: quality.map(|_| "native".into()),
-        passes: vec![PassRecord {
-            name: "scene".into(),
-            kind: "render".into(),
-            reads: vec![],
-            writes: vec!["color".into()],
-            gpu_ms: Summary::of(samples),
-            samples_ms: samples.to_vec(),
-            fragment_invocations: None,
-        }],
-        culled_passes: vec![],
-        gpu_frame_ms: Summary::of(samples),
-        cpu_frame_ms: Summary::of(samples).or(Summary::of(&[0.0])).unwrap(),
-        resources: vec![],
-        allocated_bytes: 0,
-        metrics: quality
-            .map(|(psnr, ssim, flip)| {
-                vec![
-                    metric("psnr", psnr, true),
-                    metric("ssim", ssim, true),
-                    metric("flip", flip, false),
-                ]
-            })
-            .unwrap_or_default(),
-        non_finite_values: 0,
-        stability: None,
-        images: vec![],
-        gates: vec![],
-        conditions: None,
-        sampling: None,
-        pacing: None,
-        convergence: None,
-        frame_digests: Vec::new(),
-        expectation: None,
+    let mut v = VariantResult::timed(name, samples);
+    if let Some((psnr, ssim, flip)) = quality {
+        v.reference = Some("native".into());
+        v.metrics = vec![
+            metric("psnr", psnr, true),
+            metric("ssim", ssim, true),
+            metric("flip", flip, false),
+        ];
     }
+    v
 }
 
 fn scenario(run_id: &str, name: &str, results: Vec<VariantResult>) -> ScenarioResult {

@@ -20,6 +20,7 @@ pub mod expectation;
 pub mod folder;
 pub mod measure;
 pub mod queue;
+mod timed;
 pub mod upload;
 
 /// The run folder's layout (`results/README.md`): where each file of a run lives. Both the

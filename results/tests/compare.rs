@@ -7,8 +7,8 @@ use std::collections::BTreeMap;
 use tessera_results::compare::{self, markdown, Comparison, Options, RunRef, Verdict};
 use tessera_results::stats::TimeVerdict;
 use tessera_results::{
-    AdapterFeatures, AdapterInfo, CommitInfo, HostInfo, MetricRecord, PassRecord, RunInfo,
-    RunStatus, ScenarioResult, Status, Summary, VariantResult, SCHEMA_VERSION,
+    AdapterFeatures, AdapterInfo, CommitInfo, HostInfo, MetricRecord, RunInfo, RunStatus,
+    ScenarioResult, VariantResult, SCHEMA_VERSION,
 };
 
 fn h200() -> AdapterInfo {
@@ -55,48 +55,19 @@ fn info(run_id: &str, sha: &str) -> RunInfo {
 
 /// An ok variant of technique `name` (up to a `[`) with one pass timed `samples` and a PSNR.
 fn variant(name: &str, samples: &[f64], psnr: f64) -> VariantResult {
-    VariantResult {
-        variant: name.into(),
-        technique: name.split('[').next().unwrap().into(),
-        baseline: None,
-        params: BTreeMap::new(),
-        status: Status::Ok,
-        reference: Some("native".into()),
-        passes: vec![PassRecord {
-            name: "scene".into(),
-            kind: "render".into(),
-            reads: vec![],
-            writes: vec!["color".into()],
-            gpu_ms: Summary::of(samples),
-            samples_ms: samples.to_vec(),
-            fragment_invocations: None,
-        }],
-        culled_passes: vec![],
-        gpu_frame_ms: Summary::of(samples),
-        cpu_frame_ms: Summary::of(samples).unwrap(),
-        resources: vec![],
-        allocated_bytes: 0,
-        metrics: vec![MetricRecord {
-            name: "psnr".into(),
-            per_frame: vec![psnr; samples.len()],
-            frames: (0..samples.len() as u32).collect(),
-            value: psnr,
-            higher_is_better: true,
-            frame_stats: None,
-            metrics_device: None,
-            check: None,
-        }],
-        non_finite_values: 0,
-        stability: None,
-        images: vec![],
-        gates: vec![],
-        conditions: None,
-        sampling: None,
-        pacing: None,
-        convergence: None,
-        frame_digests: Vec::new(),
-        expectation: None,
-    }
+    let mut v = VariantResult::timed(name, samples);
+    v.reference = Some("native".into());
+    v.metrics = vec![MetricRecord {
+        name: "psnr".into(),
+        per_frame: vec![psnr; samples.len()],
+        frames: (0..samples.len() as u32).collect(),
+        value: psnr,
+        higher_is_better: true,
+        frame_stats: None,
+        metrics_device: None,
+        check: None,
+    }];
+    v
 }
 
 fn scenario(run_id: &str, results: Vec<VariantResult>) -> ScenarioResult {

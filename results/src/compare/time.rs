@@ -161,47 +161,13 @@ pub(crate) fn passes(a: &VariantResult, b: &VariantResult, opts: &Options) -> Ve
 
 #[cfg(test)]
 pub(crate) mod tests {
-    use std::collections::BTreeMap;
 
     use super::*;
     use crate::stats::DEFAULT_THRESHOLD_PCT;
-    use crate::PassRecord;
 
-    /// An ok result of technique `name` (up to a `[`) with one pass timed `samples`.
+    /// An ok result of technique `name` with one pass timed `samples` ([`VariantResult::timed`]).
     pub(crate) fn result(name: &str, samples: &[f64]) -> VariantResult {
-        VariantResult {
-            variant: name.into(),
-            technique: name.split('[').next().unwrap().into(),
-            baseline: None,
-            params: BTreeMap::new(),
-            status: Status::Ok,
-            reference: None,
-            passes: vec![PassRecord {
-                name: "scene".into(),
-                kind: "render".into(),
-                reads: vec![],
-                writes: vec!["color".into()],
-                gpu_ms: Summary::of(samples),
-                samples_ms: samples.to_vec(),
-                fragment_invocations: None,
-            }],
-            culled_passes: vec![],
-            gpu_frame_ms: Summary::of(samples),
-            cpu_frame_ms: Summary::of(samples).or(Summary::of(&[0.0])).unwrap(),
-            resources: vec![],
-            allocated_bytes: 0,
-            metrics: vec![],
-            non_finite_values: 0,
-            stability: None,
-            images: vec![],
-            gates: vec![],
-            conditions: None,
-            sampling: None,
-            pacing: None,
-            convergence: None,
-            frame_digests: Vec::new(),
-            expectation: None,
-        }
+        VariantResult::timed(name, samples)
     }
 
     fn frames(n: usize, start: f64) -> Vec<f64> {
