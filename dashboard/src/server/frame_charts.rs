@@ -12,6 +12,7 @@ use std::fmt::Write;
 use tessera_results::measure::{metric_direction, metric_unit, Direction};
 use tessera_results::VariantResult;
 
+use super::frame_plot::FramePlot;
 use crate::html::{esc, num};
 
 const W: f64 = 360.0;
@@ -103,28 +104,16 @@ pub fn worst_of(s: &FrameSeries) -> Option<(u32, f64)> {
 }
 
 fn chart(s: &FrameSeries) -> String {
-    let f0 = s.frames.iter().copied().min().unwrap_or(0);
-    let f1 = s.frames.iter().copied().max().unwrap_or(0).max(f0 + 1);
-    let dx = (W - LEFT - RIGHT) / f64::from(f1 - f0);
-    let finite: Vec<f64> = s.values.iter().copied().filter(|v| v.is_finite()).collect();
-    let (lo, hi) = finite
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
-            (a.min(v), b.max(v))
-        });
-    let (lo, hi) = if !lo.is_finite() {
-        (0.0, 1.0)
-    } else if hi - lo < 1e-12 {
-        (lo - 0.5, hi + 0.5)
-    } else {
-        (lo, hi)
-    };
-    let x = |f: u32| LEFT + f64::from(f - f0) * dx;
-    let y = |v: f64| TOP + (H - TOP - BOTTOM) * (1.0 - (v - lo) / (hi - lo));
+    let plot = FramePlot::over(
+        [W, H, LEFT, RIGHT, TOP, BOTTOM],
+        std::iter::once((&s.frames[..], &s.values[..])),
+    );
     let worst = worst_of(s);
     let mut out = format!(
-        "<figure class=frame-chart><svg viewBox=\"0 0 {W} {H}\" width={W} height={H} role=img aria-label=\"{}\" data-f0={f0} data-x0={LEFT} data-dx={dx:.4}>",
-        esc(&s.title)
+        "<figure class=frame-chart><svg viewBox=\"0 0 {W} {H}\" width={W} height={H} role=img aria-label=\"{}\" data-f0={} data-x0={LEFT} data-dx={:.4}>",
+        esc(&s.title),
+        plot.f0,
+        plot.dx()
     );
     let _ = write!(
         out,
@@ -133,46 +122,14 @@ fn chart(s: &FrameSeries) -> String {
         W - RIGHT,
         worst.map_or(String::new(), |(f, v)| format!("worst: frame {f} ({})", num(v)))
     );
-    for (v, yy) in [(hi, y(hi)), (lo, y(lo))] {
-        let _ = write!(
-            out,
-            "<text x={} y={:.1} font-size=10 text-anchor=end fill=#555>{}</text><line x1={LEFT} x2={} y1={yy:.1} y2={yy:.1} stroke=#eee />",
-            LEFT - 4.0,
-            yy + 3.0,
-            num(v),
-            W - RIGHT
-        );
-    }
-    let _ = write!(
-        out,
-        "<text x={LEFT} y={} font-size=10 fill=#555>frame {f0}</text><text x={} y={} font-size=10 text-anchor=end fill=#555>{f1}</text>",
-        H - 4.0,
-        W - RIGHT,
-        H - 4.0
-    );
-    // One polyline per run of finite values (an infinite PSNR is a gap).
-    let mut runs: Vec<String> = vec![String::new()];
-    for (f, v) in s.frames.iter().zip(&s.values) {
-        if !v.is_finite() {
-            runs.push(String::new());
-            continue;
-        }
-        let last = runs.last_mut().expect("one run");
-        let _ = write!(last, "{:.1},{:.1} ", x(*f), y(*v));
-    }
-    for pts in runs.iter().filter(|p| !p.is_empty()) {
-        let _ = write!(
-            out,
-            "<polyline points=\"{}\" fill=none stroke=#1f5fa8 stroke-width=1.5 />",
-            pts.trim()
-        );
-    }
+    plot.axes(&mut out);
+    plot.lines(&mut out, &s.frames, &s.values, "#1f5fa8", None);
     if let Some((f, v)) = worst {
         let _ = write!(
             out,
             "<circle cx={:.1} cy={:.1} r=3 fill=#b3261e><title>worst: frame {f}, {}</title></circle>",
-            x(f),
-            y(v),
+            plot.x(f),
+            plot.y(v),
             num(v)
         );
     }
@@ -180,7 +137,7 @@ fn chart(s: &FrameSeries) -> String {
         out,
         "<line class=frame-marker x1={x0:.1} x2={x0:.1} y1={TOP} y2={} stroke=#e08a00 stroke-width=2 /></svg></figure>",
         H - BOTTOM,
-        x0 = x(f0)
+        x0 = plot.x(plot.f0)
     );
     out
 }

@@ -17,6 +17,7 @@ pub mod delete;
 pub mod error;
 pub mod export;
 pub mod frame_charts;
+mod frame_plot;
 pub mod frames;
 pub mod headers;
 pub mod health;

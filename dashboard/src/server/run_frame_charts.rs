@@ -12,6 +12,7 @@ use std::fmt::Write;
 use tessera_results::{ScenarioResult, Status};
 
 use super::frame_charts::{series_of, worst_of, FrameSeries};
+use super::frame_plot::FramePlot;
 use crate::html::{enc, esc, num};
 
 const W: f64 = 420.0;
@@ -75,74 +76,32 @@ fn chart(
     lines: &[Line<'_>],
     saved: &dyn Fn(&str, u32) -> bool,
 ) -> String {
-    let frames = lines.iter().flat_map(|l| l.series.frames.iter().copied());
-    let (f0, f1) = frames.fold((u32::MAX, 0), |(a, b), f| (a.min(f), b.max(f)));
-    let f1 = f1.max(f0 + 1);
-    let finite = lines
-        .iter()
-        .flat_map(|l| l.series.values.iter().copied())
-        .filter(|v| v.is_finite());
-    let (lo, hi) = finite.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
-        (a.min(v), b.max(v))
-    });
-    let (lo, hi) = if !lo.is_finite() {
-        (0.0, 1.0)
-    } else if hi - lo < 1e-12 * hi.abs().max(1e-300) {
-        (lo - 0.5 * lo.abs().max(1e-9), hi + 0.5 * hi.abs().max(1e-9))
-    } else {
-        (lo, hi)
-    };
-    let dx = (W - LEFT - RIGHT) / f64::from(f1 - f0);
-    let x = |f: u32| LEFT + f64::from(f - f0) * dx;
-    let y = |v: f64| TOP + (H - TOP - BOTTOM) * (1.0 - (v - lo) / (hi - lo));
+    let plot = FramePlot::over(
+        [W, H, LEFT, RIGHT, TOP, BOTTOM],
+        lines
+            .iter()
+            .map(|l| (&l.series.frames[..], &l.series.values[..])),
+    );
     let mut out = format!(
         "<figure class=run-frame-chart><figcaption>{}</figcaption><svg viewBox=\"0 0 {W} {H}\" width={W} height={H} role=img aria-label=\"{}\">",
         esc(title),
         esc(title)
     );
-    for (v, yy) in [(hi, y(hi)), (lo, y(lo))] {
-        let _ = write!(
-            out,
-            "<text x={} y={:.1} font-size=10 text-anchor=end fill=#555>{}</text><line x1={LEFT} x2={} y1={yy:.1} y2={yy:.1} stroke=#eee />",
-            LEFT - 4.0,
-            yy + 3.0,
-            num(v),
-            W - RIGHT
-        );
-    }
-    let _ = write!(
-        out,
-        "<text x={LEFT} y={} font-size=10 fill=#555>frame {f0}</text><text x={} y={} font-size=10 text-anchor=end fill=#555>{f1}</text>",
-        H - 5.0,
-        W - RIGHT,
-        H - 5.0
-    );
+    plot.axes(&mut out);
     for l in lines {
-        // One polyline per run of finite values (an infinite PSNR is a gap).
-        let mut runs: Vec<String> = vec![String::new()];
-        for (f, v) in l.series.frames.iter().zip(&l.series.values) {
-            if !v.is_finite() {
-                runs.push(String::new());
-                continue;
-            }
-            let last = runs.last_mut().expect("one run");
-            let _ = write!(last, "{:.1},{:.1} ", x(*f), y(*v));
-        }
-        for pts in runs.iter().filter(|p| !p.is_empty()) {
-            let _ = write!(
-                out,
-                "<polyline points=\"{}\" fill=none stroke=\"{}\" stroke-width=1.5><title>{}</title></polyline>",
-                pts.trim(),
-                l.colour,
-                esc(l.variant)
-            );
-        }
+        plot.lines(
+            &mut out,
+            &l.series.frames,
+            &l.series.values,
+            l.colour,
+            Some(l.variant),
+        );
         if let Some((f, v)) = worst_of(&l.series) {
             let _ = write!(
                 out,
                 "<circle cx={:.1} cy={:.1} r=3 fill=\"{}\"><title>{}: worst frame {f}, {}</title></circle>",
-                x(f),
-                y(v),
+                plot.x(f),
+                plot.y(v),
                 l.colour,
                 esc(l.variant),
                 num(v)
