@@ -10,7 +10,9 @@ use axum::body::Body;
 use axum::http::{header, Request, StatusCode};
 use axum::Router;
 use http_body_util::BodyExt;
+use tessera_dashboard::server::auth::Scope;
 use tessera_dashboard::server::{app, AppState};
+use tessera_dashboard::store::tokens;
 use tessera_results::upload::{blob_digest, blob_record};
 use tower::ServiceExt;
 
@@ -241,4 +243,38 @@ async fn bad_blobs_and_dangling_digests_are_refused_and_change_nothing() {
     .await;
     assert!(st.is_client_error(), "{r}");
     assert_eq!(count(&state, "SELECT COUNT(*) FROM runs"), 0);
+}
+
+#[tokio::test]
+async fn a_runner_token_sends_blobs_and_a_read_token_does_not() {
+    let store = common::sqlite();
+    let conn = &mut *store.pool.get().unwrap();
+    let runner = tokens::add(conn, "box-1", Scope::Runner).unwrap();
+    let reader = tokens::add(conn, "viewer", Scope::Read).unwrap();
+    let state = AppState::new(store.pool.clone(), None);
+    let app = app(state.clone());
+    let a = png(5_000, 3);
+    let q = serde_json::to_vec(&serde_json::json!({ "digests": [blob_digest(&a)] })).unwrap();
+
+    // A runner uploads the run of the job it holds with its images: it asks and sends blobs.
+    let (st, missing) = send(&app, "POST", "/api/blobs/missing", Some(&runner), q.clone()).await;
+    assert_eq!(st, StatusCode::OK);
+    assert_eq!(missing["missing"], serde_json::json!([blob_digest(&a)]));
+    let (st, r) = send(&app, "POST", "/api/blobs", Some(&runner), blob_record(&a)).await;
+    assert_eq!(st, StatusCode::CREATED, "{r}");
+    assert_eq!(count(&state, "SELECT COUNT(*) FROM blobs"), 1);
+
+    // A read token is refused on both, and stores nothing.
+    let b = png(5_000, 4);
+    let (st, _) = send(&app, "POST", "/api/blobs/missing", Some(&reader), q).await;
+    assert!(
+        st == StatusCode::FORBIDDEN || st == StatusCode::UNAUTHORIZED,
+        "{st}"
+    );
+    let (st, _) = send(&app, "POST", "/api/blobs", Some(&reader), blob_record(&b)).await;
+    assert!(
+        st == StatusCode::FORBIDDEN || st == StatusCode::UNAUTHORIZED,
+        "{st}"
+    );
+    assert_eq!(count(&state, "SELECT COUNT(*) FROM blobs"), 1);
 }

@@ -9,7 +9,9 @@
 //!   digest; answers `{"stored", "already"}`. A batch is all or nothing; blobs a client sent
 //!   before a failure stay, so an interrupted upload resumes where it stopped.
 //!
-//! Both need a write token, like `POST /api/runs` that then refers to the blobs by digest.
+//! Both take a write token, or a runner token (a runner uploads the run of the job it holds with
+//! its images; a blob is content-addressed and checked against its digest, so storing one grants
+//! nothing else), like `POST /api/runs` that then refers to the blobs by digest.
 
 use axum::body::Bytes;
 use axum::extract::rejection::BytesRejection;
@@ -19,7 +21,7 @@ use axum::Json;
 use serde::Serialize;
 use tessera_results::upload::{is_blob_digest, split_batch, MissingReply, MissingRequest};
 
-use super::auth::Writer;
+use super::auth::RunnerAuth;
 use super::{AppError, AppState};
 use crate::bundle::{MAX_IMAGE_BYTES, PNG_SIGNATURE};
 
@@ -28,7 +30,7 @@ pub const MAX_DIGESTS: usize = 100_000;
 
 pub async fn missing(
     State(state): State<AppState>,
-    Writer(_who): Writer,
+    RunnerAuth(_who): RunnerAuth,
     body: Result<Bytes, BytesRejection>,
 ) -> Result<Json<MissingReply>, AppError> {
     let body = body.map_err(|e| AppError::BadRequest(e.body_text()))?;
@@ -63,7 +65,7 @@ pub struct StoreReply {
 
 pub async fn store(
     State(state): State<AppState>,
-    Writer(_who): Writer,
+    RunnerAuth(_who): RunnerAuth,
     body: Result<Bytes, BytesRejection>,
 ) -> Result<(StatusCode, Json<StoreReply>), AppError> {
     let body = body.map_err(|e| {
