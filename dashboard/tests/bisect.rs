@@ -233,3 +233,38 @@ fn a_change_spread_over_commits_is_reported_as_spread() {
         b.progress.message
     );
 }
+
+#[test]
+fn an_undecided_step_runs_again_with_twice_the_attempts() {
+    // Four pairs that all differ the same way give p = 2/16 = 0.125 (exact Wilcoxon): not
+    // significant, not the same either. Eight give 0.0078.
+    let store = common::sqlite();
+    let mut c = store.pool.get().unwrap();
+    let p = Params {
+        scenario: "s.toml".into(),
+        variant: "native".into(),
+        measure: "gpu_ms.median".into(),
+        good: sha(0),
+        bad: sha(15),
+        label: "llvmpipe".into(),
+        attempts: 4,
+        regression_id: None,
+    };
+    let id = transaction(&mut *c, |c| bisect::create(c, &p, "test", 3)).unwrap();
+    let r = queue::register(&mut *c, &reg("r"), "t", 0).unwrap();
+    let mut pairs = Vec::new();
+    while let Some(job) = queue::claim(&mut *c, r, 0, 10_000).unwrap() {
+        pairs.push(job.spec.order.len() / 2);
+        work(&mut *c, r, &job);
+    }
+    let b = bisect::get(&mut *c, id).unwrap();
+    assert_eq!(pairs[..2], [4, 8], "step 0 ran again at twice the attempts");
+    assert!(pairs[2..].iter().all(|&n| n == 8), "{pairs:?}");
+    assert_eq!(b.attempts, 8);
+    assert_eq!(
+        (b.state.as_str(), b.culprit.as_deref()),
+        ("done", Some(sha(SLOW).as_str())),
+        "{}",
+        b.progress.message
+    );
+}

@@ -11,6 +11,12 @@
 //! does not build is skipped (`git bisect skip`), and the next step takes its neighbour. When
 //! one commit is left it is the culprit, recorded on the alert the bisection came from.
 //!
+//! More attempts where a step has not decided (Pinpoint adds attempts to an "unknown"
+//! comparison): a step whose measure is not significant but has a p-value below [`UNSURE_P`], or
+//! that reads `spread`, runs once more at twice the attempts (at most [`super::MAX_ATTEMPTS`])
+//! before it decides; the later steps keep the larger count, since the noise that needed it does
+//! not go away.
+//!
 //! Runs inside the transaction that finishes each step's job, so a step's result and the next
 //! step's job are stored together: a runner killed in between loses neither. Not for: HTTP, the
 //! statistics (see [`super::table`]).
@@ -45,6 +51,10 @@ fn default_attempts() -> usize {
     super::DEFAULT_ATTEMPTS
 }
 
+/// Below this p-value (and above [`super::ALPHA`]) a step has not decided whether its commit
+/// differs: more attempts may tell. Above it the two read the same.
+pub const UNSURE_P: f64 = 0.25;
+
 /// Progress kept between steps (`bisections.detail`).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Progress {
@@ -56,6 +66,9 @@ pub struct Progress {
     pub full_effect: Option<f64>,
     /// Why the bisection ended, in words.
     pub message: String,
+    /// The commit whose step is being run again with more attempts (once per step).
+    #[serde(default)]
+    pub rerun: Option<String>,
 }
 
 /// What the request of a step records (`queue_requests.spec`).
@@ -237,7 +250,7 @@ pub fn get(conn: &mut dyn Connection, id: i64) -> Result<Bisection, StoreError> 
 fn save(conn: &mut dyn Connection, b: &Bisection) -> Result<(), StoreError> {
     conn.execute(
         "UPDATE bisections SET state = $2, commits = $3, skipped = $4, culprit = $5, detail = $6, \
-         updated_at = $7 WHERE id = $1",
+         updated_at = $7, attempts = $8 WHERE id = $1",
         &[
             Value::Int(b.id),
             b.state.as_str().into(),
@@ -246,6 +259,7 @@ fn save(conn: &mut dyn Connection, b: &Bisection) -> Result<(), StoreError> {
             b.culprit.clone().into(),
             serde_json::to_string(&b.progress).unwrap().into(),
             crate::now_rfc3339().into(),
+            Value::Int(b.attempts),
         ],
     )?;
     Ok(())
@@ -352,6 +366,10 @@ pub fn on_job_finished(conn: &mut dyn Connection, job_id: i64) -> Result<(), Sto
             Some(r) if r.verdict == "changed" => {
                 b.progress.full_effect = Some(effect(r));
             }
+            Some(r) if unsure(r) && more_attempts(&mut b, &step, r) => {
+                b.commits.clear();
+                return rerun(conn, &mut b, 0, &created_by, max_attempts);
+            }
             _ => {
                 b.state = "no_change".into();
                 b.progress.message = match row {
@@ -379,7 +397,16 @@ pub fn on_job_finished(conn: &mut dyn Connection, job_id: i64) -> Result<(), Sto
             .iter()
             .position(|c| *c == step.commit)
             .ok_or_else(|| StoreError::Corrupt(format!("step commit {}", step.commit)))?;
-        match decide(row, full).1 {
+        let decision = decide(row, full).1;
+        let undecided =
+            decision == Decision::Spread || (decision == Decision::Good && row.is_some_and(unsure));
+        if let Some(r) = row.filter(|_| undecided) {
+            if more_attempts(&mut b, &step, r) {
+                return rerun(conn, &mut b, idx, &created_by, max_attempts);
+            }
+        }
+        b.progress.rerun = None;
+        match decision {
             Decision::Good => b.progress.lo = b.progress.lo.max(idx),
             Decision::Bad => b.progress.hi = b.progress.hi.min(idx),
             Decision::Spread => {
@@ -395,6 +422,67 @@ pub fn on_job_finished(conn: &mut dyn Connection, job_id: i64) -> Result<(), Sto
         }
     }
     next(conn, &mut b, &created_by, max_attempts)
+}
+
+/// Whether `r` is not significant but not clearly the same either (p in [ALPHA, UNSURE_P)).
+fn unsure(r: &Row) -> bool {
+    r.verdict != "changed" && r.p < UNSURE_P
+}
+
+/// Doubles the attempts for a second run of `step`'s commit, unless it ran again already or the
+/// count is at its most; says so in the progress.
+fn more_attempts(b: &mut Bisection, step: &StepSpec, r: &Row) -> bool {
+    let doubled = (b.attempts * 2).min(super::MAX_ATTEMPTS as i64);
+    if b.progress.rerun.as_deref() == Some(step.commit.as_str()) || doubled <= b.attempts {
+        return false;
+    }
+    b.progress.message = format!(
+        "step {} at {}: {} undecided (p = {:.3} over {} pairs): again with {} attempts",
+        step.step, step.commit, b.measure, r.p, r.pairs, doubled
+    );
+    b.attempts = doubled;
+    b.progress.rerun = Some(step.commit.clone());
+    true
+}
+
+/// Queues the step of `b.commits[idx]` again (step 0 when `idx` is 0: good against bad, with
+/// the commit list) at `b.attempts`.
+fn rerun(
+    conn: &mut dyn Connection,
+    b: &mut Bisection,
+    idx: usize,
+    created_by: &str,
+    max_attempts: i64,
+) -> Result<(), StoreError> {
+    let steps = conn.query(
+        "SELECT COUNT(*) FROM queue_requests WHERE bisection_id = $1",
+        &[Value::Int(b.id)],
+    )?[0]
+        .i64(0)? as usize;
+    let (commit, step, list) = if idx == 0 {
+        (b.bad.clone(), 0, Some([b.good.clone(), b.bad.clone()]))
+    } else {
+        (b.commits[idx].clone(), steps, None)
+    };
+    let spec = super::spec(
+        &b.scenario,
+        Some(&b.variant),
+        arm("a", &b.good),
+        arm("b", &commit),
+        b.attempts as usize,
+        list,
+    )?;
+    queue_step(
+        conn,
+        b.id,
+        step,
+        &commit,
+        &b.label,
+        spec,
+        created_by,
+        max_attempts,
+    )?;
+    save(conn, b)
 }
 
 /// Queues the next step, or ends the bisection when one commit is left.
