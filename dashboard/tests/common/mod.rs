@@ -26,6 +26,8 @@ pub fn template() -> RunBundle {
 pub struct TestStore {
     pub name: &'static str,
     pub pool: Pool,
+    /// What `db::open` takes to reach the same store from another process.
+    pub url: String,
     _dir: Option<tempfile::TempDir>,
     pg_schema: Option<(String, String)>,
 }
@@ -47,6 +49,7 @@ pub fn sqlite() -> TestStore {
     TestStore {
         name: "sqlite",
         pool,
+        url: path.to_str().unwrap().to_string(),
         _dir: Some(dir),
         pg_schema: None,
     }
@@ -76,6 +79,7 @@ pub fn postgres(test: &str) -> Option<TestStore> {
     Some(TestStore {
         name: "postgres",
         pool,
+        url: scoped.clone(),
         _dir: None,
         pg_schema: Some((url, schema)),
     })
