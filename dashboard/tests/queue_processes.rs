@@ -11,7 +11,7 @@ use std::io::{BufRead, BufReader};
 use std::process::{Command, Stdio};
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
-use tessera_dashboard::db::{self, Connection};
+use tessera_dashboard::db;
 use tessera_dashboard::store::queue::{self, JobStatus, NewJob};
 use tessera_results::queue::{Arm, Completion, JobKind, JobSpec, Registration};
 
