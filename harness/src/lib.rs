@@ -18,3 +18,4 @@ pub mod tables;
 pub mod techniques;
 pub mod timing;
 pub mod upload;
+pub mod world;

@@ -58,7 +58,7 @@ pub fn skip_reasons(variant: &Variant) -> Vec<String> {
 
 /// Why `variant` is skipped on `scene` on every adapter (it cannot draw the scene's textured
 /// models), for `tessera validate`; `None` when it draws the scene.
-pub fn scene_skip_reason(variant: &Variant, scene: &crate::scenario::Scene) -> Option<String> {
+pub fn scene_skip_reason(variant: &Variant, scene: &crate::world::scene::Scene) -> Option<String> {
     if !scene.has_textured_models() {
         return None;
     }

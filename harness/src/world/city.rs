@@ -13,7 +13,7 @@
 //!   with motion through the velocity pass).
 //!
 //! Every texture is generated on the CPU at `texture_size` texels and mip-mapped on the GPU at
-//! load. Not here: drawing (`material.rs`), the scenario keys (`scenario/`).
+//! load. Not here: drawing (`render/material.rs`), the scenario keys (`scenario/`).
 
 use glam::{DMat4, DVec3, Vec2, Vec3};
 
@@ -22,7 +22,7 @@ use super::material::{
     TextureRef, UvTransform,
 };
 use super::texture::{Encoding, Image, SamplerDesc};
-use crate::scenario::scene::City;
+use super::scene::City;
 
 /// Street width between blocks, metres.
 pub const STREET: f32 = 12.0;
