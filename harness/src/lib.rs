@@ -6,6 +6,7 @@
 pub mod compare;
 pub mod conditions;
 pub mod expect;
+pub mod files;
 pub mod gpu;
 pub mod metrics_device;
 pub mod params;
