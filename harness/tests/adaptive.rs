@@ -239,7 +239,8 @@ fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) -> [usize; 5] {
     let mut histogram = [0usize; 5];
     let mut close_calls = 0;
     let (tw, th) = model::tiles(s.width, s.height);
-    let rgba = |v: Vec<f32>| -> Vec<[f32; 4]> { vec4s(v).into_iter().map(Vec4::to_array).collect() };
+    let rgba =
+        |v: Vec<f32>| -> Vec<[f32; 4]> { vec4s(v).into_iter().map(Vec4::to_array).collect() };
     for index in 0..frames {
         rig.frame(s, index);
         let last = rig.renderer.last_frame().unwrap();
@@ -371,11 +372,10 @@ fn one_shade_per_coarse_pixel_and_object() {
         let mut coarse_blocks = 0;
         for index in 0..6 {
             rig.frame(&s, index);
-            let objects: Vec<u32> =
-                f32s(read_texture_raw(&rig.gpu, rig.texture("gbuf_position")))
-                    .chunks_exact(4)
-                    .map(|c| c[3] as u32)
-                    .collect();
+            let objects: Vec<u32> = f32s(read_texture_raw(&rig.gpu, rig.texture("gbuf_position")))
+                .chunks_exact(4)
+                .map(|c| c[3] as u32)
+                .collect();
             let color: Vec<f32> = rig.output().iter().flat_map(|c| c.to_array()).collect();
             let rates = rig.renderer.rates(&rig.gpu).unwrap();
             let mut shades = 0u32;

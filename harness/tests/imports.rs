@@ -667,7 +667,10 @@ fn a_folder_circle_is_found() {
     let dir = tree(
         "folders",
         &[
-            ("lib.rs", "pub mod render;\npub mod scenario;\npub mod techniques;\n"),
+            (
+                "lib.rs",
+                "pub mod render;\npub mod scenario;\npub mod techniques;\n",
+            ),
             ("render/mod.rs", "pub mod kit;\npub mod mesh;\n"),
             ("render/kit.rs", "pub fn bind_group() {}\n"),
             ("render/mesh.rs", "use crate::scenario::Shape;\n"),
@@ -678,7 +681,10 @@ fn a_folder_circle_is_found() {
             ("scenario/scene.rs", "pub enum Shape {}\n"),
             ("scenario/validate.rs", "use crate::techniques::Variant;\n"),
             ("techniques/mod.rs", "pub mod gpu;\npub struct Variant;\n"),
-            ("techniques/gpu.rs", "fn f() { crate::render::kit::bind_group() }\n"),
+            (
+                "techniques/gpu.rs",
+                "fn f() { crate::render::kit::bind_group() }\n",
+            ),
         ],
     );
     let edges = graph(&dir);

@@ -8,10 +8,10 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use tessera::world::gltf_model;
 use tessera::render::scene::SceneGpu;
 use tessera::run::frames;
 use tessera::techniques::{self, BuildContext, Target};
+use tessera::world::gltf_model;
 use tessera_metrics::HdrImage;
 
 const ASSIMP: &str = "/usr/share/assimp/models/glTF2";

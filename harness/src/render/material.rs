@@ -26,9 +26,9 @@ use super::formats::{ScenePipeline, COLOR_FORMAT, DEPTH_FORMAT};
 use super::mips::MipGenerator;
 use super::texture;
 use crate::world::material::{
-    AlphaMode, Brdf, Material, MaterialVertex, Model, Placement, UvTransform, SLOTS,
+    AlphaMode, Brdf, Material, MaterialVertex, Model, Placement, UvTransform,
 };
-use crate::world::texture::{Image, SamplerDesc};
+use crate::world::texture::{bytes_with_mips, Image, SamplerDesc};
 
 pub static MATERIAL_WGSL: &str = include_str!("../../../shaders/material/material.wgsl");
 
@@ -78,7 +78,7 @@ struct GroupResources {
 }
 
 /// One material bind group's resources, for a pass recorded outside wgpu: binding 0 the uniform
-/// buffer (whole), bindings 1..=5 the views of [`SLOTS`], bindings 6..=10 their samplers (as
+/// buffer (whole), bindings 1..=5 the views of [`SLOTS`](crate::world::material::SLOTS), bindings 6..=10 their samplers (as
 /// [`SamplerDesc::descriptor`] makes them, anisotropy applied).
 pub struct RawMaterial<'a> {
     pub uniform: &'a wgpu::Buffer,
@@ -189,7 +189,7 @@ impl MaterialGpu {
                 .images
                 .iter()
                 .map(|(img, enc)| {
-                    bytes += texture::bytes_with_mips(img);
+                    bytes += bytes_with_mips(img);
                     texture::upload(
                         device,
                         queue,

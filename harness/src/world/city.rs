@@ -21,8 +21,8 @@ use super::material::{
     generate_tangents, AlphaMode, Brdf, Material, MaterialVertex, Model, Placement, Primitive,
     TextureRef, UvTransform,
 };
-use super::texture::{Encoding, Image, SamplerDesc};
 use super::scene::City;
+use super::texture::{Encoding, Image, SamplerDesc};
 
 /// Street width between blocks, metres.
 pub const STREET: f32 = 12.0;
