@@ -10,9 +10,7 @@ use common::check::{vec4s, Rig};
 use glam::Vec4;
 use tessera::params::ParamValue;
 use tessera::render::readback::read_texture_raw;
-use tessera::render::renderer::Renderer;
 use tessera::render::scene::SceneGpu;
-use tessera::render::timers::Timers;
 use tessera::run::frames;
 use tessera::scenario::Scenario;
 use tessera::techniques::adaptive_shading::model::{
@@ -239,8 +237,7 @@ fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) -> [usize; 5] {
     let mut histogram = [0usize; 5];
     let mut close_calls = 0;
     let (tw, th) = model::tiles(s.width, s.height);
-    let rgba =
-        |v: Vec<f32>| -> Vec<[f32; 4]> { vec4s(v).into_iter().map(Vec4::to_array).collect() };
+    let rgba = |v: Vec<f32>| -> Vec<[f32; 4]> { vec4s(v).iter().map(Vec4::to_array).collect() };
     for index in 0..frames {
         rig.frame(s, index);
         let last = rig.renderer.last_frame().unwrap();

@@ -11,7 +11,6 @@ use glam::{Vec3, Vec4};
 use tessera::gpu::Gpu;
 use tessera::params::ParamValue;
 use tessera::render::readback::read_texture;
-use tessera::render::renderer::Renderer;
 use tessera::render::scene::{SceneGpu, ScenePipeline, COLOR_FORMAT, DEPTH_FORMAT};
 use tessera::render::timers::Timers;
 use tessera::scenario::Scenario;

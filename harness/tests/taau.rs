@@ -11,7 +11,6 @@ use glam::{Vec2, Vec4};
 use tessera::params::ParamValue;
 use tessera::render::kit::record_scene_pass;
 use tessera::render::readback::{read_texture, read_texture_raw};
-use tessera::render::renderer::Renderer;
 use tessera::render::scene::{SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FORMAT};
 use tessera::render::timers::Timers;
 use tessera::scenario::Scenario;

@@ -13,7 +13,7 @@ use tessera::render::timers::Timers;
 use tessera::scenario::Scenario;
 
 /// How a renderer names its textures (each technique's `texture` method).
-pub type TextureOf<R> = fn(&R, &str) -> Option<&wgpu::Texture>;
+pub type TextureOf<R> = for<'a> fn(&'a R, &str) -> Option<&'a wgpu::Texture>;
 
 /// A technique's renderer on the default adapter, with the scene of a scenario and the timers
 /// its frames record into.
