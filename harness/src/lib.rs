@@ -6,6 +6,7 @@
 pub mod compare;
 pub mod conditions;
 pub mod expect;
+pub mod files;
 pub mod gpu;
 pub mod metrics_device;
 pub mod params;
@@ -18,3 +19,4 @@ pub mod tables;
 pub mod techniques;
 pub mod timing;
 pub mod upload;
+pub mod world;

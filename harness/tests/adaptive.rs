@@ -6,11 +6,11 @@
 
 mod common;
 
+use common::check::{vec4s, Rig};
+use glam::Vec4;
 use tessera::params::ParamValue;
 use tessera::render::readback::read_texture_raw;
-use tessera::render::renderer::Renderer;
 use tessera::render::scene::SceneGpu;
-use tessera::render::timers::Timers;
 use tessera::run::frames;
 use tessera::scenario::Scenario;
 use tessera::techniques::adaptive_shading::model::{
@@ -229,52 +229,29 @@ fn f32s(bytes: Vec<u8>) -> Vec<f32> {
 /// Renders `frames` frames; after each compares the GPU's rates with the CPU model's on the same
 /// inputs. Returns the number of tiles at each region size over all frames with history.
 fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) -> [usize; 5] {
-    let gpu = common::gpu();
-    let mut scene = SceneGpu::new(&gpu.device, &gpu.queue, s).unwrap();
-    let mut t = Adaptive::new(&gpu, rates_of(v), s.width, s.height);
-    let mut timers = Timers::new(&gpu.device, &[]).unwrap();
+    let mut rig = Rig::new(
+        s,
+        |gpu| Adaptive::new(gpu, rates_of(v), s.width, s.height),
+        Adaptive::texture,
+    );
     let mut histogram = [0usize; 5];
     let mut close_calls = 0;
     let (tw, th) = model::tiles(s.width, s.height);
+    let rgba = |v: Vec<f32>| -> Vec<[f32; 4]> { vec4s(v).iter().map(Vec4::to_array).collect() };
     for index in 0..frames {
-        frames::submit_frame(&gpu, &mut scene, s, &mut t, &mut timers, index);
-        let _ = gpu.device.poll(wgpu::PollType::Wait {
-            submission_index: None,
-            timeout: None,
-        });
-        let _ = timers.try_collect(&gpu.queue);
-        let last = t.last_frame().unwrap();
+        rig.frame(s, index);
+        let last = rig.renderer.last_frame().unwrap();
         let (cur, prev) = (last.parity, 1 - last.parity);
-        let tex = |name: String| t.texture(&name).unwrap();
-        let prev_color: Vec<[f32; 4]> = tessera::render::readback::read_texture(
-            &gpu.device,
-            &gpu.queue,
-            tex(format!("color{prev}")),
-        )
-        .chunks_exact(4)
-        .map(|c| [c[0], c[1], c[2], c[3]])
-        .collect();
-        let motion: Vec<[f32; 4]> =
-            tessera::render::readback::read_texture(&gpu.device, &gpu.queue, tex("motion".into()))
-                .chunks_exact(4)
-                .map(|c| [c[0], c[1], c[2], c[3]])
-                .collect();
-        let prev_depth = tessera::render::readback::read_texture(
-            &gpu.device,
-            &gpu.queue,
-            tex(format!("depth{prev}")),
-        );
-        let depth = tessera::render::readback::read_texture(
-            &gpu.device,
-            &gpu.queue,
-            tex(format!("depth{cur}")),
-        );
-        let prev_state: Vec<[f32; 2]> =
-            f32s(read_texture_raw(&gpu, tex(format!("rate_state{prev}"))))
-                .chunks_exact(2)
-                .map(|c| [c[0], c[1]])
-                .collect();
-        let state: Vec<[f32; 2]> = f32s(read_texture_raw(&gpu, tex(format!("rate_state{cur}"))))
+        let raw_of = |name: String| read_texture_raw(&rig.gpu, rig.texture(&name));
+        let prev_color = rgba(rig.read(&format!("color{prev}")));
+        let motion = rgba(rig.read("motion"));
+        let prev_depth = rig.read(&format!("depth{prev}"));
+        let depth = rig.read(&format!("depth{cur}"));
+        let prev_state: Vec<[f32; 2]> = f32s(raw_of(format!("rate_state{prev}")))
+            .chunks_exact(2)
+            .map(|c| [c[0], c[1]])
+            .collect();
+        let state: Vec<[f32; 2]> = f32s(raw_of(format!("rate_state{cur}")))
             .chunks_exact(2)
             .map(|c| [c[0], c[1]])
             .collect();
@@ -283,9 +260,8 @@ fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) -> [usize; 5] {
         } else {
             "rates"
         };
-        let raw: Vec<u32> =
-            bytemuck::cast_slice(&read_texture_raw(&gpu, tex(raw_name.into()))).to_vec();
-        let rates = t.rates(&gpu).unwrap();
+        let raw: Vec<u32> = bytemuck::cast_slice(&raw_of(raw_name.into())).to_vec();
+        let rates = rig.renderer.rates(&rig.gpu).unwrap();
         let inputs = Inputs {
             width: s.width,
             height: s.height,
@@ -376,7 +352,6 @@ fn gpu_rates_equal_the_model_in_every_mode() {
 /// those with an object. Both ways of placing the shade.
 #[test]
 fn one_shade_per_coarse_pixel_and_object() {
-    let gpu = common::gpu();
     let s = common::scenario(SCENE);
     for sample in ["centre", "pixel"] {
         let v = adaptive(&[
@@ -384,27 +359,22 @@ fn one_shade_per_coarse_pixel_and_object() {
             ("allow_4x4", ParamValue::Bool(true)),
             ("coarse_sample", ParamValue::Str(sample.into())),
         ]);
-        let mut scene = SceneGpu::new(&gpu.device, &gpu.queue, &s).unwrap();
-        let mut t = Adaptive::new(&gpu, rates_of(&v), s.width, s.height);
-        let mut timers = Timers::new(&gpu.device, &[]).unwrap();
+        let mut rig = Rig::new(
+            &s,
+            |gpu| Adaptive::new(gpu, rates_of(&v), s.width, s.height),
+            Adaptive::texture,
+        );
         let (w, h) = (s.width as usize, s.height as usize);
         let (tw, _) = model::tiles(s.width, s.height);
         let mut coarse_blocks = 0;
         for index in 0..6 {
-            frames::submit_frame(&gpu, &mut scene, &s, &mut t, &mut timers, index);
-            let _ = gpu.device.poll(wgpu::PollType::Wait {
-                submission_index: None,
-                timeout: None,
-            });
-            let _ = timers.try_collect(&gpu.queue);
-            let objects: Vec<u32> =
-                f32s(read_texture_raw(&gpu, t.texture("gbuf_position").unwrap()))
-                    .chunks_exact(4)
-                    .map(|c| c[3] as u32)
-                    .collect();
-            let color =
-                tessera::render::readback::read_texture(&gpu.device, &gpu.queue, t.output());
-            let rates = t.rates(&gpu).unwrap();
+            rig.frame(&s, index);
+            let objects: Vec<u32> = f32s(read_texture_raw(&rig.gpu, rig.texture("gbuf_position")))
+                .chunks_exact(4)
+                .map(|c| c[3] as u32)
+                .collect();
+            let color: Vec<f32> = rig.output().iter().flat_map(|c| c.to_array()).collect();
+            let rates = rig.renderer.rates(&rig.gpu).unwrap();
             let mut shades = 0u32;
             for by in 0..h {
                 for bx in 0..w {
@@ -439,7 +409,7 @@ fn one_shade_per_coarse_pixel_and_object() {
             }
             let covered = objects.iter().filter(|o| **o != 0).count() as u32;
             assert_eq!(
-                t.counters(&gpu),
+                rig.renderer.counters(&rig.gpu),
                 [shades, covered],
                 "{sample} frame {index}"
             );

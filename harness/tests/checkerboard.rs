@@ -6,12 +6,10 @@
 
 mod common;
 
+use common::check::{close, f16x4, vec4s, Rig};
 use glam::Vec4;
 use tessera::params::ParamValue;
-use tessera::render::readback::{read_texture, read_texture_layer};
-use tessera::render::renderer::Renderer;
 use tessera::render::scene::SceneGpu;
-use tessera::render::timers::Timers;
 use tessera::scenario::Scenario;
 use tessera::techniques::checkerboard::model::{self, Inputs, Motion, Samples, Source};
 use tessera::techniques::checkerboard::{CheckerboardGpu as Checkerboard, LastFrame, Options};
@@ -22,26 +20,15 @@ fn variant(params: &[(&str, ParamValue)]) -> Variant {
     common::variant("checkerboard", params)
 }
 
-fn vec4s(v: Vec<f32>) -> Vec<Vec4> {
-    v.chunks_exact(4).map(Vec4::from_slice).collect()
-}
-
-fn samples(gpu: &tessera::gpu::Gpu, cb: &Checkerboard, parity: u32) -> Samples {
-    let colors = cb.texture("color_samples").expect("two-pass colour array");
-    let depths = cb.texture("depth_samples").expect("two-pass depth array");
+fn samples(rig: &Rig<Checkerboard>, parity: u32) -> Samples {
+    // The two-pass colour and depth arrays: two layers (samples) per parity.
+    let colors = rig.texture("color_samples");
     let layer = |s: u32| parity * 2 + s;
     Samples {
         width: colors.width(),
         height: colors.height(),
-        color: [0, 1].map(|s| {
-            vec4s(read_texture_layer(
-                &gpu.device,
-                &gpu.queue,
-                colors,
-                layer(s),
-            ))
-        }),
-        depth: [0, 1].map(|s| read_texture_layer(&gpu.device, &gpu.queue, depths, layer(s))),
+        color: [0, 1].map(|s| vec4s(rig.read_layer("color_samples", layer(s)))),
+        depth: [0, 1].map(|s| rig.read_layer("depth_samples", layer(s))),
     }
 }
 
@@ -85,52 +72,38 @@ fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) -> Vec<Source> {
 /// [`compare_with_model`], returning what the last frame's reconstruction was given too.
 fn capture_and_compare(s: &Scenario, v: &Variant, frames: u32) -> Captured {
     assert!(frames >= 2, "the first frame has nothing to compare");
-    let gpu = common::gpu();
-    let mut scene = SceneGpu::new(&gpu.device, &gpu.queue, s).unwrap();
-    let mut cb = Checkerboard::new(
-        &gpu,
-        Options::from_variant(v),
-        s.width,
-        s.height,
-        s.scene.has_dynamic_objects(),
-    )
-    .unwrap();
-    let mut timers = Timers::new(&gpu.device, &[]).unwrap();
+    let dynamic = s.scene.has_dynamic_objects();
+    let mut rig = Rig::new(
+        s,
+        |gpu| Checkerboard::new(gpu, Options::from_variant(v), s.width, s.height, dynamic).unwrap(),
+        Checkerboard::texture,
+    );
     let mut captured = None;
     for index in 0..frames {
-        tessera::run::frames::submit_frame(&gpu, &mut scene, s, &mut cb, &mut timers, index);
-        let _ = gpu.device.poll(wgpu::PollType::Wait {
-            submission_index: None,
-            timeout: None,
-        });
-        let _ = timers.try_collect(&gpu.queue);
+        rig.frame(s, index);
         if index == 0 {
             continue;
         }
-        let last = cb.last_frame().unwrap();
-        let read = |name: &str| read_texture(&gpu.device, &gpu.queue, cb.texture(name).unwrap());
+        let last = rig.renderer.last_frame().unwrap();
         let mut c = Captured {
             last,
-            current: samples(&gpu, &cb, last.parity),
-            previous: samples(&gpu, &cb, 1 - last.parity),
-            velocity: last.velocity.then(|| vec4s(read("velocity"))),
+            current: samples(&rig, last.parity),
+            previous: samples(&rig, 1 - last.parity),
+            velocity: last.velocity.then(|| rig.read4("velocity")),
             // Depth32Float reads back as one f32 per texel (a depth-aspect copy).
-            velocity_depth: last.velocity.then(|| read("velocity_depth")),
+            velocity_depth: last.velocity.then(|| rig.read("velocity_depth")),
             sources: Vec::new(),
         };
         let model = model::reconstruct_all(&c.inputs(s));
-        let gpu_out = vec4s(read_texture(&gpu.device, &gpu.queue, cb.output()));
+        let gpu_out = rig.output();
         for (i, ((m, src), g)) in model.iter().zip(&gpu_out).enumerate() {
-            // The output is Rgba16Float: quantise the model the same way.
-            let m16 = Vec4::from_array(m.to_array().map(|x| half::f16::from_f32(x).to_f32()));
-            let d = (m16 - *g).abs().max_element();
-            if d > 0.0 {
-                // Fills compute in f32 on both sides; rounding may differ in the last f16 bit.
-                assert!(
-                    d <= 2e-3 * m16.abs().max_element().max(1.0),
-                    "frame {index} pixel {i}: model {m16} ({src:?}) gpu {g}"
-                );
-            }
+            // The output is Rgba16Float: quantise the model the same way. Fills compute in f32
+            // on both sides; rounding may differ in the last f16 bit.
+            let m16 = f16x4(*m);
+            assert!(
+                close(m16, *g, 2e-3),
+                "frame {index} pixel {i}: model {m16} ({src:?}) gpu {g}"
+            );
         }
         c.sources = model.iter().map(|(_, s)| *s).collect();
         captured = Some(c);

@@ -6,11 +6,11 @@
 
 mod common;
 
+use common::check::{close, f16, f16x4, vec4s, Rig};
 use glam::{Vec3, Vec4};
 use tessera::gpu::Gpu;
 use tessera::params::ParamValue;
 use tessera::render::readback::read_texture;
-use tessera::render::renderer::Renderer;
 use tessera::render::scene::{SceneGpu, ScenePipeline, COLOR_FORMAT, DEPTH_FORMAT};
 use tessera::render::timers::Timers;
 use tessera::scenario::Scenario;
@@ -20,14 +20,6 @@ use tessera::techniques::checkerboard_2x2::{
 };
 use tessera::techniques::Variant;
 use tessera::techniques::{self, BuildContext, Target};
-
-fn vec4s(v: Vec<f32>) -> Vec<Vec4> {
-    v.chunks_exact(4).map(Vec4::from_slice).collect()
-}
-
-fn f16(x: f32) -> f32 {
-    half::f16::from_f32(x).to_f32()
-}
 
 fn wait(gpu: &Gpu) {
     let _ = gpu.device.poll(wgpu::PollType::Wait {
@@ -58,11 +50,10 @@ fn assert_matches_model(inputs: &Inputs, gpu_out: &[Vec4], what: &str) -> Vec<So
     let model = model::reconstitute_all(inputs);
     let w = inputs.frame.width as usize;
     for (i, ((m, src), g)) in model.iter().zip(gpu_out).enumerate() {
-        let m16 = Vec4::from_array(m.to_array().map(f16));
-        let d = (m16 - *g).abs().max_element();
+        let m16 = f16x4(*m);
         // Blends compute in f32 on both sides; rounding may differ in the last f16 bit.
         assert!(
-            d <= 2e-3 * m16.abs().max_element().max(1.0),
+            close(m16, *g, 2e-3),
             "{what}: pixel ({}, {}): model {m16} ({src:?}) gpu {g}",
             i % w,
             i / w
@@ -454,20 +445,19 @@ fn scenario(extra: &str) -> Scenario {
 /// Renders `frames` frames; after each one compares the GPU output with the CPU model fed the
 /// textures the reconstitution read. Returns the model's sources per frame.
 fn compare_rendered(s: &Scenario, v: &Variant, frames: u32) -> Vec<Vec<Source>> {
-    let gpu = common::gpu();
-    let mut scene = SceneGpu::new(&gpu.device, &gpu.queue, s).unwrap();
-    let mut t = Checkerboard2x2Gpu::new(&gpu, v, s.width, s.height);
-    let mut timers = Timers::new(&gpu.device, &[]).unwrap();
+    let mut rig = Rig::new(
+        s,
+        |gpu| Checkerboard2x2Gpu::new(gpu, v, s.width, s.height),
+        Checkerboard2x2Gpu::texture,
+    );
     let mut all = Vec::new();
     let n = (s.width * s.height) as usize;
     for index in 0..frames {
-        tessera::run::frames::submit_frame(&gpu, &mut scene, s, &mut t, &mut timers, index);
-        wait(&gpu);
-        let _ = timers.try_collect(&gpu.queue);
-        let frame = t.last_frame().unwrap().params;
+        rig.frame(s, index);
+        let frame = rig.renderer.last_frame().unwrap().params;
         assert_eq!(frame.parity, index & 1);
-        let read = |role: &str| match t.texture(role) {
-            Some(tex) => read_texture(&gpu.device, &gpu.queue, tex),
+        let read = |role: &str| match rig.read_if(role) {
+            Some(texels) => texels,
             // Not kept by this variant (and so never read).
             None if role.starts_with("depth") => vec![0.0; n],
             None => vec![0.0; n * 4],
@@ -487,7 +477,7 @@ fn compare_rendered(s: &Scenario, v: &Variant, frames: u32) -> Vec<Vec<Source>> 
             history_depth: &history_depth,
             history_motion: &history_motion,
         };
-        let out = vec4s(read_texture(&gpu.device, &gpu.queue, t.output()));
+        let out = rig.output();
         all.push(assert_matches_model(
             &inputs,
             &out,
@@ -594,25 +584,19 @@ fn a_static_scene_converges_to_native_unless_clamped_uniformly() {
 
 #[test]
 fn the_scene_pass_shades_only_the_free_blocks() {
-    let gpu = common::gpu();
     let s = common::scenario(common::TINY);
-    let mut scene = SceneGpu::new(&gpu.device, &gpu.queue, &s).unwrap();
-    let mut t = Checkerboard2x2Gpu::new(&gpu, &variant(&[]), s.width, s.height);
-    let mut timers = Timers::new(&gpu.device, &[]).unwrap();
-    let bg = s
-        .scene
-        .background
-        .to_array()
-        .map(|c| half::f16::from_f32(c).to_f32());
+    let mut rig = Rig::new(
+        &s,
+        |gpu| Checkerboard2x2Gpu::new(gpu, &variant(&[]), s.width, s.height),
+        Checkerboard2x2Gpu::texture,
+    );
+    let bg = s.scene.background.to_array().map(f16);
     let mut depth_passed = [0u64; 2];
     for index in 0..2 {
-        tessera::run::frames::submit_frame(&gpu, &mut scene, &s, &mut t, &mut timers, index);
-        wait(&gpu);
-        let _ = timers.try_collect(&gpu.queue);
-        let read = |role: &str| read_texture(&gpu.device, &gpu.queue, t.texture(role).unwrap());
-        let color = vec4s(read("scene_color"));
-        let depth = read("depth");
-        let motion_depth = read("motion_depth");
+        rig.frame(&s, index);
+        let color = rig.read4("scene_color");
+        let depth = rig.read("depth");
+        let motion_depth = rig.read("motion_depth");
         for y in 0..s.height as i32 {
             for x in 0..s.width as i32 {
                 let i = (y as u32 * s.width + x as u32) as usize;
@@ -885,7 +869,6 @@ fn parameters_are_validated() {
 /// unprojected at its motion-pass depth with this frame's camera and projected with last frame's.
 #[test]
 fn motion_of_static_geometry_is_the_cameras() {
-    let gpu = common::gpu();
     // A fast pan (about 3 px per frame at the objects) with nothing animated.
     let s = common::scenario(&format!(
         "{}[[camera.keyframes]]\ntime = 1\nposition = [30, 1.5, 4]\ntarget = [30, 0.4, 0]\n[[techniques]]\ntechnique = \"native\"\n",
@@ -894,21 +877,17 @@ fn motion_of_static_geometry_is_the_cameras() {
             ""
         )
     ));
-    let mut scene = SceneGpu::new(&gpu.device, &gpu.queue, &s).unwrap();
-    let mut t = Checkerboard2x2Gpu::new(&gpu, &variant(&[]), s.width, s.height);
-    let mut timers = Timers::new(&gpu.device, &[]).unwrap();
+    let mut rig = Rig::new(
+        &s,
+        |gpu| Checkerboard2x2Gpu::new(gpu, &variant(&[]), s.width, s.height),
+        Checkerboard2x2Gpu::texture,
+    );
     for index in 0..2 {
-        tessera::run::frames::submit_frame(&gpu, &mut scene, &s, &mut t, &mut timers, index);
-        wait(&gpu);
-        let _ = timers.try_collect(&gpu.queue);
+        rig.frame(&s, index);
     }
-    let (cur, prev) = scene.view_projections(s.frame_time(1), s.frame_time(0));
-    let motion = vec4s(read_texture(
-        &gpu.device,
-        &gpu.queue,
-        t.texture("motion").unwrap(),
-    ));
-    let depth = read_texture(&gpu.device, &gpu.queue, t.texture("motion_depth").unwrap());
+    let (cur, prev) = rig.scene.view_projections(s.frame_time(1), s.frame_time(0));
+    let motion = rig.read4("motion");
+    let depth = rig.read("motion_depth");
     let (w, h) = (s.width as f64, s.height as f64);
     let (mut checked, mut moving) = (0, 0);
     for y in 0..s.height as i32 {

@@ -4,22 +4,19 @@
 
 mod common;
 
+use common::check::{self, close, f16x4, vec4s, Rig};
 use glam::{Vec3, Vec4};
 use tessera::params::ParamValue;
 use tessera::render::readback::read_texture;
-use tessera::render::scene::SceneGpu;
 use tessera::render::timers::Timers;
 use tessera::scenario::Scenario;
 use tessera::techniques::fsr1::model::{self, Image};
 use tessera::techniques::fsr1::{Fsr1Gpu, Options};
 use tessera::techniques::Variant;
 
-fn vec4s(v: Vec<f32>) -> Vec<Vec4> {
-    v.chunks_exact(4).map(Vec4::from_slice).collect()
-}
-
+/// `v` as the `Rgba16Float` targets store it.
 fn f16(v: Vec3) -> Vec3 {
-    Vec3::from_array(v.to_array().map(|x| half::f16::from_f32(x).to_f32()))
+    v.map(check::f16)
 }
 
 const SCENE: &str = r#"
@@ -72,35 +69,24 @@ technique = "native"
 
 /// Renders `frames` frames of `v`, comparing EASU and RCAS with the model every frame.
 fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) {
-    let gpu = common::gpu();
-    let mut scene = SceneGpu::new(&gpu.device, &gpu.queue, s).unwrap();
     let options = Options::from_variant(v);
-    let mut t = Fsr1Gpu::new(&gpu, options, s.width, s.height);
-    let mut timers = Timers::new(&gpu.device, &[]).unwrap();
+    let mut rig = Rig::new(
+        s,
+        |gpu| Fsr1Gpu::new(gpu, options, s.width, s.height),
+        Fsr1Gpu::texture,
+    );
     let (lw, lh) = options.render_size(s.width, s.height);
-    let read = |t: &Fsr1Gpu, name: &str| {
-        vec4s(read_texture(
-            &gpu.device,
-            &gpu.queue,
-            t.texture(name).unwrap(),
-        ))
-    };
     let (mut edges, mut sharpened) = (0, 0);
     for index in 0..frames {
-        tessera::run::frames::submit_frame(&gpu, &mut scene, s, &mut t, &mut timers, index);
-        let _ = gpu.device.poll(wgpu::PollType::Wait {
-            submission_index: None,
-            timeout: None,
-        });
-        let _ = timers.try_collect(&gpu.queue);
-        let low = read(&t, "color_low");
+        rig.frame(s, index);
+        let low = rig.read4("color_low");
         let src = Image {
             width: lw,
             height: lh,
             texels: &low,
         };
-        let out = read(&t, "color");
-        let easu_gpu = options.rcas_sharpness().map(|_| read(&t, "easu"));
+        let out = rig.read4("color");
+        let easu_gpu = options.rcas_sharpness().map(|_| rig.read4("easu"));
         for y in 0..s.height {
             for x in 0..s.width {
                 let i = (y * s.width + x) as usize;
@@ -114,9 +100,8 @@ fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) {
                     Some(g) => (f16(e.color), g[i].truncate()),
                     None => (f16(model::decode(e.color)), out[i].truncate()),
                 };
-                let d = (want - got).abs().max_element();
                 assert!(
-                    d <= 2e-3 * want.abs().max_element().max(1.0),
+                    close(want.extend(0.0), got.extend(0.0), 2e-3),
                     "{} frame {index} easu ({x}, {y}): model {want} gpu {got} ({e:?})",
                     v.name
                 );
@@ -137,9 +122,8 @@ fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) {
                     }
                     let want = f16(c);
                     let got = out[i].truncate();
-                    let d = (want - got).abs().max_element();
                     assert!(
-                        d <= 2e-3 * want.abs().max_element().max(1.0),
+                        close(want.extend(0.0), got.extend(0.0), 2e-3),
                         "{} frame {index} rcas ({x}, {y}): model {want} gpu {got} (lobe {lobe})",
                         v.name
                     );
@@ -251,10 +235,7 @@ fn rcas_on_the_gpu_keeps_an_isolated_peak_within_one_and_equals_the_model() {
     pass.record(&timers, &mut encoder);
     gpu.queue.submit([encoder.finish()]);
     let out = vec4s(read_texture(&gpu.device, &gpu.queue, &dst));
-    let stored: Vec<Vec4> = texels
-        .iter()
-        .map(|t| Vec4::from_array(t.to_array().map(|x| half::f16::from_f32(x).to_f32())))
-        .collect();
+    let stored: Vec<Vec4> = texels.iter().map(|t| f16x4(*t)).collect();
     let img = Image {
         width: w,
         height: h,

@@ -359,7 +359,12 @@ fn graph(src: &Path) -> BTreeMap<ModPath, BTreeSet<ModPath>> {
             .map(|m| m.last().unwrap())
             .collect();
         for p in named_paths(&code, module, &children) {
-            if let Some(m) = holder(&p, &modules, &reexports) {
+            // The file the path names, as a reader sees it (`crate::scenario::Shape` is an import
+            // of `scenario/mod.rs`, whatever that file re-exports), and the file that defines
+            // the item, through the re-exports.
+            let named = owner(&p, &modules).cloned();
+            let defining = holder(&p, &modules, &reexports);
+            for m in named.into_iter().chain(defining) {
                 // A file naming its own folder's items (`super::Options` in
                 // `interlace/gpu.rs`) is the folder split in files: no edge. The folder naming
                 // its files, and every other edge, counts.
@@ -436,6 +441,38 @@ fn circles(edges: &BTreeMap<ModPath, BTreeSet<ModPath>>) -> Vec<Vec<ModPath>> {
     s.out
 }
 
+/// The folder-level circles: for every folder, its children (subfolders and files) as nodes, and
+/// an edge between two of them wherever a file in one names a file in the other. Each circle is
+/// the folder and the sorted children that import each other in a loop: `render/` ->
+/// `scenario/` -> `techniques/` -> `render/` is a circle of the root folder even when no file
+/// imports another that imports it back.
+fn folder_circles(edges: &BTreeMap<ModPath, BTreeSet<ModPath>>) -> Vec<(ModPath, Vec<ModPath>)> {
+    // Every folder: a module with a module below it (the root included).
+    let folders: BTreeSet<ModPath> = edges
+        .keys()
+        .flat_map(|m| (0..m.len()).map(|n| m[..n].to_vec()))
+        .collect();
+    let mut out = Vec::new();
+    for folder in folders {
+        let child = |m: &ModPath| -> Option<ModPath> {
+            (m.len() > folder.len() && m.starts_with(&folder)).then(|| m[..=folder.len()].to_vec())
+        };
+        let mut level: BTreeMap<ModPath, BTreeSet<ModPath>> = BTreeMap::new();
+        for (from, to) in edges {
+            let Some(a) = child(from) else { continue };
+            level.entry(a.clone()).or_default();
+            for b in to.iter().filter_map(child).filter(|b| *b != a) {
+                level.entry(b.clone()).or_default();
+                level.get_mut(&a).unwrap().insert(b);
+            }
+        }
+        for set in circles(&level) {
+            out.push((folder.clone(), set));
+        }
+    }
+    out
+}
+
 fn name(m: &ModPath) -> String {
     if m.is_empty() {
         "lib".into()
@@ -470,6 +507,26 @@ fn the_harness_has_no_import_circle() {
     assert!(
         found.is_empty(),
         "import circles in harness/src (each line one strongly connected set):\n{}",
+        text.join("\n")
+    );
+}
+
+/// Issue 39: no loop between folders either (`render/` -> `scenario/` -> `techniques/` ->
+/// `render/`), as a reader of the tree sees it, though each file-level edge of it looks fine.
+#[test]
+fn the_harness_folders_have_no_import_circle() {
+    let found = folder_circles(&graph(&src_dir()));
+    let text: Vec<String> = found
+        .iter()
+        .map(|(folder, set)| {
+            let names: Vec<String> = set.iter().map(name).collect();
+            format!("in {}/: {}", name(folder), names.join(", "))
+        })
+        .collect();
+    assert!(
+        found.is_empty(),
+        "folder-level import circles in harness/src (each line the folders or files of one \
+         folder that import each other in a loop):\n{}",
         text.join("\n")
     );
 }
@@ -590,4 +647,75 @@ fn a_circle_is_found() {
     assert_eq!(found.len(), 1, "{found:?}");
     let names: Vec<String> = found[0].iter().map(name).collect();
     assert_eq!(names, ["a::x", "b"]);
+}
+
+/// Writes `files` (path under `src/`, text) into a fresh temporary tree and returns its `src/`.
+fn tree(label: &str, files: &[(&str, &str)]) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("tessera-imports-{label}-{}", std::process::id()));
+    let _ = fs::remove_dir_all(&dir);
+    for (path, text) in files {
+        let path = dir.join(path);
+        fs::create_dir_all(path.parent().unwrap()).unwrap();
+        fs::write(path, text).unwrap();
+    }
+    dir
+}
+
+/// A loop of folders whose every file-level edge runs one way: no file circle, one folder circle.
+#[test]
+fn a_folder_circle_is_found() {
+    let dir = tree(
+        "folders",
+        &[
+            (
+                "lib.rs",
+                "pub mod render;\npub mod scenario;\npub mod techniques;\n",
+            ),
+            ("render/mod.rs", "pub mod kit;\npub mod mesh;\n"),
+            ("render/kit.rs", "pub fn bind_group() {}\n"),
+            ("render/mesh.rs", "use crate::scenario::Shape;\n"),
+            (
+                "scenario/mod.rs",
+                "pub mod scene;\npub mod validate;\npub use scene::Shape;\n",
+            ),
+            ("scenario/scene.rs", "pub enum Shape {}\n"),
+            ("scenario/validate.rs", "use crate::techniques::Variant;\n"),
+            ("techniques/mod.rs", "pub mod gpu;\npub struct Variant;\n"),
+            (
+                "techniques/gpu.rs",
+                "fn f() { crate::render::kit::bind_group() }\n",
+            ),
+        ],
+    );
+    let edges = graph(&dir);
+    let files = circles(&edges);
+    let folders = folder_circles(&edges);
+    fs::remove_dir_all(&dir).unwrap();
+    assert!(files.is_empty(), "{files:?}");
+    assert_eq!(folders.len(), 1, "{folders:?}");
+    let (folder, set) = &folders[0];
+    assert!(folder.is_empty(), "the root folder's: {folder:?}");
+    let names: Vec<String> = set.iter().map(name).collect();
+    assert_eq!(names, ["render", "scenario", "techniques"]);
+}
+
+/// Naming an item through a re-export is an import of the re-exporting file, as a reader sees it:
+/// `a` names `b::X` (defined in `c`), `b` names `a`; a circle, though `a` never names `c`'s
+/// importer.
+#[test]
+fn a_circle_through_a_reexport_is_found() {
+    let dir = tree(
+        "reexport",
+        &[
+            ("lib.rs", "pub mod a;\npub mod b;\npub mod c;\n"),
+            ("a.rs", "use crate::b::X;\npub struct Y;\n"),
+            ("b.rs", "pub use crate::c::X;\nuse crate::a::Y;\n"),
+            ("c.rs", "pub struct X;\n"),
+        ],
+    );
+    let found = circles(&graph(&dir));
+    fs::remove_dir_all(&dir).unwrap();
+    assert_eq!(found.len(), 1, "{found:?}");
+    let names: Vec<String> = found[0].iter().map(name).collect();
+    assert_eq!(names, ["a", "b"]);
 }

@@ -6,12 +6,9 @@
 
 mod common;
 
-use glam::Vec4;
+use common::check::{close, f16x4, Rig};
 use tessera::params::ParamValue;
-use tessera::render::readback::{read_texture, read_texture_layer};
-use tessera::render::renderer::Renderer;
 use tessera::render::scene::SceneGpu;
-use tessera::render::timers::Timers;
 use tessera::scenario::Scenario;
 use tessera::techniques::interlace::columns_model::{self, half_width};
 use tessera::techniques::interlace::model::{self, quarter_size, Inputs, Source};
@@ -23,46 +20,27 @@ fn variant(params: &[(&str, ParamValue)]) -> Variant {
     common::variant("interlace", params)
 }
 
-fn vec4s(v: Vec<f32>) -> Vec<Vec4> {
-    v.chunks_exact(4).map(Vec4::from_slice).collect()
-}
-
 /// Renders `frames` frames of the default pattern, comparing the GPU output (colour and depth)
 /// of each with the model's; returns every frame's sources.
 fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) -> Vec<Vec<Source>> {
-    let gpu = common::gpu();
-    let mut scene = SceneGpu::new(&gpu.device, &gpu.queue, s).unwrap();
     let options = Options::from_variant(v);
-    let mut t = InterlaceGpu::new(
-        &gpu,
-        options,
-        s.width,
-        s.height,
-        s.scene.has_dynamic_objects(),
+    let dynamic = s.scene.has_dynamic_objects();
+    let mut rig = Rig::new(
+        s,
+        |gpu| InterlaceGpu::new(gpu, options, s.width, s.height, dynamic),
+        InterlaceGpu::texture,
     );
-    let mut timers = Timers::new(&gpu.device, &[]).unwrap();
     let mut all = Vec::new();
-    // Every array layer (the quarter-resolution renders are two), layer 0 first.
-    let read = |t: &InterlaceGpu, name: &str| {
-        let texture = t.texture(name).unwrap();
-        (0..texture.depth_or_array_layers())
-            .flat_map(|l| read_texture_layer(&gpu.device, &gpu.queue, texture, l))
-            .collect::<Vec<f32>>()
-    };
     for index in 0..frames {
-        tessera::run::frames::submit_frame(&gpu, &mut scene, s, &mut t, &mut timers, index);
-        let _ = gpu.device.poll(wgpu::PollType::Wait {
-            submission_index: None,
-            timeout: None,
-        });
-        let _ = timers.try_collect(&gpu.queue);
-        let last = t.last_frame().unwrap();
-        let rows_color = vec4s(read(&t, "rows_color"));
-        let rows_depth = read(&t, "rows_depth");
-        let history = vec4s(read(&t, "history"));
-        let history_depth = read(&t, "history_depth");
-        let velocity = last.velocity.then(|| vec4s(read(&t, "velocity")));
-        let velocity_depth = last.velocity.then(|| read(&t, "velocity_depth"));
+        rig.frame(s, index);
+        let last = rig.renderer.last_frame().unwrap();
+        // Every array layer (the quarter-resolution renders are two), layer 0 first.
+        let rows_color = rig.read4("rows_color");
+        let rows_depth = rig.read("rows_depth");
+        let history = rig.read4("history");
+        let history_depth = rig.read("history_depth");
+        let velocity = last.velocity.then(|| rig.read4("velocity"));
+        let velocity_depth = last.velocity.then(|| rig.read("velocity_depth"));
         let inputs = Inputs {
             width: s.width,
             height: s.height,
@@ -85,17 +63,14 @@ fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) -> Vec<Vec<Source>
             velocity_scale: options.velocity_scale,
         };
         let model = model::reconstruct_all(&inputs);
-        let gpu_out = vec4s(read_texture(&gpu.device, &gpu.queue, t.output()));
-        let gpu_depth = read(&t, "depth_out");
-        let mut worst = 0.0f32;
+        let gpu_out = rig.output();
+        let gpu_depth = rig.read("depth_out");
         for (i, ((m, md, src), g)) in model.iter().zip(&gpu_out).enumerate() {
             // The output is Rgba16Float: quantise the model the same way; the bilinear history
             // fetch and the weights may round differently in the last f16 bits.
-            let m16 = Vec4::from_array(m.to_array().map(|x| half::f16::from_f32(x).to_f32()));
-            let d = (m16 - *g).abs().max_element();
-            worst = worst.max(d);
+            let m16 = f16x4(*m);
             assert!(
-                d <= 2e-3 * m16.abs().max_element().max(1.0),
+                close(m16, *g, 2e-3),
                 "frame {index} pixel {i}: model {m16} ({src:?}) gpu {g}"
             );
             assert_eq!(*md, gpu_depth[i], "frame {index} pixel {i}: depth");
@@ -112,32 +87,21 @@ fn compare_columns_with_model(
     v: &Variant,
     frames: u32,
 ) -> Vec<Vec<columns_model::Source>> {
-    let gpu = common::gpu();
-    let mut scene = SceneGpu::new(&gpu.device, &gpu.queue, s).unwrap();
-    let mut t = ColumnsGpu::new(
-        &gpu,
-        Options::from_variant(v),
-        s.width,
-        s.height,
-        s.scene.has_dynamic_objects(),
+    let options = Options::from_variant(v);
+    let dynamic = s.scene.has_dynamic_objects();
+    let mut rig = Rig::new(
+        s,
+        |gpu| ColumnsGpu::new(gpu, options, s.width, s.height, dynamic),
+        ColumnsGpu::texture,
     );
-    let mut timers = Timers::new(&gpu.device, &[]).unwrap();
     let mut all = Vec::new();
-    let read = |t: &ColumnsGpu, name: &str| {
-        read_texture(&gpu.device, &gpu.queue, t.texture(name).unwrap())
-    };
     for index in 0..frames {
-        tessera::run::frames::submit_frame(&gpu, &mut scene, s, &mut t, &mut timers, index);
-        let _ = gpu.device.poll(wgpu::PollType::Wait {
-            submission_index: None,
-            timeout: None,
-        });
-        let _ = timers.try_collect(&gpu.queue);
-        let last = t.last_frame().unwrap();
-        let half_color = vec4s(read(&t, "half_color"));
-        let half_depth = read(&t, "half_depth");
-        let history = vec4s(read(&t, "history"));
-        let velocity = last.velocity.then(|| vec4s(read(&t, "velocity")));
+        rig.frame(s, index);
+        let last = rig.renderer.last_frame().unwrap();
+        let half_color = rig.read4("half_color");
+        let half_depth = rig.read("half_depth");
+        let history = rig.read4("history");
+        let velocity = last.velocity.then(|| rig.read4("velocity"));
         let inputs = columns_model::Inputs {
             width: s.width,
             height: s.height,
@@ -152,14 +116,13 @@ fn compare_columns_with_model(
             clamp: last.clamp,
         };
         let model = columns_model::reconstruct_all(&inputs);
-        let gpu_out = vec4s(read_texture(&gpu.device, &gpu.queue, t.output()));
+        let gpu_out = rig.output();
         for (i, ((m, src), g)) in model.iter().zip(&gpu_out).enumerate() {
             // The output is Rgba16Float: quantise the model the same way; the bilinear history
             // fetch may round differently in the last f16 bit.
-            let m16 = Vec4::from_array(m.to_array().map(|x| half::f16::from_f32(x).to_f32()));
-            let d = (m16 - *g).abs().max_element();
+            let m16 = f16x4(*m);
             assert!(
-                d <= 2e-3 * m16.abs().max_element().max(1.0),
+                close(m16, *g, 2e-3),
                 "frame {index} pixel {i}: model {m16} ({src:?}) gpu {g}"
             );
         }

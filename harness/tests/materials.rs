@@ -8,10 +8,10 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use tessera::render::gltf_model;
 use tessera::render::scene::SceneGpu;
 use tessera::run::frames;
 use tessera::techniques::{self, BuildContext, Target};
+use tessera::world::gltf_model;
 use tessera_metrics::HdrImage;
 
 const ASSIMP: &str = "/usr/share/assimp/models/glTF2";
@@ -461,7 +461,7 @@ fn the_assimp_textured_models_load_with_their_materials() {
             .materials
             .iter()
             .filter_map(|x| x.textures[0])
-            .filter(|t| t.transform != tessera::render::material::UvTransform::IDENTITY)
+            .filter(|t| t.transform != tessera::world::material::UvTransform::IDENTITY)
             .count();
         assert!(transformed > 0, "no KHR_texture_transform read");
     }
@@ -488,7 +488,7 @@ fn flight_helmet_loads_with_its_six_meshes_and_renders() {
     let blend = m
         .materials
         .iter()
-        .filter(|x| x.alpha == tessera::render::material::AlphaMode::Blend)
+        .filter(|x| x.alpha == tessera::world::material::AlphaMode::Blend)
         .count();
     assert_eq!(blend, 1);
     assert_eq!(m.images.len(), 15);

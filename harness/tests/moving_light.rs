@@ -98,7 +98,7 @@ fn lights_take_the_animation_table_and_a_wrong_kind_is_a_located_error() {
 #[test]
 fn an_animated_light_moves_and_turns_with_time() {
     use glam::Vec3;
-    use tessera::scenario::scene::{Animation, Light};
+    use tessera::world::scene::{Animation, Light};
     let p = Light::Point {
         position: Vec3::new(0.0, 1.0, 0.0),
         color: Vec3::ONE,

@@ -6,11 +6,11 @@
 
 mod common;
 
+use common::check::{close, f16x4, vec4s, Rig};
 use glam::{Vec2, Vec4};
 use tessera::params::ParamValue;
 use tessera::render::kit::record_scene_pass;
 use tessera::render::readback::{read_texture, read_texture_raw};
-use tessera::render::renderer::Renderer;
 use tessera::render::scene::{SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FORMAT};
 use tessera::render::timers::Timers;
 use tessera::scenario::Scenario;
@@ -19,14 +19,6 @@ use tessera::techniques::taau::jitter::{jitter, ndc_offset};
 use tessera::techniques::taau::model::{self, Inputs, Source};
 use tessera::techniques::taau::{Options, TaauGpu};
 use tessera::techniques::Variant;
-
-fn vec4s(v: Vec<f32>) -> Vec<Vec4> {
-    v.chunks_exact(4).map(Vec4::from_slice).collect()
-}
-
-fn f16(v: Vec4) -> Vec4 {
-    Vec4::from_array(v.to_array().map(|x| half::f16::from_f32(x).to_f32()))
-}
 
 const SCENE: &str = r#"
 resolution = [40, 30]
@@ -169,7 +161,7 @@ fn render_pixels_sample_at_the_claimed_jitter_positions() {
             for x in 0..w {
                 let a = lo[(y * w + x) as usize];
                 let b = hi[((4 * y + 2) * 4 * w + 4 * x + 3) as usize];
-                if (a - b).abs().max_element() <= 2e-3 * b.abs().max_element().max(1.0) {
+                if close(b, a, 2e-3) {
                     same += 1;
                 }
             }
@@ -188,8 +180,6 @@ fn render_pixels_sample_at_the_claimed_jitter_positions() {
 #[test]
 fn a_still_camera_accumulates_the_mean_of_the_claimed_samples() {
     let s = scenario(&[SCENE, STILL]);
-    let gpu = common::gpu();
-    let mut scene = SceneGpu::new(&gpu.device, &gpu.queue, &s).unwrap();
     // The still-scene accumulator's options, 32 phases and a history weight that reaches 32:
     // the mean of one whole jitter cycle.
     let v = common::variant(
@@ -203,21 +193,23 @@ fn a_still_camera_accumulates_the_mean_of_the_claimed_samples() {
     );
     let options = Options::from_variant(&v);
     assert_eq!(options.phases(s.width), 32);
-    let mut t = TaauGpu::new(&gpu, options, s.width, s.height, false);
-    let mut timers = Timers::new(&gpu.device, &[]).unwrap();
+    let mut rig = Rig::new(
+        &s,
+        |gpu| TaauGpu::new(gpu, options, s.width, s.height, false),
+        TaauGpu::texture,
+    );
     for index in 0..32 {
-        tessera::run::frames::submit_frame(&gpu, &mut scene, &s, &mut t, &mut timers, index);
-        let _ = timers.try_collect(&gpu.queue);
+        rig.frame(&s, index);
     }
-    let out = vec4s(read_texture(&gpu.device, &gpu.queue, t.output()));
+    let out = rig.output();
     // The same 32 renders, one per claimed sample position, averaged on the CPU.
     let n = (s.width * s.height) as usize;
     let mut mean = vec![Vec4::ZERO; n];
     let mut max = vec![0.0f32; n];
     for index in 0..32 {
         let frame = render_view(
-            &gpu,
-            &mut scene,
+            &rig.gpu,
+            &mut rig.scene,
             (s.width, s.height),
             View {
                 ndc_offset: ndc_offset(jitter(index, 32), s.width, s.height),
@@ -245,46 +237,36 @@ fn a_still_camera_accumulates_the_mean_of_the_claimed_samples() {
     }
     // Converged and still: held, frame after frame (`freeze_converged`), as still as native.
     for index in 32..36 {
-        tessera::run::frames::submit_frame(&gpu, &mut scene, &s, &mut t, &mut timers, index);
-        let _ = timers.try_collect(&gpu.queue);
+        rig.frame(&s, index);
     }
-    assert_eq!(
-        vec4s(read_texture(&gpu.device, &gpu.queue, t.output())),
-        out
-    );
+    assert_eq!(rig.output(), out);
 }
 
 /// Renders `frames` frames of `v`, comparing every resolve (and RCAS) with the model; returns
 /// each frame's sources.
 fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) -> Vec<Vec<Source>> {
-    let gpu = common::gpu();
-    let mut scene = SceneGpu::new(&gpu.device, &gpu.queue, s).unwrap();
     let options = Options::from_variant(v);
     let dynamic = s.scene.has_dynamic_objects();
-    let mut t = TaauGpu::new(&gpu, options, s.width, s.height, dynamic);
-    let mut timers = Timers::new(&gpu.device, &[]).unwrap();
-    let read =
-        |t: &TaauGpu, name: &str| read_texture(&gpu.device, &gpu.queue, t.texture(name).unwrap());
-    let read_r32 = |t: &TaauGpu, name: &str| {
-        bytemuck::pod_collect_to_vec::<u8, f32>(&read_texture_raw(&gpu, t.texture(name).unwrap()))
+    let mut rig = Rig::new(
+        s,
+        |gpu| TaauGpu::new(gpu, options, s.width, s.height, dynamic),
+        TaauGpu::texture,
+    );
+    let read_r32 = |rig: &Rig<TaauGpu>, name: &str| {
+        bytemuck::pod_collect_to_vec::<u8, f32>(&read_texture_raw(&rig.gpu, rig.texture(name)))
     };
     let mut all = Vec::new();
     for index in 0..frames {
-        tessera::run::frames::submit_frame(&gpu, &mut scene, s, &mut t, &mut timers, index);
-        let _ = gpu.device.poll(wgpu::PollType::Wait {
-            submission_index: None,
-            timeout: None,
-        });
-        let _ = timers.try_collect(&gpu.queue);
-        let last = t.last_frame().unwrap();
-        let color_low = vec4s(read(&t, "color_low"));
-        let depth_low = read(&t, "depth_low");
-        let history = vec4s(read(&t, "history"));
-        let depth_history = read_r32(&t, "depth_history");
-        let velocity = last.velocity.then(|| vec4s(read(&t, "velocity")));
-        let velocity_depth = last.velocity.then(|| read(&t, "velocity_depth"));
+        rig.frame(s, index);
+        let last = rig.renderer.last_frame().unwrap();
+        let color_low = rig.read4("color_low");
+        let depth_low = rig.read("depth_low");
+        let history = rig.read4("history");
+        let depth_history = read_r32(&rig, "depth_history");
+        let velocity = last.velocity.then(|| rig.read4("velocity"));
+        let velocity_depth = last.velocity.then(|| rig.read("velocity_depth"));
         let inputs = Inputs {
-            low: t.render_size(),
+            low: rig.renderer.render_size(),
             out: (s.width, s.height),
             jitter: last.jitter,
             color_low: &color_low,
@@ -305,13 +287,12 @@ fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) -> Vec<Vec<Source>
             freeze_converged: options.freeze_converged,
         };
         let model = model::resolve_all(&inputs);
-        let resolved = vec4s(read(&t, "resolved"));
-        let depth = read_r32(&t, "depth");
+        let resolved = rig.read4("resolved");
+        let depth = read_r32(&rig, "depth");
         let mut bad = Vec::new();
         for (i, (m, g)) in model.iter().zip(&resolved).enumerate() {
-            let want = f16(m.color);
-            let d = (want - *g).abs().max_element();
-            if d > 3e-3 * want.abs().max_element().max(1.0) {
+            let want = f16x4(m.color);
+            if !close(want, *g, 3e-3) {
                 bad.push(format!(
                     "pixel ({}, {}): model {want} ({:?}, lands {}, history at {} depth {}) gpu {g}",
                     i as u32 % s.width,
@@ -336,15 +317,14 @@ fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) -> Vec<Vec<Source>
                 height: s.height,
                 texels: &resolved,
             };
-            let out = vec4s(read_texture(&gpu.device, &gpu.queue, t.output()));
+            let out = rig.output();
             for y in 0..s.height {
                 for x in 0..s.width {
                     let (_, c) = fsr1_model::rcas(&img, (-stops).exp2(), true, x, y);
-                    let want = f16(c.extend(1.0)).truncate();
-                    let got = out[(y * s.width + x) as usize].truncate();
-                    let d = (want - got).abs().max_element();
+                    let want = f16x4(c.extend(0.0));
+                    let got = out[(y * s.width + x) as usize].truncate().extend(0.0);
                     assert!(
-                        d <= 3e-3 * want.abs().max_element().max(1.0),
+                        close(want, got, 3e-3),
                         "frame {index} rcas ({x}, {y}): model {want} gpu {got}"
                     );
                 }
@@ -416,16 +396,16 @@ fn the_defaults_clip_every_frame_and_never_stop_accumulating() {
         assert!(f.iter().all(|s| *s == Source::Clipped), "{f:?}");
     }
     // Past `max_weight` frames the output still changes with each jitter phase.
-    let gpu = common::gpu();
-    let mut scene = SceneGpu::new(&gpu.device, &gpu.queue, &s).unwrap();
-    let mut t = TaauGpu::new(&gpu, options, s.width, s.height, false);
-    let mut timers = Timers::new(&gpu.device, &[]).unwrap();
+    let mut rig = Rig::new(
+        &s,
+        |gpu| TaauGpu::new(gpu, options, s.width, s.height, false),
+        TaauGpu::texture,
+    );
     let mut last = Vec::new();
     let mut changed = 0;
     for index in 0..40 {
-        tessera::run::frames::submit_frame(&gpu, &mut scene, &s, &mut t, &mut timers, index);
-        let _ = timers.try_collect(&gpu.queue);
-        let out = vec4s(read_texture(&gpu.device, &gpu.queue, t.output()));
+        rig.frame(&s, index);
+        let out = rig.output();
         if index >= 34 && out != last {
             changed += 1;
         }

@@ -2,14 +2,15 @@
 //! `slow` without `--slow`), which failed `flaky` variants it runs again, and the record of each
 //! result an entry applied to (expected failure, unexpected pass, passed on retry, ...).
 //!
-//! Pure decisions over records; running scenarios is `run/`.
+//! Pure decisions over records; running scenarios, and the records of variants not run, are
+//! `run/`'s.
 
 use tessera_results::expectation::{ExpectationRecord, Label, Outcome};
 use tessera_results::{AdapterInfo, GateLevel, Status, VariantResult};
 
 use super::Expectations;
-use crate::run::record::empty_result;
 use crate::scenario::Scenario;
+use crate::techniques::Variant;
 
 /// Whether a result failed: a failed status or a failed gate.
 pub fn failed(r: &VariantResult) -> bool {
@@ -32,12 +33,20 @@ pub fn failure_text(r: &VariantResult) -> Option<String> {
     }
 }
 
-/// A scenario split by its expectations: what to run, and the results of what is not run.
+/// A scenario split by its expectations: what to run, and what is not run and why.
 pub struct Split {
     /// The scenario with only the variants to run (all of them without expectations).
     pub to_run: Scenario,
-    /// `skipped` results of the variants not run, with their expectation.
-    pub not_run: Vec<VariantResult>,
+    /// The variants not run, each with its `skipped` status and expectation.
+    pub not_run: Vec<NotRun>,
+}
+
+/// A variant an expectation holds back: what its result records instead of measurements.
+pub struct NotRun {
+    pub variant: Variant,
+    /// `skipped`, with the expectation's label and reason.
+    pub status: Status,
+    pub expectation: ExpectationRecord,
 }
 
 /// Leaves out the variants an entry says not to run on `adapter`: `skip`, and `slow` unless
@@ -76,20 +85,19 @@ pub fn split(
                     Label::Slow => "expectation `slow` (run with --slow)",
                     _ => "expectation `skip`",
                 };
-                let mut r = empty_result(
-                    v,
-                    Status::Skipped {
+                not_run.push(NotRun {
+                    variant: v.clone(),
+                    status: Status::Skipped {
                         reason: format!("{why}: {}", e.reason),
                     },
-                );
-                r.expectation = Some(ExpectationRecord {
-                    label: e.label,
-                    reason: e.reason.clone(),
-                    source: exp.source(e),
-                    outcome: Outcome::NotRun,
-                    error: None,
+                    expectation: ExpectationRecord {
+                        label: e.label,
+                        reason: e.reason.clone(),
+                        source: exp.source(e),
+                        outcome: Outcome::NotRun,
+                        error: None,
+                    },
                 });
-                not_run.push(r);
             }
             run
         });

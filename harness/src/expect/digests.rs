@@ -230,11 +230,9 @@ pub fn approve(runs: &[PathBuf]) -> Result<Vec<(PathBuf, usize)>, DigestError> {
         file.frames.sort();
         let mut json = serde_json::to_string_pretty(&file).expect("plain data serialises");
         json.push('\n');
-        crate::run::output::write_atomic(&path, json.as_bytes()).map_err(|e| {
-            DigestError::Write {
-                path: e.path,
-                message: e.source.to_string(),
-            }
+        crate::files::write_atomic(&path, json.as_bytes()).map_err(|e| DigestError::Write {
+            path: e.path,
+            message: e.source.to_string(),
         })?;
         written.push((path, n));
     }

@@ -266,7 +266,7 @@ fn apply(path: &Path, change: &FileChange) -> Result<FileUpdate, UpdateError> {
 
 /// Writes a file's new text.
 pub fn write(u: &FileUpdate) -> Result<(), UpdateError> {
-    crate::run::output::write_atomic(&u.path, u.after.as_bytes()).map_err(|e| UpdateError::Write {
+    crate::files::write_atomic(&u.path, u.after.as_bytes()).map_err(|e| UpdateError::Write {
         path: e.path,
         source: e.source,
     })

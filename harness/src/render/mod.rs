@@ -1,17 +1,14 @@
-//! Rendering infrastructure that knows no technique: the scene on the GPU (`scene.rs`, `mesh.rs`;
-//! textured models: `material.rs`, `texture.rs`, `mips.rs`, `gltf_model.rs`, `city.rs`),
+//! Rendering infrastructure that knows no technique: the world (`crate::world`) on the GPU
+//! (`scene.rs`; textured models: `material.rs`, `texture.rs`, `mips.rs`),
 //! the pass graph, per-pass timers, readback, the [`renderer::Renderer`] interface the run loop
 //! drives, and a kit of GPU helpers techniques build with (`kit.rs`; the optional velocity pass,
 //! `velocity.rs`). Techniques are in `techniques/`.
 
-pub mod city;
 pub mod formats;
 pub mod frame_check;
-pub mod gltf_model;
 pub mod graph;
 pub mod kit;
 pub mod material;
-pub mod mesh;
 pub mod mips;
 pub mod motion_blur;
 pub mod readback;

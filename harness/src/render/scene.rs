@@ -8,17 +8,19 @@
 //!
 //! Procedural shapes and `materials = "color"` meshes are drawn as before with the scene's own
 //! colours; glTF files with `materials = "file"` and the generated city are textured models
-//! (`material.rs`), drawn after them in the same passes with the same objects buffer.
+//! (`world/material.rs`, drawn by `material.rs`), drawn after them in the same passes with the same objects buffer.
 
 use std::collections::HashMap;
 
 use bytemuck::{Pod, Zeroable};
 use glam::{DMat4, DVec3, Vec2, Vec4};
 
-use super::material::{instance_runs, MaterialGpu, Model, Placement};
-use super::mesh::{self, Mesh, MeshError, Vertex};
-use super::{city, gltf_model};
-use crate::scenario::scene::{CameraPose, GroundFilter, Light, Stage};
+use super::material::{instance_runs, MaterialGpu};
+use crate::world::city;
+use crate::world::geometry::{Draw, Geometry};
+use crate::world::material::{Model, Placement};
+use crate::world::mesh::{MeshError, Vertex};
+use crate::world::scene::{CameraPose, GroundFilter, Light, Stage};
 
 pub use super::formats::{ScenePipeline, COLOR_FORMAT, DEPTH_FORMAT, SCENE_WGSL};
 pub const MAX_LIGHTS: usize = 8;
@@ -103,13 +105,6 @@ pub enum Objects {
     Dynamic,
 }
 
-/// A draw: one object's index range.
-struct Draw {
-    first_index: u32,
-    index_count: u32,
-    base_vertex: i32,
-}
-
 /// The scene's buffers and draws, for a pass recorded outside wgpu ([`SceneGpu::raw_draw`]):
 /// vertices (position, normal: two `Float32x3`), `u32` indices, group 0 of `scene.wgsl` (binding 0
 /// the frame uniforms at `frame_offset`, binding 1 the objects), and per object (its instance
@@ -126,7 +121,7 @@ pub struct RawDraw<'a> {
 }
 
 pub struct SceneGpu {
-    /// The scenario's scene, camera and size: nothing else of it (`scenario/scene.rs`).
+    /// The scenario's scene, camera and size: nothing else of it (`world/scene.rs`).
     stage: Stage,
     vertex_buffer: wgpu::Buffer,
     index_buffer: wgpu::Buffer,
@@ -159,57 +154,15 @@ impl SceneGpu {
         stage: impl Into<Stage>,
     ) -> Result<SceneGpu, MeshError> {
         let scenario: Stage = stage.into();
-        let mut meshes: Vec<Mesh> = Vec::new();
-        if let Some(g) = &scenario.scene.ground {
-            meshes.push(mesh::ground_quad(g.size));
-        }
-        // Textured objects keep their slot in the objects buffer (an empty untextured mesh) and
-        // are drawn by the material path.
-        let mut models: Vec<(Model, Vec<Placement>)> = Vec::new();
-        for o in &scenario.scene.objects {
-            match &o.shape {
-                crate::scenario::Shape::Mesh {
-                    path,
-                    scale,
-                    textured: true,
-                } => {
-                    let placement = Placement {
-                        part: 0,
-                        first_object: meshes.len() as u32,
-                        count: 1,
-                    };
-                    models.push((gltf_model::load(path, *scale)?, vec![placement]));
-                    meshes.push(Mesh::default());
-                }
-                shape => meshes.push(mesh::build(shape)?),
-            }
-        }
-        let mut city_objects = Vec::new();
-        if let Some(c) = &scenario.scene.city {
-            let generated = city::generate(c, meshes.len() as u32);
-            city_objects = generated.objects;
-            models.push((generated.model, generated.placements));
-        }
-        // In the objects buffer's order (`write_objects`): the ground (static: it follows the
-        // camera, its pattern stays in world space), the scenario's objects (textured ones too),
-        // the city's.
-        let dynamic: Vec<bool> = (scenario.scene.ground.iter().map(|_| false))
-            .chain(scenario.scene.objects.iter().map(|o| o.animation.is_some()))
-            .chain(city_objects.iter().map(|c| c.is_dynamic()))
-            .collect();
-        let mut vertices: Vec<Vertex> = Vec::new();
-        let mut indices: Vec<u32> = Vec::new();
-        let mut draws = Vec::new();
-        for m in &meshes {
-            draws.push(Draw {
-                first_index: indices.len() as u32,
-                index_count: m.indices.len() as u32,
-                base_vertex: vertices.len() as i32,
-            });
-            vertices.extend_from_slice(&m.vertices);
-            indices.extend_from_slice(&m.indices);
-        }
-        let triangles = indices.len() / 3;
+        let Geometry {
+            mut vertices,
+            mut indices,
+            draws,
+            models,
+            city_objects,
+            dynamic,
+            triangles,
+        } = Geometry::build(&scenario.scene)?;
         // Empty scenes still need valid (non-zero-sized) buffers.
         if vertices.is_empty() {
             vertices.push(Vertex {

@@ -302,7 +302,12 @@ fn run_expecting(
         }
     }
     apply::judge(&s.name, &mut result.results, exp, adapter, &first_errors);
-    apply::merge_in_order(s, &mut result.results, split.not_run);
+    let not_run = split.not_run.into_iter().map(|n| {
+        let mut r = record::empty_result(&n.variant, n.status);
+        r.expectation = Some(n.expectation);
+        r
+    });
+    apply::merge_in_order(s, &mut result.results, not_run.collect());
     result
 }
 

@@ -1,11 +1,10 @@
 //! Result files: `run.json`, `scenarios/<scenario>.json`, `results.csv` and JUnit XML.
 //!
-//! Exporters are pure (records in, bytes out); [`write_atomic`] puts bytes on disk through a
-//! temporary file and a rename, so an interrupted run keeps every scenario it completed and never
-//! leaves a half-written file. The format is documented in `results/README.md`.
+//! Exporters are pure (records in, bytes out); [`write_atomic`] (`crate::files`) puts bytes on
+//! disk through a temporary file and a rename, so an interrupted run keeps every scenario it
+//! completed and never leaves a half-written file. The format is documented in `results/README.md`.
 
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
 
 use tessera_results::expectation::Outcome;
 use tessera_results::measure::{self, Key, Measure, DEFAULT_BASELINE};
@@ -13,29 +12,7 @@ use tessera_results::{GateLevel, RunInfo, ScenarioResult, Status, VariantResult,
 
 use Measure::*;
 
-#[derive(Debug, thiserror::Error)]
-#[error("cannot write {path}: {source}")]
-pub struct WriteError {
-    pub path: PathBuf,
-    pub source: std::io::Error,
-}
-
-/// Writes `bytes` to `path` via a sibling temporary file and a rename.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), WriteError> {
-    let err = |source| WriteError {
-        path: path.to_path_buf(),
-        source,
-    };
-    if let Some(parent) = path.parent() {
-        std::fs::create_dir_all(parent).map_err(err)?;
-    }
-    let tmp = path.with_extension(format!(
-        "{}.tmp",
-        path.extension().and_then(|e| e.to_str()).unwrap_or("")
-    ));
-    std::fs::write(&tmp, bytes).map_err(err)?;
-    std::fs::rename(&tmp, path).map_err(err)
-}
+pub use crate::files::{write_atomic, WriteError};
 
 pub fn run_json(run: &RunInfo) -> Vec<u8> {
     serde_json::to_vec_pretty(run).expect("run records serialise")

@@ -7,7 +7,6 @@
 
 pub mod pattern;
 mod raw;
-pub mod scene;
 pub mod span;
 pub mod sweep;
 mod validate;
@@ -18,7 +17,7 @@ use std::path::{Path, PathBuf};
 use tessera_results::measure::Measure;
 
 use crate::techniques::Variant;
-pub use scene::{
+pub use crate::world::scene::{
     Animation, CameraPose, CameraTrack, City, Ground, GroundFilter, Inject, Interpolation,
     Keyframe, Light, Object, Scene, Shape, Stage,
 };

@@ -1,9 +1,9 @@
 //! Techniques: one folder each (its definition and options, its GPU part, its CPU model, its
 //! shaders), and the registry that lists them.
 //!
-//! A folder depends on `params`, `render/` (infrastructure that knows no technique) and `gpu`;
-//! `registry.rs` depends on the folders; nothing here depends on `run/` or on scenarios (only on
-//! what they draw, `scenario/scene.rs`, through `render/`). `upscale` reuses `native`'s forward
+//! A folder depends on `params`, `render/` (infrastructure that knows no technique), `world/`
+//! and `gpu`; `registry.rs` depends on the folders; nothing here depends on `run/` or on
+//! scenarios (only on what they draw, `world/`, mostly through `render/`). `upscale` reuses `native`'s forward
 //! path. What the run loop needs of the reference and of exact motion is asked here, by role
 //! ([`is_reference`], [`reference`], [`MotionPass`]), so `run/` names no technique.
 
@@ -58,7 +58,7 @@ pub fn skip_reasons(variant: &Variant) -> Vec<String> {
 
 /// Why `variant` is skipped on `scene` on every adapter (it cannot draw the scene's textured
 /// models), for `tessera validate`; `None` when it draws the scene.
-pub fn scene_skip_reason(variant: &Variant, scene: &crate::scenario::Scene) -> Option<String> {
+pub fn scene_skip_reason(variant: &Variant, scene: &crate::world::scene::Scene) -> Option<String> {
     if !scene.has_textured_models() {
         return None;
     }

@@ -2,6 +2,8 @@
 // Each test crate uses a subset of these helpers.
 #![allow(dead_code)]
 
+pub mod check;
+
 use std::path::Path;
 
 use tessera::gpu::{self, Gpu};

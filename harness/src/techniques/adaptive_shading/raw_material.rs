@@ -161,7 +161,7 @@ impl RawMaterialSets {
         let n = materials.materials.len() as u32;
         let sizes = pool_sizes(n);
         // Samplers: one per distinct description.
-        let mut sampler_of: Vec<(crate::render::texture::SamplerDesc, vk::Sampler)> = Vec::new();
+        let mut sampler_of: Vec<(crate::world::texture::SamplerDesc, vk::Sampler)> = Vec::new();
         // SAFETY: every create-info outlives its call; each object is stored in `out` as soon as
         // it exists, so `Drop` destroys exactly what was made, also when a later step fails.
         unsafe {
@@ -329,9 +329,9 @@ mod tests {
 
     #[test]
     fn samplers_map_as_wgpu_does() {
-        let trilinear = crate::render::texture::SamplerDesc {
+        let trilinear = crate::world::texture::SamplerDesc {
             anisotropy: 8,
-            ..crate::render::texture::SamplerDesc::DEFAULT
+            ..crate::world::texture::SamplerDesc::DEFAULT
         };
         let info = sampler_info(&trilinear.descriptor(), true);
         assert_eq!(info.min_filter, vk::Filter::LINEAR);
@@ -348,7 +348,7 @@ mod tests {
             vk::FALSE
         );
         // No mip filtering in the file: level 0 only, no anisotropy (not every filter linear).
-        let nearest = crate::render::texture::SamplerDesc {
+        let nearest = crate::world::texture::SamplerDesc {
             mipmap: None,
             mag_linear: false,
             ..trilinear

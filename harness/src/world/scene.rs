@@ -1,7 +1,7 @@
 //! What a scenario draws and from where: the scene (objects, lights, ground) and the camera track,
 //! as validated domain types. The renderer (`render/scene.rs`) reads these and nothing else of a
-//! scenario, so rendering depends on this file, not on scenarios, variants or techniques. Not for:
-//! parsing (`raw.rs`, `validate.rs`).
+//! scenario, so rendering depends on the world, not on scenarios, variants or techniques. Not for:
+//! parsing and validation (`scenario/raw.rs`, `scenario/validate.rs`, which build these).
 
 use std::path::PathBuf;
 
@@ -41,7 +41,7 @@ impl Scene {
             || self
                 .objects
                 .iter()
-                .any(|o| matches!(o.shape, super::Shape::Mesh { textured: true, .. }))
+                .any(|o| matches!(o.shape, Shape::Mesh { textured: true, .. }))
     }
 }
 

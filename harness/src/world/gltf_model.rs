@@ -6,7 +6,7 @@
 //! (a missing buffer or image file, an index out of range, attribute arrays of different lengths,
 //! a node that is its own ancestor, a required extension it does not implement, a second texture
 //! coordinate set), never a silently different picture. Not here: the untextured mesh path of
-//! `materials = "color"` (`mesh.rs`), the GPU side (`material.rs`).
+//! `materials = "color"` (`mesh.rs`), the GPU side (`render/material.rs`).
 
 use std::collections::HashMap;
 use std::path::Path;

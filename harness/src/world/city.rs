@@ -13,7 +13,7 @@
 //!   with motion through the velocity pass).
 //!
 //! Every texture is generated on the CPU at `texture_size` texels and mip-mapped on the GPU at
-//! load. Not here: drawing (`material.rs`), the scenario keys (`scenario/`).
+//! load. Not here: drawing (`render/material.rs`), the scenario keys (`scenario/`).
 
 use glam::{DMat4, DVec3, Vec2, Vec3};
 
@@ -21,8 +21,8 @@ use super::material::{
     generate_tangents, AlphaMode, Brdf, Material, MaterialVertex, Model, Placement, Primitive,
     TextureRef, UvTransform,
 };
+use super::scene::City;
 use super::texture::{Encoding, Image, SamplerDesc};
-use crate::scenario::scene::City;
 
 /// Street width between blocks, metres.
 pub const STREET: f32 = 12.0;

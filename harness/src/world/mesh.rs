@@ -1,14 +1,14 @@
 //! Triangle meshes of scene objects: procedural shapes and glTF 2.0 files.
 //!
 //! Meshes are built on the CPU in object space (shape sizes baked into the vertices, so model
-//! matrices stay rigid and normals need no inverse-transpose). Uploading is `scene.rs`'s job.
+//! matrices stay rigid and normals need no inverse-transpose). Uploading is `render/scene.rs`'s job.
 
 use std::path::Path;
 
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 
-use crate::scenario::Shape;
+use super::scene::Shape;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
