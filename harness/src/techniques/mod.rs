@@ -17,6 +17,7 @@ pub mod interlace;
 pub mod native;
 pub mod options;
 pub mod registry;
+pub mod shared;
 pub mod taau;
 pub mod upscale;
 
