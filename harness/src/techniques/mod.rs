@@ -13,6 +13,7 @@ pub mod checkerboard_2x2;
 pub mod definition;
 pub mod docs;
 pub mod fsr1;
+pub mod fsr2;
 pub mod interlace;
 pub mod native;
 pub mod options;
