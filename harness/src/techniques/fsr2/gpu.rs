@@ -537,7 +537,7 @@ impl Renderer for Fsr2Gpu {
             "luminance_pyramid",
             &p.luminance,
             &[&self.luminance],
-            [mw.div_ceil(8), mh.div_ceil(8)],
+            [mw, mh],
         );
         timed_dispatch(
             encoder,
