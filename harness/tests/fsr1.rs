@@ -12,6 +12,7 @@ use tessera::render::timers::Timers;
 use tessera::scenario::Scenario;
 use tessera::techniques::fsr1::model::{self, Image};
 use tessera::techniques::fsr1::{Fsr1Gpu, Options};
+use tessera::techniques::shared::rcas_model;
 use tessera::techniques::Variant;
 
 /// `v` as the `Rgba16Float` targets store it.
@@ -116,7 +117,7 @@ fn compare_with_model(s: &Scenario, v: &Variant, frames: u32) {
             for y in 0..s.height {
                 for x in 0..s.width {
                     let i = (y * s.width + x) as usize;
-                    let (lobe, c) = model::rcas(&img, (-stops).exp2(), false, x, y);
+                    let (lobe, c) = rcas_model::rcas(&img, (-stops).exp2(), false, x, y);
                     if lobe < -1e-3 {
                         sharpened += 1;
                     }
@@ -220,7 +221,7 @@ fn rcas_on_the_gpu_keeps_an_isolated_peak_within_one_and_equals_the_model() {
         wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC,
     ));
     let stops = 0.2f32;
-    let pass = tessera::techniques::fsr1::gpu::rcas_pass(
+    let pass = tessera::techniques::shared::rcas::rcas_pass(
         &gpu,
         (
             &src.create_view(&Default::default()),
@@ -243,12 +244,12 @@ fn rcas_on_the_gpu_keeps_an_isolated_peak_within_one_and_equals_the_model() {
     };
     for y in 0..h {
         for x in 0..w {
-            let raw = model::rcas_unclamped(&img, (-stops).exp2(), x, y);
+            let raw = rcas_model::rcas_unclamped(&img, (-stops).exp2(), x, y);
             assert!(
                 raw.min_element() >= 0.0 && raw.max_element() <= 1.0,
                 "({x}, {y}): the limiter let {raw} out of [0, 1]"
             );
-            let (_, c) = model::rcas(&img, (-stops).exp2(), false, x, y);
+            let (_, c) = rcas_model::rcas(&img, (-stops).exp2(), false, x, y);
             let (want, got) = (f16(c), out[(y * w + x) as usize].truncate());
             assert!(
                 got.is_finite() && got.max_element() < 30.0,

@@ -79,11 +79,11 @@ fn wrong_types_say_what_was_expected() {
 fn unknown_technique_lists_the_known_and_suggests_the_closest() {
     assert_eq!(
         errors("\n[[techniques]]\ntechnique = \"upscal\"\n"),
-        ["s.toml:18:13: `techniques[1].technique`: unknown technique \"upscal\" (did you mean \"upscale\"?): known techniques are \"native\", \"upscale\", \"fsr1\", \"taau\", \"checkerboard\", \"checkerboard-2x2\", \"adaptive-shading\", \"native-deferred\", \"native-vrs\", \"interlace\""]
+        ["s.toml:18:13: `techniques[1].technique`: unknown technique \"upscal\" (did you mean \"upscale\"?): known techniques are \"native\", \"upscale\", \"fsr1\", \"taau\", \"fsr2\", \"checkerboard\", \"checkerboard-2x2\", \"adaptive-shading\", \"native-deferred\", \"native-vrs\", \"interlace\""]
     );
     assert_eq!(
         errors("\n[[techniques]]\ntechnique = \"raytrace\"\n"),
-        ["s.toml:18:13: `techniques[1].technique`: unknown technique \"raytrace\": known techniques are \"native\", \"upscale\", \"fsr1\", \"taau\", \"checkerboard\", \"checkerboard-2x2\", \"adaptive-shading\", \"native-deferred\", \"native-vrs\", \"interlace\""]
+        ["s.toml:18:13: `techniques[1].technique`: unknown technique \"raytrace\": known techniques are \"native\", \"upscale\", \"fsr1\", \"taau\", \"fsr2\", \"checkerboard\", \"checkerboard-2x2\", \"adaptive-shading\", \"native-deferred\", \"native-vrs\", \"interlace\""]
     );
 }
 

@@ -44,6 +44,7 @@ fn alternating_techniques_say_so() {
         ("checkerboard-2x2", FramePattern::Alternating),
         ("interlace", FramePattern::Alternating),
         ("adaptive-shading", FramePattern::Same),
+        ("fsr2", FramePattern::Same),
     ] {
         let v = variant(name, &[]);
         assert_eq!(v.technique.frames(&v), pattern, "{name}");
@@ -94,4 +95,50 @@ fn requirements_are_known_without_a_gpu() {
             .passes
             .is_empty());
     }
+}
+
+/// `fsr2` plans AMD's passes in AMD's dispatch order, after the engine's inputs (scene, motion
+/// provider, motion vectors), and declares one cycle of AMD's jitter as its convergence
+/// (`ffxFsr2GetJitterPhaseCount` at the mode's render width); a mode with a `scale` is refused.
+#[test]
+fn fsr2_plans_amds_passes_and_declares_amds_phase_count() {
+    let v = variant("fsr2", &[]);
+    let names = |v: &tessera::techniques::Variant, dynamic: bool| -> Vec<&'static str> {
+        techniques::plan(v, Target::new(1920, 1080, dynamic))
+            .passes
+            .iter()
+            .map(|p| p.name)
+            .collect()
+    };
+    let amd = [
+        "luminance_pyramid",
+        "auto_exposure",
+        "reconstruct",
+        "depth_clip",
+        "lock",
+        "accumulate",
+    ];
+    let with = |head: &[&'static str], tail: &[&'static str]| -> Vec<&'static str> {
+        head.iter().chain(&amd).chain(tail).copied().collect()
+    };
+    assert_eq!(names(&v, false), with(&["scene", "motion"], &["rcas"]));
+    assert_eq!(
+        names(&v, true),
+        with(&["scene", "velocity", "motion"], &["rcas"])
+    );
+    let plain = variant("fsr2", &[("sharpening", ParamValue::Bool(false))]);
+    assert_eq!(names(&plain, false), with(&["scene", "motion"], &[]));
+    for (mode, phases) in [
+        ("quality", 18),
+        ("balanced", 23),
+        ("performance", 32),
+        ("ultra-performance", 72),
+    ] {
+        let v = variant("fsr2", &[("mode", ParamValue::Str(mode.into()))]);
+        assert_eq!(v.technique.convergence(&v, 1920), phases, "{mode}");
+    }
+    let both = techniques::by_name("fsr2")
+        .unwrap()
+        .check(&variant("fsr2", &[("scale", ParamValue::Float(0.4))]));
+    assert!(both.unwrap_err().contains("sets the render scale"));
 }

@@ -13,10 +13,12 @@ pub mod checkerboard_2x2;
 pub mod definition;
 pub mod docs;
 pub mod fsr1;
+pub mod fsr2;
 pub mod interlace;
 pub mod native;
 pub mod options;
 pub mod registry;
+pub mod shared;
 pub mod taau;
 pub mod upscale;
 

@@ -7,6 +7,7 @@ use super::checkerboard::Checkerboard;
 use super::checkerboard_2x2::Checkerboard2x2;
 use super::definition::Technique;
 use super::fsr1::Fsr1;
+use super::fsr2::Fsr2;
 use super::interlace::Interlace;
 use super::native::Native;
 use super::taau::Taau;
@@ -18,6 +19,7 @@ pub static ALL: &[&dyn Technique] = &[
     &Upscale,
     &Fsr1,
     &Taau,
+    &Fsr2,
     &Checkerboard,
     &Checkerboard2x2,
     &AdaptiveShading,

@@ -1,7 +1,8 @@
 //! The GPU part of `fsr1`: a `scene` render pass at the render size (the ground's derivatives
 //! scaled by the mip bias; with `input = "msaa4x"` into 4x multisampled targets resolved into
 //! `color_low` at the end of the pass), an `easu` compute pass to the output size and, when RCAS is on, an
-//! `rcas` compute pass (`fsr1.wgsl`; CPU model in `model.rs`). With RCAS, EASU writes
+//! `rcas` compute pass (`fsr1.wgsl` after the shared `rcas.wgsl`; CPU models in `model.rs` and
+//! `shared/rcas_model.rs`). With RCAS, EASU writes
 //! perceptual values into `easu` and RCAS the linear output; without, EASU writes the output.
 
 use std::collections::HashMap;
@@ -9,14 +10,19 @@ use std::collections::HashMap;
 use super::{Input, Options};
 use crate::gpu::Gpu;
 use crate::render::graph::{Graph, PassKind, Plan, Res, TextureDesc};
-use crate::render::kit::{
-    allocate, bind_group, compute_pipeline, record_scene_pass_resolved, timed_dispatch, TextureMap,
-};
+use crate::render::kit::{allocate, record_scene_pass_resolved, TextureMap};
 use crate::render::renderer::{FrameInfo, Renderer};
 use crate::render::scene::{Objects, SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::render::timers::Timers;
+use crate::techniques::shared::rcas::{rcas_pass, FsrPass, Params, RCAS_WGSL};
 
+/// EASU, appended to the shared RCAS module whose bindings and encoding it uses.
 pub static FSR1_WGSL: &str = include_str!("fsr1.wgsl");
+
+/// The module the GPU compiles: `shared/rcas.wgsl` then `fsr1.wgsl`.
+pub fn module() -> String {
+    format!("{RCAS_WGSL}\n{FSR1_WGSL}")
+}
 
 /// The render-size scene targets, EASU's perceptual output (with RCAS) and the output.
 const COLOR_LOW: Res = Res::new("color_low");
@@ -77,88 +83,6 @@ pub fn graph(options: &Options, width: u32, height: u32) -> Plan {
     g.plan().expect("built-in graphs are well formed")
 }
 
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct Params {
-    size: [u32; 4],
-    rcas: [f32; 4],
-}
-
-/// One compute pass of `fsr1.wgsl` (`easu` or `rcas`): its pipeline, bind group and uniforms,
-/// dispatched over the output.
-pub struct FsrPass {
-    name: &'static str,
-    pipeline: wgpu::ComputePipeline,
-    bind_group: wgpu::BindGroup,
-    _params: wgpu::Buffer,
-    out_size: (u32, u32),
-}
-
-impl FsrPass {
-    fn new(
-        gpu: &Gpu,
-        name: &'static str,
-        (src, dst): (&wgpu::TextureView, &wgpu::TextureView),
-        params: Params,
-    ) -> FsrPass {
-        use wgpu::util::DeviceExt;
-        let device = &gpu.device;
-        let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("fsr1 params"),
-            contents: bytemuck::bytes_of(&params),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
-        let pipeline = compute_pipeline(device, name, FSR1_WGSL, name);
-        let bind_group = bind_group(
-            device,
-            name,
-            &pipeline.get_bind_group_layout(0),
-            &[(0, &buffer)],
-            &[(1, src), (2, dst)],
-        );
-        FsrPass {
-            name,
-            pipeline,
-            bind_group,
-            _params: buffer,
-            out_size: (params.size[2], params.size[3]),
-        }
-    }
-
-    /// Records the pass, timed under its name.
-    pub fn record(&self, timers: &Timers, encoder: &mut wgpu::CommandEncoder) {
-        timed_dispatch(
-            encoder,
-            timers,
-            self.name,
-            &self.pipeline,
-            &[&self.bind_group],
-            [self.out_size.0.div_ceil(8), self.out_size.1.div_ceil(8)],
-        );
-    }
-}
-
-/// An RCAS pass (`rcas`) from `src` to `dst`, both `width` x `height`, at `sharpness` stops;
-/// `linear_input`: `src` holds linear colour, encoded per tap (`taau`'s optional RCAS).
-pub fn rcas_pass(
-    gpu: &Gpu,
-    (src, dst): (&wgpu::TextureView, &wgpu::TextureView),
-    (width, height): (u32, u32),
-    sharpness: f32,
-    linear_input: bool,
-) -> FsrPass {
-    let params = Params {
-        size: [width, height, width, height],
-        rcas: [
-            (-sharpness).exp2(),
-            1.0,
-            f32::from(u8::from(linear_input)),
-            0.0,
-        ],
-    };
-    FsrPass::new(gpu, "rcas", (src, dst), params)
-}
-
 pub struct Fsr1Gpu {
     plan: Plan,
     textures: HashMap<&'static str, wgpu::Texture>,
@@ -183,11 +107,13 @@ impl Fsr1Gpu {
             size: [lw, lh, width, height],
             rcas: [0.0, f32::from(u8::from(rcas)), 0.0, 0.0],
         };
+        let module = module();
         let passes = match options.rcas_sharpness() {
             Some(sharpness) => vec![
                 FsrPass::new(
                     gpu,
                     "easu",
+                    &module,
                     (&view(COLOR_LOW), &view(EASU)),
                     easu_params(true),
                 ),
@@ -202,6 +128,7 @@ impl Fsr1Gpu {
             None => vec![FsrPass::new(
                 gpu,
                 "easu",
+                &module,
                 (&view(COLOR_LOW), &view(COLOR)),
                 easu_params(false),
             )],

@@ -30,6 +30,7 @@ use crate::render::graph::Plan;
 use crate::render::renderer::Renderer;
 use crate::render::scene::{COLOR_FORMAT, DEPTH_FORMAT};
 
+use crate::techniques::shared::rcas::RCAS_WGSL;
 pub use gpu::{Fsr1Gpu, FSR1_WGSL};
 
 crate::choice! {
@@ -192,6 +193,13 @@ impl Definition for Fsr1 {
     }
 
     fn shaders(&self) -> Vec<Shader> {
-        vec![Shader::file("fsr1/fsr1.wgsl", FSR1_WGSL)]
+        vec![
+            Shader {
+                name: "fsr1/fsr1.wgsl".to_string(),
+                source: gpu::module(),
+                files: vec!["shared/rcas.wgsl", "fsr1/fsr1.wgsl"],
+            },
+            Shader::file("shared/rcas.wgsl", RCAS_WGSL),
+        ]
     }
 }

@@ -190,7 +190,7 @@ impl Renderer for Converged {
         // than the scene has view slots. Untimed: the reference's cost is not a measure.
         for n in 0..self.samples {
             let j = r2(n);
-            // As `taau`'s jitter (`techniques/taau/jitter.rs`): pixel q samples at q + 0.5 + j.
+            // As `taau`'s jitter (`techniques/shared/jitter.rs`): pixel q samples at q + 0.5 + j.
             let view = View {
                 ndc_offset: Vec2::new(
                     -2.0 * j.x / self.width as f32,

@@ -1,9 +1,9 @@
 //! The GPU part of `taau`: per frame a `scene` render pass at the render size, jittered by the
-//! frame's Halton phase (`jitter.rs`); the shared motion provider's `velocity` pass
+//! frame's Halton phase (`shared/jitter.rs`); the shared motion provider's `velocity` pass
 //! (`render/velocity.rs`) when the scene has animated objects: the dynamic objects only, at the
 //! render size, through the same jittered view as the scene pass; the `resolve` compute pass (`resolve.wgsl`, CPU model in
 //! `model.rs`) writing the output with its accumulated weight in alpha and the depth of each
-//! output pixel's sample; and, with `rcas`, FSR 1's RCAS from the resolved colour to `color`.
+//! output pixel's sample; and, with `rcas`, FSR 1's RCAS (`shared/rcas.rs`) from the resolved colour to `color`.
 //! Colour and depth histories are one ping-pong pair of sides (`kit::PingPong`): frame parity k
 //! writes side k's colour and depth and reads the other's.
 
@@ -11,7 +11,6 @@ use std::collections::HashMap;
 
 use glam::{DMat4, Mat4, Vec2};
 
-use super::jitter::{jitter, ndc_offset};
 use super::Options;
 use crate::gpu::Gpu;
 use crate::render::graph::{Graph, PassKind, Plan, Res, TextureDesc};
@@ -22,7 +21,8 @@ use crate::render::renderer::{FrameInfo, Renderer};
 use crate::render::scene::{Objects, SceneGpu, ScenePipeline, View, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::render::timers::Timers;
 use crate::render::velocity::{self, VelocityPass, VELOCITY, VELOCITY_DEPTH};
-use crate::techniques::fsr1::gpu::{rcas_pass, FsrPass};
+use crate::techniques::shared::jitter::{jitter, ndc_offset};
+use crate::techniques::shared::rcas::{rcas_pass, FsrPass};
 
 pub static RESOLVE_WGSL: &str = include_str!("resolve.wgsl");
 

@@ -1,7 +1,7 @@
 //! Technique `taau`: temporal anti-aliasing with upsampling, from the published design (Yang, Liu,
 //! Salvi, "A Survey of Temporal Antialiasing Techniques", Eurographics STAR 2020) with Bevy's TAA
 //! resolve (`crates/bevy_anti_alias/src/taa/taa.wgsl`) as a readable reference: the projection
-//! jittered by Halton (2, 3) over FSR 2's phase count (`jitter.rs`), the previous output
+//! jittered by Halton (2, 3) over FSR 2's phase count (`shared/jitter.rs`), the previous output
 //! reprojected by the cameras and the shared motion provider (`render/velocity.rs`), fetched
 //! with Catmull-Rom, rectified by YCoCg variance clipping every frame, rejected on disocclusion
 //! and cuts, accumulated as a running mean that never stops (each new sample blended in with at
@@ -26,13 +26,14 @@
 //! provider's pass at the render size, recorded only when the scene has animated objects.
 
 pub mod gpu;
-pub mod jitter;
 pub mod model;
 
 use super::definition::{BuildContext, Definition, Shader, Target};
 use crate::gpu::Unsupported;
 use crate::render::graph::Plan;
 use crate::render::renderer::Renderer;
+use crate::techniques::shared::jitter;
+use crate::techniques::shared::rcas::RCAS_WGSL;
 
 pub use gpu::{LastFrame, TaauGpu, RESOLVE_WGSL};
 
@@ -177,6 +178,9 @@ impl Definition for Taau {
     }
 
     fn shaders(&self) -> Vec<Shader> {
-        vec![Shader::file("taau/resolve.wgsl", RESOLVE_WGSL)]
+        vec![
+            Shader::file("taau/resolve.wgsl", RESOLVE_WGSL),
+            Shader::file("shared/rcas.wgsl", RCAS_WGSL),
+        ]
     }
 }
