@@ -337,41 +337,8 @@ fn ingest_once(conn: &mut dyn Connection, bundle: &RunBundle) -> Result<Ingested
     let ord = order_key(run);
     let mut series = Vec::with_capacity(series_points.len());
     for ((scenario, variant, measure), (value, hib)) in series_points {
-        let key = [
-            scenario.into(),
-            variant.into(),
-            Value::Int(adapter),
-            measure.into(),
-        ];
-        let id = match conn.query_opt(
-            "SELECT id FROM series WHERE scenario = $1 AND variant = $2 AND adapter_id = $3 AND measure = $4",
-            &key,
-        )? {
-            Some(row) => row.i64(0)?,
-            None => {
-                let mut params = key.to_vec();
-                params.push(hib.into());
-                conn.execute(
-                    "INSERT INTO series (scenario, variant, adapter_id, measure, higher_is_better)
-                     VALUES ($1, $2, $3, $4, $5) ON CONFLICT DO NOTHING",
-                    &params,
-                )?;
-                conn.query(
-                    "SELECT id FROM series WHERE scenario = $1 AND variant = $2 AND adapter_id = $3 AND measure = $4",
-                    &key,
-                )?[0]
-                    .i64(0)?
-            }
-        };
-        conn.execute(
-            "INSERT INTO points (series_id, run_pk, value, ord) VALUES ($1, $2, $3, $4)",
-            &[
-                Value::Int(id),
-                Value::Int(run_pk),
-                Value::Real(value),
-                ord.as_str().into(),
-            ],
-        )?;
+        let id = super::series::id_or_insert(conn, &scenario, &variant, adapter, &measure, hib)?;
+        super::series::insert_point(conn, id, run_pk, value, &ord)?;
         series.push(id);
     }
     super::extras::store(conn, run_pk, adapter, bundle)?;
