@@ -253,13 +253,58 @@ pub fn has_status_column(conn: &mut dyn Connection) -> Result<bool, StoreError> 
     Ok(conn.query(sql, &[])?[0].i64(0)? > 0)
 }
 
+/// The SQL for the scenario file of the `scenario_results` row `sr`: a column from the compact
+/// schema on; older rows keep it in their JSON.
+fn file_of_record(backend: Backend) -> &'static str {
+    match backend {
+        Backend::Sqlite => "COALESCE(sr.file, json_extract(sr.record_json, '$.file'))",
+        Backend::Postgres => {
+            "COALESCE(sr.file, CAST(NULLIF(sr.record_json, '') AS JSON) ->> 'file')"
+        }
+    }
+}
+
+/// What a bisection of an alert starts from: its series, commit range, scenario file and adapter.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BisectTarget {
+    pub scenario_file: String,
+    pub variant: String,
+    pub measure: String,
+    pub commit_before: Option<String>,
+    pub commit_after: Option<String>,
+    pub adapter: String,
+}
+
+/// The [`BisectTarget`] of alert `id`.
+pub fn bisect_target(conn: &mut dyn Connection, id: i64) -> Result<BisectTarget, StoreError> {
+    let file = file_of_record(conn.backend());
+    let r = conn
+        .query_opt(
+            &format!(
+                "SELECT {file}, s.variant, s.measure, rb.commit_sha, ra.commit_sha, a.name
+                 FROM regressions g JOIN series s ON s.id = g.series_id
+                 JOIN runs rb ON rb.id = g.run_pk_before JOIN runs ra ON ra.id = g.run_pk_after
+                 JOIN adapters a ON a.id = s.adapter_id
+                 LEFT JOIN scenario_results sr ON sr.run_pk = ra.id AND sr.scenario = s.scenario
+                 WHERE g.id = $1"
+            ),
+            &[Value::Int(id)],
+        )?
+        .ok_or_else(|| StoreError::NotFound(format!("alert {id}")))?;
+    Ok(BisectTarget {
+        scenario_file: r.opt_string(0)?.unwrap_or_default(),
+        variant: r.string(1)?,
+        measure: r.string(2)?,
+        commit_before: r.opt_string(3)?,
+        commit_after: r.opt_string(4)?,
+        adapter: r.string(5)?,
+    })
+}
+
 /// The suite of each scenario that has alerts: the folder of its newest scenario file (one JSON
 /// read per scenario, not per alert).
 fn suites(conn: &mut dyn Connection) -> Result<BTreeMap<String, String>, StoreError> {
-    let file = match conn.backend() {
-        Backend::Sqlite => "json_extract(sr.record_json, '$.file')",
-        Backend::Postgres => "CAST(sr.record_json AS JSON) ->> 'file'",
-    };
+    let file = file_of_record(conn.backend());
     let rows = conn.query(
         &format!(
             "SELECT sr.scenario, {file} FROM scenario_results sr

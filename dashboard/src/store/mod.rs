@@ -17,6 +17,7 @@ pub mod noise;
 pub mod outbox;
 pub mod queue;
 pub mod read;
+pub mod records;
 pub mod series;
 pub mod stoppage;
 pub mod tokens;

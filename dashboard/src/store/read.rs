@@ -160,11 +160,14 @@ pub(crate) fn scenarios_of(
     pk: i64,
 ) -> Result<Vec<ScenarioResult>, StoreError> {
     conn.query(
-        "SELECT record_json FROM scenario_results WHERE run_pk = $1 ORDER BY scenario",
+        &format!(
+            "SELECT {} FROM scenario_results WHERE run_pk = $1 ORDER BY scenario",
+            super::records::COLUMNS
+        ),
         &[Value::Int(pk)],
     )?
     .iter()
-    .map(|r| serde_json::from_str(r.str(0)?).map_err(|e| StoreError::Corrupt(e.to_string())))
+    .map(|r| super::records::decode(r, 0))
     .collect()
 }
 
@@ -354,11 +357,14 @@ pub fn scenario_result(
     let pk = run_pk(conn, run_id)?;
     let row = conn
         .query_opt(
-            "SELECT record_json FROM scenario_results WHERE run_pk = $1 AND scenario = $2",
+            &format!(
+                "SELECT {} FROM scenario_results WHERE run_pk = $1 AND scenario = $2",
+                super::records::COLUMNS
+            ),
             &[Value::Int(pk), scenario.into()],
         )?
         .ok_or_else(|| StoreError::NotFound(format!("scenario {scenario} in run {run_id}")))?;
-    serde_json::from_str(row.str(0)?).map_err(|e| StoreError::Corrupt(e.to_string()))
+    super::records::decode(&row, 0)
 }
 
 /// Every scenario record of a run (the adapter comparison reads two runs).
