@@ -172,8 +172,8 @@ impl Environments {
     }
 }
 
-/// The newest `len` points of a series, oldest first: one range of the covering index
-/// `points_order`, whatever the length of the series.
+/// The newest `len` points of a series, oldest first: one range of the primary key of `points`
+/// (series_id, ord, run_pk), whatever the length of the series.
 pub fn window(
     conn: &mut dyn Connection,
     series_id: i64,
