@@ -321,9 +321,13 @@ fn stored_series_take_the_measure_tables_names_and_directions() {
 /// and runs stored after the migration sit beside them in one series.
 #[test]
 fn a_store_of_the_previous_schema_migrates_to_compact_storage() {
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("old.sqlite");
-    let path = path.to_str().unwrap();
+    let test = "a_store_of_the_previous_schema_migrates_to_compact_storage";
+    for store in std::iter::once(common::sqlite_at(8)).chain(common::postgres_at(test, 8)) {
+        migrates_to_compact_storage(&store);
+    }
+}
+
+fn migrates_to_compact_storage(store: &common::TestStore) {
     let old = tessera_dashboard::bundle::RunBundle::read_folder(
         &std::fs::read_dir(common::fixtures())
             .unwrap()
@@ -333,44 +337,56 @@ fn a_store_of_the_previous_schema_migrates_to_compact_storage() {
     )
     .unwrap();
     let record = serde_json::to_string(&old.scenarios[0]).unwrap();
-    {
-        let pool = tessera_dashboard::db::open_at(path, 8).unwrap();
-        let mut c = pool.get().unwrap();
-        for sql in [
-            "INSERT INTO adapters (id, name, vendor, device, device_type, backend) VALUES (1, 'llvmpipe (LLVM 15.0.6, 256 bits)', 65541, 0, 'cpu', 'vulkan')",
-            "INSERT INTO blobs (digest, bytes) VALUES ('d1', x'00')",
-        ] {
-            c.execute(sql, &[]).unwrap();
-        }
-        c.execute(
-            "INSERT INTO runs (id, run_id, dirty, started_at, status, harness_version, adapter_id, driver,
+    let series = {
+        let mut c = store.pool.get().unwrap();
+        let mut id = |sql: &str, params: &[Value]| c.query(sql, params).unwrap()[0].i64(0).unwrap();
+        let adapter = id(
+            "INSERT INTO adapters (name, vendor, device, device_type, backend)
+             VALUES ('llvmpipe (LLVM 15.0.6, 256 bits)', 65541, 0, 'cpu', 'vulkan') RETURNING id",
+            &[],
+        );
+        let run = id(
+            "INSERT INTO runs (run_id, dirty, started_at, status, harness_version, adapter_id, driver,
                  driver_info, hostname, n_ok, n_skipped, n_failed, run_json, imported_at, commit_time)
-             VALUES (1, 'old-run', 0, '2026-11-01T00:00:00Z', 'complete', '0.1.0', 1, 'llvmpipe', 'Mesa',
-                 'h', 1, 0, 0, $1, '2026-11-01T00:00:00Z', '2026-11-01T00:00:00Z')",
-            &[serde_json::to_string(&old.run).unwrap().into()],
-        )
-        .unwrap();
-        c.execute(
+             VALUES ('old-run', 0, '2026-11-01T00:00:00Z', 'complete', '0.1.0', $1, 'llvmpipe', 'Mesa',
+                 'h', 1, 0, 0, $2, '2026-11-01T00:00:00Z', '2026-11-01T00:00:00Z') RETURNING id",
+            &[Value::Int(adapter), serde_json::to_string(&old.run).unwrap().into()],
+        );
+        id(
             "INSERT INTO scenario_results (run_pk, scenario, width, height, wall_ms, record_json)
-             VALUES (1, $1, 32, 24, 1.0, $2)",
+             VALUES ($1, $2, 32, 24, 1.0, $3) RETURNING id",
             &[
+                Value::Int(run),
                 old.scenarios[0].scenario.as_str().into(),
                 record.as_str().into(),
             ],
+        );
+        let series = id(
+            "INSERT INTO series (scenario, variant, adapter_id, measure, higher_is_better)
+             VALUES ('tiny', 'native', $1, 'gpu_ms.median', 0) RETURNING id",
+            &[Value::Int(adapter)],
+        );
+        drop(id);
+        c.execute(
+            "INSERT INTO points (series_id, run_pk, value, ord)
+             VALUES ($1, $2, 2.5, '2026-11-01T00:00:00Z 2026-11-01T00:00:00Z')",
+            &[Value::Int(series), Value::Int(run)],
         )
         .unwrap();
-        for sql in [
-            "INSERT INTO series (id, scenario, variant, adapter_id, measure, higher_is_better)
-             VALUES (1, 'tiny', 'native', 1, 'gpu_ms.median', 0)",
-            "INSERT INTO points (series_id, run_pk, value, ord)
-             VALUES (1, 1, 2.5, '2026-11-01T00:00:00Z 2026-11-01T00:00:00Z')",
+        c.execute(
+            "INSERT INTO blobs (digest, bytes) VALUES ('d1', $1)",
+            &[Value::Blob(vec![0])],
+        )
+        .unwrap();
+        c.execute(
             "INSERT INTO images (run_pk, scenario, variant, frame, kind, digest)
-             VALUES (1, 'tiny', 'native', 0, 'output', 'd1')",
-        ] {
-            c.execute(sql, &[]).unwrap();
-        }
-    }
-    let pool = tessera_dashboard::db::open(path).unwrap();
+             VALUES ($1, 'tiny', 'native', 0, 'output', 'd1')",
+            &[Value::Int(run)],
+        )
+        .unwrap();
+        series
+    };
+    let pool = tessera_dashboard::db::open(&store.url).unwrap();
     let mut c = pool.get().unwrap();
     assert_eq!(
         tessera_dashboard::db::current_version(&mut *c).unwrap(),
@@ -409,7 +425,7 @@ fn a_store_of_the_previous_schema_migrates_to_compact_storage() {
     assert_eq!(stored_json, "");
     assert!(stored_z.unwrap().len() < record.len());
     // Old and new points of the series, in commit order.
-    let pts = tessera_dashboard::store::series::points(&mut *c, 1).unwrap();
+    let pts = tessera_dashboard::store::series::points(&mut *c, series).unwrap();
     let runs: Vec<&str> = pts.iter().map(|p| p.run_id.as_str()).collect();
     assert_eq!(runs, ["old-run", "new-run"]);
     assert_eq!(pts[0].value, 2.5);
