@@ -366,7 +366,6 @@ fn migrates_to_compact_storage(store: &common::TestStore) {
              VALUES ('tiny', 'native', $1, 'gpu_ms.median', 0) RETURNING id",
             &[Value::Int(adapter)],
         );
-        drop(id);
         c.execute(
             "INSERT INTO points (series_id, run_pk, value, ord)
              VALUES ($1, $2, 2.5, '2026-11-01T00:00:00Z 2026-11-01T00:00:00Z')",
