@@ -3,7 +3,7 @@
 //!
 //! Layout (rustc-perf's database / site split): [`db`] talks to the database, [`store`] holds the
 //! queries, [`bundle`] checks incoming runs, [`detect`] finds change points, [`regressions`]
-//! applies it to stored series, [`server`] serves pages and API, [`html`] and [`svg`] draw them.
+//! applies it to stored series, [`server`] serves pages and API, [`titles`] names alert groups, [`html`] and [`svg`] draw them.
 
 pub mod ab;
 pub mod bundle;
@@ -22,6 +22,7 @@ pub mod steps;
 pub mod store;
 pub mod svg;
 pub mod synth;
+pub mod titles;
 pub mod validate;
 
 /// The current time, RFC 3339 in UTC, as stored in the `*_at` columns.

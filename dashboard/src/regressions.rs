@@ -26,16 +26,20 @@
 //! Not for: the statistics (see [`crate::detect`]), the alert row (see [`crate::store::alerts`])
 //! or triage (see [`crate::store::triage`]).
 
-use std::collections::{BTreeMap, BTreeSet, HashMap};
+use std::collections::{BTreeMap, BTreeSet};
 
 use crate::bundle::RunBundle;
-use crate::db::{transaction, Backend, Connection, Value};
+use crate::db::{transaction, Connection};
 use crate::detect::{analyse, Analysis, ChangePoint, Params};
 use crate::store::alerts::{self, DetectionStatus, Placement};
 use crate::store::ingest::{ingest_in_transaction, Ingested};
+use crate::store::series;
 use crate::store::StoreError;
 
 pub use crate::store::alerts::StoredAlert;
+pub use crate::store::series::{
+    all_series, points, window, Environments, SeriesPoint, WindowPoint,
+};
 
 /// A change point within this many points of an open alert, in the same direction, is that alert.
 pub const SAME_CHANGE_WITHIN: usize = 3;
@@ -48,104 +52,6 @@ pub const WITHDRAWN: DetectionStatus = DetectionStatus::Withdrawn;
 /// A confirmed alert moves to another commit without a backfill inside its range only when the
 /// location probability at its own commit has fallen below this.
 pub const STRONG_EVIDENCE: f64 = 0.01;
-
-/// One point of a series with what identifies its environment.
-#[derive(Clone, Debug)]
-pub struct SeriesPoint {
-    pub run_pk: i64,
-    pub run_id: String,
-    pub commit: Option<String>,
-    pub started_at: String,
-    pub environment: String,
-    pub value: f64,
-}
-
-fn environment(driver: &str, info: &str, harness: &str) -> String {
-    format!("{driver} {info} / harness {harness}")
-}
-
-/// All points of a series in commit order (commit time, start time, import order): for pages.
-pub fn points(conn: &mut dyn Connection, series_id: i64) -> Result<Vec<SeriesPoint>, StoreError> {
-    let rows = conn.query(
-        "SELECT r.id, r.run_id, r.commit_sha, r.started_at, r.driver, r.driver_info, r.harness_version, p.value
-         FROM points p JOIN runs r ON r.id = p.run_pk
-         WHERE p.series_id = $1 ORDER BY p.ord, p.run_pk",
-        &[Value::Int(series_id)],
-    )?;
-    rows.iter()
-        .map(|r| {
-            Ok(SeriesPoint {
-                run_pk: r.i64(0)?,
-                run_id: r.string(1)?,
-                commit: r.opt_string(2)?,
-                started_at: r.string(3)?,
-                environment: environment(r.str(4)?, r.str(5)?, r.str(6)?),
-                value: r.f64(7)?,
-            })
-        })
-        .collect()
-}
-
-/// A point as detection reads it: its run, its environment (an id from [`Environments`]) and value.
-#[derive(Clone, Debug, PartialEq)]
-pub struct WindowPoint {
-    pub run_pk: i64,
-    pub environment: u32,
-    pub value: f64,
-}
-
-/// Environment (driver, driver version, harness version) of each run, read once per run and
-/// shared by every series a detection pass reads: a point is then just a run and a value.
-#[derive(Debug, Default)]
-pub struct Environments {
-    by_run: HashMap<i64, u32>,
-    ids: HashMap<String, u32>,
-}
-
-impl Environments {
-    pub fn of(&mut self, conn: &mut dyn Connection, run_pk: i64) -> Result<u32, StoreError> {
-        if let Some(&e) = self.by_run.get(&run_pk) {
-            return Ok(e);
-        }
-        let row = conn.query(
-            "SELECT driver || ' ' || driver_info || ' / harness ' || harness_version FROM runs WHERE id = $1",
-            &[Value::Int(run_pk)],
-        )?;
-        let name = row
-            .first()
-            .map(|r| r.string(0))
-            .transpose()?
-            .unwrap_or_default();
-        let next = self.ids.len() as u32;
-        let id = *self.ids.entry(name).or_insert(next);
-        self.by_run.insert(run_pk, id);
-        Ok(id)
-    }
-}
-
-/// The newest `len` points of a series, oldest first: one range of the covering index
-/// `points_order`, whatever the length of the series.
-pub fn window(
-    conn: &mut dyn Connection,
-    series_id: i64,
-    len: usize,
-    envs: &mut Environments,
-) -> Result<Vec<WindowPoint>, StoreError> {
-    let rows = conn.query(
-        "SELECT run_pk, value FROM points WHERE series_id = $1 ORDER BY ord DESC, run_pk DESC LIMIT $2",
-        &[Value::Int(series_id), Value::Int(len as i64)],
-    )?;
-    let mut pts = Vec::with_capacity(rows.len());
-    for r in rows.iter().rev() {
-        let run_pk = r.i64(0)?;
-        pts.push(WindowPoint {
-            run_pk,
-            environment: envs.of(conn, run_pk)?,
-            value: r.f64(1)?,
-        });
-    }
-    Ok(pts)
-}
 
 /// A change point found in the window, with its status.
 #[derive(Clone, Debug, PartialEq)]
@@ -297,20 +203,6 @@ pub fn plan(pks: &[i64], open_from: usize, found: &[Found], alerts: &[StoredAler
     actions
 }
 
-fn run_label(conn: &mut dyn Connection, pk: i64) -> Result<String, StoreError> {
-    let row = conn.query(
-        "SELECT run_id, commit_sha FROM runs WHERE id = $1",
-        &[Value::Int(pk)],
-    )?;
-    Ok(match row.first() {
-        Some(r) => match r.opt_string(1)? {
-            Some(sha) => format!("{} ({})", &sha[..sha.len().min(7)], r.str(0)?),
-            None => r.string(0)?,
-        },
-        None => format!("run {pk}"),
-    })
-}
-
 fn describe(f: &Found) -> String {
     format!(
         "{:+.1}% ({:.4} -> {:.4}), {}",
@@ -411,8 +303,8 @@ fn update_series_with(
                     };
                     match reason {
                         Some(reason) => {
-                            let from = run_label(conn, old.run_pk_after)?;
-                            let to = run_label(conn, pks[at])?;
+                            let from = alerts::run_label(conn, old.run_pk_after)?;
+                            let to = alerts::run_label(conn, pks[at])?;
                             alerts::event(
                                 conn,
                                 id,
@@ -467,20 +359,6 @@ fn update_series_with(
     Ok(changes)
 }
 
-/// On PostgreSQL, locks the series in id order so that two uploads touching one series analyse
-/// it one after the other, each seeing the other's point (SQLite's `BEGIN IMMEDIATE` already
-/// serialises writers).
-fn lock_series_of_run(conn: &mut dyn Connection, run_pk: i64) -> Result<(), StoreError> {
-    if conn.backend() == Backend::Postgres {
-        conn.query(
-            "SELECT id FROM series WHERE id IN (SELECT series_id FROM points WHERE run_pk = $1)
-             ORDER BY id FOR UPDATE",
-            &[Value::Int(run_pk)],
-        )?;
-    }
-    Ok(())
-}
-
 /// Stores `bundle` and runs detection on the series it touched, in one transaction (retried on a
 /// write conflict): the path of every upload and import.
 pub fn ingest_and_detect(
@@ -494,9 +372,9 @@ pub fn ingest_and_detect(
             let ingested = ingest_in_transaction(c, bundle)?;
             let mut changes = Changes::default();
             if let Ingested::Stored { run_pk, series, .. } = &ingested {
-                lock_series_of_run(c, *run_pk)?;
+                series::lock_of_run(c, *run_pk)?;
                 let mut envs = Environments::default();
-                let mut stored_alerts = alerts::of_series_of_run(c, *run_pk)?;
+                let mut stored_alerts = alerts::of_series_in(c, series)?;
                 for &id in series {
                     let stored = stored_alerts.remove(&id).unwrap_or_default();
                     changes += update_series_with(c, id, params, &mut envs, stored)?;
@@ -547,13 +425,8 @@ pub fn update_all(
     let mut envs = Environments::default();
     for chunk in series.chunks(64) {
         changes += transaction(conn, |c| {
-            if c.backend() == Backend::Postgres {
-                for &id in chunk {
-                    c.query(
-                        "SELECT id FROM series WHERE id = $1 FOR UPDATE",
-                        &[Value::Int(id)],
-                    )?;
-                }
+            for &id in chunk {
+                series::lock(c, id)?;
             }
             let mut ch = Changes::default();
             for &id in chunk {
@@ -572,19 +445,6 @@ pub fn update(
     params: &Params,
 ) -> Result<usize, StoreError> {
     Ok(update_all(conn, series, params)?.detected)
-}
-
-/// Every series in the store (for `tessera-dashboard detect`), but the frame alerts' series
-/// (`frames.untriaged`, which have no points: their alerts are triaged, not detected).
-pub fn all_series(conn: &mut dyn Connection) -> Result<Vec<i64>, StoreError> {
-    Ok(conn
-        .query(
-            "SELECT id FROM series WHERE measure <> $1 ORDER BY id",
-            &[crate::store::frames::UNTRIAGED_MEASURE.into()],
-        )?
-        .iter()
-        .map(|r| r.i64(0))
-        .collect::<Result<_, _>>()?)
 }
 
 #[cfg(test)]

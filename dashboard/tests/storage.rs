@@ -315,3 +315,122 @@ fn stored_series_take_the_measure_tables_names_and_directions() {
         }
     }
 }
+
+/// A store of the schema before compact storage (version 8: records as JSON text, points and
+/// images with row ids) migrates: its records, points and images read back as they were stored,
+/// and runs stored after the migration sit beside them in one series.
+#[test]
+fn a_store_of_the_previous_schema_migrates_to_compact_storage() {
+    let test = "a_store_of_the_previous_schema_migrates_to_compact_storage";
+    for store in std::iter::once(common::sqlite_at(8)).chain(common::postgres_at(test, 8)) {
+        migrates_to_compact_storage(&store);
+    }
+}
+
+fn migrates_to_compact_storage(store: &common::TestStore) {
+    let old = tessera_dashboard::bundle::RunBundle::read_folder(
+        &std::fs::read_dir(common::fixtures())
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .min()
+            .unwrap(),
+    )
+    .unwrap();
+    let record = serde_json::to_string(&old.scenarios[0]).unwrap();
+    let series = {
+        let mut c = store.pool.get().unwrap();
+        let mut id = |sql: &str, params: &[Value]| c.query(sql, params).unwrap()[0].i64(0).unwrap();
+        let adapter = id(
+            "INSERT INTO adapters (name, vendor, device, device_type, backend)
+             VALUES ('llvmpipe (LLVM 15.0.6, 256 bits)', 65541, 0, 'cpu', 'vulkan') RETURNING id",
+            &[],
+        );
+        let run = id(
+            "INSERT INTO runs (run_id, dirty, started_at, status, harness_version, adapter_id, driver,
+                 driver_info, hostname, n_ok, n_skipped, n_failed, run_json, imported_at, commit_time)
+             VALUES ('old-run', 0, '2026-11-01T00:00:00Z', 'complete', '0.1.0', $1, 'llvmpipe', 'Mesa',
+                 'h', 1, 0, 0, $2, '2026-11-01T00:00:00Z', '2026-11-01T00:00:00Z') RETURNING id",
+            &[Value::Int(adapter), serde_json::to_string(&old.run).unwrap().into()],
+        );
+        id(
+            "INSERT INTO scenario_results (run_pk, scenario, width, height, wall_ms, record_json)
+             VALUES ($1, $2, 32, 24, 1.0, $3) RETURNING id",
+            &[
+                Value::Int(run),
+                old.scenarios[0].scenario.as_str().into(),
+                record.as_str().into(),
+            ],
+        );
+        let series = id(
+            "INSERT INTO series (scenario, variant, adapter_id, measure, higher_is_better)
+             VALUES ('tiny', 'native', $1, 'gpu_ms.median', 0) RETURNING id",
+            &[Value::Int(adapter)],
+        );
+        c.execute(
+            "INSERT INTO points (series_id, run_pk, value, ord)
+             VALUES ($1, $2, 2.5, '2026-11-01T00:00:00Z 2026-11-01T00:00:00Z')",
+            &[Value::Int(series), Value::Int(run)],
+        )
+        .unwrap();
+        c.execute(
+            "INSERT INTO blobs (digest, bytes) VALUES ('d1', $1)",
+            &[Value::Blob(vec![0])],
+        )
+        .unwrap();
+        c.execute(
+            "INSERT INTO images (run_pk, scenario, variant, frame, kind, digest)
+             VALUES ($1, 'tiny', 'native', 0, 'output', 'd1')",
+            &[Value::Int(run)],
+        )
+        .unwrap();
+        series
+    };
+    let pool = tessera_dashboard::db::open(&store.url).unwrap();
+    let mut c = pool.get().unwrap();
+    assert_eq!(
+        tessera_dashboard::db::current_version(&mut *c).unwrap(),
+        tessera_dashboard::db::known_version()
+    );
+    // The old record reads back from its JSON text, the new one from its deflated column.
+    let detail = read::run(&mut *c, "old-run").unwrap();
+    assert_eq!(serde_json::to_string(&detail.scenarios[0]).unwrap(), record);
+    assert_eq!(detail.images.len(), 1);
+    assert_eq!(detail.images[0].digest, "d1");
+    let mut run = old.clone();
+    run.run.run_id = "new-run".into();
+    run.run.started_at = "2026-12-01T00:00:00Z".into();
+    run.run.commit_time = Some("2026-12-01T00:00:00Z".into());
+    assert!(matches!(
+        ingest(&mut *c, &run).unwrap(),
+        Ingested::Stored { .. }
+    ));
+    assert_eq!(
+        serde_json::to_string(&read::run(&mut *c, "new-run").unwrap().scenarios).unwrap(),
+        serde_json::to_string(&run.scenarios).unwrap()
+    );
+    let (stored_json, stored_z): (String, Option<Vec<u8>>) = {
+        let r = &c
+            .query(
+                "SELECT s.record_json, s.record_z FROM scenario_results s JOIN runs r ON r.id = s.run_pk
+                 WHERE r.run_id = 'new-run'",
+                &[],
+            )
+            .unwrap()[0];
+        (
+            r.string(0).unwrap(),
+            r.opt_blob(1).unwrap().map(<[u8]>::to_vec),
+        )
+    };
+    assert_eq!(stored_json, "");
+    assert!(stored_z.unwrap().len() < record.len());
+    // Old and new points of the series, in commit order.
+    let pts = tessera_dashboard::store::series::points(&mut *c, series).unwrap();
+    let runs: Vec<&str> = pts.iter().map(|p| p.run_id.as_str()).collect();
+    assert_eq!(runs, ["old-run", "new-run"]);
+    assert_eq!(pts[0].value, 2.5);
+    // The same upload again is recognised as stored (its deflated record compared as text).
+    assert!(matches!(
+        ingest(&mut *c, &run).unwrap(),
+        Ingested::AlreadyStored { .. }
+    ));
+}

@@ -26,6 +26,22 @@ fn the_csv_of_a_version_1_folder_is_unchanged() {
 }
 
 #[test]
+fn results_csv_reads_back_through_the_shared_reader() {
+    use tessera_results::csv_file;
+    let mut run = tessera::compare::load_run(&fixture()).unwrap();
+    let plain = tessera::run::output::results_csv(&run.info, &run.scenarios);
+    let plain_rows = String::from_utf8(plain).unwrap().lines().count() - 1;
+    // A name with what CSV must quote, and one a spreadsheet would run: kept as written.
+    run.scenarios[0].results[0].variant = "say \"hi\",\r\n=1+1".into();
+    let bytes = tessera::run::output::results_csv(&run.info, &run.scenarios);
+    let table = csv_file::read(&bytes, Some(&tessera_results::CSV_COLUMNS)).unwrap();
+    let rows = &table.rows;
+    assert_eq!(rows.len(), plain_rows);
+    assert_eq!(rows[0][2], "say \"hi\",\r\n=1+1");
+    assert!(rows.iter().all(|r| r[0] == run.info.run_id));
+}
+
+#[test]
 fn metric_kinds_are_measures_of_the_table() {
     for m in MetricKind::ALL {
         let measure = Measure::from_name(m.name()).unwrap();

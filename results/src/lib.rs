@@ -15,6 +15,7 @@ use serde::{Deserialize, Serialize};
 pub mod adapter;
 pub mod compare;
 pub mod conditions;
+pub mod csv_file;
 pub mod digest;
 pub mod expectation;
 pub mod folder;

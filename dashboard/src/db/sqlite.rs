@@ -33,6 +33,13 @@ impl FactoryTrait for Factory {
                 .map_err(open_err)?;
             conn.pragma_update(None, "synchronous", "NORMAL")
                 .map_err(open_err)?;
+            // A large store: its B-tree pages read through a memory map and a 64 MiB page cache
+            // per connection, not copied in from the file on every read (an upload touches the
+            // newest points of thousands of series).
+            conn.pragma_update(None, "mmap_size", 1i64 << 32)
+                .map_err(open_err)?;
+            conn.pragma_update(None, "cache_size", -65536)
+                .map_err(open_err)?;
         }
         conn.pragma_update(None, "foreign_keys", "ON")
             .map_err(open_err)?;

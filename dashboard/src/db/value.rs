@@ -137,4 +137,11 @@ impl Row {
             _ => Err(self.mismatch(i, "a blob")),
         }
     }
+
+    pub fn opt_blob(&self, i: usize) -> Result<Option<&[u8]>, DbError> {
+        match self.get(i)? {
+            Value::Null => Ok(None),
+            _ => self.blob(i).map(Some),
+        }
+    }
 }

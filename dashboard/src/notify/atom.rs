@@ -102,7 +102,7 @@ pub fn feed_with_stoppages(
             out,
             "<entry>\n<id>{}</id>\n<title>{}</title>\n<updated>{}</updated>\n<link rel=\"alternate\" type=\"text/html\" href=\"{}\"/>\n<link rel=\"alternate\" type=\"text/markdown\" href=\"{}\"/>\n<category term=\"{}\"/>\n<summary type=\"text\">{}</summary>\n</entry>\n",
             xml(&url),
-            xml(&g.title),
+            xml(&crate::titles::of(g)),
             xml(&g.detected_at),
             xml(&url),
             xml(&super::markdown_url(base, g.id)),

@@ -6,7 +6,8 @@ use std::fmt::Write;
 
 use crate::html::{commit, num, pct};
 use crate::store::alerts::Alert;
-use crate::store::groups::{group_title, Group};
+use crate::store::groups::Group;
+use crate::titles::group_title;
 
 /// Most series rows written; the rest are counted.
 pub const MAX_ROWS: usize = 50;

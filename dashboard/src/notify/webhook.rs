@@ -88,6 +88,7 @@ pub fn target_of(url: &str) -> String {
 /// The JSON body POSTed for a group. `text` makes it readable by chat webhooks as it is.
 pub fn body(g: &Group, base: &str) -> serde_json::Value {
     let url = super::group_url(base, g.id);
+    let title = crate::titles::of(g);
     let alerts: Vec<serde_json::Value> = g
         .alerts
         .iter()
@@ -115,8 +116,8 @@ pub fn body(g: &Group, base: &str) -> serde_json::Value {
         "event": "regression_group_confirmed",
         "id": g.id,
         "key": g.key,
-        "title": g.title,
-        "text": format!("{} {url}", g.title),
+        "title": title,
+        "text": format!("{title} {url}"),
         "url": url,
         "markdown_url": super::markdown_url(base, g.id),
         "commit_before": g.commit_before,

@@ -20,7 +20,7 @@ use super::auth::{self, Writer};
 use super::queue::{resolve_commit, Requested};
 use super::{AppError, AppState};
 use crate::ab::{self, bisect};
-use crate::db::{transaction, Value};
+use crate::db::transaction;
 use crate::html::{esc, num, page as layout};
 use crate::store::queue::{self, NewJob};
 
@@ -320,37 +320,14 @@ fn ten() -> usize {
 
 /// The alert's series and commit range, its scenario file and a label of a runner on its adapter.
 fn alert_form(c: &mut dyn crate::db::Connection, id: i64) -> Result<BisectForm, AppError> {
-    let r = c
-        .query_opt(
-            "SELECT s.scenario, s.variant, s.measure, rb.commit_sha, ra.commit_sha, sr.record_json, \
-             a.name FROM regressions g JOIN series s ON s.id = g.series_id \
-             JOIN runs rb ON rb.id = g.run_pk_before JOIN runs ra ON ra.id = g.run_pk_after \
-             JOIN adapters a ON a.id = s.adapter_id \
-             LEFT JOIN scenario_results sr ON sr.run_pk = ra.id AND sr.scenario = s.scenario \
-             WHERE g.id = $1",
-            &[Value::Int(id)],
-        )?
-        .ok_or_else(|| AppError::NotFound(format!("alert {id} not found")))?;
-    let file = r
-        .opt_string(5)?
-        .and_then(|j| serde_json::from_str::<serde_json::Value>(&j).ok())
-        .and_then(|v| v["file"].as_str().map(str::to_string))
-        .unwrap_or_default();
-    let label = c
-        .query_opt(
-            "SELECT l.label FROM runners r JOIN runner_labels l ON l.runner_id = r.id \
-             WHERE r.adapter = $1 ORDER BY r.last_heartbeat_ms DESC, l.label LIMIT 1",
-            &[r.str(6)?.into()],
-        )?
-        .map(|l| l.string(0))
-        .transpose()?
-        .unwrap_or_default();
+    let t = crate::store::alerts::bisect_target(c, id)?;
+    let label = crate::store::queue::label_on_adapter(c, &t.adapter)?.unwrap_or_default();
     Ok(BisectForm {
-        scenario: file,
-        variant: r.string(1)?,
-        measure: r.string(2)?,
-        good: r.opt_string(3)?.unwrap_or_default(),
-        bad: r.opt_string(4)?.unwrap_or_default(),
+        scenario: t.scenario_file,
+        variant: t.variant,
+        measure: t.measure,
+        good: t.commit_before.unwrap_or_default(),
+        bad: t.commit_after.unwrap_or_default(),
         label,
         attempts: ab::DEFAULT_ATTEMPTS,
         token: String::new(),

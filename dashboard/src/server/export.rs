@@ -1,12 +1,13 @@
 //! Exports: `?format=json` (default), `csv` or `md` on API routes, answered with the right
-//! content type and a download file name. CSV follows RFC 4180 (fields with commas, quotes or line
-//! breaks are quoted).
+//! content type and a download file name. CSV is `tessera_results::csv_file`'s (RFC 4180, formula
+//! cells guarded), the writer `results.csv` uses too.
 //!
 //! Not for: what is exported (each endpoint builds its rows).
 
 use axum::http::header;
 use axum::response::{IntoResponse, Response};
 use serde::Deserialize;
+use tessera_results::csv_file::{self, Formulas};
 
 use super::AppError;
 
@@ -25,33 +26,10 @@ pub struct FormatQuery {
     pub format: Format,
 }
 
-/// One CSV field. Text that a spreadsheet would run as a formula (starting with `=`, `+`, `-`,
-/// `@`, a tab or a carriage return, e.g. `=HYPERLINK(...)` in a name) gets a leading `'`, as
-/// OWASP advises; a plain number (`-0.05`) is left as it is.
-pub fn csv_field(s: &str) -> String {
-    let formula = s.starts_with(['=', '+', '-', '@', '\t', '\r']) && s.parse::<f64>().is_err();
-    let s = if formula {
-        format!("'{s}")
-    } else {
-        s.to_string()
-    };
-    if s.contains([',', '"', '\n', '\r']) {
-        format!("\"{}\"", s.replace('"', "\"\""))
-    } else {
-        s
-    }
-}
-
-/// Rows as CSV text, header first.
+/// Rows as CSV text, header first, formula cells guarded (see `tessera_results::csv_file`).
 pub fn csv(header: &[&str], rows: &[Vec<String>]) -> String {
-    let mut out = header.join(",");
-    out.push('\n');
-    for r in rows {
-        let fields: Vec<String> = r.iter().map(|f| csv_field(f)).collect();
-        out.push_str(&fields.join(","));
-        out.push('\n');
-    }
-    out
+    String::from_utf8(csv_file::write(header, rows, Formulas::Guard))
+        .expect("CSV of UTF-8 fields is UTF-8")
 }
 
 /// An optional number as a CSV or Markdown cell: empty when absent.
@@ -102,24 +80,17 @@ mod tests {
     use super::*;
 
     #[test]
-    fn csv_quotes_what_needs_it() {
+    fn exports_quote_and_guard_formula_cells() {
         assert_eq!(
             csv(
-                &["a", "b"],
-                &[vec!["upscale[scale=0.5,x=1]".into(), "say \"hi\"".into()]]
+                &["a", "b", "c"],
+                &[vec![
+                    "upscale[scale=0.5,x=1]".into(),
+                    "=HYPERLINK(\"x\")".into(),
+                    "-0.05".into()
+                ]]
             ),
-            "a,b\n\"upscale[scale=0.5,x=1]\",\"say \"\"hi\"\"\"\n"
+            "a,b,c\n\"upscale[scale=0.5,x=1]\",\"'=HYPERLINK(\"\"x\"\")\",-0.05\n"
         );
-    }
-
-    #[test]
-    fn csv_neutralises_formulas_not_numbers() {
-        assert_eq!(csv_field("=HYPERLINK(\"x\")"), "\"'=HYPERLINK(\"\"x\"\")\"");
-        assert_eq!(csv_field("+cmd"), "'+cmd");
-        assert_eq!(csv_field("@SUM(A1)"), "'@SUM(A1)");
-        assert_eq!(csv_field("-x"), "'-x");
-        assert_eq!(csv_field("-0.05"), "-0.05");
-        assert_eq!(csv_field("+1e3"), "+1e3");
-        assert_eq!(csv_field("native"), "native");
     }
 }

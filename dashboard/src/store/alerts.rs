@@ -19,7 +19,7 @@ use std::str::FromStr;
 
 use serde::{Serialize, Serializer};
 
-use super::read::SeriesKey;
+use super::series::{self, SeriesKey};
 use super::StoreError;
 use crate::db::{Backend, Connection, Row, Value};
 
@@ -253,13 +253,58 @@ pub fn has_status_column(conn: &mut dyn Connection) -> Result<bool, StoreError> 
     Ok(conn.query(sql, &[])?[0].i64(0)? > 0)
 }
 
+/// The SQL for the scenario file of the `scenario_results` row `sr`: a column from the compact
+/// schema on; older rows keep it in their JSON.
+fn file_of_record(backend: Backend) -> &'static str {
+    match backend {
+        Backend::Sqlite => "COALESCE(sr.file, json_extract(sr.record_json, '$.file'))",
+        Backend::Postgres => {
+            "COALESCE(sr.file, CAST(NULLIF(sr.record_json, '') AS JSON) ->> 'file')"
+        }
+    }
+}
+
+/// What a bisection of an alert starts from: its series, commit range, scenario file and adapter.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BisectTarget {
+    pub scenario_file: String,
+    pub variant: String,
+    pub measure: String,
+    pub commit_before: Option<String>,
+    pub commit_after: Option<String>,
+    pub adapter: String,
+}
+
+/// The [`BisectTarget`] of alert `id`.
+pub fn bisect_target(conn: &mut dyn Connection, id: i64) -> Result<BisectTarget, StoreError> {
+    let file = file_of_record(conn.backend());
+    let r = conn
+        .query_opt(
+            &format!(
+                "SELECT {file}, s.variant, s.measure, rb.commit_sha, ra.commit_sha, a.name
+                 FROM regressions g JOIN series s ON s.id = g.series_id
+                 JOIN runs rb ON rb.id = g.run_pk_before JOIN runs ra ON ra.id = g.run_pk_after
+                 JOIN adapters a ON a.id = s.adapter_id
+                 LEFT JOIN scenario_results sr ON sr.run_pk = ra.id AND sr.scenario = s.scenario
+                 WHERE g.id = $1"
+            ),
+            &[Value::Int(id)],
+        )?
+        .ok_or_else(|| StoreError::NotFound(format!("alert {id}")))?;
+    Ok(BisectTarget {
+        scenario_file: r.opt_string(0)?.unwrap_or_default(),
+        variant: r.string(1)?,
+        measure: r.string(2)?,
+        commit_before: r.opt_string(3)?,
+        commit_after: r.opt_string(4)?,
+        adapter: r.string(5)?,
+    })
+}
+
 /// The suite of each scenario that has alerts: the folder of its newest scenario file (one JSON
 /// read per scenario, not per alert).
 fn suites(conn: &mut dyn Connection) -> Result<BTreeMap<String, String>, StoreError> {
-    let file = match conn.backend() {
-        Backend::Sqlite => "json_extract(sr.record_json, '$.file')",
-        Backend::Postgres => "CAST(sr.record_json AS JSON) ->> 'file'",
-    };
+    let file = file_of_record(conn.backend());
     let rows = conn.query(
         &format!(
             "SELECT sr.scenario, {file} FROM scenario_results sr
@@ -515,21 +560,43 @@ pub fn of_series(
     .collect()
 }
 
-/// The stored alerts of every series run `run_pk` has a point in, by series: one query for an
-/// upload instead of one per series.
-pub fn of_series_of_run(
+/// The stored alerts of the series `ids`, by series: one query per 500 series for an upload
+/// instead of one per series.
+pub fn of_series_in(
     conn: &mut dyn Connection,
-    run_pk: i64,
+    ids: &[i64],
 ) -> Result<std::collections::HashMap<i64, Vec<StoredAlert>>, StoreError> {
     let mut out: std::collections::HashMap<i64, Vec<StoredAlert>> = Default::default();
-    for r in conn.query(
-        "SELECT series_id, id, run_pk_before, run_pk_after, relative_change, status FROM regressions
-         WHERE series_id IN (SELECT series_id FROM points WHERE run_pk = $1)",
-        &[Value::Int(run_pk)],
-    )? {
-        out.entry(r.i64(0)?).or_default().push(stored(&r, 1)?);
+    for chunk in ids.chunks(500) {
+        let marks: Vec<String> = (1..=chunk.len()).map(|i| format!("${i}")).collect();
+        let params: Vec<Value> = chunk.iter().map(|&id| Value::Int(id)).collect();
+        for r in conn.query(
+            &format!(
+                "SELECT series_id, id, run_pk_before, run_pk_after, relative_change, status FROM regressions
+                 WHERE series_id IN ({})",
+                marks.join(", ")
+            ),
+            &params,
+        )? {
+            out.entry(r.i64(0)?).or_default().push(stored(&r, 1)?);
+        }
     }
     Ok(out)
+}
+
+/// How an alert's history names run `pk`: its short commit and run id.
+pub fn run_label(conn: &mut dyn Connection, pk: i64) -> Result<String, StoreError> {
+    let row = conn.query(
+        "SELECT run_id, commit_sha FROM runs WHERE id = $1",
+        &[Value::Int(pk)],
+    )?;
+    Ok(match row.first() {
+        Some(r) => match r.opt_string(1)? {
+            Some(sha) => format!("{} ({})", &sha[..sha.len().min(7)], r.str(0)?),
+            None => r.string(0)?,
+        },
+        None => format!("run {pk}"),
+    })
 }
 
 /// Where detection places a change and how sure it is.
@@ -809,32 +876,8 @@ pub fn repoint_for_deleted_run(conn: &mut dyn Connection, run_pk: i64) -> Result
     let mut n = 0;
     for r in &rows {
         let (id, series, before, after) = (r.i64(0)?, r.i64(1)?, r.i64(2)?, r.i64(3)?);
-        let ord = conn
-            .query_opt(
-                "SELECT ord FROM points WHERE series_id = $1 AND run_pk = $2",
-                &[Value::Int(series), Value::Int(run_pk)],
-            )?
-            .map(|r| r.string(0))
-            .transpose()?;
-        let neighbour = |conn: &mut dyn Connection,
-                         later: bool|
-         -> Result<Option<i64>, StoreError> {
-            let Some(ord) = &ord else { return Ok(None) };
-            let sql = if later {
-                "SELECT run_pk FROM points WHERE series_id = $1 AND run_pk <> $2 AND (ord > $3 OR (ord = $3 AND run_pk > $2))
-                 ORDER BY ord, run_pk LIMIT 1"
-            } else {
-                "SELECT run_pk FROM points WHERE series_id = $1 AND run_pk <> $2 AND (ord < $3 OR (ord = $3 AND run_pk < $2))
-                 ORDER BY ord DESC, run_pk DESC LIMIT 1"
-            };
-            Ok(conn
-                .query_opt(
-                    sql,
-                    &[Value::Int(series), Value::Int(run_pk), ord.as_str().into()],
-                )?
-                .map(|r| r.i64(0))
-                .transpose()?)
-        };
+        let neighbour =
+            |conn: &mut dyn Connection, later: bool| series::neighbour(conn, series, run_pk, later);
         let (new_before, new_after, lost) = if after == run_pk {
             match neighbour(conn, true)? {
                 Some(a) if a != before => (before, a, false),

@@ -74,21 +74,8 @@ fn sides(
     after: i64,
 ) -> Result<Option<(f64, f64)>, StoreError> {
     let side = |conn: &mut dyn Connection, run: i64, earlier: bool| {
-        let sql = if earlier {
-            "SELECT p.value FROM points p, points q WHERE q.series_id = $1 AND q.run_pk = $2
-               AND p.series_id = $1 AND (p.ord < q.ord OR (p.ord = q.ord AND p.run_pk <= q.run_pk))
-             ORDER BY p.ord DESC, p.run_pk DESC LIMIT $3"
-        } else {
-            "SELECT p.value FROM points p, points q WHERE q.series_id = $1 AND q.run_pk = $2
-               AND p.series_id = $1 AND (p.ord > q.ord OR (p.ord = q.ord AND p.run_pk >= q.run_pk))
-             ORDER BY p.ord, p.run_pk LIMIT $3"
-        };
-        let rows = conn.query(
-            sql,
-            &[Value::Int(series), Value::Int(run), Value::Int(SIDE_POINTS)],
-        )?;
-        let values: Result<Vec<f64>, _> = rows.iter().map(|r| r.f64(0)).collect();
-        Ok::<_, StoreError>(median(values?))
+        let values = super::series::values_beside(conn, series, run, earlier, SIDE_POINTS)?;
+        Ok::<_, StoreError>(median(values))
     };
     let b = side(conn, before, true)?;
     let a = side(conn, after, false)?;

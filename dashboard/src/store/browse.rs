@@ -7,9 +7,9 @@
 
 use serde::Serialize;
 
-use super::read::{
-    run_row, series_key, AdapterRow, RunRow, SeriesKey, RUN_COLUMNS, SERIES_COLUMNS,
-};
+use super::read::{run_row, AdapterRow, RunRow, RUN_COLUMNS};
+pub use super::series::{band_points, BandPoint};
+use super::series::{series_key, SeriesKey, SERIES_COLUMNS};
 use super::StoreError;
 use crate::db::{Connection, Value};
 
@@ -209,45 +209,6 @@ pub fn series_list(
         limit,
         adapters: super::read::adapters(conn)?,
     })
-}
-
-/// One point of a series with its band (p5 and p95 of the run's samples, where stored).
-#[derive(Clone, Debug, Serialize, PartialEq)]
-pub struct BandPoint {
-    pub run_id: String,
-    pub commit: Option<String>,
-    pub started_at: String,
-    pub environment: String,
-    pub value: f64,
-    pub p5: Option<f64>,
-    pub p95: Option<f64>,
-}
-
-/// A series' points in run order (start time, then import order), with bands.
-pub fn band_points(
-    conn: &mut dyn Connection,
-    series_id: i64,
-) -> Result<Vec<BandPoint>, StoreError> {
-    conn.query(
-        "SELECT r.run_id, r.commit_sha, r.started_at, r.driver, r.driver_info, r.harness_version, p.value, b.p5, b.p95
-         FROM points p JOIN runs r ON r.id = p.run_pk
-         LEFT JOIN point_bands b ON b.series_id = p.series_id AND b.run_pk = p.run_pk
-         WHERE p.series_id = $1 ORDER BY r.started_at, r.id",
-        &[Value::Int(series_id)],
-    )?
-    .iter()
-    .map(|r| {
-        Ok(BandPoint {
-            run_id: r.string(0)?,
-            commit: r.opt_string(1)?,
-            started_at: r.string(2)?,
-            environment: format!("{} {} / harness {}", r.str(3)?, r.str(4)?, r.str(5)?),
-            value: r.f64(6)?,
-            p5: r.opt_f64(7)?,
-            p95: r.opt_f64(8)?,
-        })
-    })
-    .collect()
 }
 
 /// Series that can be overlaid on `key`: the same scenario and measure on other variants and

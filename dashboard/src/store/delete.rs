@@ -46,18 +46,10 @@ pub fn delete_in_transaction(
         return Err(StoreError::NotFound(format!("run {run_id}")));
     };
     let pk = [Value::Int(row.i64(0)?)];
-    let series: Vec<i64> = c
-        .query(
-            "SELECT series_id FROM points WHERE run_pk = $1 ORDER BY series_id",
-            &pk,
-        )?
-        .iter()
-        .map(|r| r.i64(0))
-        .collect::<Result<_, _>>()?;
+    let series = super::series::of_run(c, row.i64(0)?)?;
     let alerts = super::alerts::repoint_for_deleted_run(c, row.i64(0)?)?;
-    // The p5-p95 bands of the run's timed points (series charts).
-    c.execute("DELETE FROM point_bands WHERE run_pk = $1", &pk)?;
-    let points = c.execute("DELETE FROM points WHERE run_pk = $1", &pk)?;
+    // The points and the p5-p95 bands of the run's timed points (series charts).
+    let points = super::series::delete_of_run(c, row.i64(0)?)?;
     // The run's distinct digests, so that only blobs it used are checked for other users.
     let digests: Vec<String> = c
         .query(

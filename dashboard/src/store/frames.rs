@@ -21,7 +21,7 @@ use super::StoreError;
 use crate::db::{Connection, Value};
 
 /// The measure of a frame alert's series.
-pub const UNTRIAGED_MEASURE: &str = "frames.untriaged";
+pub use super::series::UNTRIAGED_MEASURE;
 
 /// The variant name the separately rendered reference's frames are kept under.
 pub const REFERENCE_VARIANT: &str = "(reference)";
@@ -175,24 +175,7 @@ fn untriaged_series(
     variant: &str,
     adapter: i64,
 ) -> Result<i64, StoreError> {
-    let key = [
-        scenario.into(),
-        variant.into(),
-        Value::Int(adapter),
-        UNTRIAGED_MEASURE.into(),
-    ];
-    let select = "SELECT id FROM series WHERE scenario = $1 AND variant = $2 AND adapter_id = $3 AND measure = $4";
-    if let Some(r) = conn.query_opt(select, &key)? {
-        return Ok(r.i64(0)?);
-    }
-    let mut params = key.to_vec();
-    params.push(false.into());
-    conn.execute(
-        "INSERT INTO series (scenario, variant, adapter_id, measure, higher_is_better)
-         VALUES ($1, $2, $3, $4, $5) ON CONFLICT DO NOTHING",
-        &params,
-    )?;
-    Ok(conn.query(select, &key)?[0].i64(0)?)
+    super::series::id_or_insert(conn, scenario, variant, adapter, UNTRIAGED_MEASURE, false)
 }
 
 /// One frame of a run with its triage.
@@ -245,7 +228,7 @@ pub fn of_run(
     run_id: &str,
     scenario: Option<&str>,
 ) -> Result<Vec<RunFrame>, StoreError> {
-    let pk = super::read::run_pk(conn, run_id)?;
+    let pk = super::run_pk(conn, run_id)?;
     conn.query(
         &format!(
             "SELECT {RUN_FRAME_COLUMNS} FROM run_frames f JOIN runs r ON r.id = f.run_pk
@@ -319,7 +302,7 @@ pub fn judge(conn: &mut dyn Connection, j: &Judge) -> Result<usize, StoreError> 
             j.state
         )));
     }
-    let pk = super::read::run_pk(conn, &j.run_id)?;
+    let pk = super::run_pk(conn, &j.run_id)?;
     let frames: Vec<RunFrame> = of_run(conn, &j.run_id, j.scenario.as_deref())?
         .into_iter()
         .filter(|f| j.variant.as_ref().is_none_or(|v| *v == f.variant))

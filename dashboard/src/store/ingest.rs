@@ -125,12 +125,15 @@ fn same_content(
     }
     let stored: BTreeMap<String, String> = conn
         .query(
-            "SELECT scenario, record_json FROM scenario_results WHERE run_pk = $1",
+            &format!(
+                "SELECT scenario, {} FROM scenario_results WHERE run_pk = $1",
+                super::records::COLUMNS
+            ),
             &[Value::Int(run_pk)],
         )?
         .iter()
-        .map(|r| Ok((r.string(0)?, r.string(1)?)))
-        .collect::<Result<_, DbError>>()?;
+        .map(|r| Ok((r.string(0)?, super::records::text(r, 1)?)))
+        .collect::<Result<_, StoreError>>()?;
     let incoming: BTreeMap<String, String> = bundle
         .scenarios
         .iter()
@@ -274,15 +277,17 @@ fn ingest_once(conn: &mut dyn Connection, bundle: &RunBundle) -> Result<Ingested
     for s in &bundle.scenarios {
         let record = serde_json::to_string(s).expect("records serialise");
         conn.execute(
-            "INSERT INTO scenario_results (run_pk, scenario, width, height, wall_ms, record_json)
-             VALUES ($1, $2, $3, $4, $5, $6)",
+            "INSERT INTO scenario_results (run_pk, scenario, width, height, wall_ms, record_json,
+                 record_z, file)
+             VALUES ($1, $2, $3, $4, $5, '', $6, $7)",
             &[
                 Value::Int(run_pk),
                 s.scenario.as_str().into(),
                 Value::Int(s.width.into()),
                 Value::Int(s.height.into()),
                 Value::from(s.wall_ms),
-                record.into(),
+                Value::Blob(super::records::encode(&record)),
+                s.file.as_str().into(),
             ],
         )?;
         for v in &s.results {
@@ -337,41 +342,8 @@ fn ingest_once(conn: &mut dyn Connection, bundle: &RunBundle) -> Result<Ingested
     let ord = order_key(run);
     let mut series = Vec::with_capacity(series_points.len());
     for ((scenario, variant, measure), (value, hib)) in series_points {
-        let key = [
-            scenario.into(),
-            variant.into(),
-            Value::Int(adapter),
-            measure.into(),
-        ];
-        let id = match conn.query_opt(
-            "SELECT id FROM series WHERE scenario = $1 AND variant = $2 AND adapter_id = $3 AND measure = $4",
-            &key,
-        )? {
-            Some(row) => row.i64(0)?,
-            None => {
-                let mut params = key.to_vec();
-                params.push(hib.into());
-                conn.execute(
-                    "INSERT INTO series (scenario, variant, adapter_id, measure, higher_is_better)
-                     VALUES ($1, $2, $3, $4, $5) ON CONFLICT DO NOTHING",
-                    &params,
-                )?;
-                conn.query(
-                    "SELECT id FROM series WHERE scenario = $1 AND variant = $2 AND adapter_id = $3 AND measure = $4",
-                    &key,
-                )?[0]
-                    .i64(0)?
-            }
-        };
-        conn.execute(
-            "INSERT INTO points (series_id, run_pk, value, ord) VALUES ($1, $2, $3, $4)",
-            &[
-                Value::Int(id),
-                Value::Int(run_pk),
-                Value::Real(value),
-                ord.as_str().into(),
-            ],
-        )?;
+        let id = super::series::id_or_insert(conn, &scenario, &variant, adapter, &measure, hib)?;
+        super::series::insert_point(conn, id, run_pk, value, &ord)?;
         series.push(id);
     }
     super::extras::store(conn, run_pk, adapter, bundle)?;

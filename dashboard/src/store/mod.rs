@@ -17,11 +17,13 @@ pub mod noise;
 pub mod outbox;
 pub mod queue;
 pub mod read;
+pub mod records;
+pub mod series;
 pub mod stoppage;
 pub mod tokens;
 pub mod triage;
 
-use crate::db::DbError;
+use crate::db::{Connection, DbError};
 
 /// Errors of the store's queries.
 #[derive(Debug, thiserror::Error)]
@@ -37,4 +39,12 @@ pub enum StoreError {
     /// The request contradicts what is stored (a run id stored with different content).
     #[error("{0}")]
     Conflict(String),
+}
+
+/// The row id of run `run_id`.
+pub(crate) fn run_pk(conn: &mut dyn Connection, run_id: &str) -> Result<i64, StoreError> {
+    conn.query_opt("SELECT id FROM runs WHERE run_id = $1", &[run_id.into()])?
+        .ok_or_else(|| StoreError::NotFound(format!("run {run_id}")))?
+        .i64(0)
+        .map_err(Into::into)
 }

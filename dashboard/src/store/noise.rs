@@ -9,9 +9,9 @@
 
 use std::collections::BTreeMap;
 
-use crate::db::{Connection, Value};
+use crate::db::Connection;
 use crate::detect::noise_sigma;
-use crate::store::StoreError;
+use crate::store::{series, StoreError};
 
 /// Points read before the run (the newest ones).
 pub const NOISE_POINTS: i64 = 64;
@@ -40,34 +40,16 @@ pub fn frame_time_noise(
     };
     let pk = run.i64(0)?;
     let env = (run.string(1)?, run.string(2)?, run.string(3)?);
-    let series = conn.query(
-        "SELECT s.id, s.scenario, s.variant, p.ord FROM points p JOIN series s ON s.id = p.series_id
-         WHERE p.run_pk = $1 AND s.measure = $2 ORDER BY s.id",
-        &[Value::Int(pk), FRAME_TIME.into()],
-    )?;
-    for s in &series {
-        let (id, scenario, variant, ord) = (s.i64(0)?, s.string(1)?, s.string(2)?, s.string(3)?);
-        let rows = conn.query(
-            "SELECT p.value, r.driver, r.driver_info, r.harness_version
-             FROM points p JOIN runs r ON r.id = p.run_pk
-             WHERE p.series_id = $1 AND (p.ord < $2 OR (p.ord = $2 AND p.run_pk < $3))
-             ORDER BY p.ord DESC, p.run_pk DESC LIMIT $4",
-            &[
-                Value::Int(id),
-                ord.as_str().into(),
-                Value::Int(pk),
-                Value::Int(NOISE_POINTS),
-            ],
-        )?;
+    for s in series::of_run_with_measure(conn, pk, FRAME_TIME)? {
         let mut values = Vec::new();
-        for r in &rows {
-            if (r.string(1)?, r.string(2)?, r.string(3)?) != env {
+        for (value, run_env) in series::before_with_environment(conn, s.id, pk, NOISE_POINTS)? {
+            if run_env != env {
                 break;
             }
-            values.push(r.f64(0)?);
+            values.push(value);
         }
         if let Some(sigma) = relative_sigma(&mut values) {
-            out.entry(scenario).or_default().insert(variant, sigma);
+            out.entry(s.scenario).or_default().insert(s.variant, sigma);
         }
     }
     Ok(out)

@@ -822,3 +822,19 @@ pub fn check_labels_known(conn: &mut dyn Connection, labels: &[String]) -> Resul
     }
     Ok(())
 }
+
+/// A label of the runner on adapter `adapter` that was heard from last (the bisect form's
+/// default), if any.
+pub fn label_on_adapter(
+    conn: &mut dyn Connection,
+    adapter: &str,
+) -> Result<Option<String>, StoreError> {
+    Ok(conn
+        .query_opt(
+            "SELECT l.label FROM runners r JOIN runner_labels l ON l.runner_id = r.id
+             WHERE r.adapter = $1 ORDER BY r.last_heartbeat_ms DESC, l.label LIMIT 1",
+            &[adapter.into()],
+        )?
+        .map(|l| l.string(0))
+        .transpose()?)
+}

@@ -5,6 +5,9 @@
 use serde::Serialize;
 use tessera_results::{RunInfo, ScenarioResult};
 
+pub(crate) use super::run_pk;
+use super::series::{self, series_key, SERIES_COLUMNS};
+pub use super::series::{SeriesKey, SeriesLink};
 use super::StoreError;
 use crate::db::{Connection, Row, Value};
 
@@ -119,15 +122,6 @@ pub struct ImageRow {
     pub digest: String,
 }
 
-/// Series ids of a run's results, so that pages can link to their history.
-#[derive(Clone, Debug, Serialize, PartialEq)]
-pub struct SeriesLink {
-    pub scenario: String,
-    pub variant: String,
-    pub measure: String,
-    pub series_id: i64,
-}
-
 /// One run with its records.
 #[derive(Clone, Debug, Serialize)]
 pub struct RunDetail {
@@ -136,13 +130,6 @@ pub struct RunDetail {
     pub scenarios: Vec<ScenarioResult>,
     pub images: Vec<ImageRow>,
     pub series: Vec<SeriesLink>,
-}
-
-pub(crate) fn run_pk(conn: &mut dyn Connection, run_id: &str) -> Result<i64, StoreError> {
-    conn.query_opt("SELECT id FROM runs WHERE run_id = $1", &[run_id.into()])?
-        .ok_or_else(|| StoreError::NotFound(format!("run {run_id}")))?
-        .i64(0)
-        .map_err(Into::into)
 }
 
 pub fn run(conn: &mut dyn Connection, run_id: &str) -> Result<RunDetail, StoreError> {
@@ -158,17 +145,7 @@ pub fn run(conn: &mut dyn Connection, run_id: &str) -> Result<RunDetail, StoreEr
         serde_json::from_str(row[0].str(16)?).map_err(|e| StoreError::Corrupt(e.to_string()))?;
     let scenarios = scenarios_of(conn, pk)?;
     let images = images_of(conn, pk, None)?;
-    let series = conn
-        .query(
-            "SELECT DISTINCT s.scenario, s.variant, s.measure, s.id FROM points p JOIN series s ON s.id = p.series_id
-             WHERE p.run_pk = $1 ORDER BY s.scenario, s.variant, s.measure",
-            &[Value::Int(pk)],
-        )?
-        .iter()
-        .map(|r| {
-            Ok(SeriesLink { scenario: r.string(0)?, variant: r.string(1)?, measure: r.string(2)?, series_id: r.i64(3)? })
-        })
-        .collect::<Result<_, StoreError>>()?;
+    let series = super::series::links_of_run(conn, pk)?;
     Ok(RunDetail {
         run,
         info,
@@ -183,11 +160,14 @@ pub(crate) fn scenarios_of(
     pk: i64,
 ) -> Result<Vec<ScenarioResult>, StoreError> {
     conn.query(
-        "SELECT record_json FROM scenario_results WHERE run_pk = $1 ORDER BY scenario",
+        &format!(
+            "SELECT {} FROM scenario_results WHERE run_pk = $1 ORDER BY scenario",
+            super::records::COLUMNS
+        ),
         &[Value::Int(pk)],
     )?
     .iter()
-    .map(|r| serde_json::from_str(r.str(0)?).map_err(|e| StoreError::Corrupt(e.to_string())))
+    .map(|r| super::records::decode(r, 0))
     .collect()
 }
 
@@ -242,33 +222,6 @@ pub fn blob(conn: &mut dyn Connection, digest: &str) -> Result<Vec<u8>, StoreErr
     Ok(row.blob(0)?.to_vec())
 }
 
-/// What identifies a series.
-#[derive(Clone, Debug, Serialize, PartialEq)]
-pub struct SeriesKey {
-    pub id: i64,
-    pub scenario: String,
-    pub variant: String,
-    pub adapter_id: i64,
-    pub adapter: String,
-    pub measure: String,
-    pub higher_is_better: bool,
-}
-
-pub(crate) const SERIES_COLUMNS: &str =
-    "s.id, s.scenario, s.variant, s.adapter_id, a.name, s.measure, s.higher_is_better";
-
-pub(crate) fn series_key(r: &Row) -> Result<SeriesKey, StoreError> {
-    Ok(SeriesKey {
-        id: r.i64(0)?,
-        scenario: r.string(1)?,
-        variant: r.string(2)?,
-        adapter_id: r.i64(3)?,
-        adapter: r.string(4)?,
-        measure: r.string(5)?,
-        higher_is_better: r.bool(6)?,
-    })
-}
-
 /// Series matching a filter (each part optional), at most `limit`.
 pub fn find_series(
     conn: &mut dyn Connection,
@@ -321,14 +274,8 @@ pub struct SeriesDetail {
 }
 
 pub fn series(conn: &mut dyn Connection, id: i64) -> Result<SeriesDetail, StoreError> {
-    let key = conn
-        .query_opt(
-            &format!("SELECT {SERIES_COLUMNS} FROM series s JOIN adapters a ON a.id = s.adapter_id WHERE s.id = $1"),
-            &[Value::Int(id)],
-        )?
-        .ok_or_else(|| StoreError::NotFound(format!("series {id}")))?;
-    let series = series_key(&key)?;
-    let pts = crate::regressions::points(conn, id)?;
+    let series = series::key(conn, id)?;
+    let pts = series::points(conn, id)?;
     let mut segment_starts = Vec::new();
     for i in 0..pts.len() {
         if i == 0 || pts[i].environment != pts[i - 1].environment {
@@ -410,11 +357,14 @@ pub fn scenario_result(
     let pk = run_pk(conn, run_id)?;
     let row = conn
         .query_opt(
-            "SELECT record_json FROM scenario_results WHERE run_pk = $1 AND scenario = $2",
+            &format!(
+                "SELECT {} FROM scenario_results WHERE run_pk = $1 AND scenario = $2",
+                super::records::COLUMNS
+            ),
             &[Value::Int(pk), scenario.into()],
         )?
         .ok_or_else(|| StoreError::NotFound(format!("scenario {scenario} in run {run_id}")))?;
-    serde_json::from_str(row.str(0)?).map_err(|e| StoreError::Corrupt(e.to_string()))
+    super::records::decode(&row, 0)
 }
 
 /// Every scenario record of a run (the adapter comparison reads two runs).

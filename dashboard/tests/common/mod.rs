@@ -26,7 +26,7 @@ pub fn template() -> RunBundle {
 pub struct TestStore {
     pub name: &'static str,
     pub pool: Pool,
-    /// What `db::open` takes to reach the same store from another process.
+    /// What `db::open` takes to open the store again.
     pub url: String,
     _dir: Option<tempfile::TempDir>,
     pg_schema: Option<(String, String)>,
@@ -43,19 +43,30 @@ impl Drop for TestStore {
 }
 
 pub fn sqlite() -> TestStore {
+    sqlite_at(db::known_version())
+}
+
+/// A SQLite store migrated up to schema `version` only.
+pub fn sqlite_at(version: i64) -> TestStore {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("store.sqlite");
-    let pool = db::open(path.to_str().unwrap()).unwrap();
+    let url = path.to_str().unwrap().to_string();
+    let pool = db::open_at(&url, version).unwrap();
     TestStore {
         name: "sqlite",
         pool,
-        url: path.to_str().unwrap().to_string(),
+        url,
         _dir: Some(dir),
         pg_schema: None,
     }
 }
 
 pub fn postgres(test: &str) -> Option<TestStore> {
+    postgres_at(test, db::known_version())
+}
+
+/// A PostgreSQL store (a schema of its own) migrated up to schema `version` only.
+pub fn postgres_at(test: &str, version: i64) -> Option<TestStore> {
     let Ok(url) = std::env::var("TESSERA_TEST_POSTGRES_URL") else {
         eprintln!("{test}: skipped PostgreSQL: TESSERA_TEST_POSTGRES_URL is not set (dashboard/ci/setup-postgres.sh prints it)");
         return None;
@@ -75,11 +86,11 @@ pub fn postgres(test: &str) -> Option<TestStore> {
     c.batch_execute(&format!("CREATE SCHEMA {schema}")).unwrap();
     let sep = if url.contains('?') { '&' } else { '?' };
     let scoped = format!("{url}{sep}options=-csearch_path%3D{schema}");
-    let pool = db::open(&scoped).unwrap();
+    let pool = db::open_at(&scoped, version).unwrap();
     Some(TestStore {
         name: "postgres",
         pool,
-        url: scoped.clone(),
+        url: scoped,
         _dir: None,
         pg_schema: Some((url, schema)),
     })

@@ -6,6 +6,7 @@
 
 use std::fmt::Write as _;
 
+use tessera_results::csv_file::{self, Formulas};
 use tessera_results::expectation::Outcome;
 use tessera_results::measure::{self, Key, Measure, DEFAULT_BASELINE};
 use tessera_results::{GateLevel, RunInfo, ScenarioResult, Status, VariantResult, CSV_COLUMNS};
@@ -22,14 +23,6 @@ pub fn scenario_json(s: &ScenarioResult) -> Vec<u8> {
     serde_json::to_vec_pretty(s).expect("scenario records serialise")
 }
 
-fn csv_field(s: &str) -> String {
-    if s.contains([',', '"', '\n']) {
-        format!("\"{}\"", s.replace('"', "\"\""))
-    } else {
-        s.to_string()
-    }
-}
-
 fn num(v: f64) -> String {
     if v.is_infinite() && v > 0.0 {
         "inf".to_string()
@@ -42,32 +35,28 @@ fn num(v: f64) -> String {
 
 /// `results.csv`: one row per (scenario, variant, measure); columns in [`CSV_COLUMNS`].
 pub fn results_csv(run: &RunInfo, scenarios: &[ScenarioResult]) -> Vec<u8> {
-    let mut out = CSV_COLUMNS.join(",");
-    out.push('\n');
+    let mut lines: Vec<[String; 10]> = Vec::new();
     for s in scenarios {
         for r in &s.results {
             let mut rows: Vec<(String, String, &str)> = Vec::new();
             csv_rows(&s.results, r, &mut rows);
             for (measure, value, unit) in rows {
-                let fields = [
-                    run.run_id.as_str(),
-                    s.scenario.as_str(),
-                    r.variant.as_str(),
-                    r.technique.as_str(),
-                    run.adapter.name.as_str(),
-                    run.adapter.backend.as_str(),
-                    r.status.label(),
-                    measure.as_str(),
-                    value.as_str(),
-                    unit,
-                ];
-                let line: Vec<String> = fields.iter().map(|f| csv_field(f)).collect();
-                out.push_str(&line.join(","));
-                out.push('\n');
+                lines.push([
+                    run.run_id.clone(),
+                    s.scenario.clone(),
+                    r.variant.clone(),
+                    r.technique.clone(),
+                    run.adapter.name.clone(),
+                    run.adapter.backend.clone(),
+                    r.status.label().to_string(),
+                    measure,
+                    value,
+                    unit.to_string(),
+                ]);
             }
         }
     }
-    out.into_bytes()
+    csv_file::write(&CSV_COLUMNS, &lines, Formulas::Keep)
 }
 
 /// The (measure, value, unit) rows of one result, in `results.csv` order: names and units from

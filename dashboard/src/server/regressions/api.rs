@@ -11,9 +11,10 @@ use serde::Deserialize;
 use super::{load_group, load_groups, resolve, writer, GroupsQuery};
 use crate::server::{AppError, AppState};
 use crate::store::alerts::TriageState;
-use crate::store::groups::{Group, Named};
+use crate::store::groups::Named;
 use crate::store::read::{self, RegressionRow};
 use crate::store::triage::{self, Triage};
+use crate::titles::{self, Titled};
 
 #[derive(Debug, Deserialize, Default)]
 pub struct RegressionsQuery {
@@ -49,8 +50,9 @@ pub async fn api(
 pub async fn groups_api(
     State(state): State<AppState>,
     Query(q): Query<GroupsQuery>,
-) -> Result<Json<Vec<Group>>, AppError> {
-    Ok(Json(load_groups(&state, &q).await?.0))
+) -> Result<Json<Vec<Titled>>, AppError> {
+    let groups = load_groups(&state, &q).await?.0;
+    Ok(Json(groups.into_iter().map(titles::titled).collect()))
 }
 
 /// `GET /api/regressions/groups/{id}`: one group with all its alerts; a key it is or was shown
@@ -63,7 +65,7 @@ pub async fn group_api(
         Named::Key(id) => {
             Ok(Redirect::permanent(&format!("/api/regressions/groups/{id}")).into_response())
         }
-        Named::Id(id) => Ok(Json::<Group>(load_group(&state, id).await?).into_response()),
+        Named::Id(id) => Ok(Json(titles::titled(load_group(&state, id).await?)).into_response()),
     }
 }
 

@@ -198,13 +198,11 @@ fn change_cell(a: &Alert) -> String {
 /// The header row of a group: title, triage, commits, and its form.
 fn group_head(g: &Group, b: &mut String, title_link: bool) {
     let key = g.id;
+    let name = crate::titles::of(g);
     let title = if title_link {
-        format!(
-            "<a href=\"/regressions/groups/{key}\">{}</a>",
-            esc(&g.title)
-        )
+        format!("<a href=\"/regressions/groups/{key}\">{}</a>", esc(&name))
     } else {
-        esc(&g.title)
+        esc(&name)
     };
     let _ = write!(
         b,

@@ -1,0 +1,72 @@
+//! A scenario's record as stored: the whole `ScenarioResult` JSON, deflated into
+//! `scenario_results.record_z` (about a quarter of its size: most of a record is per-frame arrays
+//! and names that repeat across its variants). Rows stored before the compact schema keep their
+//! text in `record_json`; readers take whichever the row has.
+//!
+//! Not for: the measures a series reads (points, see [`super::series`]) or the per-result columns
+//! (`results`), which stay rows.
+
+use std::io::{Read, Write};
+
+use flate2::read::DeflateDecoder;
+use flate2::write::DeflateEncoder;
+use flate2::Compression;
+use tessera_results::ScenarioResult;
+
+use super::StoreError;
+use crate::db::Row;
+
+/// The columns a reader selects, in this order, for [`text`] and [`decode`].
+pub const COLUMNS: &str = "record_json, record_z";
+
+/// A record's JSON text as stored (deflated).
+pub fn encode(json: &str) -> Vec<u8> {
+    let mut e = DeflateEncoder::new(Vec::new(), Compression::default());
+    e.write_all(json.as_bytes()).expect("deflate into memory");
+    e.finish().expect("deflate into memory")
+}
+
+/// The record's JSON text from the row's [`COLUMNS`] starting at column `at`.
+pub fn text(r: &Row, at: usize) -> Result<String, StoreError> {
+    let corrupt = |e: std::io::Error| StoreError::Corrupt(format!("scenario record: {e}"));
+    match r.opt_blob(at + 1)? {
+        Some(z) => {
+            let mut s = String::new();
+            DeflateDecoder::new(z)
+                .read_to_string(&mut s)
+                .map_err(corrupt)?;
+            Ok(s)
+        }
+        None => Ok(r.string(at)?),
+    }
+}
+
+/// The record from the row's [`COLUMNS`] starting at column `at`.
+pub fn decode(r: &Row, at: usize) -> Result<ScenarioResult, StoreError> {
+    serde_json::from_str(&text(r, at)?).map_err(|e| StoreError::Corrupt(e.to_string()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn deflated_records_read_back_and_are_smaller() {
+        let json =
+            include_str!("../../tests/fixtures/runs/20261122T030520Z-34ab2b4/scenarios/tiny.json");
+        let s: ScenarioResult = serde_json::from_str(json).unwrap();
+        let compact = serde_json::to_string(&s).unwrap();
+        let z = encode(&compact);
+        assert!(
+            z.len() * 2 < compact.len(),
+            "{} of {}",
+            z.len(),
+            compact.len()
+        );
+        let mut back = String::new();
+        DeflateDecoder::new(&z[..])
+            .read_to_string(&mut back)
+            .unwrap();
+        assert_eq!(back, compact);
+    }
+}
