@@ -95,6 +95,7 @@
       const time = state.mode === 'time';
       const xs = time ? spec.x : spec.x.map((_, i) => i);
       const xOf = i => xs[i];
+      const single = xs.length > 0 && xs[0] === xs[xs.length - 1];
       const data = [xs];
       const series = [{ label: time ? 'time' : 'commit', value: (u, v, si, i) => i == null ? '' : spec.commits[i] }];
       const bands = [];
@@ -113,7 +114,9 @@
       const width = Math.max(300, box.clientWidth || 900);
       const opts = {
         width, height: 320, series, bands,
-        scales: { x: { time }, y: { distr: state.log ? 3 : 1 } },
+        // One point (or several at one time): half a day either side (one commit in commit
+        // mode), not uPlot's default span of years.
+        scales: { x: single ? { time, auto: false, range: [xs[0] - (time ? 43200 : 1), xs[0] + (time ? 43200 : 1)] } : { time }, y: { distr: state.log ? 3 : 1 } },
         axes: [
           time ? { space: 80 } : { space: 70, incrs: [1, 2, 5, 10, 20, 50, 100, 200, 500, 1000, 2000, 5000], values: (u, splits) => splits.map(i => spec.commits[Math.round(i)] || '') },
           { label: spec.y_label, size: 70 },
@@ -143,7 +146,7 @@
     }
     modeSel.addEventListener('change', () => { state.mode = modeSel.value; build(); });
     logBox.addEventListener('change', () => { state.log = logBox.checked; build(); });
-    reset.addEventListener('click', () => u.setScale('x', { min: u.data[0][0], max: u.data[0][n - 1] }));
+    reset.addEventListener('click', () => (spec.x[0] === spec.x[n - 1] ? build() : u.setScale('x', { min: u.data[0][0], max: u.data[0][n - 1] })));
     box.replaceChildren(controls, plot, hover);
     build();
     new ResizeObserver(() => { if (u) u.setSize({ width: Math.max(300, box.clientWidth), height: 320 }); }).observe(box);
@@ -204,6 +207,24 @@
             // overlaps no number already placed (right-up, right-down, left-up, left-down, further out).
             const placed = [];
             const overlaps = (r) => placed.some(q => r.x < q.x + q.w && q.x < r.x + r.w && r.y < q.y + q.h && q.y < r.y + r.h);
+            // Error bars where the result has repeats: the GPU time's and the measure's 95% intervals.
+            spec.points.filter(p => p.group === 0 && (p.x_interval || p.y_interval)).forEach(p => {
+              const px = u.valToPos(p.x, 'x', true), py = u.valToPos(p.y, 'y', true);
+              ctx.strokeStyle = p.colour || '#4e79a7';
+              ctx.lineWidth = 1.2 * d;
+              ctx.beginPath();
+              if (p.x_interval) {
+                const a = u.valToPos(p.x_interval[0], 'x', true), b = u.valToPos(p.x_interval[1], 'x', true);
+                ctx.moveTo(a, py); ctx.lineTo(b, py);
+                ctx.moveTo(a, py - 3 * d); ctx.lineTo(a, py + 3 * d); ctx.moveTo(b, py - 3 * d); ctx.lineTo(b, py + 3 * d);
+              }
+              if (p.y_interval) {
+                const a = u.valToPos(p.y_interval[0], 'y', true), b = u.valToPos(p.y_interval[1], 'y', true);
+                ctx.moveTo(px, a); ctx.lineTo(px, b);
+                ctx.moveTo(px - 3 * d, a); ctx.lineTo(px + 3 * d, a); ctx.moveTo(px - 3 * d, b); ctx.lineTo(px + 3 * d, b);
+              }
+              ctx.stroke();
+            });
             spec.points.filter(p => p.group === 0).forEach(p => {
               const px = u.valToPos(p.x, 'x', true), py = u.valToPos(p.y, 'y', true);
               if (px < u.bbox.left || px > u.bbox.left + u.bbox.width || py < u.bbox.top || py > u.bbox.top + u.bbox.height) return;
@@ -257,16 +278,21 @@
     let cur = 0, showingRef = false, timer = null, userZoom = false;
     // Until the user picks a zoom, small frames open enlarged (whole steps, at most 8x, about
     // 360 px wide) so a 96 px test frame is not a thumbnail; large frames open at natural size.
+    // A frame wider than its pane (4K in a half-width pane) opens fitted to the pane, whole.
     function fitZoom() {
       const first = root.querySelector('img.px');
       const w0 = spec.width || (first && first.naturalWidth) || 0;
-      return w0 ? Math.max(1, Math.min(8, Math.floor(360 / w0))) : 1;
+      if (!w0) return 1;
+      const pw = panes.length ? panes[0].clientWidth : 0;
+      if (pw > 0 && w0 > pw) return Math.max(1 / 32, pw / w0);
+      return Math.max(1, Math.min(8, Math.floor(360 / w0)));
     }
     const url = (f, k) => spec.urls[f][spec.kinds.indexOf(k)] || '';
     function setZoom(z) {
-      z = Math.max(1, Math.min(32, z));
-      zoom.value = z;
-      zoomOut.textContent = z + '×';
+      z = Math.max(Math.min(1, fitZoom()), Math.min(32, z || 0));
+      zoom.value = Math.max(1, Math.round(z));
+      zoomOut.textContent = z < 1 ? Math.round(z * 100) + '% (fit)' : z + '×';
+      root.dataset.zoom = z;
       const first = root.querySelector('img.px');
       const w0 = spec.width || (first && first.naturalWidth) || 0, h0 = spec.height || (first && first.naturalHeight) || 0;
       if (!w0) return;
@@ -321,6 +347,8 @@
       document.addEventListener('mouseup', up);
     }));
     zoom.addEventListener('input', () => { userZoom = true; setZoom(+zoom.value); });
+    const fit = q('#fit');
+    if (fit) fit.addEventListener('click', () => { userZoom = false; setZoom(fitZoom()); });
     frame.addEventListener('input', () => setFrame(+frame.value));
     wipe.addEventListener('input', () => setWipe(+wipe.value));
     flick.addEventListener('click', () => setAB(!showingRef));
@@ -332,8 +360,8 @@
     document.addEventListener('keydown', e => {
       if (e.target.tagName === 'INPUT' && e.target.type !== 'range') return;
       if (e.key === 'f' || e.key === ' ') { e.preventDefault(); setAB(!showingRef); }
-      else if (e.key === '+' || e.key === '=') { userZoom = true; setZoom(+zoom.value * 2); }
-      else if (e.key === '-') { userZoom = true; setZoom(Math.floor(+zoom.value / 2)); }
+      else if (e.key === '+' || e.key === '=') { userZoom = true; setZoom(Math.max(1, (+root.dataset.zoom || 1) * 2)); }
+      else if (e.key === '-') { userZoom = true; setZoom(Math.floor((+root.dataset.zoom || 1) / 2)); }
       else if (e.key === 'ArrowRight') setFrame(Math.min(spec.frames.length - 1, cur + 1));
       else if (e.key === 'ArrowLeft') setFrame(Math.max(0, cur - 1));
     });

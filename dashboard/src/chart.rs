@@ -121,6 +121,11 @@ pub struct ScatterPoint {
     pub front: bool,
     /// The point's colour (by technique on the error-against-time page).
     pub colour: String,
+    /// Error bars: 95% intervals of x and y, where the result has repeats.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub x_interval: Option<[f64; 2]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub y_interval: Option<[f64; 2]>,
 }
 
 #[derive(Clone, Debug, Serialize, PartialEq)]

@@ -152,6 +152,7 @@ kbd{border:1px solid #aaa;border-radius:3px;padding:0 4px;font-size:12px}
 .frame-charts{display:flex;flex-wrap:wrap;gap:8px;margin:8px 0}.frame-chart{margin:0}.frame-chart svg{border:1px solid #eee}
 .run-frames summary{cursor:pointer;color:#444;margin:6px 0}.run-frame-charts{display:flex;flex-wrap:wrap;gap:12px;margin:4px 0}.run-frame-chart{margin:0;max-width:100%;width:420px}
 .run-frame-chart figcaption{font-size:12px;color:#444}ul.legend{list-style:none;padding:0;margin:2px 0;font-size:12px}ul.legend li{overflow-wrap:anywhere}.swatch{display:inline-block;width:10px;height:10px;margin-right:4px}
+a.ab-button{display:inline-block;padding:0 8px;border:1px solid #4e79a7;border-radius:3px;text-decoration:none;font-weight:600}
 main table{display:block;overflow-x:auto;max-width:100%}td{overflow-wrap:break-word}.name{overflow-wrap:normal;word-break:normal}.name>span{white-space:nowrap}td.links{white-space:nowrap;overflow-wrap:normal}
 @media (max-width:700px){.wide{display:none}#runs tr{display:block;border-bottom:1px solid #ddd;padding:4px 0}#runs tr:first-child{display:none}#runs td{display:inline-block;border:0;padding:1px 8px 1px 0}#runs td.wide{display:none}nav{padding:6px 8px}nav a{display:inline-block;margin:2px 10px 2px 0}main{padding:8px}
 h1{font-size:17px}td,th{padding:3px 4px}select,input{max-width:100%}.pane{max-height:70vh}

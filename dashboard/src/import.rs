@@ -1,5 +1,5 @@
 //! `tessera-dashboard import`: finds run folders (the folder itself when it holds `run.json`,
-//! else its sub-folders that do) and stores each as an upload does: the run and detection on the
+//! else the folders below it that do, down to a folder of folders of runs) and stores each as an upload does: the run and detection on the
 //! series it touched in one transaction ([`crate::regressions::ingest_and_detect`]).
 //!
 //! Not for: checking records (see [`crate::bundle`]) or SQL (see [`crate::store::ingest`]).
@@ -40,17 +40,37 @@ impl ImportSummary {
     }
 }
 
-/// Run folders under `root`, in name order (run ids sort by time).
+/// Folder levels searched below the root: a folder of folders (per adapter, per night) of runs.
+pub const MAX_DEPTH: usize = 4;
+
+/// Run folders under `root`: `root` itself when it holds `run.json`, else every folder with one
+/// down to [`MAX_DEPTH`] levels below it (not inside a run folder, not hidden folders, not
+/// through links), in run-folder name order (run ids sort by time).
 pub fn find_run_folders(root: &Path) -> std::io::Result<Vec<PathBuf>> {
     if root.join("run.json").is_file() {
         return Ok(vec![root.to_path_buf()]);
     }
-    let mut dirs: Vec<PathBuf> = std::fs::read_dir(root)?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.join("run.json").is_file())
-        .collect();
-    dirs.sort();
+    let mut dirs = Vec::new();
+    collect_runs(root, 1, &mut dirs)?;
+    dirs.sort_by(|a, b| a.file_name().cmp(&b.file_name()).then_with(|| a.cmp(b)));
     Ok(dirs)
+}
+
+fn collect_runs(dir: &Path, depth: usize, out: &mut Vec<PathBuf>) -> std::io::Result<()> {
+    for entry in std::fs::read_dir(dir)? {
+        let entry = entry?;
+        let hidden = entry.file_name().to_string_lossy().starts_with('.');
+        if hidden || !entry.file_type()?.is_dir() {
+            continue;
+        }
+        let path = entry.path();
+        if path.join("run.json").is_file() {
+            out.push(path);
+        } else if depth < MAX_DEPTH {
+            collect_runs(&path, depth + 1, out)?;
+        }
+    }
+    Ok(())
 }
 
 /// Imports every run folder under `root`. A folder that fails is reported and skipped; the others
@@ -86,4 +106,38 @@ pub fn import(pool: &Pool, root: &Path, params: &Params) -> anyhow::Result<Impor
     }
     summary.elapsed = start.elapsed();
     Ok(summary)
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn run_folders_are_found_in_folders_of_folders() {
+        let root = tempfile::tempdir().unwrap();
+        let run = |rel: &str| {
+            let p = root.path().join(rel);
+            std::fs::create_dir_all(&p).unwrap();
+            std::fs::write(p.join("run.json"), "{}").unwrap();
+        };
+        run("lavapipe/20261202T000000Z-b");
+        run("h200/nightly/20261201T000000Z-a");
+        run("20261203T000000Z-c");
+        // Not runs: a folder inside a run, a hidden folder, a folder too deep.
+        run("20261203T000000Z-c/images/inner");
+        run(".cache/20261204T000000Z-d");
+        run("a/b/c/d/20261205T000000Z-e");
+        std::fs::create_dir_all(root.path().join("empty/also-empty")).unwrap();
+        let found: Vec<String> = super::find_run_folders(root.path())
+            .unwrap()
+            .iter()
+            .map(|p| p.strip_prefix(root.path()).unwrap().display().to_string())
+            .collect();
+        assert_eq!(
+            found,
+            [
+                "h200/nightly/20261201T000000Z-a",
+                "lavapipe/20261202T000000Z-b",
+                "20261203T000000Z-c"
+            ]
+        );
+    }
 }

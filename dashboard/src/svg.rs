@@ -101,6 +101,8 @@ pub struct SeriesMark {
     pub value: f64,
     pub label: String,
     pub href: String,
+    /// Its label on the x axis (a short commit); empty: none.
+    pub tick: String,
 }
 
 /// A series over commits: points joined by a line, change points as red dashed lines (with their
@@ -145,6 +147,29 @@ pub fn series_chart(
             esc(href),
             h - bottom,
             esc(label)
+        );
+    }
+    // The x axis: a line, and the commits of up to eight evenly spaced points.
+    let _ = write!(
+        out,
+        "<line class='x-axis' x1='{left}' x2='{:.1}' y1='{:.1}' y2='{:.1}' stroke='#999'/>",
+        w - 10.0,
+        h - bottom,
+        h - bottom
+    );
+    let every = marks.len().div_ceil(8).max(1);
+    for (i, m) in marks.iter().enumerate() {
+        if m.tick.is_empty() || i % every != 0 {
+            continue;
+        }
+        let px = x.at(i as f64);
+        let _ = write!(
+            out,
+            "<line x1='{px:.1}' x2='{px:.1}' y1='{:.1}' y2='{:.1}' stroke='#999'/><text x='{px:.1}' y='{:.1}' font-size='10' text-anchor='middle' fill='#444'>{}</text>",
+            h - bottom,
+            h - bottom + 4.0,
+            h - bottom + 14.0,
+            esc(&m.tick)
         );
     }
     let path: Vec<String> = marks
@@ -452,6 +477,7 @@ mod tests {
                 value: i as f64,
                 label: format!("p{i}"),
                 href: format!("/runs/{i}"),
+                tick: format!("c{i}"),
             })
             .collect();
         let svg = series_chart(
@@ -462,6 +488,11 @@ mod tests {
         );
         assert_eq!(svg.matches("class='point'").count(), 5);
         assert_eq!(svg.matches("class='change-point'").count(), 1);
+        // An x axis: a line and every point's commit as a tick (five fit).
+        assert!(svg.contains("class='x-axis'"), "{svg}");
+        for i in 0..5 {
+            assert!(svg.contains(&format!(">c{i}</text>")), "{svg}");
+        }
         assert!(svg.starts_with("<svg") && svg.ends_with("</svg>"));
     }
 }

@@ -66,6 +66,18 @@ fn median(mut v: Vec<f64>) -> f64 {
     }
 }
 
+/// How surely an alert shows a change: its size over the half-width of its 95% interval, times
+/// the probability that it lies at the located commit. Orders a title's variants.
+fn lead_score(a: &Alert) -> f64 {
+    let half = match (a.change_low, a.change_high) {
+        (Some(l), Some(h)) if h > l => (h - l) / 2.0,
+        _ => 0.0,
+    };
+    let size = a.relative_change.abs().min(1e6);
+    let z = if half > 0.0 { size / half } else { size * 1e3 };
+    z * a.location_probability.unwrap_or(1.0)
+}
+
 /// The group's one-line title. With `code`, names are wrapped in backticks (Markdown).
 pub fn title(commit_after: &str, alerts: &[&Alert], code: bool) -> String {
     counted_title(commit_after, alerts, alerts, code)
@@ -99,6 +111,13 @@ fn counted_title(commit_after: &str, alerts: &[&Alert], all: &[&Alert], code: bo
     // Per variant, its measures with the median change over scenarios and adapters.
     let mut by_variant: BTreeMap<&str, BTreeMap<&str, Vec<f64>>> = BTreeMap::new();
     let mut scenarios: BTreeMap<&str, BTreeSet<&str>> = BTreeMap::new();
+    // The variant whose change leads: the surest one, not the largest (a noisy adapter's
+    // +40% located at 58% must not lead a group whose real change is a quiet GPU's exact +5%).
+    let mut lead: BTreeMap<&str, f64> = BTreeMap::new();
+    for a in alerts {
+        let e = lead.entry(&a.series.variant).or_insert(0.0);
+        *e = e.max(lead_score(a));
+    }
     for a in alerts {
         by_variant
             .entry(&a.series.variant)
@@ -117,7 +136,7 @@ fn counted_title(commit_after: &str, alerts: &[&Alert], all: &[&Alert], code: bo
             let mut ms: Vec<(f64, &str)> =
                 measures.into_iter().map(|(m, v)| (median(v), m)).collect();
             ms.sort_by(|x, y| y.0.abs().total_cmp(&x.0.abs()).then(x.1.cmp(y.1)));
-            let largest = ms.first().map_or(0.0, |m| m.0.abs());
+            let largest = lead.get(variant).copied().unwrap_or(0.0);
             let shown: Vec<String> = ms
                 .iter()
                 .take(2)

@@ -1414,3 +1414,64 @@ fn regressions_page_triages_groups_with_the_token_entered_once() {
         .unwrap()
         .contains("series on 2 adapters"));
 }
+
+/// A frame wider than its pane (a 3840x2160 scenario) opens fitted to the pane, whole, and `fit`
+/// returns there after a zoom; a series of one point gets an x axis of a day, not of years.
+#[test]
+fn a_4k_frame_opens_fitted_and_a_one_point_series_has_a_day_wide_axis() {
+    let Some((chromium, chromedriver)) = browser_tools() else {
+        return;
+    };
+    let store = common::sqlite();
+    let folder = tessera_dashboard::import::find_run_folders(&viewer_fixtures())
+        .unwrap()
+        .remove(0);
+    let mut run = RunBundle::read_folder(&folder).unwrap();
+    for s in &mut run.scenarios {
+        (s.width, s.height) = (3840, 2160);
+    }
+    {
+        let mut conn = store.pool.get().unwrap();
+        ingest(&mut *conn, &run).unwrap();
+    }
+    let addr = serve(AppState::new(store.pool.clone(), None));
+    let browser = Browser::start(&chromium, &chromedriver);
+    browser.goto(&format!(
+        "http://{addr}/runs/{}/images/basic/checkerboard%5Bsampling%3Dtwo-pass%5D",
+        run.run.run_id
+    ));
+    let state = || {
+        browser.eval(
+            "const v = document.getElementById('viewer'); const p = v.querySelector('.pane'); \
+             const i = v.querySelector('img.px'); \
+             return {zoom: +v.dataset.zoom, img: i.getBoundingClientRect().width, pane: p.clientWidth, \
+                     label: document.getElementById('zoomval').textContent};",
+        )
+    };
+    // The whole 3840 px width in the pane: zoom below 1, the image as wide as the pane.
+    let fitted = || {
+        let s = state();
+        let zoom = s["zoom"].as_f64().unwrap();
+        assert!(zoom < 1.0 && zoom > 0.0, "{s}");
+        let (img, pane) = (s["img"].as_f64().unwrap(), s["pane"].as_f64().unwrap());
+        assert!(img <= pane + 1.0 && img >= pane * 0.9, "{s}");
+        assert!(s["label"].as_str().unwrap().ends_with("% (fit)"), "{s}");
+    };
+    fitted();
+    browser.eval("document.getElementById('viewer').viewer.setZoom(4); return 0;");
+    assert_eq!(state()["zoom"].as_f64().unwrap(), 4.0);
+    browser.eval("document.getElementById('fit').click(); return 0;");
+    fitted();
+
+    // One run: every series has one point. Its time axis spans a day around it.
+    browser.goto(&format!("http://{addr}/series/1"));
+    let span = browser.eval(
+        "const c = document.querySelector('[data-chart]'); const u = c.uplot; \
+         return u ? u.scales.x.max - u.scales.x.min : -1;",
+    );
+    let span = span.as_f64().unwrap();
+    assert!(
+        span > 0.0 && span <= 2.0 * 86_400.0,
+        "x axis spans {span} s"
+    );
+}

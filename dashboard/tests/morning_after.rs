@@ -285,6 +285,7 @@ fn an_alert_that_moves_leaves_a_group_whose_others_stay() {
             location_probability: 0.9,
             first_candidate: pk(c, n),
             last_candidate: pk(c, n),
+            range_before: pk(c, n - 1),
             status: DetectionStatus::Pending,
         };
         let group_of = |c: &mut dyn tessera_dashboard::db::Connection, id: i64| {
@@ -347,6 +348,124 @@ fn an_alert_that_moves_leaves_a_group_whose_others_stay() {
                     .starts_with(&format!("left group {early} for group {right}"))),
             "{history:?}"
         );
+        // No alert is left in a group it moved out of: every live alert's group has its range.
+        for (id, want) in [
+            (a, right),
+            (b, right),
+            (e, new),
+            (f, new),
+            (g, alone),
+            (d, right),
+        ] {
+            assert_eq!(group_of(&mut *c, id), want, "alert {id}");
+        }
+    }
+}
+
+#[test]
+fn a_loosely_located_series_does_not_join_an_exact_group_through_the_shared_night() {
+    use tessera_dashboard::store::alerts::{self, DetectionStatus, Placement};
+    for store in common::stores("a_loosely_located_series_does_not_join") {
+        let h = StepHistory::h200(10, 99, "native", 1.0);
+        let mut c = store.pool.get().unwrap();
+        for run in h.runs(&common::template()) {
+            tessera_dashboard::store::ingest::ingest(&mut *c, &run).unwrap();
+        }
+        let pk = |c: &mut dyn tessera_dashboard::db::Connection, n: usize| {
+            c.query(
+                "SELECT id FROM runs WHERE run_id = $1",
+                &[h.run_id(n).as_str().into()],
+            )
+            .unwrap()[0]
+                .i64(0)
+                .unwrap()
+        };
+        let series: Vec<i64> = c
+            .query("SELECT id FROM series ORDER BY id LIMIT 3", &[])
+            .unwrap()
+            .iter()
+            .map(|r| r.i64(0).unwrap())
+            .collect();
+        // Located at night 5; `first..=last` the candidate nights.
+        let at =
+            |c: &mut dyn tessera_dashboard::db::Connection, first: usize, last: usize, p: f64| {
+                Placement {
+                    run_pk_before: pk(c, 4),
+                    run_pk_after: pk(c, 5),
+                    value_before: 1.0,
+                    value_after: 1.1,
+                    relative_change: 0.1,
+                    change_low: 0.02,
+                    change_high: 0.18,
+                    confidence: 0.999,
+                    location_probability: p,
+                    first_candidate: pk(c, first),
+                    last_candidate: pk(c, last),
+                    range_before: pk(c, first - 1),
+                    status: DetectionStatus::Pending,
+                }
+            };
+        let group_of = |c: &mut dyn tessera_dashboard::db::Connection, id: i64| {
+            c.query(
+                "SELECT group_id FROM regressions WHERE id = $1",
+                &[id.into()],
+            )
+            .unwrap()[0]
+                .i64(0)
+                .unwrap()
+        };
+        let exact = at(&mut *c, 5, 5, 0.99);
+        let loose = at(&mut *c, 4, 6, 0.58);
+        let h200 = alerts::insert(&mut *c, series[0], &exact).unwrap();
+        // Placed on the same night, but its own location spans nights 4 to 6: a group of its own.
+        let cpu = alerts::insert(&mut *c, series[1], &loose).unwrap();
+        assert_ne!(
+            group_of(&mut *c, cpu),
+            group_of(&mut *c, h200),
+            "{}",
+            store.name
+        );
+        // A second loose series with the same candidate range shares that group.
+        let cpu2 = alerts::insert(&mut *c, series[2], &loose).unwrap();
+        assert_eq!(group_of(&mut *c, cpu2), group_of(&mut *c, cpu));
+        // Once located exactly on night 5, it joins the exact group, and leaves the loose one.
+        alerts::place(&mut *c, cpu, &exact).unwrap();
+        assert_eq!(group_of(&mut *c, cpu), group_of(&mut *c, h200));
+        assert_ne!(group_of(&mut *c, cpu2), group_of(&mut *c, h200));
+        // The exact alert placed again at its own range stays in its group.
+        alerts::place(&mut *c, h200, &exact).unwrap();
+        assert_eq!(group_of(&mut *c, h200), group_of(&mut *c, cpu));
+
+        // The title leads with the surest change, not the largest: two variants' frame times
+        // on one night, +5% with a tight interval and +40% with a wide one located at 60%.
+        let two: Vec<(i64, String)> = c
+            .query(
+                "SELECT MIN(id), variant FROM series WHERE measure = 'gpu_ms.median' GROUP BY variant ORDER BY MIN(id) LIMIT 2",
+                &[],
+            )
+            .unwrap()
+            .iter()
+            .map(|r| (r.i64(0).unwrap(), r.string(1).unwrap()))
+            .collect();
+        let mut sure = at(&mut *c, 8, 8, 0.99);
+        sure.run_pk_before = pk(&mut *c, 7);
+        sure.run_pk_after = pk(&mut *c, 8);
+        sure.relative_change = 0.05;
+        (sure.change_low, sure.change_high) = (0.045, 0.055);
+        let mut big = sure.clone();
+        big.relative_change = 0.4;
+        (big.change_low, big.change_high) = (0.05, 0.75);
+        big.location_probability = 0.6;
+        let x = alerts::insert(&mut *c, two[0].0, &sure).unwrap();
+        let y = alerts::insert(&mut *c, two[1].0, &big).unwrap();
+        let gid = group_of(&mut *c, x);
+        assert_eq!(group_of(&mut *c, y), gid);
+        let title = tessera_dashboard::titles::of(
+            &tessera_dashboard::store::groups::get(&mut *c, gid).unwrap(),
+        );
+        let lead = title.split("; ").nth(1).unwrap();
+        assert!(lead.starts_with(&format!("{} ", two[0].1)), "{title}");
+        assert!(lead.contains("+5.0%"), "{title}");
     }
 }
 
@@ -611,6 +730,18 @@ fn a_wrong_token_is_called_unknown_not_missing() {
             wrong.contains("is not a known write token") && !wrong.contains("needs the header"),
             "{wrong}"
         );
+        // A header sent in another scheme, or Bearer with nothing: said, not "missing".
+        for (sent, says) in [
+            ("Token right", "uses the scheme \\\"Token\\\", not `Bearer`"),
+            ("Bearer ", "`Bearer` is followed by no token"),
+        ] {
+            let (status, text) = body(send(Some(sent)).await.unwrap()).await;
+            assert_eq!(status, StatusCode::UNAUTHORIZED);
+            assert!(
+                text.contains("header was sent") && text.contains(says),
+                "{sent}: {text}"
+            );
+        }
     });
 }
 
@@ -677,6 +808,59 @@ fn error_against_time_lists_only_error_measures_and_shows_two_beside_each_other(
         );
         let one = get(&app, "/pareto?scenario=basic&metric=flip&metric2=none").await;
         assert!(!one.contains("id=pareto-second"));
+    });
+}
+
+#[test]
+fn error_against_time_draws_error_bars_where_repeats_exist() {
+    let store = common::sqlite();
+    let viewer =
+        std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/viewer-runs");
+    tessera_dashboard::import::import(&store.pool, &viewer, &Params::default()).unwrap();
+    let app = app(AppState::new(store.pool.clone(), None));
+    block_on(async {
+        let v: serde_json::Value =
+            serde_json::from_str(&get(&app, "/api/pareto?scenario=basic&metric=psnr").await)
+                .unwrap();
+        let points = v["points"].as_array().unwrap();
+        // Six compared frames with different PSNRs: an interval around the value.
+        let up = points
+            .iter()
+            .find(|p| p["variant"] == "upscale[scale=0.5]")
+            .unwrap();
+        let value = up["value"].as_f64().unwrap();
+        let [lo, hi] = [0, 1].map(|i| up["value_interval"][i].as_f64().unwrap());
+        assert!(lo < value && value < hi && hi - lo < 1.0, "{up}");
+        let page = get(&app, "/pareto?scenario=basic&metric=psnr").await;
+        assert!(page.contains("\"y_interval\":["), "{page}");
+        assert!(page.contains("title=\"95% interval\""), "{page}");
+    });
+}
+
+#[test]
+fn a_run_without_a_commit_is_flagged_and_never_the_previous_run() {
+    let store = common::sqlite();
+    let h = StepHistory::h200(4, 99, "native", 1.0);
+    {
+        let mut c = store.pool.get().unwrap();
+        for (n, mut run) in h.runs(&common::template()).into_iter().enumerate() {
+            if n == 2 {
+                run.run.commit = None;
+            }
+            ingest_and_detect(&mut *c, &run, &Params::default()).unwrap();
+        }
+    }
+    let app = app(AppState::new(store.pool.clone(), None));
+    block_on(async {
+        let flagged = get(&app, &format!("/runs/{}", h.run_id(2))).await;
+        assert!(flagged.contains("id=no-commit"), "{flagged}");
+        // Night 3's previous run is night 1, not the commit-less night 2.
+        let next = get(&app, &format!("/runs/{}", h.run_id(3))).await;
+        assert!(!next.contains("id=no-commit"));
+        assert!(
+            next.contains(&format!("compare/runs?a={}&b={}", h.run_id(1), h.run_id(3))),
+            "{next}"
+        );
     });
 }
 

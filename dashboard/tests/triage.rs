@@ -531,3 +531,61 @@ fn a_queued_group_that_detection_moved_away_is_dropped_not_retried() {
     assert_eq!(h.got.lock().unwrap().len(), 1);
     assert_eq!(n.tick(at(1000)).unwrap(), Default::default());
 }
+
+#[test]
+fn a_data_stoppage_goes_through_the_webhook_once_per_silence() {
+    use tessera_dashboard::detect::Params;
+    use tessera_dashboard::regressions::ingest_and_detect;
+    use tessera_dashboard::steps::StepHistory;
+    for store in common::stores("a_data_stoppage_goes_through_the_webhook") {
+        let h = hook(vec![503, 200]);
+        let steps = StepHistory::h200(10, 99, "native", 1.0);
+        let runs = steps.runs(&common::template());
+        {
+            let mut c = store.pool.get().unwrap();
+            for run in &runs[..9] {
+                ingest_and_detect(&mut *c, run, &Params::default()).unwrap();
+            }
+        }
+        // Night 8's commit is at day 8 00:00 of 2026 (`synth::time_after`).
+        let day = |d: i64| {
+            Utc.with_ymd_and_hms(2026, 1, 1, 10, 0, 0).unwrap() + chrono::TimeDelta::days(d)
+        };
+        let n = Notifier::new(store.pool.clone(), config(&h));
+        // Configured while the adapter reports: nothing to send.
+        assert_eq!(n.tick(day(9)).unwrap().queued, 0);
+        // Three nights later it has stopped: queued, first attempt fails, the retry is sent.
+        let t = n.tick(day(12)).unwrap();
+        assert_eq!((t.queued, t.sent, t.failed), (1, 0, 1), "{}", store.name);
+        let t = n.tick(day(12) + chrono::TimeDelta::seconds(11)).unwrap();
+        assert_eq!((t.queued, t.sent), (0, 1));
+        // Sent once, however often the worker looks.
+        let t = n.tick(day(13)).unwrap();
+        assert_eq!((t.queued, t.sent), (0, 0));
+        let got = h.got.lock().unwrap().clone();
+        assert_eq!(got.len(), 2);
+        let body: serde_json::Value = serde_json::from_str(&got[1].body).unwrap();
+        assert_eq!(body["event"], "data_stoppage");
+        assert_eq!(
+            body["title"],
+            "NVIDIA H200 (replay): no fx run for 4 nights (usually every night)"
+        );
+        assert_eq!(body["last_run"], "h200-0008");
+        assert_eq!(body["last_run_url"], "https://dash.example/runs/h200-0008");
+        assert!(got[1]
+            .headers
+            .to_ascii_lowercase()
+            .contains("idempotency-key: stoppage:"));
+        // The adapter reports again, then stops again: a new silence, a new notice.
+        {
+            let mut c = store.pool.get().unwrap();
+            ingest_and_detect(&mut *c, &runs[9], &Params::default()).unwrap();
+        }
+        assert_eq!(n.tick(day(10)).unwrap().queued, 0);
+        let t = n.tick(day(14)).unwrap();
+        assert_eq!((t.queued, t.sent), (1, 1));
+        let body: serde_json::Value =
+            serde_json::from_str(&h.got.lock().unwrap().last().unwrap().body).unwrap();
+        assert_eq!(body["last_run"], "h200-0009");
+    }
+}

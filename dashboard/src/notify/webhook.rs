@@ -8,7 +8,13 @@
 //! Delivery is at least once: a server killed between a successful POST and recording it sends
 //! that group again after the restart; the body's `key` (also the `Idempotency-Key` header) lets
 //! a receiver drop the repeat. Groups triaged `invalid` or `ignored` before they were sent are
-//! not sent. Not for: the feed or Markdown (see [`super::atom`], [`super::markdown`]).
+//! not sent.
+//!
+//! A data stoppage ([`crate::store::stoppage`]: an adapter that stopped reporting a suite) is
+//! sent the same way, once per silence: its outbox name is `stoppage:<adapter id>:<suite>:<last
+//! run>`, so the adapter's next run ends it and a later silence is a new notification; one that
+//! ends before it was sent is dropped, not retried. Not for: the feed or Markdown (see
+//! [`super::atom`], [`super::markdown`]).
 
 use std::time::Duration;
 
@@ -19,6 +25,7 @@ use sha2::{Digest, Sha256};
 use crate::db::Pool;
 use crate::store::groups::{self, Filter, Group, Sort};
 use crate::store::outbox::{self, Delivery};
+use crate::store::stoppage::{self, Stoppage};
 use crate::store::StoreError;
 
 /// Settings of the worker; [`Config::new`] has the defaults `serve` uses.
@@ -134,6 +141,31 @@ pub fn body(g: &Group, base: &str) -> serde_json::Value {
     })
 }
 
+/// The outbox's name for one silence of an (adapter, suite): ended by the adapter's next run.
+pub fn stoppage_name(s: &Stoppage) -> String {
+    format!("stoppage:{}:{}:{}", s.adapter_id, s.suite, s.last_run)
+}
+
+/// The JSON body POSTed for a data stoppage; `text` as for a group.
+pub fn stoppage_body(s: &Stoppage, base: &str) -> serde_json::Value {
+    let run_url = format!("{base}/runs/{}", crate::html::enc(&s.last_run));
+    json!({
+        "event": "data_stoppage",
+        "key": stoppage_name(s),
+        "title": s.message,
+        "text": format!("{} (last run {run_url})", s.message),
+        "url": format!("{base}/regressions"),
+        "adapter_id": s.adapter_id,
+        "adapter": s.adapter,
+        "suite": s.suite,
+        "last_run": s.last_run,
+        "last_run_url": run_url,
+        "last_at": s.last_at,
+        "nights": s.nights,
+        "usual_gap": s.usual_gap,
+    })
+}
+
 impl Notifier {
     pub fn new(pool: Pool, config: Config) -> Notifier {
         let agent = ureq::Agent::config_builder()
@@ -182,6 +214,7 @@ impl Notifier {
     pub fn tick(&self, now: DateTime<Utc>) -> Result<Tick, StoreError> {
         let mut tick = Tick::default();
         let now_s = ts(now);
+        let stopped: Vec<Stoppage>;
         let due = {
             let mut conn = self.pool.get()?;
             let confirmed = Filter {
@@ -190,6 +223,7 @@ impl Notifier {
                 ..Filter::default()
             };
             let groups = groups::list(&mut *conn, &confirmed, Sort::Date, usize::MAX)?;
+            stopped = stoppage::stoppages(&mut *conn, &now_s)?;
             let first = outbox::register_target(&mut *conn, &self.target, &now_s)?;
             let known: std::collections::BTreeSet<String> =
                 outbox::known(&mut *conn, &self.target)?
@@ -218,9 +252,46 @@ impl Notifier {
                     }
                 }
             }
+            // Data stoppages, once per silence; those already there at the first look are the
+            // baseline, as groups are.
+            for st in &stopped {
+                let name = stoppage_name(st);
+                if known.contains(&name) {
+                    continue;
+                }
+                let state = if first {
+                    outbox::BASELINE
+                } else {
+                    outbox::PENDING
+                };
+                if outbox::add(&mut *conn, &self.target, &name, state, &now_s)? {
+                    if first {
+                        tick.baseline += 1;
+                    } else {
+                        tick.queued += 1;
+                    }
+                }
+            }
             outbox::due(&mut *conn, &self.target, &now_s, 100)?
         };
         for mut d in due {
+            if d.group_key.starts_with("stoppage:") {
+                let outcome = match stopped.iter().find(|s| stoppage_name(s) == d.group_key) {
+                    Some(st) => {
+                        self.post(&stoppage_body(st, &self.config.public_url), &d.group_key)
+                    }
+                    // The adapter reported again before the notice went out.
+                    None => {
+                        d.state = outbox::FAILED.into();
+                        d.last_error = "the adapter reported again before it was sent".into();
+                        let mut conn = self.pool.get()?;
+                        outbox::update(&mut *conn, &self.target, &d)?;
+                        continue;
+                    }
+                };
+                self.record(&mut d, outcome, now, &mut tick)?;
+                continue;
+            }
             let group = {
                 let mut conn = self.pool.get()?;
                 // Detection never deletes an alert; a group whose alerts were all withdrawn (moved
@@ -249,38 +320,55 @@ impl Notifier {
                 }
                 Err(e) => return Err(e),
             };
-            d.attempts += 1;
-            match outcome {
-                Ok(()) => {
-                    d.state = outbox::SENT.into();
-                    d.sent_at = Some(now_s.clone());
-                    d.last_error.clear();
-                    tick.sent += 1;
-                    eprintln!("webhook: sent alert group {}", d.group_key);
-                }
-                Err(e) => {
-                    tick.failed += 1;
-                    d.last_error = e;
-                    if d.attempts >= self.config.max_attempts {
-                        d.state = outbox::FAILED.into();
-                        eprintln!(
-                            "webhook: gave up on alert group {} after {} attempts: {}",
-                            d.group_key, d.attempts, d.last_error
-                        );
-                    } else {
-                        let delay = self.backoff(d.attempts);
-                        d.next_attempt_at = ts(now + delay);
-                        eprintln!(
-                            "webhook: alert group {}: attempt {} failed ({}); next at {}",
-                            d.group_key, d.attempts, d.last_error, d.next_attempt_at
-                        );
-                    }
-                }
-            }
-            let mut conn = self.pool.get()?;
-            outbox::update(&mut *conn, &self.target, &d)?;
+            self.record(&mut d, outcome, now, &mut tick)?;
         }
         Ok(tick)
+    }
+
+    /// Records one attempt's outcome: sent, or retried after a backoff, or given up.
+    fn record(
+        &self,
+        d: &mut Delivery,
+        outcome: Result<(), String>,
+        now: DateTime<Utc>,
+        tick: &mut Tick,
+    ) -> Result<(), StoreError> {
+        let now_s = ts(now);
+        let what = if d.group_key.starts_with("stoppage:") {
+            d.group_key.clone()
+        } else {
+            format!("alert group {}", d.group_key)
+        };
+        d.attempts += 1;
+        match outcome {
+            Ok(()) => {
+                d.state = outbox::SENT.into();
+                d.sent_at = Some(now_s);
+                d.last_error.clear();
+                tick.sent += 1;
+                eprintln!("webhook: sent {what}");
+            }
+            Err(e) => {
+                tick.failed += 1;
+                d.last_error = e;
+                if d.attempts >= self.config.max_attempts {
+                    d.state = outbox::FAILED.into();
+                    eprintln!(
+                        "webhook: gave up on {what} after {} attempts: {}",
+                        d.attempts, d.last_error
+                    );
+                } else {
+                    let delay = self.backoff(d.attempts);
+                    d.next_attempt_at = ts(now + delay);
+                    eprintln!(
+                        "webhook: {what}: attempt {} failed ({}); next at {}",
+                        d.attempts, d.last_error, d.next_attempt_at
+                    );
+                }
+            }
+        }
+        let mut conn = self.pool.get()?;
+        outbox::update(&mut *conn, &self.target, d)
     }
 
     /// The wait after `attempts` failed attempts: `backoff · 2^(attempts-1)`, at most `max_backoff`.

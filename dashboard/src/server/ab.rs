@@ -53,6 +53,13 @@ pub async fn create(
     Writer(who): Writer,
     Json(req): Json<AbRequest>,
 ) -> Result<(StatusCode, Json<Requested>), AppError> {
+    let r = enqueue(&state, req, who.name).await?;
+    Ok((StatusCode::CREATED, Json(r)))
+}
+
+/// Checks an A/B request (labels, commits, attempts, scenario) and queues one job per label, on
+/// behalf of `who`: the API's and the A/B form's one path.
+pub async fn enqueue(state: &AppState, req: AbRequest, who: String) -> Result<Requested, AppError> {
     if req.labels.is_empty() || req.labels.len() > queue::MAX_LABELS {
         return Err(AppError::Field {
             field: "labels".into(),
@@ -63,7 +70,7 @@ pub async fn create(
     let arm = |name: &str, e: &EnvBody| -> Result<Arm, AppError> {
         Ok(Arm {
             name: name.into(),
-            commit: resolve_commit(&state, name, &e.commit)?,
+            commit: resolve_commit(state, name, &e.commit)?,
             env: e.env.clone(),
         })
     };
@@ -93,13 +100,13 @@ pub async fn create(
                 "ab",
                 &spec,
                 None,
-                &who.name,
+                &who,
                 &jobs,
                 max_attempts,
             )?)
         })
         .await?;
-    Ok((StatusCode::CREATED, Json(Requested { request_id, jobs })))
+    Ok(Requested { request_id, jobs })
 }
 
 /// One job of an A/B with its table.

@@ -208,6 +208,23 @@ pub fn require(state: &AppState, headers: &HeaderMap, scope: Scope) -> Result<Pr
     let basic = (scope == Scope::Read)
         .then(|| basic_password(headers))
         .flatten();
+    // A header was sent that holds no Bearer token (another scheme, or `Bearer` with nothing):
+    // say what was wrong with it, not that it is missing.
+    if scope != Scope::Read && any_token_for(state, scope) {
+        if let Some(sent) = headers.get(header::AUTHORIZATION) {
+            if bearer(headers).is_none_or(str::is_empty) {
+                let text = sent.to_str().unwrap_or("");
+                let scheme = text.split_whitespace().next().unwrap_or("");
+                return Err(AppError::MalformedToken(if scheme.is_empty() {
+                    "it is empty".into()
+                } else if scheme == "Bearer" {
+                    "`Bearer` is followed by no token".into()
+                } else {
+                    format!("it uses the scheme {scheme:?}, not `Bearer`")
+                }));
+            }
+        }
+    }
     require_token(state, bearer(headers).or(basic.as_deref()), scope)
 }
 

@@ -1,7 +1,8 @@
 //! The one error type of the server: each variant picks the status; the body is always
 //! `{"error": "..."}`. Internal errors are logged with their detail and answered with a generic
 //! message, so store internals never reach a client. [`json_errors`] gives the same body to the
-//! errors that do not come from a handler (axum's rejections, 405, timeouts).
+//! errors that do not come from a handler (axum's rejections, 405, timeouts); a handler's own HTML
+//! error page (the image viewer's 404) is left as it is.
 
 use axum::extract::Request;
 use axum::http::{header, HeaderValue, StatusCode};
@@ -36,6 +37,9 @@ pub enum AppError {
     /// A token was sent and is not a known token (it was not missing: say so).
     #[error("the token sent in `Authorization: Bearer` is not a known write token (revoked, mistyped, or another dashboard's): `tessera-dashboard token list` shows the names of the known ones")]
     UnknownToken,
+    /// An `Authorization` header was sent, but it holds no Bearer token: what is wrong with it.
+    #[error("the `Authorization` header was sent, but {0}: send `Authorization: Bearer <token>` with a write token")]
+    MalformedToken(String),
     #[error("this dashboard needs a read token: `Authorization: Bearer <token>`, or the token as the password of HTTP Basic")]
     ReadUnauthorized,
     #[error("{0}")]
@@ -58,9 +62,10 @@ impl AppError {
             AppError::Unprocessable(_) | AppError::Field { .. } => StatusCode::UNPROCESSABLE_ENTITY,
             AppError::Conflict(_) => StatusCode::CONFLICT,
             AppError::PayloadTooLarge(_) => StatusCode::PAYLOAD_TOO_LARGE,
-            AppError::Unauthorized | AppError::UnknownToken | AppError::ReadUnauthorized => {
-                StatusCode::UNAUTHORIZED
-            }
+            AppError::Unauthorized
+            | AppError::UnknownToken
+            | AppError::MalformedToken(_)
+            | AppError::ReadUnauthorized => StatusCode::UNAUTHORIZED,
             AppError::Forbidden(_) | AppError::WritesDisabled => StatusCode::FORBIDDEN,
             AppError::TooManyRequests { .. } => StatusCode::TOO_MANY_REQUESTS,
             AppError::RequestTimeout(_) => StatusCode::REQUEST_TIMEOUT,
@@ -83,7 +88,7 @@ impl IntoResponse for AppError {
         let mut res = (self.status(), Json(body)).into_response();
         let headers = res.headers_mut();
         match self {
-            AppError::Unauthorized | AppError::UnknownToken => {
+            AppError::Unauthorized | AppError::UnknownToken | AppError::MalformedToken(_) => {
                 headers.insert(header::WWW_AUTHENTICATE, HeaderValue::from_static("Bearer"));
             }
             AppError::ReadUnauthorized => {
@@ -160,7 +165,13 @@ pub async fn json_errors(req: Request, next: Next) -> Response {
         .get(header::CONTENT_TYPE)
         .and_then(|v| v.to_str().ok())
         .is_some_and(|v| v.starts_with("application/json"));
-    if !(status.is_client_error() || status.is_server_error()) || is_json {
+    // A page's own HTML error (the image viewer's 404) stays a page.
+    let is_html = res
+        .headers()
+        .get(header::CONTENT_TYPE)
+        .and_then(|v| v.to_str().ok())
+        .is_some_and(|v| v.starts_with("text/html"));
+    if !(status.is_client_error() || status.is_server_error()) || is_json || is_html {
         return res;
     }
     let (mut parts, body) = res.into_parts();

@@ -5,7 +5,8 @@
 //! The viewer shows one saved frame at a time: A/B flicker between reference and variant (button
 //! or the F key), a wipe between them, reference, variant, the FLIP heat map and the shading-rate
 //! image (alone and over the variant) where stored, and the same variant's frame in another run.
-//! Frames are shown at their natural size and zoom up to 32x with nearest-neighbour pixels; all
+//! A frame wider than its pane opens fitted to it (the whole frame in view; `fit` returns there),
+//! smaller ones at natural size or enlarged; zoom up to 32x with nearest-neighbour pixels; all
 //! panes pan together. A frame slider and playback step through the saved frames. Without
 //! JavaScript every image is still shown at natural size.
 
@@ -182,7 +183,7 @@ pub fn render(v: &Viewer<'_>) -> Result<String, AppError> {
     let has_ref = present[0] && present[1];
     let _ = write!(
         out,
-        "<div class=viewer id=viewer data-viewer=viewer-data><div class=controls><label>frame <input id=frame type=range min=0 max={} value=0 step=1> <span id=frameno>{}</span></label><button id=play type=button>play</button><label>zoom <input id=zoom type=range min=1 max=32 value=1 step=1> <span id=zoomval>1×</span></label>",
+        "<div class=viewer id=viewer data-viewer=viewer-data><div class=controls><label>frame <input id=frame type=range min=0 max={} value=0 step=1> <span id=frameno>{}</span></label><button id=play type=button>play</button><label>zoom <input id=zoom type=range min=1 max=32 value=1 step=1> <span id=zoomval>1×</span></label><button id=fit type=button title=\"the whole frame in its pane\">fit</button>",
         frames.len() - 1,
         frames[0]
     );
@@ -278,8 +279,41 @@ pub async fn page(
     State(state): State<AppState>,
     Path((run_id, scenario, variant)): Path<(String, String, String)>,
     Query(q): Query<ViewerQuery>,
+) -> Result<Response, AppError> {
+    match viewer_page(state, &run_id, &scenario, &variant, q).await {
+        // A link a person followed: a page that says what is missing, not a JSON body.
+        Err(AppError::NotFound(what)) => Ok(not_found_page(&run_id, &what)),
+        other => other.map(IntoResponse::into_response),
+    }
+}
+
+/// The viewer's 404 as a page: what is missing and a way back to the run.
+pub fn not_found_page(run_id: &str, what: &str) -> Response {
+    let body = format!(
+        "<p class=neutral>{}.</p><p>This run saved no images here (a run keeps its frames only where its scenario asks for them, or with <code>tessera run --save-images</code>). Back to <a href=\"/runs/{}\">run {}</a>.</p>",
+        crate::html::esc(what),
+        crate::html::enc(run_id),
+        crate::html::esc(run_id)
+    );
+    (
+        axum::http::StatusCode::NOT_FOUND,
+        Html(layout("No images", "runs", &body)),
+    )
+        .into_response()
+}
+
+async fn viewer_page(
+    state: AppState,
+    run_id: &str,
+    scenario: &str,
+    variant: &str,
+    q: ViewerQuery,
 ) -> Result<Html<String>, AppError> {
-    let (r, s, var) = (run_id.clone(), scenario.clone(), variant.clone());
+    let (r, s, var) = (
+        run_id.to_string(),
+        scenario.to_string(),
+        variant.to_string(),
+    );
     let other_id = q.other.filter(|o| !o.is_empty());
     let (images, (w, h), other, runs, frame_charts) = state
         .db(move |c| {
@@ -300,9 +334,9 @@ pub async fn page(
         })
         .await?;
     let body = render(&Viewer {
-        run_id: &run_id,
-        scenario: &scenario,
-        variant: &variant,
+        run_id,
+        scenario,
+        variant,
         images: &images,
         width: w,
         height: h,

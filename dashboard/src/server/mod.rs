@@ -7,6 +7,7 @@
 //! Not for: SQL (see [`crate::store`]) or chart drawing (see [`crate::svg`]).
 
 pub mod ab;
+pub mod ab_form;
 pub mod assets;
 pub mod auth;
 pub mod blobs;
@@ -104,6 +105,10 @@ pub fn app(state: AppState) -> Router {
         .route("/runs/{run_id}", get(run::page))
         .route("/api/runs/{run_id}", get(run::api))
         .route(
+            "/runs/{run_id}/scenarios/{scenario}",
+            get(run::scenario_page),
+        )
+        .route(
             "/runs/{run_id}/images/{scenario}/{variant}",
             get(images::page),
         )
@@ -161,6 +166,7 @@ pub fn app(state: AppState) -> Router {
         .route("/api/queue/jobs/{id}/return", post(queue::give_back))
         .route("/queue", get(queue_page::page))
         .route("/api/ab", post(ab::create))
+        .route("/ab/new", get(ab_form::page).post(ab_form::submit))
         .route("/api/ab/{request_id}", get(ab::get))
         .route("/api/bisections", post(ab::bisect_create))
         .route("/api/bisections/{id}", get(ab::bisect_get))

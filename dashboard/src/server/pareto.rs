@@ -41,6 +41,30 @@ pub struct ParetoPoint {
     /// The baseline's median GPU time over this variant's (`None` for the baseline itself).
     pub speedup: Option<f64>,
     pub on_front: bool,
+    /// The 95% interval of the median GPU time over the measured frames (6 or more).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gpu_ms_interval: Option<[f64; 2]>,
+    /// The 95% interval of the measure from its per-frame values (2 or more, not all equal):
+    /// `value ± 1.96 σ/√n`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub value_interval: Option<[f64; 2]>,
+}
+
+/// `value ± 1.96 σ/√n` of the finite per-frame values; `None` with fewer than 2 or no spread.
+pub fn frames_interval(value: f64, per_frame: &[f64]) -> Option<[f64; 2]> {
+    let xs: Vec<f64> = per_frame
+        .iter()
+        .copied()
+        .filter(|x| x.is_finite())
+        .collect();
+    let n = xs.len() as f64;
+    if xs.len() < 2 {
+        return None;
+    }
+    let mean = xs.iter().sum::<f64>() / n;
+    let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    let half = 1.96 * (var / n).sqrt();
+    (half > 0.0 && half.is_finite()).then_some([value - half, value + half])
 }
 
 /// Whether `name` is an error measure: an image metric of the measure table (PSNR, SSIM, FLIP,
@@ -124,6 +148,8 @@ pub fn points(s: &ScenarioResult, metric: &str) -> (Vec<ParetoPoint>, bool) {
                 gpu_ms: g.median,
                 value: m.value,
                 on_front: false,
+                gpu_ms_interval: g.median_ci95,
+                value_interval: frames_interval(m.value, &m.per_frame),
             });
         }
     }
@@ -278,7 +304,7 @@ pub fn render(v: &ParetoView) -> String {
         .unwrap_or_default();
     let _ = write!(
         b,
-        "<p>filled: run {}{hollow} · {} ({} is better) against median GPU ms; the line joins the Pareto front</p>",
+        "<p>filled: run {}{hollow} · {} ({} is better) against median GPU ms; the line joins the Pareto front; bars: 95% intervals where the run has repeats (the median over the timed frames, the measure over the compared frames)</p>",
         link(&v.run),
         esc(&v.metric),
         if v.higher_is_better { "higher" } else { "lower" }
@@ -330,6 +356,8 @@ pub fn render(v: &ParetoView) -> String {
                 label: p.variant.clone(),
                 front: p.on_front,
                 colour: technique_colour(&techniques, &p.technique).to_string(),
+                x_interval: p.gpu_ms_interval.filter(|_| group == 0),
+                y_interval: p.value_interval.filter(|_| group == 0),
             })
             .collect(),
     };
@@ -411,9 +439,9 @@ pub fn render(v: &ParetoView) -> String {
             technique_colour(&techniques, &p.technique),
             esc(&p.technique),
             crate::html::name(&p.variant),
-            num(p.gpu_ms),
+            with_interval(p.gpu_ms, p.gpu_ms_interval),
             p.speedup.map_or("–".into(), |x| format!("{x:.2}")),
-            num(p.value),
+            with_interval(p.value, p.value_interval),
             if p.on_front { "on front" } else { "dominated" },
             match &v.metric2 {
                 Some(_) => {
@@ -434,6 +462,19 @@ pub fn render(v: &ParetoView) -> String {
     b
 }
 
+/// A value with its 95% interval under it, small: `1.234` / `1.20–1.25`.
+fn with_interval(v: f64, interval: Option<[f64; 2]>) -> String {
+    match interval {
+        Some([lo, hi]) => format!(
+            "{}<br><span class=muted title=\"95% interval\">{}–{}</span>",
+            num(v),
+            num(lo),
+            num(hi)
+        ),
+        None => num(v),
+    }
+}
+
 pub async fn page(
     State(state): State<AppState>,
     Query(q): Query<ParetoQuery>,
@@ -444,4 +485,18 @@ pub async fn page(
         "error vs time",
         &render(&v),
     )))
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn the_interval_of_repeats_is_the_means_95_percent_interval_around_the_value() {
+        // Mean 2, sample σ 1, n 3: ±1.96/√3.
+        let [lo, hi] = super::frames_interval(2.5, &[1.0, 2.0, 3.0, f64::INFINITY]).unwrap();
+        let half = 1.96 / 3f64.sqrt();
+        assert!((lo - (2.5 - half)).abs() < 1e-12 && (hi - (2.5 + half)).abs() < 1e-12);
+        // No repeats, or no spread: no bar.
+        assert_eq!(super::frames_interval(1.0, &[1.0]), None);
+        assert_eq!(super::frames_interval(1.0, &[1.0, 1.0, 1.0]), None);
+    }
 }

@@ -4,6 +4,10 @@
 //! (the significance test of `tessera compare`), metrics, allocated bytes, links to its series and
 //! images, and per-frame charts of each measure (`run_frame_charts.rs`). The CSV export has the
 //! columns of the harness's `results.csv`.
+//!
+//! A run of more than one scenario opens on a summary per scenario (ok / skipped / failed, what
+//! changed against the previous run beyond noise); a run wider than [`INLINE_RESULTS`] shows only
+//! the summary, each scenario's detail on its own page (`/runs/{run_id}/scenarios/{scenario}`).
 
 use std::fmt::Write;
 
@@ -78,6 +82,24 @@ pub struct Previous {
     pub options: tessera_results::compare::Options,
 }
 
+/// GPU time of `variant` against the previous run: the engine's comparison, the threshold it
+/// was judged with and the series' own noise; `None` without a previous run or frames on both sides.
+fn change_of(
+    prev: &Previous,
+    scenario: &str,
+    v: &tessera_results::VariantResult,
+) -> Option<(tessera_results::stats::TimeChange, f64, Option<f64>)> {
+    let before = prev
+        .scenarios
+        .iter()
+        .find(|s| s.scenario == scenario)
+        .and_then(|s| s.results.iter().find(|w| w.variant == v.variant))
+        .filter(|w| w.status == Status::Ok)?;
+    let (a, b) = (frame_samples(before)?, frame_samples(v)?);
+    let (threshold, noise) = prev.options.threshold_for(scenario, &v.variant);
+    compare_times(&a, &b, threshold).map(|c| (c, threshold, noise))
+}
+
 /// GPU time of `variant` against the previous run: change and verdict, as a table cell.
 fn change_cell(
     prev: Option<&Previous>,
@@ -87,18 +109,8 @@ fn change_cell(
     let Some(prev) = prev else {
         return "<td class=n></td>".into();
     };
-    let before = prev
-        .scenarios
-        .iter()
-        .find(|s| s.scenario == scenario)
-        .and_then(|s| s.results.iter().find(|w| w.variant == v.variant))
-        .filter(|w| w.status == Status::Ok);
-    let (Some(a), Some(b)) = (before.and_then(frame_samples), frame_samples(v)) else {
-        return "<td class=n>–</td>".into();
-    };
-    let (threshold, noise) = prev.options.threshold_for(scenario, &v.variant);
-    match compare_times(&a, &b, threshold) {
-        Some(c) => {
+    match change_of(prev, scenario, v) {
+        Some((c, threshold, noise)) => {
             let (class, word) = match c.verdict {
                 TimeVerdict::Slower => ("worse", "slower"),
                 TimeVerdict::Faster => ("better", "faster"),
@@ -288,8 +300,144 @@ fn scenario_section(d: &RunDetail, prev: Option<&Previous>, s: &ScenarioResult, 
     );
 }
 
-/// The run page body.
-pub fn render(d: &RunDetail, prev: Option<&Previous>) -> String {
+/// A run with more results than this opens on its per-scenario summary alone; each scenario's
+/// detail (tables, per-pass bars, per-frame charts, conditions) is its own page
+/// (`/runs/{run_id}/scenarios/{scenario}`). A nightly run of 1,700 results would otherwise be
+/// 7.6 MB of HTML that takes a browser seconds to lay out.
+pub const INLINE_RESULTS: usize = 150;
+
+/// Most changed or failed variants named in one summary cell; the rest are counted.
+const SUMMARY_NAMES: usize = 3;
+
+/// Where a scenario's detail is: its section on this page, or its own page.
+fn scenario_href(run_id: &str, scenario: &str, inline: bool) -> String {
+    if inline {
+        format!("#s-{}", enc(scenario))
+    } else {
+        format!("/runs/{}/scenarios/{}", enc(run_id), enc(scenario))
+    }
+}
+
+/// Names with a rest count: `a +6.1%, b +5.2%, c +5.0% and 4 more`.
+fn named_list(items: &[String]) -> String {
+    let mut out = items
+        .iter()
+        .take(SUMMARY_NAMES)
+        .cloned()
+        .collect::<Vec<_>>()
+        .join(", ");
+    if items.len() > SUMMARY_NAMES {
+        let _ = write!(out, " and {} more", items.len() - SUMMARY_NAMES);
+    }
+    out
+}
+
+/// The per-scenario summary: variants, ok / skipped / failed, and what changed against the
+/// previous run beyond noise (slower, faster; the largest first), what could not be decided.
+pub fn summary(d: &RunDetail, prev: Option<&Previous>, inline: bool) -> String {
+    struct Row<'a> {
+        s: &'a ScenarioResult,
+        ok: usize,
+        skipped: usize,
+        failed: Vec<String>,
+        changed: Vec<(f64, bool, String)>,
+        undecided: usize,
+    }
+    let rows: Vec<Row> = d
+        .scenarios
+        .iter()
+        .map(|s| {
+            let mut r = Row {
+                s,
+                ok: 0,
+                skipped: 0,
+                failed: Vec::new(),
+                changed: Vec::new(),
+                undecided: 0,
+            };
+            for v in &s.results {
+                match &v.status {
+                    Status::Ok => r.ok += 1,
+                    Status::Skipped { .. } => r.skipped += 1,
+                    Status::Failed { error } => r.failed.push(format!(
+                        "<span title=\"{}\">{}</span>",
+                        esc(error),
+                        name(&v.variant)
+                    )),
+                }
+                if v.status != Status::Ok {
+                    continue;
+                }
+                match prev.and_then(|p| change_of(p, &s.scenario, v)) {
+                    Some((c, ..))
+                        if matches!(c.verdict, TimeVerdict::Slower | TimeVerdict::Faster) =>
+                    {
+                        r.changed.push((
+                            c.change,
+                            c.verdict == TimeVerdict::Slower,
+                            v.variant.clone(),
+                        ))
+                    }
+                    Some((c, ..)) if c.verdict == TimeVerdict::TooFewFrames => r.undecided += 1,
+                    _ => {}
+                }
+            }
+            r.changed.sort_by(|a, b| b.0.abs().total_cmp(&a.0.abs()));
+            r
+        })
+        .collect();
+    let count = |f: &dyn Fn(&Row) -> bool| rows.iter().filter(|r| f(r)).count();
+    let results: usize = d.scenarios.iter().map(|s| s.results.len()).sum();
+    let mut out = format!(
+        "<h2 id=summary>Scenarios</h2><p id=summary-counts>{results} results in {} scenarios · <span class=worse>{} with a slower variant</span> · <span class=better>{} with a faster one</span> · <span class=failed>{} with a failure</span>{}</p>",
+        d.scenarios.len(),
+        count(&|r| r.changed.iter().any(|c| c.1)),
+        count(&|r| r.changed.iter().any(|c| !c.1)),
+        count(&|r| !r.failed.is_empty()),
+        if inline {
+            String::new()
+        } else {
+            " · each scenario's tables and charts open on its own page".into()
+        }
+    );
+    let _ = write!(
+        out,
+        "<div class=scroll><table id=run-summary><tr><th>scenario</th><th class=n>variants</th><th class=n>ok</th><th class=n>skipped</th><th class=n>failed</th><th title=\"median GPU time against the previous run, beyond its noise by the test of tessera compare\">changed vs prev (GPU ms)</th><th class=n title=\"too few frames to tell a change\">undecided</th><th>failures</th></tr>"
+    );
+    for r in &rows {
+        let changed: Vec<String> = r
+            .changed
+            .iter()
+            .map(|(c, slower, v)| {
+                format!(
+                    "<span class=nw>{} <span class={}>{}</span></span>",
+                    name(v),
+                    if *slower { "worse" } else { "better" },
+                    pct(*c)
+                )
+            })
+            .collect();
+        let _ = write!(
+            out,
+            "<tr><td><a href=\"{}\">{}</a></td><td class=n>{}</td><td class=n>{}</td><td class=n>{}</td><td class=\"n{}\">{}</td><td>{}</td><td class=n>{}</td><td>{}</td></tr>",
+            scenario_href(&d.run.run_id, &r.s.scenario, inline),
+            name(&r.s.scenario),
+            r.s.results.len(),
+            r.ok,
+            r.skipped,
+            if r.failed.is_empty() { "" } else { " failed" },
+            r.failed.len(),
+            if prev.is_none() { "<span class=muted>no previous run</span>".into() } else { named_list(&changed) },
+            r.undecided,
+            named_list(&r.failed)
+        );
+    }
+    out.push_str("</table></div>");
+    out
+}
+
+/// The lines above the detail: commit, times, adapter, counts, exports, and the previous run.
+fn header(d: &RunDetail, prev: Option<&Previous>) -> String {
     let r = &d.run;
     let mut out = format!(
         "<p>commit <code>{}</code>{} · started {} · finished {} · {} · harness {}</p><p>adapter <a href=\"/?adapter={}\">{}</a> ({}, {}) · driver {} {} · host {}</p><p><span class=ok>{} ok</span> · <span class=skipped>{} skipped</span> · <span class=failed>{} failed</span></p>",
@@ -312,12 +460,17 @@ pub fn render(d: &RunDetail, prev: Option<&Previous>) -> String {
     );
     let _ = write!(
         out,
-        "<p>suite {} · branch {} · export <a href=\"/api/runs/{}?format=csv\">CSV</a> <a href=\"/api/runs/{}\">JSON</a></p>",
+        "<p>suite {} · branch {} · export <a href=\"/api/runs/{}?format=csv\">CSV</a> <a href=\"/api/runs/{}\">JSON</a> · {}</p>",
         esc(r.suite.as_deref().unwrap_or("–")),
         esc(r.branch.as_deref().unwrap_or("–")),
         enc(&r.run_id),
-        enc(&r.run_id)
+        enc(&r.run_id),
+        // Against the previous run's commit, else this commit against itself.
+        super::ab_form::link(prev.map_or(&r.run_id, |p| &p.run_id), &r.run_id, None)
     );
+    if r.commit.is_none() {
+        out.push_str("<p id=no-commit class=neutral>This run was recorded without a git commit (tessera ran outside a checkout): it is kept, but never used as the previous run of its suite.</p>");
+    }
     match prev {
         Some(p) => {
             let _ = write!(
@@ -331,7 +484,70 @@ pub fn render(d: &RunDetail, prev: Option<&Previous>) -> String {
         }
         None => out.push_str("<p class=muted>No earlier run of this suite on this adapter.</p>"),
     }
-    for s in &d.scenarios {
+    out
+}
+
+/// The run page body: the header, the per-scenario summary (for more than one scenario), and
+/// every scenario's detail when the run has at most [`INLINE_RESULTS`] results.
+pub fn render(d: &RunDetail, prev: Option<&Previous>) -> String {
+    let mut out = header(d, prev);
+    let results: usize = d.scenarios.iter().map(|s| s.results.len()).sum();
+    let inline = results <= INLINE_RESULTS;
+    if d.scenarios.len() > 1 || !inline {
+        out.push_str(&summary(d, prev, inline));
+    }
+    if inline {
+        for s in &d.scenarios {
+            scenario_section(d, prev, s, &mut out);
+        }
+    }
+    out
+}
+
+/// One scenario of a large run on its own page: a link back to the summary, the previous and
+/// next scenarios, and the scenario's detail as the run page shows it for a small run.
+pub fn render_scenario(d: &RunDetail, prev: Option<&Previous>, scenario: &str) -> String {
+    let r = &d.run;
+    let names: Vec<&str> = d.scenarios.iter().map(|s| s.scenario.as_str()).collect();
+    let at = names.iter().position(|n| *n == scenario);
+    let link = |n: &str, word: &str| {
+        format!(
+            " · {word} <a href=\"/runs/{}/scenarios/{}\">{}</a>",
+            enc(&r.run_id),
+            enc(n),
+            name(n)
+        )
+    };
+    let mut out = format!(
+        "<p id=crumbs><a href=\"/runs/{}#summary\">run {}</a> (all {} scenarios){}{}</p><p>commit <code>{}</code> · adapter {} · driver {} {} · started {} · {}</p>",
+        enc(&r.run_id),
+        esc(&r.run_id),
+        names.len(),
+        at.and_then(|i| i.checked_sub(1))
+            .map_or(String::new(), |i| link(names[i], "previous")),
+        at.and_then(|i| names.get(i + 1))
+            .map_or(String::new(), |n| link(n, "next")),
+        esc(&commit(r.commit.as_deref())),
+        esc(&r.adapter),
+        esc(&r.driver),
+        esc(&r.driver_info),
+        esc(&r.started_at),
+        super::ab_form::link(
+            prev.map_or(&r.run_id, |p| &p.run_id),
+            &r.run_id,
+            Some(scenario)
+        ),
+    );
+    if let Some(p) = prev {
+        let _ = write!(
+            out,
+            "<p>The <em>vs prev</em> column is against <a href=\"/runs/{}/scenarios/{}\">{}</a>, the previous run of this suite on this adapter.</p>",
+            enc(&p.run_id),
+            enc(scenario),
+            esc(&p.run_id)
+        );
+    }
+    if let Some(s) = d.scenarios.iter().find(|s| s.scenario == scenario) {
         scenario_section(d, prev, s, &mut out);
     }
     out
@@ -362,5 +578,44 @@ pub async fn page(
         &format!("Run {}", d.run.run_id),
         "runs",
         &render(&d, prev.as_ref()),
+    )))
+}
+
+/// `GET /runs/{run_id}/scenarios/{scenario}`: one scenario's detail, against the same
+/// scenario of the previous run of the suite.
+pub async fn scenario_page(
+    State(state): State<AppState>,
+    Path((run_id, scenario)): Path<(String, String)>,
+) -> Result<Html<String>, AppError> {
+    let wanted = scenario.clone();
+    let (d, prev) = state
+        .db(move |c| {
+            let d = read::run(c, &run_id)?;
+            if !d.scenarios.iter().any(|s| s.scenario == scenario) {
+                return Err(AppError::NotFound(format!(
+                    "run {run_id} has no scenario {scenario:?}"
+                )));
+            }
+            let prev = match browse::previous_in_suite(c, &run_id)? {
+                Some(p) => Some(Previous {
+                    // The previous run may not hold this scenario: then nothing to compare.
+                    scenarios: read::scenario_result(c, &p, &scenario)
+                        .map(|s| vec![s])
+                        .unwrap_or_default(),
+                    run_id: p,
+                    options: tessera_results::compare::Options {
+                        threshold_pct: DEFAULT_THRESHOLD_PCT,
+                        noise: crate::store::noise::frame_time_noise(c, &run_id)?,
+                    },
+                }),
+                None => None,
+            };
+            Ok((d, prev))
+        })
+        .await?;
+    Ok(Html(layout(
+        &format!("Run {} · {}", d.run.run_id, wanted),
+        "runs",
+        &render_scenario(&d, prev.as_ref(), &wanted),
     )))
 }

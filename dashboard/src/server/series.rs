@@ -303,6 +303,7 @@ pub fn render(v: &SeriesView) -> String {
         .iter()
         .map(|p| SeriesMark {
             value: p.value,
+            tick: commit(p.commit.as_deref()),
             label: format!(
                 "{} {} {}: {}",
                 commit(p.commit.as_deref()),

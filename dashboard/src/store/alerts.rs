@@ -614,7 +614,18 @@ pub struct Placement {
     pub location_probability: f64,
     pub first_candidate: i64,
     pub last_candidate: i64,
+    /// The run before the first candidate: with `last_candidate`, the commit range the series'
+    /// own location of the change spans, which names its group ([`own_key`]).
+    pub range_before: i64,
     pub status: DetectionStatus,
+}
+
+/// The group key of a placement: the commit range its own location spans (the located commit
+/// when the location is exact, its whole candidate range otherwise). A series whose change is
+/// located loosely (a noisy CPU adapter at 58%) does not join, through a shared nightly range, a
+/// group another series located exactly.
+fn own_key(conn: &mut dyn Connection, p: &Placement) -> Result<String, StoreError> {
+    key_of_runs(conn, p.range_before, p.last_candidate.max(p.run_pk_after))
 }
 
 fn placement_values(p: &Placement) -> Vec<Value> {
@@ -638,7 +649,7 @@ fn placement_values(p: &Placement) -> Vec<Value> {
 /// A new alert; it joins the group its commit range names (taking the group's triage, so a change
 /// detected again keeps what people said about it), else a new group. Returns its id.
 pub fn insert(conn: &mut dyn Connection, series_id: i64, p: &Placement) -> Result<i64, StoreError> {
-    let k = key_of_runs(conn, p.run_pk_before, p.run_pk_after)?;
+    let k = own_key(conn, p)?;
     let group = group_for_key(conn, &k)?;
     let now = crate::now_rfc3339();
     let mut params = placement_values(p);
@@ -696,15 +707,22 @@ pub fn place(conn: &mut dyn Connection, id: i64, p: &Placement) -> Result<(), St
          WHERE id = $13",
         &params,
     )?;
-    let k = key_of_runs(conn, p.run_pk_before, p.run_pk_after)?;
+    let k = own_key(conn, p)?;
     let Some(row) = old else {
         return Ok(());
     };
     let Some(g) = row.opt_i64(0)? else {
         return Ok(());
     };
-    let old_key = key_of_runs(conn, row.i64(1)?, row.i64(2)?)?;
-    let target = if old_key == k {
+    // Staying at its range (exact, or the candidate range already recorded for its group).
+    let named = conn
+        .query_opt(
+            "SELECT group_id FROM alert_group_keys WHERE key = $1",
+            &[k.as_str().into()],
+        )?
+        .map(|r| r.i64(0))
+        .transpose()?;
+    let target = if named == Some(g) {
         g
     } else {
         regroup_target(conn, id, g, &k)?

@@ -253,7 +253,8 @@ pub fn series_keys(conn: &mut dyn Connection, ids: &[i64]) -> Result<Vec<SeriesK
 
 /// The run before `run_id` on the same adapter with the same suite (runs without a suite count as
 /// one suite) that holds at least one of its scenarios (a suite split over several runs has runs
-/// with other scenarios), by start time.
+/// with other scenarios), by start time. A run recorded without a commit is never the previous
+/// run: nothing says what it measured.
 pub fn previous_in_suite(
     conn: &mut dyn Connection,
     run_id: &str,
@@ -263,7 +264,7 @@ pub fn previous_in_suite(
             "SELECT p.run_id FROM runs r JOIN runs p ON p.adapter_id = r.adapter_id
                AND p.suite IS NOT DISTINCT FROM r.suite
                AND (p.started_at < r.started_at OR (p.started_at = r.started_at AND p.id < r.id))
-             WHERE r.run_id = $1
+             WHERE r.run_id = $1 AND p.commit_sha IS NOT NULL
                AND EXISTS (SELECT 1 FROM scenario_results sp JOIN scenario_results sr
                              ON sr.scenario = sp.scenario
                            WHERE sp.run_pk = p.id AND sr.run_pk = r.id)

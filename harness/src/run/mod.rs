@@ -117,6 +117,11 @@ pub fn run_with_sensors(
 
     let started = chrono::Utc::now();
     let commit = git_commit();
+    if commit.is_none() {
+        eprintln!(
+            "warning: not in a git checkout (or git failed): the run is recorded without a commit; the dashboard stores it but never compares a later run with it as its previous run (run tessera from the repository to record the commit)"
+        );
+    }
     let commit_time = commit.as_ref().and_then(|_| git_commit_time());
     let run_id = unique_run_id(&opts.out, &started, commit.as_ref());
     let run_dir = opts.out.join(&run_id);

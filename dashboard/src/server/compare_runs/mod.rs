@@ -44,10 +44,11 @@ pub async fn page(
 ) -> Result<Html<String>, AppError> {
     let q = query::parse(raw.as_deref())?;
     let mut body = view::form(&q);
+    let focus = q.scenario.clone();
     match query::load(&state, q).await? {
         Some(l) => {
             let c = &l.comparison;
-            body.push_str(&view::render_with(&l));
+            body.push_str(&view::render_with(&l, focus.as_deref()));
             Ok(Html(layout(
                 &format!("Compare {} with {}", c.b.run_id, c.a.run_id),
                 "compare",

@@ -1,6 +1,7 @@
 //! The compare request: `a` and `b` (run ids, or commits of at least 4 hex digits resolved to the
 //! newest run of that commit on `adapter` and in `suite` when given), or two `pick`s (the runs
-//! list's tick boxes, the older is A), `threshold` (percent, 5 by default) and `format`; and the
+//! list's tick boxes, the older is A), `threshold` (percent, 5 by default), `format` and `scenario`
+//! (one scenario's table of a large comparison); and the
 //! comparison of the two runs it names, read from the store.
 //!
 //! Not for: presenting the comparison ([`super::view`], [`super::formats`]).
@@ -25,6 +26,8 @@ pub struct CompareRunsQuery {
     pub threshold: f64,
     pub format: Format,
     pub picks: Vec<String>,
+    /// One scenario's table of a large comparison (the page shows a summary otherwise).
+    pub scenario: Option<String>,
 }
 
 pub fn parse(raw: Option<&str>) -> Result<CompareRunsQuery, AppError> {
@@ -44,6 +47,7 @@ pub fn parse(raw: Option<&str>) -> Result<CompareRunsQuery, AppError> {
             "b" => q.b = Some(v),
             "pick" => q.picks.push(v),
             "suite" => q.suite = Some(v),
+            "scenario" => q.scenario = Some(v),
             "adapter" => {
                 q.adapter = Some(v.parse().map_err(|_| {
                     AppError::BadRequest(format!("adapter must be an id, not {v:?}"))

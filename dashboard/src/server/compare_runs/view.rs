@@ -18,6 +18,15 @@ use tessera_results::RunInfo;
 use super::query::CompareRunsQuery;
 use crate::html::{commit, enc, esc, name, num};
 
+/// A comparison of more variants than this opens on its per-scenario summary; each scenario's
+/// table is `?scenario=NAME` (the run page's limit, [`crate::server::run::INLINE_RESULTS`]).
+pub const INLINE_VARIANTS: usize = crate::server::run::INLINE_RESULTS;
+
+/// Most regressions (and improvements) named at the top; the rest are in the scenarios' tables.
+const FINDINGS_SHOWN: usize = 40;
+/// Variants with too few frames named in the sentence that says so; the rest are counted.
+const TOO_FEW_SHOWN: usize = 10;
+
 fn plural(n: usize, word: &str) -> String {
     format!("{n} {word}{}", if n == 1 { "" } else { "s" })
 }
@@ -118,13 +127,24 @@ fn findings(b: &mut String, c: &Comparison) {
         ("Regressions", Verdict::Worse),
         ("Improvements", Verdict::Better),
     ] {
-        let items: Vec<String> = c.findings_of(v).map(finding_item).collect();
-        if !items.is_empty() {
+        let all: Vec<&Finding> = c.findings_of(v).collect();
+        if !all.is_empty() {
+            let mut items: String = all
+                .iter()
+                .take(FINDINGS_SHOWN)
+                .map(|f| finding_item(f))
+                .collect();
+            if all.len() > FINDINGS_SHOWN {
+                let _ = write!(
+                    items,
+                    "<li class=muted>and {} more: see the scenarios below</li>",
+                    all.len() - FINDINGS_SHOWN
+                );
+            }
             let _ = write!(
                 b,
-                "<h2 class={}>{title}</h2><ul class=findings>{}</ul>",
+                "<h2 class={}>{title}</h2><ul class=findings>{items}</ul>",
                 verdict_class(v),
-                items.concat()
             );
         }
     }
@@ -133,12 +153,21 @@ fn findings(b: &mut String, c: &Comparison) {
         .map(|(s, v)| format!("{} / {}", name(&s.scenario), name(&v.variant)))
         .collect();
     if !few.is_empty() {
+        let mut named = few
+            .iter()
+            .take(TOO_FEW_SHOWN)
+            .cloned()
+            .collect::<Vec<_>>()
+            .join(", ");
+        if few.len() > TOO_FEW_SHOWN {
+            let _ = write!(named, " and {} more", few.len() - TOO_FEW_SHOWN);
+        }
         let _ = write!(
             b,
             "<p id=too-few><strong>Too few frames</strong> to tell a time change in {} (the test cannot reach p &lt; {} with so few frames, whatever the change): {}. It takes {} measured frames per side (<code>frames.measured</code>).</p>",
             few.len(),
             c.rule.alpha,
-            few.join(", "),
+            named,
             c.rule.frames_needed
         );
     }
@@ -270,8 +299,8 @@ fn scenario_table(b: &mut String, c: &Comparison, s: &ScenarioComparison) {
     b.push_str("</table></div>");
 }
 
-/// The page body below the form.
-pub fn render(c: &Comparison) -> String {
+/// The page body below the form: the whole comparison, or with `focus` one scenario's table.
+pub fn render(c: &Comparison, focus: Option<&str>) -> String {
     let q = format!("a={}&b={}", enc(&c.a.run_id), enc(&c.b.run_id));
     let thr = if c.rule.threshold_pct == tessera_results::stats::DEFAULT_THRESHOLD_PCT {
         String::new()
@@ -282,9 +311,15 @@ pub fn render(c: &Comparison) -> String {
     b.push_str(&run_line("B (new)", &c.b));
     let _ = write!(
         b,
-        "<p><a id=permalink href=\"/compare/runs?{q}{thr}\">permalink</a> · export <a href=\"/api/compare/runs?{q}{thr}&format=md\">Markdown</a> <a href=\"/api/compare/runs?{q}{thr}&format=csv\">CSV</a> <a href=\"/api/compare/runs?{q}{thr}\">JSON</a> · <a href=\"/compare/runs?a={}&b={}{thr}\">swap A and B</a></p>",
+        "<p><a id=permalink href=\"/compare/runs?{q}{thr}\">permalink</a> · export <a href=\"/api/compare/runs?{q}{thr}&format=md\">Markdown</a> <a href=\"/api/compare/runs?{q}{thr}&format=csv\">CSV</a> <a href=\"/api/compare/runs?{q}{thr}\">JSON</a> · <a href=\"/compare/runs?a={}&b={}{thr}\">swap A and B</a> · {}</p>",
         enc(&c.b.run_id),
         enc(&c.a.run_id),
+        // On the shown scenario, else the first regression's, else B's first.
+        crate::server::ab_form::link(
+            &c.a.run_id,
+            &c.b.run_id,
+            focus.or_else(|| c.findings_of(Verdict::Worse).next().map(|f| f.scenario.as_str()))
+        ),
     );
     let _ = write!(
         b,
@@ -336,17 +371,115 @@ pub fn render(c: &Comparison) -> String {
         slow = if c.timings_count { "worse" } else { "muted" },
         fast = if c.timings_count { "better" } else { "muted" },
     );
+    if let Some(f) = focus {
+        // One scenario of a large comparison: its table under the whole comparison's verdict.
+        let _ = write!(
+            b,
+            "<p id=crumbs><a href=\"/compare/runs?{q}{thr}#summary\">all {} scenarios of this comparison</a></p>",
+            c.scenarios.len()
+        );
+        match c.scenarios.iter().find(|s| s.scenario == f) {
+            Some(s) => scenario_table(&mut b, c, s),
+            None => {
+                let _ = write!(
+                    b,
+                    "<p class=neutral>Neither run has scenario {}.</p>",
+                    name(f)
+                );
+            }
+        }
+        return b;
+    }
     findings(&mut b, c);
-    for s in &c.scenarios {
-        scenario_table(&mut b, c, s);
+    let inline = c.variants().count() <= INLINE_VARIANTS;
+    if c.scenarios.len() > 1 || !inline {
+        summary_table(&mut b, c, &format!("{q}{thr}"), inline);
+    }
+    if inline {
+        for s in &c.scenarios {
+            scenario_table(&mut b, c, s);
+        }
     }
     b
 }
 
+/// Per scenario: variants, how many slower and faster (counted where time counts), within
+/// noise or below threshold, too few frames, status changes, metric changes; a link to its table.
+fn summary_table(b: &mut String, c: &Comparison, query: &str, inline: bool) {
+    let _ = write!(
+        b,
+        "<h2 id=summary>Scenarios</h2>{}<div class=scroll><table id=compare-summary><tr><th>scenario</th><th class=n>variants</th><th class=n>slower</th><th class=n>faster</th><th class=n title=\"within noise or below threshold\">same</th><th class=n>too few frames</th><th class=n title=\"status changed (ok, skipped, failed, gate failed)\">status changes</th><th>worse metrics</th></tr>",
+        if inline {
+            ""
+        } else {
+            "<p class=muted>Each scenario's table (frame time with its interval, passes, metrics, images) opens on its own page.</p>"
+        }
+    );
+    for s in &c.scenarios {
+        let n = |v: TimeVerdict| {
+            s.variants
+                .iter()
+                .filter(|x| x.time_verdict() == Some(v))
+                .count()
+        };
+        let href = if inline {
+            format!("#s-{}", enc(&s.scenario))
+        } else {
+            format!("/compare/runs?{query}&scenario={}", enc(&s.scenario))
+        };
+        let worse_metrics: Vec<String> = s
+            .variants
+            .iter()
+            .flat_map(|v| {
+                v.metrics
+                    .iter()
+                    .filter(|m| m.verdict == Verdict::Worse)
+                    .map(move |m| format!("{} {}", esc(&v.variant), esc(&m.name)))
+            })
+            .collect();
+        let status = s
+            .variants
+            .iter()
+            .filter(|v| v.status.a != v.status.b)
+            .count();
+        let (slow, fast) = (n(TimeVerdict::Slower), n(TimeVerdict::Faster));
+        let counted = |k: usize, class: &str| {
+            if k > 0 && c.timings_count {
+                format!("<td class=\"n {class}\">{k}</td>")
+            } else {
+                format!("<td class=n>{k}</td>")
+            }
+        };
+        let _ = write!(
+            b,
+            "<tr><td><a href=\"{href}\">{}</a>{}</td><td class=n>{}</td>{}{}<td class=n>{}</td><td class=n>{}</td><td class=\"n{}\">{status}</td><td>{}</td></tr>",
+            name(&s.scenario),
+            match s.only_in {
+                Some(side) => format!(" <span class=muted>(only in {side:?})</span>"),
+                None => String::new(),
+            },
+            s.variants.len(),
+            counted(slow, "worse"),
+            counted(fast, "better"),
+            n(TimeVerdict::WithinNoise) + n(TimeVerdict::BelowThreshold),
+            n(TimeVerdict::TooFewFrames),
+            if status > 0 { " neutral" } else { "" },
+            {
+                let mut w = worse_metrics.iter().take(3).cloned().collect::<Vec<_>>().join(", ");
+                if worse_metrics.len() > 3 {
+                    let _ = write!(w, " and {} more", worse_metrics.len() - 3);
+                }
+                w
+            }
+        );
+    }
+    b.push_str("</table></div>");
+}
+
 /// The page body below the form, with the conditions: the environment diff beside the verdict
 /// and each variant's conditions in A and B.
-pub fn render_with(l: &super::query::Loaded) -> String {
-    let mut b = render(&l.comparison);
+pub fn render_with(l: &super::query::Loaded, focus: Option<&str>) -> String {
+    let mut b = render(&l.comparison, focus);
     let env = if l.environment.is_empty() {
         "<p id=environment class=muted>Conditions: the same driver and harness; clocks, temperature and throttling alike where recorded.</p>".to_string()
     } else {
@@ -363,12 +496,14 @@ pub fn render_with(l: &super::query::Loaded) -> String {
         Some(at) => b.insert_str(at, &env),
         None => b.push_str(&env),
     }
-    let table = conditions_table(l);
-    b.push_str(&table);
+    // The conditions per variant: with the scenarios' tables, not under a summary.
+    if focus.is_some() || l.comparison.variants().count() <= INLINE_VARIANTS {
+        b.push_str(&conditions_table(l, focus));
+    }
     b
 }
 
-fn conditions_table(l: &super::query::Loaded) -> String {
+fn conditions_table(l: &super::query::Loaded, focus: Option<&str>) -> String {
     use crate::server::conditions_view::{cells, HEADERS};
     let any = |s: &[tessera_results::ScenarioResult]| {
         s.iter().flat_map(|s| &s.results).any(|v| {
@@ -383,7 +518,11 @@ fn conditions_table(l: &super::query::Loaded) -> String {
     let mut out = format!(
         "<h2 id=conditions>Conditions</h2><div class=scroll><table class=conditions><tr><th>scenario</th><th>variant</th><th>run</th>{HEADERS}</tr>"
     );
-    for (s, v) in l.comparison.variants() {
+    for (s, v) in l
+        .comparison
+        .variants()
+        .filter(|(s, _)| focus.is_none_or(|f| f == s.scenario))
+    {
         for (side, runs) in [("A", &l.a), ("B", &l.b)] {
             let Some(r) = runs
                 .iter()

@@ -57,7 +57,7 @@ const STYLE: &str = "<style>
 .meta{margin:2px 0 6px;color:#444}.meta code{background:#e8ebf0;padding:0 3px}
 .chg{display:inline-block;white-space:nowrap;min-width:84px;padding:0 6px;border-radius:3px;font-weight:600;font-variant-numeric:tabular-nums;text-align:right}
 .chg.worse{background:#fde8e6;color:#a1140f}.chg.better{background:#e2f3e7;color:#0d6b2c}
-.chg.via{background:#eceff3;color:#444;white-space:normal}.count.worse{color:#a1140f;font-weight:600}.count.better{color:#0d6b2c;font-weight:600}
+.pivot td{vertical-align:top}.pivot a.via{color:#555}.chg.via{background:#eceff3;color:#444;white-space:normal}.count.worse{color:#a1140f;font-weight:600}.count.better{color:#0d6b2c;font-weight:600}
 .badge{display:inline-block;padding:0 7px;border-radius:9px;font-size:12px;border:1px solid #aaa;background:#fff}
 .st-new{background:#fff3d1;border-color:#d9a521}.st-acknowledged{background:#e3ebfb;border-color:#6f93dd}
 .st-fixed{background:#e2f3e7;border-color:#5aa772}.st-invalid,.st-ignored{background:#eee;color:#555}
@@ -372,6 +372,97 @@ pub async fn page(
 
 /// Most series charted on a group's page; the rest are listed.
 const MAX_CHARTS: usize = 24;
+/// A group of more series than this opens on a table by scenario and variant (a cell per series,
+/// its change and a link to it) and charts only its [`PIVOT_CHARTS`] largest changes: one chart
+/// per series of a change that moved hundreds of them is a page nobody reads.
+const PIVOT_FROM: usize = MAX_CHARTS;
+/// Charts on the page of a pivoted group.
+const PIVOT_CHARTS: usize = 6;
+
+/// Charts a group's page draws: all its series up to [`MAX_CHARTS`], or [`PIVOT_CHARTS`] when
+/// it pivots.
+fn charts_for(g: &Group) -> usize {
+    if g.alerts.len() > PIVOT_FROM {
+        PIVOT_CHARTS
+    } else {
+        MAX_CHARTS
+    }
+}
+
+/// A large group's series by scenario (rows) and variant (columns): each cell the change of its
+/// series (with the adapter and measure where the group has several), linked to the series.
+fn pivot(g: &Group) -> String {
+    let mut scenarios: Vec<&str> = Vec::new();
+    let mut variants: Vec<&str> = Vec::new();
+    let mut adapters: Vec<&str> = Vec::new();
+    let mut measures: Vec<&str> = Vec::new();
+    for a in &g.alerts {
+        for (list, x) in [
+            (&mut scenarios, a.series.scenario.as_str()),
+            (&mut variants, a.series.variant.as_str()),
+            (&mut adapters, a.series.adapter.as_str()),
+            (&mut measures, a.series.measure.as_str()),
+        ] {
+            if !list.contains(&x) {
+                list.push(x);
+            }
+        }
+    }
+    scenarios.sort_unstable();
+    variants.sort_unstable();
+    let mut b = format!(
+        "<h2 id=pivot>{} series by scenario and variant</h2><p class=muted>{} scenarios × {} variants; each cell is a series' change (▲ up, ▼ down; red worse, green better, grey moved with its baseline), linked to its history. Charts follow for the {} largest changes.</p><div class=scroll><table class=pivot><tr><th>scenario</th>",
+        g.alerts.len(),
+        scenarios.len(),
+        variants.len(),
+        PIVOT_CHARTS.min(g.alerts.len())
+    );
+    for v in &variants {
+        let _ = write!(b, "<th>{}</th>", name(v));
+    }
+    b.push_str("</tr>");
+    for s in &scenarios {
+        let _ = write!(b, "<tr><th>{}</th>", name(s));
+        for v in &variants {
+            let cell: Vec<String> = g
+                .alerts
+                .iter()
+                .filter(|a| a.series.scenario == *s && a.series.variant == *v)
+                .map(|a| {
+                    let mut what = Vec::new();
+                    if adapters.len() > 1 {
+                        what.push(esc(&a.series.adapter));
+                    }
+                    if measures.len() > 1 {
+                        what.push(esc(&a.series.measure));
+                    }
+                    let class = if a.via_baseline {
+                        "via"
+                    } else if a.is_regression {
+                        "worse"
+                    } else {
+                        "better"
+                    };
+                    format!(
+                        "<a class=\"nw {class}\" href=\"/series/{}\" title=\"{} · {}: {} → {}\">{}{} {}</a>",
+                        a.series.id,
+                        esc(&a.series.adapter),
+                        esc(&a.series.measure),
+                        num(a.value_before),
+                        num(a.value_after),
+                        if what.is_empty() { String::new() } else { format!("{} ", what.join(" ")) },
+                        if a.relative_change >= 0.0 { "▲" } else { "▼" },
+                        pct(a.relative_change)
+                    )
+                })
+                .collect();
+            let _ = write!(b, "<td class=n>{}</td>", cell.join("<br>"));
+        }
+        b.push_str("</tr>");
+    }
+    b.push_str("</table></div>");
+    b
+}
 /// Points around the change drawn in each chart.
 const CHART_POINTS: usize = 60;
 
@@ -388,11 +479,25 @@ pub fn render_group(g: &Group, charts: &[(Alert, read::SeriesDetail)]) -> String
     );
     group_head(g, &mut b, false);
     b.push_str("</td></tr>");
+    if g.alerts.len() > PIVOT_FROM {
+        // Opens on the pivot; the list of every series stays one click away.
+        b.push_str("</tbody></table>");
+        b.push_str(&pivot(g));
+        let _ = write!(
+            b,
+            "<details id=series-list><summary>all {} series as a list</summary><table class=alert-list><tbody class=group>",
+            g.alerts.len()
+        );
+    }
     b.push_str(ALERT_HEADER);
     for a in &g.alerts {
         alert_row(a, &mut b);
     }
-    b.push_str("</tbody></table><div class=charts>");
+    b.push_str("</tbody></table>");
+    if g.alerts.len() > PIVOT_FROM {
+        b.push_str("</details>");
+    }
+    b.push_str("<div class=charts>");
     for (a, d) in charts {
         let after = d.points.iter().position(|p| p.run_id == a.run_after);
         let end = after.map_or(d.points.len(), |i| {
@@ -404,6 +509,7 @@ pub fn render_group(g: &Group, charts: &[(Alert, read::SeriesDetail)]) -> String
             .iter()
             .map(|p| SeriesMark {
                 value: p.value,
+                tick: commit(p.commit.as_deref()),
                 label: format!(
                     "{} {}: {}",
                     commit(p.commit.as_deref()),
@@ -491,7 +597,7 @@ pub async fn group_page(
                 .alerts
                 .iter()
                 .filter(|a| a.status != DetectionStatus::Withdrawn)
-                .take(MAX_CHARTS)
+                .take(charts_for(&g))
             {
                 charts.push((a.clone(), read::series(c, a.series.id)?));
             }
