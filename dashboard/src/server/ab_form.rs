@@ -92,14 +92,25 @@ fn prefill(c: &mut dyn Connection, q: &FromRuns) -> Result<AbForm, AppError> {
         f.a = f.b.clone();
     }
     let record = c.query_opt(
-        "SELECT sr.record_json FROM scenario_results sr JOIN runs r ON r.id = sr.run_pk
-         WHERE r.run_id = $1 AND (CAST($2 AS TEXT) IS NULL OR sr.scenario = $2)
-         ORDER BY sr.scenario LIMIT 1",
+        &format!(
+            "SELECT sr.file, {} FROM scenario_results sr JOIN runs r ON r.id = sr.run_pk
+             WHERE r.run_id = $1 AND (CAST($2 AS TEXT) IS NULL OR sr.scenario = $2)
+             ORDER BY sr.scenario LIMIT 1",
+            crate::store::records::COLUMNS
+        ),
         &[b.as_str().into(), q.scenario.clone().into()],
     )?;
     if let Some(r) = record {
-        let v: serde_json::Value = serde_json::from_str(r.str(0)?).unwrap_or_default();
-        f.scenario = v["file"].as_str().unwrap_or_default().to_string();
+        // The compact schema keeps the file in a column and the record deflated; rows stored
+        // before it have only the record's text.
+        f.scenario = match r.opt_string(0)? {
+            Some(file) => file,
+            None => {
+                let text = crate::store::records::text(&r, 1)?;
+                let v: serde_json::Value = serde_json::from_str(&text).unwrap_or_default();
+                v["file"].as_str().unwrap_or_default().to_string()
+            }
+        };
     }
     f.labels = c
         .query_opt(
