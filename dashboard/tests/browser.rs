@@ -867,8 +867,8 @@ return {
     }
     assert_eq!(w["pair"], 2, "A and B side by side: {w}");
 
-    // At 390 px (a phone): the viewport tag, and no horizontal scroll on the runs, run and
-    // regressions pages.
+    // At 390 px (a phone): the viewport tag, and no horizontal scroll on the runs, run,
+    // regressions, comparison, adapters, error-against-time and image viewer pages.
     browser.call(
         "POST",
         "window/rect",
@@ -881,6 +881,15 @@ return {
         (
             "compare",
             format!("/compare/runs?a={}&b={}", smoke_runs[0], smoke_runs[1]),
+        ),
+        ("adapters", "/compare".to_string()),
+        ("pareto", "/pareto".to_string()),
+        (
+            "viewer",
+            format!(
+                "/runs/{}/images/basic/checkerboard%5Bsampling%3Dtwo-pass%5D",
+                smoke_runs[1]
+            ),
         ),
     ] {
         browser.goto(&format!("{origin}{path}"));
