@@ -211,6 +211,31 @@ impl Notifier {
     }
 
     /// One look at the store at time `now`: queue newly confirmed groups, send those due.
+    /// Puts `name` in the outbox once: as the baseline at the target's first look (not sent),
+    /// else pending; counts it in `tick`.
+    fn enqueue(
+        &self,
+        conn: &mut dyn crate::db::Connection,
+        name: &str,
+        first: bool,
+        now_s: &str,
+        tick: &mut Tick,
+    ) -> Result<(), StoreError> {
+        let state = if first {
+            outbox::BASELINE
+        } else {
+            outbox::PENDING
+        };
+        if outbox::add(conn, &self.target, name, state, now_s)? {
+            if first {
+                tick.baseline += 1;
+            } else {
+                tick.queued += 1;
+            }
+        }
+        Ok(())
+    }
+
     pub fn tick(&self, now: DateTime<Utc>) -> Result<Tick, StoreError> {
         let mut tick = Tick::default();
         let now_s = ts(now);
@@ -239,18 +264,7 @@ impl Notifier {
                 {
                     continue;
                 }
-                let state = if first {
-                    outbox::BASELINE
-                } else {
-                    outbox::PENDING
-                };
-                if outbox::add(&mut *conn, &self.target, &name, state, &now_s)? {
-                    if first {
-                        tick.baseline += 1;
-                    } else {
-                        tick.queued += 1;
-                    }
-                }
+                self.enqueue(&mut *conn, &name, first, &now_s, &mut tick)?;
             }
             // Data stoppages, once per silence; those already there at the first look are the
             // baseline, as groups are.
@@ -259,18 +273,7 @@ impl Notifier {
                 if known.contains(&name) {
                     continue;
                 }
-                let state = if first {
-                    outbox::BASELINE
-                } else {
-                    outbox::PENDING
-                };
-                if outbox::add(&mut *conn, &self.target, &name, state, &now_s)? {
-                    if first {
-                        tick.baseline += 1;
-                    } else {
-                        tick.queued += 1;
-                    }
-                }
+                self.enqueue(&mut *conn, &name, first, &now_s, &mut tick)?;
             }
             outbox::due(&mut *conn, &self.target, &now_s, 100)?
         };

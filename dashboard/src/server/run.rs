@@ -553,6 +553,30 @@ pub fn render_scenario(d: &RunDetail, prev: Option<&Previous>, scenario: &str) -
     out
 }
 
+/// The previous run of `run_id`'s suite, with the scenarios `scenarios` reads of it, compared at
+/// the default threshold and `run_id`'s frame-time noise.
+fn previous(
+    c: &mut dyn crate::db::Connection,
+    run_id: &str,
+    scenarios: impl FnOnce(
+        &mut dyn crate::db::Connection,
+        &str,
+    )
+        -> Result<Vec<tessera_results::ScenarioResult>, crate::store::StoreError>,
+) -> Result<Option<Previous>, crate::store::StoreError> {
+    let Some(p) = browse::previous_in_suite(c, run_id)? else {
+        return Ok(None);
+    };
+    Ok(Some(Previous {
+        scenarios: scenarios(c, &p)?,
+        run_id: p,
+        options: tessera_results::compare::Options {
+            threshold_pct: DEFAULT_THRESHOLD_PCT,
+            noise: crate::store::noise::frame_time_noise(c, run_id)?,
+        },
+    }))
+}
+
 pub async fn page(
     State(state): State<AppState>,
     Path(run_id): Path<String>,
@@ -560,17 +584,7 @@ pub async fn page(
     let (d, prev) = state
         .db(move |c| {
             let d = read::run(c, &run_id)?;
-            let prev = match browse::previous_in_suite(c, &run_id)? {
-                Some(p) => Some(Previous {
-                    scenarios: read::run_scenarios(c, &p)?,
-                    run_id: p,
-                    options: tessera_results::compare::Options {
-                        threshold_pct: DEFAULT_THRESHOLD_PCT,
-                        noise: crate::store::noise::frame_time_noise(c, &run_id)?,
-                    },
-                }),
-                None => None,
-            };
+            let prev = previous(c, &run_id, |c, p| read::run_scenarios(c, p))?;
             Ok((d, prev))
         })
         .await?;
@@ -596,20 +610,12 @@ pub async fn scenario_page(
                     "run {run_id} has no scenario {scenario:?}"
                 )));
             }
-            let prev = match browse::previous_in_suite(c, &run_id)? {
-                Some(p) => Some(Previous {
-                    // The previous run may not hold this scenario: then nothing to compare.
-                    scenarios: read::scenario_result(c, &p, &scenario)
-                        .map(|s| vec![s])
-                        .unwrap_or_default(),
-                    run_id: p,
-                    options: tessera_results::compare::Options {
-                        threshold_pct: DEFAULT_THRESHOLD_PCT,
-                        noise: crate::store::noise::frame_time_noise(c, &run_id)?,
-                    },
-                }),
-                None => None,
-            };
+            // The previous run may not hold this scenario: then nothing to compare.
+            let prev = previous(c, &run_id, |c, p| {
+                Ok(read::scenario_result(c, p, &scenario)
+                    .map(|s| vec![s])
+                    .unwrap_or_default())
+            })?;
             Ok((d, prev))
         })
         .await?;
