@@ -308,6 +308,8 @@ pub struct ScatterPoint {
     /// Drawn beside a point of the newer run: a short tag (its row number), so that labels do not
     /// collide; the label is its tooltip.
     pub tag: String,
+    /// The point's colour (the page colours by technique, so every chart of it agrees).
+    pub colour: &'static str,
 }
 
 /// Error (y) against GPU time (x): every variant a point, the Pareto front of each group joined
@@ -374,8 +376,8 @@ pub fn scatter(points: &[ScatterPoint], x_label: &str, y_label: &str) -> String 
             );
         }
     }
-    for (i, p) in points.iter().enumerate() {
-        let c = colour(i % 10);
+    for p in points {
+        let c = p.colour;
         let fill = if p.group == 0 { c } else { "none" };
         let _ = write!(
             out,

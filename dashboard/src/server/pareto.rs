@@ -337,6 +337,7 @@ pub fn render(v: &ParetoView) -> String {
             group,
             on_front: p.on_front,
             tag: num_of(&p.variant).to_string(),
+            colour: technique_colour(&techniques, &p.technique),
         })
         .collect();
     let spec = ScatterChart {
@@ -385,6 +386,7 @@ pub fn render(v: &ParetoView) -> String {
                     group: 0,
                     on_front: p.on_front,
                     tag: num_of(&p.variant).to_string(),
+                    colour: technique_colour(&techniques, &p.technique),
                 })
                 .collect();
             let _ = write!(
