@@ -79,6 +79,11 @@ crate::options! {
             true,
             "object motion from the shared motion provider (`render/velocity.rs`) where the scene has animated objects; off: the cameras' motion only",
         ),
+        mip_bias: f64 = float(
+            (-4.0, true, 1.0),
+            -1.0,
+            "texture LOD bias relative to the output resolution: AMD's -1 (the integration guide's log2(render / display) - 1 in the render's terms) samples textures one mip finer than a native render; 0 samples them at the native render's level",
+        ),
     }
 }
 
@@ -101,10 +106,11 @@ impl Options {
         jitter::auto_phases(self.render_size(width, 1).0, width)
     }
 
-    /// Multiplier of the render's screen-space derivatives for AMD's mip bias
-    /// log2(render / display) - 1 relative to the render: scale x 2^-1 of the render's own.
+    /// Multiplier of the render's screen-space derivatives for the mip bias relative to the
+    /// output, AMD's log2(render / display) - 1 relative to the render by default: scale x
+    /// 2^mip_bias of the render's own.
     pub fn gradient_scale(&self) -> f32 {
-        (self.render_scale() * 0.5) as f32
+        (self.render_scale() * self.mip_bias.exp2()) as f32
     }
 
     /// RCAS's sharpness in stops (ffx_fsr2.cpp: `-2 * sharpness + 2`), when it runs.
