@@ -6,44 +6,13 @@
 //! diff`). Not for: GPU-resident frames (use `GpuMetrics::evaluate` or
 //! `GpuMetrics::sequence_frames` with `GpuFrame`s directly).
 
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 use tessera_metrics::{HdrImage, Rgb8Image};
 
-use crate::pair::{FlipPooling, FlipValues, PairRequest, PairValues};
-use crate::{GpuFrame, GpuMetrics, GpuMetricsError};
-
-/// Where a metric was computed: recorded with every result (`metrics_device` in a scenario).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Backend {
-    Cpu,
-    Gpu,
-}
-
-impl Backend {
-    pub const ALL: [Backend; 2] = [Backend::Gpu, Backend::Cpu];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            Backend::Cpu => "cpu",
-            Backend::Gpu => "gpu",
-        }
-    }
-
-    /// `"gpu"` or `"cpu"`; anything else is an error that lists them.
-    pub fn parse(s: &str) -> Result<Backend, String> {
-        Backend::ALL
-            .into_iter()
-            .find(|b| b.name() == s)
-            .ok_or_else(|| format!("unknown metrics device \"{s}\"; allowed: \"gpu\", \"cpu\""))
-    }
-}
-
-impl std::fmt::Display for Backend {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
+use crate::context::GpuMetrics;
+use crate::error::GpuMetricsError;
+use crate::frame::GpuFrame;
+use crate::pair::{Backend, FlipPooling, FlipValues, PairRequest, PairValues};
 
 /// A reference/test pair as both back ends take it: 8-bit frames, and their linear floats when
 /// HDR-FLIP is requested.

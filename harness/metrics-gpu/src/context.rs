@@ -7,38 +7,13 @@
 
 use std::collections::HashMap;
 
+use tessera_metrics::{CvvdpResult, CvvdpSettings, Frames};
+
+use crate::cvvdp::CvvdpState;
+use crate::error::GpuMetricsError;
+use crate::plumbing::{check_binding, read_buffer, Layout, Region, MAX_TIMED};
+use crate::pool::{RunningSums, Ticket};
 use crate::shaders::Pipelines;
-use crate::GpuMetricsError;
-
-/// Threads per workgroup of the 1-D passes.
-pub(crate) const GROUP: u32 = 256;
-/// Workgroups per row of a 1-D dispatch (the rest go to further rows).
-const MAX_GROUPS_X: u32 = 32768;
-/// Alignment of uniform slots and output regions (the largest minimum offset alignment).
-const ALIGN: u64 = 256;
-/// Metric groups timed per request, at most (two timestamps each).
-pub(crate) const MAX_TIMED: u32 = 16;
-
-/// A 1-D grid of 256-thread workgroups covering `count` items.
-#[derive(Clone, Copy)]
-pub(crate) struct Grid1 {
-    pub x: u32,
-    pub y: u32,
-}
-
-impl Grid1 {
-    pub fn new(count: u32) -> Grid1 {
-        let groups = count.div_ceil(GROUP).max(1);
-        let x = groups.min(MAX_GROUPS_X);
-        Grid1 {
-            x,
-            y: groups.div_ceil(x),
-        }
-    }
-    pub fn groups(&self) -> u32 {
-        self.x * self.y
-    }
-}
 
 /// The FLIP kernels of one pixels-per-degree value, on the device.
 pub(crate) struct FlipKernels {
@@ -92,47 +67,9 @@ pub struct GpuMetrics {
     /// GPU milliseconds of the last request's metric groups (empty without timestamps).
     pub(crate) last_gpu_ms: Vec<(&'static str, f64)>,
     /// ColorVideoVDP's pipelines, calibration and last plan, made on its first request.
-    pub(crate) cvvdp: Option<Box<crate::cvvdp::CvvdpState>>,
+    pub(crate) cvvdp: Option<Box<CvvdpState>>,
     /// FLIP's flip-evaluator means, summed on the device (`pool`), made on first use.
-    pub(crate) running: Option<crate::pool::RunningSums>,
-}
-
-/// Uniform slots and output regions of one request, laid out before anything is recorded.
-#[derive(Default)]
-pub(crate) struct Layout {
-    pub params: Vec<u8>,
-    pub outputs: u64,
-}
-
-impl Layout {
-    /// Appends a uniform slot; returns its offset.
-    pub fn param<T: bytemuck::Pod>(&mut self, value: &T) -> u64 {
-        let offset = self.params.len() as u64;
-        self.params.extend_from_slice(bytemuck::bytes_of(value));
-        self.params
-            .resize(offset as usize + align(size_of::<T>() as u64) as usize, 0);
-        offset
-    }
-    /// Reserves an output region of `bytes`; returns its offset.
-    pub fn output(&mut self, bytes: u64) -> Region {
-        let offset = self.outputs;
-        self.outputs += align(bytes.max(4));
-        Region {
-            offset,
-            size: bytes.max(4),
-        }
-    }
-}
-
-/// Part of the output buffer.
-#[derive(Clone, Copy)]
-pub(crate) struct Region {
-    pub offset: u64,
-    pub size: u64,
-}
-
-fn align(v: u64) -> u64 {
-    v.div_ceil(ALIGN) * ALIGN
+    pub(crate) running: Option<RunningSums>,
 }
 
 impl GpuMetrics {
@@ -216,16 +153,7 @@ impl GpuMetrics {
 
     /// Checks that one binding of `bytes` fits the device's limits.
     pub(crate) fn check_binding(&self, what: &str, bytes: u64) -> Result<(), GpuMetricsError> {
-        let limits = self.device.limits();
-        let max = limits
-            .max_storage_buffer_binding_size
-            .min(limits.max_buffer_size);
-        if bytes > max {
-            return Err(GpuMetricsError::Unsupported(format!(
-                "{what} needs a {bytes}-byte storage buffer; the device allows {max}"
-            )));
-        }
-        Ok(())
+        check_binding(&self.device, what, bytes)
     }
 
     /// Grows the uniform, output and staging buffers to fit `layout`.
@@ -345,6 +273,86 @@ impl GpuMetrics {
     }
 }
 
+/// ColorVideoVDP (`cvvdp`), through the state made on its first request.
+impl GpuMetrics {
+    /// ColorVideoVDP of `test` against `reference` on the device: the same checks, shots,
+    /// per-frame values and maps as `tessera_metrics::cvvdp`, with each shot's pyramid, masking
+    /// and spatial pooling computed by compute passes.
+    ///
+    /// `GpuMetricsError::Unsupported` when the device cannot hold the work (a plane beyond its
+    /// binding limit, more temporal taps than the frame ring holds): use the CPU.
+    pub fn cvvdp(
+        &mut self,
+        reference: Frames<'_>,
+        test: Frames<'_>,
+        settings: &CvvdpSettings,
+    ) -> Result<CvvdpResult, GpuMetricsError> {
+        crate::cvvdp::evaluate(
+            &self.device,
+            &self.queue,
+            &mut self.cvvdp,
+            reference,
+            test,
+            settings,
+        )
+    }
+
+    /// GPU ms of each frame of the last [`GpuMetrics::cvvdp`] call, from timestamps around each
+    /// frame's passes; empty without `TIMESTAMP_QUERY`.
+    pub fn last_cvvdp_frame_ms(&self) -> &[f64] {
+        self.cvvdp.as_ref().map_or(&[], |s| s.frame_ms())
+    }
+}
+
+/// FLIP's flip-evaluator means (`pool`), through the batch made on first use.
+impl GpuMetrics {
+    fn running(&mut self) -> &mut RunningSums {
+        let device = &self.device;
+        self.running.get_or_insert_with(|| RunningSums::new(device))
+    }
+
+    /// [`RunningSums::make_room`].
+    pub(crate) fn make_running_room(
+        &mut self,
+        count: u32,
+        maps: u32,
+    ) -> Result<(), GpuMetricsError> {
+        let (device, queue) = (self.device.clone(), self.queue.clone());
+        self.running().make_room(&device, &queue, count, maps)
+    }
+
+    /// [`RunningSums::reserve`].
+    pub(crate) fn reserve_running_mean(&mut self) -> (Ticket, u64) {
+        self.running().reserve()
+    }
+
+    /// [`RunningSums::maps`].
+    pub(crate) fn running_maps(&self) -> &wgpu::Buffer {
+        self.running.as_ref().expect("reserved first").maps()
+    }
+
+    /// [`RunningSums::flush`].
+    pub(crate) fn flush_running_means(&mut self) -> Result<(), GpuMetricsError> {
+        let (device, queue) = (self.device.clone(), self.queue.clone());
+        self.running().flush(&device, &queue)
+    }
+
+    /// [`RunningSums::take_mean`].
+    pub(crate) fn take_running_mean(&mut self, ticket: Ticket) -> Result<f64, GpuMetricsError> {
+        self.running().take_mean(ticket)
+    }
+
+    /// [`RunningSums::set_defer`].
+    pub(crate) fn defer_running_means(&mut self, on: bool) {
+        self.running().set_defer(on)
+    }
+
+    /// [`RunningSums::take_handed`].
+    pub(crate) fn take_handed_means(&mut self) -> Vec<(Ticket, bool)> {
+        self.running().take_handed()
+    }
+}
+
 fn uniform_buffer(device: &wgpu::Device, size: u64) -> wgpu::Buffer {
     device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("metrics uniforms"),
@@ -372,31 +380,4 @@ fn staging_buffer(device: &wgpu::Device, size: u64) -> wgpu::Buffer {
         usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     })
-}
-
-/// Maps the first `size` bytes of `buffer` (after the submission that fills it) and copies them.
-pub(crate) fn read_buffer(
-    device: &wgpu::Device,
-    buffer: &wgpu::Buffer,
-    size: u64,
-) -> Result<Vec<u8>, GpuMetricsError> {
-    let size = size.div_ceil(4) * 4;
-    let slice = buffer.slice(..size);
-    let (tx, rx) = std::sync::mpsc::channel();
-    slice.map_async(wgpu::MapMode::Read, move |r| {
-        let _ = tx.send(r);
-    });
-    let _ = device.poll(wgpu::PollType::Wait {
-        submission_index: None,
-        timeout: None,
-    });
-    rx.recv()
-        .map_err(|e| GpuMetricsError::Readback(e.to_string()))?
-        .map_err(|e| GpuMetricsError::Readback(e.to_string()))?;
-    let bytes = slice
-        .get_mapped_range()
-        .map_err(|e| GpuMetricsError::Readback(format!("{e:?}")))?
-        .to_vec();
-    buffer.unmap();
-    Ok(bytes)
 }

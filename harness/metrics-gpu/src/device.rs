@@ -4,7 +4,7 @@
 //! For: choosing an adapter by a name filter and opening it with its real limits. Not for:
 //! anything the harness's `gpu` module does for rendering (features, VRS, probes).
 
-use crate::GpuMetricsError;
+use crate::error::GpuMetricsError;
 
 /// An opened device and its adapter.
 pub struct MetricsDevice {

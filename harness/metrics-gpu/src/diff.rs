@@ -12,8 +12,9 @@ use tessera_metrics::{
     DEFAULT_PIXELS_PER_DEGREE,
 };
 
+use crate::context::GpuMetrics;
+use crate::error::GpuMetricsError;
 use crate::pair::{FlipHdrRequest, FlipPooling, FlipRequest, PairRequest};
-use crate::{GpuMetrics, GpuMetricsError};
 
 /// [`DiffReport`] of two decoded files on the GPU (16-bit PNG pairs and mixed kinds: the CPU's
 /// report or error).
@@ -71,7 +72,7 @@ fn diff_ldr(
     let rf = gpu.upload(r, hdr.map(|h| h.0))?;
     let tf = gpu.upload(t, hdr.map(|h| h.1))?;
     let v = gpu.evaluate(&rf, &tf, &request)?;
-    let result = |f: Option<crate::FlipValues>| {
+    let result = |f: Option<crate::pair::FlipValues>| {
         f.and_then(|f| f.error_map)
             .map(|m| tessera_metrics::port::flip_result_from_map(m, r.width, r.height))
             .ok_or_else(|| GpuMetricsError::Readback("FLIP error map missing".into()))

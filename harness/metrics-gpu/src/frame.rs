@@ -9,8 +9,9 @@
 use tessera_metrics::{HdrImage, Rgb8Image};
 use wgpu::util::DeviceExt;
 
-use crate::context::Layout;
-use crate::{GpuMetrics, GpuMetricsError};
+use crate::context::GpuMetrics;
+use crate::error::GpuMetricsError;
+use crate::plumbing::{pack, read_buffer, unpack, Layout};
 
 /// A frame on the device.
 pub struct GpuFrame {
@@ -28,29 +29,6 @@ impl GpuFrame {
     /// Whether the frame has linear floats (needed by HDR-FLIP).
     pub fn has_hdr(&self) -> bool {
         self.hdr.is_some()
-    }
-}
-
-/// Packs 8-bit RGB into one u32 per pixel.
-pub(crate) fn pack(image: &Rgb8Image) -> Vec<u32> {
-    image
-        .data
-        .chunks_exact(3)
-        .map(|p| p[0] as u32 | (p[1] as u32) << 8 | (p[2] as u32) << 16)
-        .collect()
-}
-
-/// Unpacks `count` pixels.
-pub(crate) fn unpack(words: &[u32], width: u32, height: u32) -> Rgb8Image {
-    let n = width as usize * height as usize;
-    let data = words[..n]
-        .iter()
-        .flat_map(|&p| [p as u8, (p >> 8) as u8, (p >> 16) as u8])
-        .collect();
-    Rgb8Image {
-        width,
-        height,
-        data,
     }
 }
 
@@ -247,7 +225,7 @@ impl GpuMetrics {
         let mut encoder = self.device.create_command_encoder(&Default::default());
         encoder.copy_buffer_to_buffer(&frame.ldr, 0, &staging, 0, bytes);
         self.queue.submit([encoder.finish()]);
-        let data = crate::context::read_buffer(&self.device, &staging, bytes)?;
+        let data = read_buffer(&self.device, &staging, bytes)?;
         Ok(unpack(
             bytemuck::cast_slice(&data),
             frame.width,

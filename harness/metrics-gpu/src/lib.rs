@@ -16,14 +16,17 @@ mod diff;
 mod error;
 mod frame;
 mod pair;
+mod plumbing;
 mod pool;
 mod shaders;
 mod temporal;
 
-pub use backend::{Backend, CpuMetrics, MetricsBackend, Pair, Sequence, SequenceValues};
+pub use backend::{CpuMetrics, MetricsBackend, Pair, Sequence, SequenceValues};
 pub use context::GpuMetrics;
 pub use device::{open, select_adapter, MetricsDevice};
 pub use diff::diff_images;
 pub use error::GpuMetricsError;
 pub use frame::GpuFrame;
-pub use pair::{FlipHdrRequest, FlipPooling, FlipRequest, FlipValues, PairRequest, PairValues};
+pub use pair::{
+    Backend, FlipHdrRequest, FlipPooling, FlipRequest, FlipValues, PairRequest, PairValues,
+};

@@ -9,12 +9,47 @@
 //! in workgroup memory), and the partials are added on the CPU in workgroup order, in u64 for the
 //! integer sums (MSE and max-abs are exact, bit for bit the CPU's) and f64 for the float ones.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use tessera_metrics::{ExposureRange, Rgb8Image};
 
-use crate::context::{FlipBuffers, FlipKernels, Grid1, Layout, Region};
-use crate::frame::{unpack, GpuFrame};
-use crate::{Backend, GpuMetrics, GpuMetricsError};
+use crate::context::GpuMetrics;
+use crate::context::{FlipBuffers, FlipKernels};
+use crate::error::GpuMetricsError;
+use crate::frame::GpuFrame;
+use crate::plumbing::{unpack, Grid1, Layout, Region};
+
+/// Where a metric was computed: recorded with every result (`metrics_device` in a scenario).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Backend {
+    Cpu,
+    Gpu,
+}
+
+impl Backend {
+    pub const ALL: [Backend; 2] = [Backend::Gpu, Backend::Cpu];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Backend::Cpu => "cpu",
+            Backend::Gpu => "gpu",
+        }
+    }
+
+    /// `"gpu"` or `"cpu"`; anything else is an error that lists them.
+    pub fn parse(s: &str) -> Result<Backend, String> {
+        Backend::ALL
+            .into_iter()
+            .find(|b| b.name() == s)
+            .ok_or_else(|| format!("unknown metrics device \"{s}\"; allowed: \"gpu\", \"cpu\""))
+    }
+}
+
+impl std::fmt::Display for Backend {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
 
 /// Which metrics of a pair to compute.
 #[derive(Debug, Clone, Default, PartialEq)]

@@ -5,14 +5,15 @@
 //! The sum is sequential by definition (each step's rounding depends on the sum before it), so
 //! one workgroup sums one map; maps are batched, and a batch is summed side by side in one
 //! dispatch. A single pair's request sums its maps at once; a sequence defers them
-//! ([`GpuMetrics::defer_running_means`]) and sums every frame's maps together at its end. Not
+//! ([`RunningSums::set_defer`]) and sums every frame's maps together at its end. Not
 //! for: the exact mean (`reduce.wgsl`) or recording FLIP's passes (`pair`).
 
 use std::collections::HashMap;
 
 use wgpu::util::DeviceExt;
 
-use crate::{GpuMetrics, GpuMetricsError};
+use crate::error::GpuMetricsError;
+use crate::plumbing::{check_binding, read_buffer};
 
 /// Maps per batch, at most.
 const MAX_MAPS: u64 = 64;
@@ -38,7 +39,7 @@ pub(crate) struct RunningSums {
     next: u64,
     /// Summed, not yet taken: the sum and the value count.
     done: HashMap<Ticket, (f32, u32)>,
-    /// Whether requests leave their means to a later [`GpuMetrics::flush_running_means`].
+    /// Whether requests leave their means to a later [`RunningSums::flush`].
     pub defer: bool,
     /// Means a deferred request left (ticket, HDR-FLIP), in order, until taken.
     pub handed: Vec<(Ticket, bool)>,
@@ -48,62 +49,60 @@ fn stride_of(count: u32) -> u64 {
     (4 * count as u64).div_ceil(256) * 256
 }
 
-impl GpuMetrics {
-    fn running(&mut self) -> &mut RunningSums {
-        let device = &self.device;
-        self.running.get_or_insert_with(|| {
-            let buffer = |size: u64, usage| {
-                device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("flip running sums"),
-                    size,
-                    usage,
-                    mapped_at_creation: false,
-                })
-            };
-            RunningSums {
-                pipeline: crate::shaders::pipeline(
-                    device,
-                    "flip running sum",
-                    crate::shaders::RUNNING_SUM,
-                ),
-                count: 0,
-                stride: 256,
-                capacity: 1,
-                maps: buffer(256, wgpu::BufferUsages::STORAGE),
-                sums: buffer(256, wgpu::BufferUsages::STORAGE),
-                staging: buffer(256, wgpu::BufferUsages::MAP_READ),
-                queued: Vec::new(),
-                next: 0,
-                done: HashMap::new(),
-                defer: false,
-                handed: Vec::new(),
-            }
-        })
+impl RunningSums {
+    /// An empty batch on `device` (its buffers are sized by the first `make_room`).
+    pub fn new(device: &wgpu::Device) -> RunningSums {
+        let buffer = |size: u64, usage| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("flip running sums"),
+                size,
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        RunningSums {
+            pipeline: crate::shaders::pipeline(
+                device,
+                "flip running sum",
+                crate::shaders::RUNNING_SUM,
+            ),
+            count: 0,
+            stride: 256,
+            capacity: 1,
+            maps: buffer(256, wgpu::BufferUsages::STORAGE),
+            sums: buffer(256, wgpu::BufferUsages::STORAGE),
+            staging: buffer(256, wgpu::BufferUsages::MAP_READ),
+            queued: Vec::new(),
+            next: 0,
+            done: HashMap::new(),
+            defer: false,
+            handed: Vec::new(),
+        }
     }
 
     /// Makes room in the batch for `maps` error maps of `count` values: sums the batch first
     /// when it is too full or holds maps of another size. Call before a request reserves its
     /// slots, so that nothing is summed between a reservation and its copy.
-    pub(crate) fn make_running_room(
+    pub fn make_room(
         &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
         count: u32,
         maps: u32,
     ) -> Result<(), GpuMetricsError> {
-        let r = self.running();
-        let full = r.queued.len() as u32 + maps > r.capacity;
-        if !r.queued.is_empty() && (r.count != count || full) {
-            self.flush_running_means()?;
+        let full = self.queued.len() as u32 + maps > self.capacity;
+        if !self.queued.is_empty() && (self.count != count || full) {
+            self.flush(device, queue)?;
         }
         let stride = stride_of(count);
-        self.check_binding("a FLIP error map", stride)?;
-        let limits = self.device.limits();
+        check_binding(device, "a FLIP error map", stride)?;
+        let limits = device.limits();
         let budget = MAX_BATCH_BYTES
             .min(limits.max_storage_buffer_binding_size)
             .min(limits.max_buffer_size);
         // Two at least: a request may pool LDR-FLIP and HDR-FLIP.
         let capacity = (budget / stride).clamp(2, MAX_MAPS) as u32;
-        let device = self.device.clone();
-        let r = self.running();
+        let r = self;
         if r.count != count {
             r.count = count;
             r.stride = stride;
@@ -129,10 +128,10 @@ impl GpuMetrics {
         Ok(())
     }
 
-    /// A slot for one error map of the size [`GpuMetrics::make_running_room`] made room for: its
-    /// ticket and the byte offset to copy the map to (in [`GpuMetrics::running_maps`]).
-    pub(crate) fn reserve_running_mean(&mut self) -> (Ticket, u64) {
-        let r = self.running();
+    /// A slot for one error map of the size [`RunningSums::make_room`] made room for: its
+    /// ticket and the byte offset to copy the map to (in [`RunningSums::maps`]).
+    pub fn reserve(&mut self) -> (Ticket, u64) {
+        let r = self;
         debug_assert!((r.queued.len() as u32) < r.capacity, "room made first");
         let ticket = Ticket(r.next);
         r.next += 1;
@@ -142,15 +141,17 @@ impl GpuMetrics {
     }
 
     /// The batch buffer error maps are copied into (at a reserved offset).
-    pub(crate) fn running_maps(&self) -> &wgpu::Buffer {
-        &self.running.as_ref().expect("reserved first").maps
+    pub fn maps(&self) -> &wgpu::Buffer {
+        &self.maps
     }
 
     /// Sums every map of the batch (one submission, one small readback).
-    pub(crate) fn flush_running_means(&mut self) -> Result<(), GpuMetricsError> {
-        let device = self.device.clone();
-        let queue = self.queue.clone();
-        let r = self.running();
+    pub fn flush(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<(), GpuMetricsError> {
+        let r = self;
         if r.queued.is_empty() {
             return Ok(());
         }
@@ -187,7 +188,7 @@ impl GpuMetrics {
         }
         encoder.copy_buffer_to_buffer(&r.sums, 0, &r.staging, 0, 4 * n as u64);
         queue.submit([encoder.finish()]);
-        let bytes = crate::context::read_buffer(&device, &r.staging, 4 * n as u64)?;
+        let bytes = read_buffer(device, &r.staging, 4 * n as u64)?;
         let sums: &[f32] = bytemuck::cast_slice(&bytes);
         let count = r.count;
         for (t, &s) in r.queued.drain(..).zip(sums) {
@@ -196,20 +197,20 @@ impl GpuMetrics {
         Ok(())
     }
 
-    /// The mean of a summed map (`flush_running_means` first), as `flip_running_mean` divides:
-    /// in f32, by the value count.
-    pub(crate) fn take_running_mean(&mut self, ticket: Ticket) -> Result<f64, GpuMetricsError> {
-        let (sum, count) =
-            self.running().done.remove(&ticket).ok_or_else(|| {
-                GpuMetricsError::Readback("a FLIP running mean went missing".into())
-            })?;
+    /// The mean of a summed map (`flush` first), as `flip_running_mean` divides: in f32, by the
+    /// value count.
+    pub fn take_mean(&mut self, ticket: Ticket) -> Result<f64, GpuMetricsError> {
+        let (sum, count) = self
+            .done
+            .remove(&ticket)
+            .ok_or_else(|| GpuMetricsError::Readback("a FLIP running mean went missing".into()))?;
         Ok((sum / count as f32) as f64)
     }
 
-    /// While `on`, requests leave their flip-evaluator means to [`GpuMetrics::flush_running_means`]
-    /// (their `mean` is NaN until the caller fills it in from [`GpuMetrics::take_handed_means`]).
-    pub(crate) fn defer_running_means(&mut self, on: bool) {
-        let r = self.running();
+    /// While `on`, requests leave their flip-evaluator means to [`RunningSums::flush`] (their
+    /// `mean` is NaN until the caller fills it in from [`RunningSums::take_handed`]).
+    pub fn set_defer(&mut self, on: bool) {
+        let r = self;
         r.defer = on;
         if !on {
             r.handed.clear();
@@ -217,7 +218,7 @@ impl GpuMetrics {
     }
 
     /// The means the last deferred request left: (ticket, HDR-FLIP).
-    pub(crate) fn take_handed_means(&mut self) -> Vec<(Ticket, bool)> {
-        std::mem::take(&mut self.running().handed)
+    pub fn take_handed(&mut self) -> Vec<(Ticket, bool)> {
+        std::mem::take(&mut self.handed)
     }
 }

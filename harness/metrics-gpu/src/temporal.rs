@@ -5,10 +5,11 @@
 
 use wgpu::util::DeviceExt;
 
-use crate::context::{Grid1, Layout};
+use crate::context::GpuMetrics;
+use crate::error::GpuMetricsError;
 use crate::frame::GpuFrame;
 use crate::pair::{pixel_sums, Params1};
-use crate::{GpuMetrics, GpuMetricsError};
+use crate::plumbing::{Grid1, Layout};
 
 fn same_size(a: &GpuFrame, b: &GpuFrame) -> Result<(), GpuMetricsError> {
     if (a.width, a.height) != (b.width, b.height) {

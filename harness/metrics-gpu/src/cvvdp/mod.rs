@@ -3,7 +3,7 @@
 //! pooling to JOD) as WGSL compute passes, with per-frame JOD, the transient channel and the
 //! distortion maps of chosen frames.
 //!
-//! For: [`GpuMetrics::cvvdp`], the same call and result as `tessera_metrics::cvvdp` (which stays
+//! For: `GpuMetrics::cvvdp` ([`evaluate`]), the same call and result as `tessera_metrics::cvvdp` (which stays
 //! the reference and the fallback); everything around a shot's prediction (checks, camera cuts,
 //! per-frame pooling) is tessera-metrics' own, through its `ShotPredictor` seam. Not for: PQ,
 //! HLG or gamma-encoded input (the harness has 8-bit sRGB and linear frames), or the reference's
@@ -22,9 +22,9 @@ use tessera_metrics::{
     CvvdpResult, CvvdpSettings, Frames, MetricsError, Shot, ShotPrediction, ShotPredictor,
 };
 
-use crate::context::read_buffer;
+use crate::error::GpuMetricsError;
+use crate::plumbing::{pack, read_buffer};
 use crate::shaders::pipeline;
-use crate::{GpuMetrics, GpuMetricsError};
 use model::{safe_pow, Decode, Model};
 use plan::{Plan, PlanKey};
 
@@ -109,40 +109,50 @@ pub(crate) struct CvvdpState {
 /// Frames whose partials are read back together.
 const BATCH: usize = 16;
 
-impl GpuMetrics {
-    /// ColorVideoVDP of `test` against `reference` on the device: the same checks, shots,
-    /// per-frame values and maps as `tessera_metrics::cvvdp`, with each shot's pyramid, masking
-    /// and spatial pooling computed by compute passes.
-    ///
-    /// `GpuMetricsError::Unsupported` when the device cannot hold the work (a plane beyond its
-    /// binding limit, more temporal taps than the frame ring holds): use the CPU.
-    pub fn cvvdp(
-        &mut self,
-        reference: Frames<'_>,
-        test: Frames<'_>,
-        settings: &CvvdpSettings,
-    ) -> Result<CvvdpResult, GpuMetricsError> {
-        if let Some(s) = &mut self.cvvdp {
-            s.frame_ms.clear();
-        }
-        tessera_metrics::cvvdp_with(reference, test, settings, &mut Predictor { gpu: self })
+/// ColorVideoVDP of `test` against `reference` on `device`, keeping pipelines, calibration and
+/// the last plan in `state` (made on the first call): the same checks, shots, per-frame values
+/// and maps as `tessera_metrics::cvvdp`, with each shot's pyramid, masking and spatial pooling
+/// computed by compute passes.
+///
+/// `GpuMetricsError::Unsupported` when the device cannot hold the work (a plane beyond its
+/// binding limit, more temporal taps than the frame ring holds): use the CPU.
+pub(crate) fn evaluate(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    state: &mut Option<Box<CvvdpState>>,
+    reference: Frames<'_>,
+    test: Frames<'_>,
+    settings: &CvvdpSettings,
+) -> Result<CvvdpResult, GpuMetricsError> {
+    if let Some(s) = state {
+        s.frame_ms.clear();
     }
+    let mut predictor = Predictor {
+        device,
+        queue,
+        state,
+    };
+    tessera_metrics::cvvdp_with(reference, test, settings, &mut predictor)
+}
 
-    /// GPU ms of each frame of the last [`GpuMetrics::cvvdp`] call, from timestamps around each
-    /// frame's passes; empty without `TIMESTAMP_QUERY`.
-    pub fn last_cvvdp_frame_ms(&self) -> &[f64] {
-        self.cvvdp.as_ref().map_or(&[], |s| &s.frame_ms)
+impl CvvdpState {
+    /// GPU ms of each frame of the last call, from timestamps around each frame's passes; empty
+    /// without `TIMESTAMP_QUERY`.
+    pub fn frame_ms(&self) -> &[f64] {
+        &self.frame_ms
     }
 }
 
 struct Predictor<'a> {
-    gpu: &'a mut GpuMetrics,
+    device: &'a wgpu::Device,
+    queue: &'a wgpu::Queue,
+    state: &'a mut Option<Box<CvvdpState>>,
 }
 
 /// Frame `i` as the ring's texels: packed 8-bit pixels, or RGBA floats.
 fn texels(frames: &Frames<'_>, i: usize) -> Vec<u8> {
     match frames {
-        Frames::Srgb(f) => bytemuck::cast_slice(&crate::frame::pack(&f[i])).to_vec(),
+        Frames::Srgb(f) => bytemuck::cast_slice(&pack(&f[i])).to_vec(),
         Frames::Linear { frames, .. } => {
             let rgba: Vec<f32> = frames[i]
                 .data
@@ -167,7 +177,7 @@ impl ShotPredictor for Predictor<'_> {
     /// One shot, inside error scopes: a device that runs out of memory or refuses the work makes
     /// the shot `Unsupported` (the caller falls back to the CPU) instead of a panic.
     fn predict(&mut self, shot: &Shot<'_>) -> Result<ShotPrediction, GpuMetricsError> {
-        let device = self.gpu.device.clone();
+        let device = self.device.clone();
         let oom = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
         let validation = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let result = self.predict_on_device(shot);
@@ -176,7 +186,7 @@ impl ShotPredictor for Predictor<'_> {
             pollster::block_on(oom.pop()),
         ];
         if let Some(e) = errors.into_iter().flatten().next() {
-            if let Some(s) = &mut self.gpu.cvvdp {
+            if let Some(s) = self.state.as_mut() {
                 s.plan = None;
             }
             return Err(unsupported(&format!("the device failed the work: {e}")));
@@ -187,22 +197,18 @@ impl ShotPredictor for Predictor<'_> {
 
 impl Predictor<'_> {
     fn predict_on_device(&mut self, shot: &Shot<'_>) -> Result<ShotPrediction, GpuMetricsError> {
-        let gpu = &mut *self.gpu;
-        if gpu.cvvdp.is_none() {
-            gpu.cvvdp = Some(Box::new(CvvdpState {
-                pipelines: CvvdpPipelines::new(&gpu.device),
+        let (device, queue) = (self.device, self.queue);
+        if self.state.is_none() {
+            *self.state = Some(Box::new(CvvdpState {
+                pipelines: CvvdpPipelines::new(device),
                 model: Model::load()?,
                 plan: None,
                 frame_ms: Vec::new(),
             }));
         }
-        let (device, queue) = (gpu.device.clone(), gpu.queue.clone());
-        let timer = gpu
-            .device
-            .features()
-            .contains(wgpu::Features::TIMESTAMP_QUERY);
+        let timer = device.features().contains(wgpu::Features::TIMESTAMP_QUERY);
         let period_ns = queue.get_timestamp_period() as f64;
-        let state = gpu.cvvdp.as_mut().ok_or_else(|| unsupported("no state"))?;
+        let state = self.state.as_mut().ok_or_else(|| unsupported("no state"))?;
         let (width, height) = size(&shot.test);
         let frames = shot.frames.len();
         let (white, linear) = match shot.test {
@@ -231,8 +237,8 @@ impl Predictor<'_> {
         if state.plan.as_ref().is_none_or(|p| p.key != key) {
             state.plan = None;
             state.plan = Some(Plan::new(
-                &device,
-                &queue,
+                device,
+                queue,
                 &state.pipelines,
                 &state.model,
                 key,
@@ -283,7 +289,7 @@ impl Predictor<'_> {
         for k in 0..frames {
             let f = shot.frames.start + k;
             plan.upload_frame(
-                &queue,
+                queue,
                 k,
                 &texels(&shot.test, f),
                 &texels(&shot.reference, f),
@@ -309,13 +315,13 @@ impl Predictor<'_> {
             queue.submit([encoder.finish()]);
             pending += 1;
             if let (true, Some(ms)) = (wants_map, &map_staging) {
-                let bytes = read_buffer(&device, ms, width as u64 * height as u64 * 4)?;
+                let bytes = read_buffer(device, ms, width as u64 * height as u64 * 4)?;
                 maps.push((f, bytemuck::pod_collect_to_vec::<u8, f32>(&bytes)));
             }
             if !last_of_batch {
                 continue;
             }
-            let bytes = read_buffer(&device, &staging, stamps_offset + 16 * pending as u64)?;
+            let bytes = read_buffer(device, &staging, stamps_offset + 16 * pending as u64)?;
             for s in 0..pending {
                 let frame = k + 1 - pending + s;
                 let partials: Vec<f32> = bytemuck::pod_collect_to_vec(

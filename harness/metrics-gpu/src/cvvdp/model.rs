@@ -9,7 +9,7 @@
 
 use serde::Deserialize;
 
-use crate::GpuMetricsError;
+use crate::error::GpuMetricsError;
 
 const PARAMETERS: &str = include_str!("../../data/cvvdp_parameters.json");
 const CSF_LUT: &str = include_str!("../../data/csf_lut_weber_fixed_size.json");

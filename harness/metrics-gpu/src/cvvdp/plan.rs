@@ -15,10 +15,10 @@
 //! workgroup; the CPU adds them in f64 in workgroup order. A frame whose distortion map is
 //! wanted adds `map_band` per band, the reconstruction (`expand` accumulating) and `map_jod`.
 
-use crate::context::{Grid1, Layout};
 use crate::cvvdp::model::{self, Decode, Model, CSF_LUMINANCES};
 use crate::cvvdp::CvvdpPipelines;
-use crate::GpuMetricsError;
+use crate::error::GpuMetricsError;
+use crate::plumbing::{Grid1, Layout};
 
 /// The most temporal filter taps the frame ring holds (layers of one texture array).
 pub(crate) const MAX_TAPS: usize = 256;
