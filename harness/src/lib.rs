@@ -8,6 +8,7 @@ pub mod conditions;
 pub mod expect;
 pub mod files;
 pub mod gpu;
+pub mod metric;
 pub mod metrics_device;
 pub mod params;
 pub mod regimes;

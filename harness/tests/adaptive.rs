@@ -187,7 +187,7 @@ fn adaptive(params: &[(&str, ParamValue)]) -> Variant {
     common::variant("adaptive-shading", params)
 }
 
-fn render(gpu: &tessera::gpu::Gpu, s: &Scenario, v: &Variant) -> frames::Rendered {
+fn render(gpu: &tessera::gpu::Gpu, s: &Scenario, v: &Variant) -> tessera::run::rendered::Rendered {
     let mut scene = SceneGpu::new(&gpu.device, &gpu.queue, s).unwrap();
     let mut t = techniques::build(
         v,

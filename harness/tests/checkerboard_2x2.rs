@@ -531,7 +531,7 @@ fn a_camera_cut_resets_history() {
     );
 }
 
-fn render(gpu: &Gpu, s: &Scenario, v: &Variant) -> tessera::run::frames::Rendered {
+fn render(gpu: &Gpu, s: &Scenario, v: &Variant) -> tessera::run::rendered::Rendered {
     let mut scene = SceneGpu::new(&gpu.device, &gpu.queue, s).unwrap();
     let mut t = techniques::build(
         v,

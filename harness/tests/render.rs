@@ -15,7 +15,7 @@ fn render(
     gpu: &tessera::gpu::Gpu,
     s: &tessera::scenario::Scenario,
     v: &Variant,
-) -> frames::Rendered {
+) -> tessera::run::rendered::Rendered {
     let mut scene = SceneGpu::new(&gpu.device, &gpu.queue, s).unwrap();
     let mut t = techniques::build(
         v,

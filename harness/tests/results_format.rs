@@ -5,7 +5,8 @@
 
 use std::path::{Path, PathBuf};
 
-use tessera::scenario::{self, MetricKind};
+use tessera::metric::MetricKind;
+use tessera::scenario;
 use tessera_results::measure::{Key, Measure};
 
 fn fixture() -> PathBuf {

@@ -3,7 +3,8 @@
 
 use std::path::Path;
 
-use tessera::scenario::{self, MetricKind, Reference};
+use tessera::metric::MetricKind;
+use tessera::scenario::{self, Reference};
 
 const VALID: &str = r#"
 resolution = [64, 32]

@@ -212,8 +212,8 @@ fn tolerance(gpu: &tessera::gpu::Gpu) -> usize {
 fn assert_as_native(
     gpu: &tessera::gpu::Gpu,
     what: &str,
-    r: &frames::Rendered,
-    native: &frames::Rendered,
+    r: &tessera::run::rendered::Rendered,
+    native: &tessera::run::rendered::Rendered,
 ) {
     for (i, (a, b)) in r.hdr_frames.iter().zip(&native.hdr_frames).enumerate() {
         let pixels = (a.width * a.height) as usize;

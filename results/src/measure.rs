@@ -80,7 +80,7 @@ pub enum Source {
 }
 
 /// Everything the harness and the dashboard need to know about one measure.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Info {
     /// The one name: gate key, CSV row, store series, page.
     pub name: &'static str,
@@ -98,6 +98,10 @@ pub struct Info {
     /// The dashboard stores a series of it (under [`Measure::store_key`]) and detects regressions.
     pub stored: bool,
     pub source: Source,
+    /// The change a comparison must see before it calls the measure better or worse, in its own
+    /// unit (`compare::metrics::judge`); `None`: 0.1% of the larger magnitude
+    /// (`compare::metrics::RELATIVE_TOLERANCE`).
+    pub tolerance: Option<f64>,
 }
 
 macro_rules! measures {
@@ -133,18 +137,23 @@ const fn info(
         summarised: false,
         stored: false,
         source,
+        tolerance: None,
     }
 }
 
+/// An image metric against the reference, gated and stored, that moves only beyond `tolerance`
+/// (in its unit; `None`: relative).
 const fn metric(
     name: &'static str,
     unit: &'static str,
     direction: Direction,
     label: &'static str,
+    tolerance: Option<f64>,
 ) -> Info {
     Info {
         gate: true,
         stored: true,
+        tolerance,
         ..info(name, unit, direction, label, Source::Metric)
     }
 }
@@ -198,18 +207,20 @@ measures! {
         ..info("nondeterministic", "bool", Lower, "nondeterministic", Source::Record) },
     UnrecoveredCuts => Info { gate: true, aliases: &["unrecovered-cuts"],
         ..info("unrecovered_cuts", "count", Lower, "unrecovered cuts", Source::Record) },
-    Psnr => metric("psnr", "dB", Higher, "PSNR dB"),
-    PsnrLuma => metric("psnr-luma", "dB", Higher, "PSNR luma dB"),
-    MaxAbsError => metric("max-abs-error", "", Lower, "max abs error"),
-    Ssim => metric("ssim", "", Higher, "SSIM"),
-    SsimLuma => metric("ssim-luma", "", Higher, "SSIM luma"),
-    Flip => metric("flip", "", Lower, "FLIP"),
-    FlipHdr => metric("flip-hdr", "", Lower, "HDR-FLIP"),
-    Flicker => metric("flicker", "", Lower, "flicker"),
-    Tde => metric("tde", "", Lower, "TDE"),
-    Cvvdp => metric("cvvdp", "JOD", Higher, "ColorVideoVDP JOD"),
-    CvvdpFlicker => metric("cvvdp-flicker", "JOD", Higher, "ColorVideoVDP flicker JOD"),
-    CvvdpTransientShare => metric("cvvdp-transient-share", "", Lower, "ColorVideoVDP transient share"),
+    // Tolerances: 0.1 dB of PSNR, 0.001 of SSIM and FLIP, 0.05 JOD (1/20 of the step at which
+    // 75% of viewers prefer one video), 0.01 of the transient share; the rest relative.
+    Psnr => metric("psnr", "dB", Higher, "PSNR dB", Some(0.1)),
+    PsnrLuma => metric("psnr-luma", "dB", Higher, "PSNR luma dB", Some(0.1)),
+    MaxAbsError => metric("max-abs-error", "", Lower, "max abs error", None),
+    Ssim => metric("ssim", "", Higher, "SSIM", Some(0.001)),
+    SsimLuma => metric("ssim-luma", "", Higher, "SSIM luma", Some(0.001)),
+    Flip => metric("flip", "", Lower, "FLIP", Some(0.001)),
+    FlipHdr => metric("flip-hdr", "", Lower, "HDR-FLIP", Some(0.001)),
+    Flicker => metric("flicker", "", Lower, "flicker", None),
+    Tde => metric("tde", "", Lower, "TDE", None),
+    Cvvdp => metric("cvvdp", "JOD", Higher, "ColorVideoVDP JOD", Some(0.05)),
+    CvvdpFlicker => metric("cvvdp-flicker", "JOD", Higher, "ColorVideoVDP flicker JOD", Some(0.05)),
+    CvvdpTransientShare => metric("cvvdp-transient-share", "", Lower, "ColorVideoVDP transient share", Some(0.01)),
 }
 
 impl Measure {

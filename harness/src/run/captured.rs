@@ -1,7 +1,7 @@
 //! What rendering captures for evaluation: a reference's frames ([`ReferenceFrames`]) and what a
 //! variant's metrics are computed from ([`MetricInputs`]). Both the reference render
 //! (`reference.rs`) and a variant's (`frames.rs`, `scenario.rs`) end here; metrics
-//! (`metrics.rs`, `cvvdp.rs`, `gpu_evaluate.rs`) and images (`images.rs`) read only this.
+//! (`evaluate.rs`, `cvvdp.rs`) and images (`images.rs`) read only this.
 //!
 //! Frames are on the CPU (`frames`, `hdr`) when the CPU needs them (the CPU metrics,
 //! ColorVideoVDP, HDR-FLIP's exposure ranges), and on the device (`gpu`) for the GPU metrics;
@@ -12,8 +12,8 @@
 use tessera_metrics::{ExposureRange, HdrImage, Rgb8Image};
 use tessera_metrics_gpu::GpuFrame;
 
-use super::frames::Rendered;
 use super::motion;
+use super::rendered::Rendered;
 
 /// Frames a reference render produced, in measured-frame order.
 pub struct ReferenceFrames {

@@ -17,55 +17,35 @@ use tessera_metrics_gpu::{GpuMetrics, GpuMetricsError};
 use tessera_results::measure::Measure;
 use tessera_results::MetricRecord;
 
-use crate::scenario::{Scenario, CVVDP_MEASURES};
-
-/// Whether the scenario's display takes linear frames (an HDR display: its colour space is not
-/// sRGB, e.g. `standard_hdr_linear`); SDR displays take the 8-bit sRGB output.
-pub fn uses_linear(scenario: &Scenario) -> bool {
-    scenario
-        .display
-        .model()
-        .is_ok_and(|m| m.color_space != "sRGB")
-}
-
-/// Measured frames that start a new shot: the camera changed segment (a cut) since the previous
-/// measured frame.
-pub fn cuts(scenario: &Scenario) -> Vec<usize> {
-    let segment = |i: u32| {
-        let t = scenario.frame_time(scenario.warmup_frames + i);
-        scenario.camera.pose_at(t).segment
-    };
-    (1..scenario.measured_frames)
-        .filter(|&i| segment(i) != segment(i - 1))
-        .map(|i| i as usize)
-        .collect()
-}
+use super::plan::Plan;
+use crate::metric::cvvdp::CVVDP_MEASURES;
 
 /// Records `cvvdp` (JOD), `cvvdp-flicker` (the transient channel's JOD) and
 /// `cvvdp-transient-share`, each with per-frame values, and the maps of the saved frames,
 /// computed on the CPU.
 pub fn records(
-    scenario: &Scenario,
+    plan: &Plan<'_>,
     reference: (&[Rgb8Image], &[HdrImage]),
     test: (&[Rgb8Image], &[HdrImage]),
 ) -> Result<(Vec<MetricRecord>, Vec<DistortionMap>), MetricsError> {
-    records_on(scenario, reference, test, None)
+    records_on(plan, reference, test, None)
 }
 
 /// [`records`] on `gpu` when given. A device that cannot take the work (a plane beyond its
 /// limits, a device error) leaves it to the CPU, with a note, and the records say `"cpu"`; input
 /// the metric refuses is the same error on both.
 pub fn records_on(
-    scenario: &Scenario,
+    plan: &Plan<'_>,
     reference: (&[Rgb8Image], &[HdrImage]),
     test: (&[Rgb8Image], &[HdrImage]),
     gpu: Option<&mut GpuMetrics>,
 ) -> Result<(Vec<MetricRecord>, Vec<DistortionMap>), MetricsError> {
+    let scenario = plan.scenario;
     let n = reference.0.len().min(test.0.len());
     let settings = CvvdpSettings {
         display: scenario.display.clone(),
         fps: 1.0 / scenario.time_step,
-        cuts: cuts(scenario).into_iter().filter(|&c| c < n).collect(),
+        cuts: plan.cvvdp_cuts().into_iter().filter(|&c| c < n).collect(),
         map_frames: scenario
             .save_frames
             .iter()
@@ -75,7 +55,7 @@ pub fn records_on(
         ..CvvdpSettings::default()
     };
     let white = DEFAULT_HDR_WHITE;
-    let linear = uses_linear(scenario) && reference.1.len() >= n && test.1.len() >= n;
+    let linear = plan.display_linear && reference.1.len() >= n && test.1.len() >= n;
     let (rf, tf) = if linear {
         (
             Frames::Linear {

@@ -6,6 +6,7 @@
 //! time went ([`phases`]) is printed per scenario and for the run, and written to
 //! `timings.json`.
 
+pub mod capture;
 pub mod captured;
 pub mod console;
 pub mod convergence;
@@ -13,7 +14,6 @@ pub mod cvvdp;
 pub mod evaluate;
 pub mod frames;
 pub mod gates;
-pub mod gpu_evaluate;
 pub mod images;
 pub mod memory;
 pub mod metrics;
@@ -21,12 +21,15 @@ pub mod motion;
 pub mod motion_blur;
 pub mod output;
 pub mod phases;
+pub mod plan;
 pub mod record;
 pub mod reference;
 pub mod reference_noise;
+pub mod rendered;
 pub mod report;
 pub mod scenario;
 pub mod select;
+pub mod sequence;
 pub mod stability;
 pub mod summary;
 
@@ -102,66 +105,10 @@ pub fn run_with_sensors(
     opts: &Options,
     sensors: &Sensors,
 ) -> Result<SuiteOutcome, SuiteError> {
-    let lost = Arc::new(AtomicBool::new(false));
-    {
-        let lost = lost.clone();
-        gpu.device.set_device_lost_callback(move |_, message| {
-            eprintln!("error: the GPU device was lost: {message}");
-            lost.store(true, Ordering::SeqCst);
-        });
-    }
-    // Errors outside an error scope are reported, not turned into a panic.
-    gpu.device.on_uncaptured_error(Arc::new(|e| {
-        eprintln!("warning: uncaptured GPU error: {e}")
-    }));
-
-    let started = chrono::Utc::now();
-    let commit = git_commit();
-    if commit.is_none() {
-        eprintln!(
-            "warning: not in a git checkout (or git failed): the run is recorded without a commit; the dashboard stores it but never compares a later run with it as its previous run (run tessera from the repository to record the commit)"
-        );
-    }
-    let commit_time = commit.as_ref().and_then(|_| git_commit_time());
-    let run_id = unique_run_id(&opts.out, &started, commit.as_ref());
-    let run_dir = opts.out.join(&run_id);
-    let mut run = RunInfo {
-        schema_version: SCHEMA_VERSION,
-        run_id: run_id.clone(),
-        commit,
-        commit_time,
-        started_at: started.to_rfc3339_opts(chrono::SecondsFormat::Secs, true),
-        finished_at: None,
-        status: RunStatus::Running,
-        harness_version: env!("CARGO_PKG_VERSION").to_string(),
-        adapter: gpu.info.clone(),
-        host: host_info(),
-        command_line: opts.command_line.clone(),
-        scenarios: scenarios
-            .iter()
-            .map(|s| s.file.display().to_string())
-            .collect(),
-        conditions: Some(sensors.device_record()),
-        suite: opts.suite.clone(),
-        branch: opts.branch.clone().or_else(git_branch),
-        adapter_class: opts.adapter_class.clone(),
-    };
-    let total: u64 = scenarios
-        .iter()
-        .map(|s| 2 * s.total_frames() as u64 * (s.variants.len() as u64 + 1))
-        .sum();
-    let bar = if opts.progress {
-        let b = indicatif::ProgressBar::new(total);
-        b.set_style(
-            indicatif::ProgressStyle::with_template(
-                "{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} frames  {msg}",
-            )
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-        );
-        b
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
+    let lost = watch_device(gpu);
+    let mut run = run_info(gpu, scenarios, opts, sensors);
+    let (run_id, run_dir) = (run.run_id.clone(), opts.out.join(&run.run_id));
+    let bar = progress_bar(scenarios, opts.progress);
 
     // Every output of the run, called in this order at each stage.
     let mut files = report::Files {
@@ -225,6 +172,78 @@ pub fn run_with_sensors(
         scenarios: results,
         device_lost: lost.load(Ordering::SeqCst),
     })
+}
+
+/// Watches `gpu` for device loss (the flag it returns) and reports errors outside an error scope
+/// instead of panicking.
+fn watch_device(gpu: &Gpu) -> Arc<AtomicBool> {
+    let lost = Arc::new(AtomicBool::new(false));
+    {
+        let lost = lost.clone();
+        gpu.device.set_device_lost_callback(move |_, message| {
+            eprintln!("error: the GPU device was lost: {message}");
+            lost.store(true, Ordering::SeqCst);
+        });
+    }
+    // Errors outside an error scope are reported, not turned into a panic.
+    gpu.device.on_uncaptured_error(Arc::new(|e| {
+        eprintln!("warning: uncaptured GPU error: {e}")
+    }));
+    lost
+}
+
+/// The run's record as it starts: id, commit, adapter, host, scenarios.
+fn run_info(gpu: &Gpu, scenarios: &[Scenario], opts: &Options, sensors: &Sensors) -> RunInfo {
+    let started = chrono::Utc::now();
+    let commit = git_commit();
+    if commit.is_none() {
+        eprintln!(
+            "warning: not in a git checkout (or git failed): the run is recorded without a commit; the dashboard stores it but never compares a later run with it as its previous run (run tessera from the repository to record the commit)"
+        );
+    }
+    let commit_time = commit.as_ref().and_then(|_| git_commit_time());
+    let run_id = unique_run_id(&opts.out, &started, commit.as_ref());
+    RunInfo {
+        schema_version: SCHEMA_VERSION,
+        run_id: run_id.clone(),
+        commit,
+        commit_time,
+        started_at: started.to_rfc3339_opts(chrono::SecondsFormat::Secs, true),
+        finished_at: None,
+        status: RunStatus::Running,
+        harness_version: env!("CARGO_PKG_VERSION").to_string(),
+        adapter: gpu.info.clone(),
+        host: host_info(),
+        command_line: opts.command_line.clone(),
+        scenarios: scenarios
+            .iter()
+            .map(|s| s.file.display().to_string())
+            .collect(),
+        conditions: Some(sensors.device_record()),
+        suite: opts.suite.clone(),
+        branch: opts.branch.clone().or_else(git_branch),
+        adapter_class: opts.adapter_class.clone(),
+    }
+}
+
+/// The progress bar over every frame the run renders (hidden without `progress`).
+fn progress_bar(scenarios: &[Scenario], progress: bool) -> indicatif::ProgressBar {
+    let total: u64 = scenarios
+        .iter()
+        .map(|s| 2 * s.total_frames() as u64 * (s.variants.len() as u64 + 1))
+        .sum();
+    if progress {
+        let b = indicatif::ProgressBar::new(total);
+        b.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} frames  {msg}",
+            )
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        b
+    } else {
+        indicatif::ProgressBar::hidden()
+    }
 }
 
 /// `timings.json`: where the run's wall time went (see [`phases`]).

@@ -6,7 +6,7 @@
 //! Rendered once per scenario, only when `tde` is asked for, after the timed work of the
 //! reference; never between timed frames.
 
-use super::frames::{history_valid, submit_frame};
+use super::sequence::{history_valid, submit_frame};
 use crate::gpu::Gpu;
 use crate::render::readback::read_texture;
 use crate::render::scene::SceneGpu;

@@ -198,121 +198,142 @@ pub fn junit(run: &RunInfo, scenarios: &[ScenarioResult]) -> Vec<u8> {
             s.wall_ms / 1000.0
         );
         for r in &s.results {
-            let time = r.cpu_frame_ms.mean * r.cpu_frame_ms.count as f64 / 1000.0;
-            let _ = write!(
-                out,
-                "    <testcase classname=\"{}\" name=\"{}\" time=\"{time:.3}\"",
-                xml(&s.scenario),
-                xml(&r.variant)
-            );
-            let mut body = String::new();
-            // Every metric as a property, its direction in the name: `cvvdp (higher is better)`;
-            // the expectation that applied, as `expectation`.
-            if !r.metrics.is_empty() || r.expectation.is_some() {
-                body.push_str("      <properties>\n");
-                if let Some(e) = &r.expectation {
-                    let _ = writeln!(
-                        body,
-                        "        <property name=\"expectation\" value=\"{}\"/>",
-                        xml(&format!(
-                            "{} ({}): {}: {}",
-                            e.label.as_str(),
-                            e.source,
-                            e.outcome.as_str(),
-                            e.reason
-                        ))
-                    );
-                }
-                for m in &r.metrics {
-                    let dir = if m.higher_is_better {
-                        "higher"
-                    } else {
-                        "lower"
-                    };
-                    let _ = writeln!(
-                        body,
-                        "        <property name=\"{} ({dir} is better)\" value=\"{}\"/>",
-                        xml(&m.name),
-                        num(m.value)
-                    );
-                }
-                body.push_str("      </properties>\n");
-            }
-            let outcome = r.expectation.as_ref().map(|e| (e, e.outcome));
-            match &r.status {
-                // A failure an expectation said would happen is reported as pytest reports an
-                // expected failure: skipped, with why.
-                _ if matches!(outcome, Some((_, Outcome::ExpectedFailure))) => {
-                    let e = outcome.expect("matched").0;
-                    let _ = writeln!(
-                        body,
-                        "      <skipped message=\"{}\"/>",
-                        xml(&format!(
-                            "expected failure ({}: {}, {}): {}",
-                            e.label.as_str(),
-                            e.reason,
-                            e.source,
-                            e.error.as_deref().unwrap_or("")
-                        ))
-                    );
-                }
-                _ if matches!(outcome, Some((_, Outcome::UnexpectedPass))) => {
-                    let e = outcome.expect("matched").0;
-                    let _ = writeln!(
-                        body,
-                        "      <failure message=\"{}\"/>",
-                        xml(&format!(
-                            "unexpected pass: remove the entry at {} ({}: {})",
-                            e.source,
-                            e.label.as_str(),
-                            e.reason
-                        ))
-                    );
-                }
-                Status::Skipped { reason } => {
-                    let _ = writeln!(body, "      <skipped message=\"{}\"/>", xml(reason));
-                }
-                Status::Failed { error } => {
-                    let _ = writeln!(body, "      <failure message=\"{}\"/>", xml(error));
-                }
-                Status::Ok => {
-                    for g in r.gates.iter().filter(|g| g.level == GateLevel::Fail) {
-                        let _ = writeln!(body, "      <failure message=\"{}\"/>", xml(&g.message));
-                    }
-                }
-            }
-            let throttled = r
-                .conditions
-                .as_ref()
-                .and_then(|c| c.recorded())
-                .filter(|c| c.throttled)
-                .map(|c| format!("throttled: {}", c.throttle_causes.join("; ")));
-            let warnings: Vec<&str> = r
-                .gates
-                .iter()
-                .filter(|g| g.level == GateLevel::Warn)
-                .map(|g| g.message.as_str())
-                .chain(throttled.as_deref())
-                .collect();
-            if !warnings.is_empty() {
-                let _ = writeln!(
-                    body,
-                    "      <system-out>{}</system-out>",
-                    xml(&warnings.join("\n"))
-                );
-            }
-            if body.is_empty() {
-                out.push_str("/>\n");
-            } else {
-                out.push_str(">\n");
-                out.push_str(&body);
-                out.push_str("    </testcase>\n");
-            }
+            testcase(&mut out, &s.scenario, r);
         }
         out.push_str("  </testsuite>\n");
     }
     out.push_str("</testsuites>\n");
     out.into_bytes()
+}
+
+/// One variant's `<testcase>`: its metrics and expectation as properties, its outcome, and its
+/// warnings as system-out.
+fn testcase(out: &mut String, scenario: &str, r: &tessera_results::VariantResult) {
+    let time = r.cpu_frame_ms.mean * r.cpu_frame_ms.count as f64 / 1000.0;
+    let _ = write!(
+        out,
+        "    <testcase classname=\"{}\" name=\"{}\" time=\"{time:.3}\"",
+        xml(scenario),
+        xml(&r.variant)
+    );
+    let mut body = properties(r);
+    outcome(&mut body, r);
+    system_out(&mut body, r);
+    if body.is_empty() {
+        out.push_str("/>\n");
+    } else {
+        out.push_str(">\n");
+        out.push_str(&body);
+        out.push_str("    </testcase>\n");
+    }
+}
+
+/// Every metric as a property, its direction in the name: `cvvdp (higher is better)`; the
+/// expectation that applied, as `expectation`.
+fn properties(r: &tessera_results::VariantResult) -> String {
+    let mut body = String::new();
+    if !r.metrics.is_empty() || r.expectation.is_some() {
+        body.push_str("      <properties>\n");
+        if let Some(e) = &r.expectation {
+            let _ = writeln!(
+                body,
+                "        <property name=\"expectation\" value=\"{}\"/>",
+                xml(&format!(
+                    "{} ({}): {}: {}",
+                    e.label.as_str(),
+                    e.source,
+                    e.outcome.as_str(),
+                    e.reason
+                ))
+            );
+        }
+        for m in &r.metrics {
+            let dir = if m.higher_is_better {
+                "higher"
+            } else {
+                "lower"
+            };
+            let _ = writeln!(
+                body,
+                "        <property name=\"{} ({dir} is better)\" value=\"{}\"/>",
+                xml(&m.name),
+                num(m.value)
+            );
+        }
+        body.push_str("      </properties>\n");
+    }
+    body
+}
+
+/// A failure, a skip, or nothing, as the status, the gates and the expectation say.
+fn outcome(body: &mut String, r: &tessera_results::VariantResult) {
+    let outcome = r.expectation.as_ref().map(|e| (e, e.outcome));
+    match &r.status {
+        // A failure an expectation said would happen is reported as pytest reports an
+        // expected failure: skipped, with why.
+        _ if matches!(outcome, Some((_, Outcome::ExpectedFailure))) => {
+            let e = outcome.expect("matched").0;
+            let _ = writeln!(
+                body,
+                "      <skipped message=\"{}\"/>",
+                xml(&format!(
+                    "expected failure ({}: {}, {}): {}",
+                    e.label.as_str(),
+                    e.reason,
+                    e.source,
+                    e.error.as_deref().unwrap_or("")
+                ))
+            );
+        }
+        _ if matches!(outcome, Some((_, Outcome::UnexpectedPass))) => {
+            let e = outcome.expect("matched").0;
+            let _ = writeln!(
+                body,
+                "      <failure message=\"{}\"/>",
+                xml(&format!(
+                    "unexpected pass: remove the entry at {} ({}: {})",
+                    e.source,
+                    e.label.as_str(),
+                    e.reason
+                ))
+            );
+        }
+        Status::Skipped { reason } => {
+            let _ = writeln!(body, "      <skipped message=\"{}\"/>", xml(reason));
+        }
+        Status::Failed { error } => {
+            let _ = writeln!(body, "      <failure message=\"{}\"/>", xml(error));
+        }
+        Status::Ok => {
+            for g in r.gates.iter().filter(|g| g.level == GateLevel::Fail) {
+                let _ = writeln!(body, "      <failure message=\"{}\"/>", xml(&g.message));
+            }
+        }
+    }
+}
+
+/// Warning gates and throttling, as system-out.
+fn system_out(body: &mut String, r: &tessera_results::VariantResult) {
+    let throttled = r
+        .conditions
+        .as_ref()
+        .and_then(|c| c.recorded())
+        .filter(|c| c.throttled)
+        .map(|c| format!("throttled: {}", c.throttle_causes.join("; ")));
+    let warnings: Vec<&str> = r
+        .gates
+        .iter()
+        .filter(|g| g.level == GateLevel::Warn)
+        .map(|g| g.message.as_str())
+        .chain(throttled.as_deref())
+        .collect();
+    if !warnings.is_empty() {
+        let _ = writeln!(
+            body,
+            "      <system-out>{}</system-out>",
+            xml(&warnings.join("\n"))
+        );
+    }
 }
 
 /// Whether JUnit counts a result as a failure: it failed and no expectation said it would, or it

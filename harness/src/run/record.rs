@@ -7,7 +7,7 @@ use std::time::Instant;
 use tessera_results::conditions::Conditions;
 use tessera_results::{PassRecord, ScenarioResult, Status, Summary, VariantResult};
 
-use super::frames::Rendered;
+use super::rendered::Rendered;
 use crate::conditions::Sensors;
 use crate::render::renderer::Renderer;
 use crate::scenario::Scenario;

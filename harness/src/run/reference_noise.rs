@@ -18,14 +18,16 @@ use std::collections::BTreeMap;
 use tessera_results::ReferenceNoise;
 
 use super::captured::{MetricInputs, ReferenceFrames};
-use super::evaluate::{CpuMetrics, Evaluator};
+use super::evaluate;
+use super::plan::Plan;
 use crate::gpu::Gpu;
+use crate::metric::{MetricKind, Values};
 use crate::render::scene::SceneGpu;
-use crate::scenario::{MetricKind, Reference, Scenario};
+use crate::scenario::{Reference, Scenario};
 
-/// The metrics that mean something on one frame.
+/// The metrics that mean something on one frame: not those of consecutive frames.
 fn one_frame_metric(m: MetricKind) -> bool {
-    !matches!(m, MetricKind::Flicker | MetricKind::Tde)
+    !matches!(m.def().values, Values::Consecutive | Values::Motion)
 }
 
 /// The scenario reduced to its first compared frame, rendered as the converged reference with
@@ -90,15 +92,18 @@ pub fn measure(
     };
     let base = first_frame(scenario, samples);
     let denser = first_frame(scenario, dense);
-    let render = |s: &Scenario, scene: &mut SceneGpu, on_frame: &mut dyn FnMut()| {
-        super::reference::render(gpu, scene, s, false, on_frame).map(|mut r| {
+    // Read back to the CPU and evaluated there, whatever the scenario's metrics device.
+    let plan = |s| Plan::new(gpu, s).on_cpu();
+    let (base_plan, denser_plan) = (plan(&base), plan(&denser));
+    let render = |p: &Plan<'_>, scene: &mut SceneGpu, on_frame: &mut dyn FnMut()| {
+        super::reference::render(gpu, scene, p, on_frame).map(|mut r| {
             last_only(&mut r);
             r
         })
     };
     let (mut test, reference) = match (
-        render(&base, scene, on_frame),
-        render(&denser, scene, on_frame),
+        render(&base_plan, scene, on_frame),
+        render(&denser_plan, scene, on_frame),
     ) {
         (Ok(t), Ok(r)) => (t, r),
         (Err(e), _) | (_, Err(e)) => {
@@ -114,7 +119,7 @@ pub fn measure(
         test_non_finite: &test.non_finite,
         motion: &Ok(Vec::new()),
     };
-    let evaluation = CpuMetrics.evaluate(&base, &inputs);
+    let evaluation = evaluate::evaluate(gpu, &base_plan, &inputs);
     let names: Vec<&str> = base.metrics.iter().map(|m| m.name()).collect();
     for m in evaluation.metrics {
         if m.check.is_none() && names.contains(&m.name.as_str()) && m.value.is_finite() {

@@ -6,24 +6,13 @@
 use tessera_metrics::Rgb8Image;
 use tessera_results::{CutRecovery, Stability};
 
-use super::frames::history_valid;
-use crate::scenario::Scenario;
+use super::plan::Plan;
 
 /// How far (in PSNR dB) the second frame after a cut may stay below the steady level.
 pub const CUT_TOLERANCE_DB: f64 = 1.0;
 
 /// Frames after a cut (the cut frame included) that are not part of the steady level.
 const SETTLE_FRAMES: u32 = 3;
-
-/// Measured-frame indices where a new camera shot starts (history is dropped there).
-pub fn cut_frames(scenario: &Scenario) -> Vec<u32> {
-    (0..scenario.measured_frames)
-        .filter(|&m| {
-            let index = scenario.warmup_frames + m;
-            index > 0 && !history_valid(scenario, index)
-        })
-        .collect()
-}
 
 /// The error around each cut: `mse` holds one value per measured frame. A cut's steady level is
 /// the median error of its own shot (the new view's content sets the level) from
@@ -79,7 +68,7 @@ pub struct Frames<'a> {
 /// `mse`: per measured frame, the MSE against the reference when the metrics computed it (the
 /// GPU's: the frames are then not on the CPU); else it is computed here from the frames.
 pub fn check(
-    scenario: &Scenario,
+    plan: &Plan<'_>,
     own: Frames<'_>,
     deterministic: Option<bool>,
     reference: Option<Frames<'_>>,
@@ -101,7 +90,7 @@ pub fn check(
                     spread_pixels(m.as_deref(), r.masks.get(i).and_then(|x| x.as_deref()))
                 })
                 .sum();
-            let cut_list = cut_frames(scenario);
+            let cut_list = &plan.cuts;
             let cuts = if cut_list.is_empty() {
                 Vec::new()
             } else {
@@ -114,7 +103,7 @@ pub fn check(
                         .map(|(t, r)| tessera_metrics::mse_rgb(r, t).unwrap_or(f64::INFINITY))
                         .collect(),
                 };
-                cut_recovery(&mse, &cut_list)
+                cut_recovery(&mse, cut_list)
             };
             (Some(spread), cuts)
         }

@@ -16,6 +16,7 @@ use std::path::{Path, PathBuf};
 
 use tessera_results::measure::Measure;
 
+use crate::metric::MetricKind;
 use crate::techniques::Variant;
 pub use crate::world::scene::{
     Animation, CameraPose, CameraTrack, City, Ground, GroundFilter, Inject, Interpolation,
@@ -143,74 +144,6 @@ impl Reference {
             Reference::Native => "native",
             Reference::GroundTruth { .. } | Reference::Converged { .. } => "ground-truth",
         }
-    }
-}
-
-/// The measures `cvvdp` records besides `cvvdp` (JOD): the transient channel's own JOD (higher is
-/// better) and its share of the visible difference (lower is better).
-pub const CVVDP_MEASURES: [Measure; 2] = [Measure::CvvdpFlicker, Measure::CvvdpTransientShare];
-
-/// Image metrics a scenario can ask for.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum MetricKind {
-    Psnr,
-    PsnrLuma,
-    MaxAbsError,
-    Ssim,
-    SsimLuma,
-    Flip,
-    /// Static-scene flicker: mean absolute change between consecutive output frames.
-    Flicker,
-    /// HDR-FLIP on the linear output, exposures from the reference frame.
-    FlipHdr,
-    /// Temporal difference error with the renderer's exact motion (notes/metrics.md 3.3).
-    Tde,
-    /// ColorVideoVDP in JOD on the scenario's `display`, plus its perceptual-flicker measures.
-    Cvvdp,
-}
-
-impl MetricKind {
-    pub const ALL: [MetricKind; 10] = [
-        MetricKind::Psnr,
-        MetricKind::PsnrLuma,
-        MetricKind::MaxAbsError,
-        MetricKind::Ssim,
-        MetricKind::SsimLuma,
-        MetricKind::Flip,
-        MetricKind::Flicker,
-        MetricKind::FlipHdr,
-        MetricKind::Tde,
-        MetricKind::Cvvdp,
-    ];
-    pub const DEFAULT: [MetricKind; 3] = [
-        MetricKind::Psnr,
-        MetricKind::PsnrLuma,
-        MetricKind::MaxAbsError,
-    ];
-
-    /// The measure this metric records (its name, unit and direction are defined there).
-    pub fn measure(self) -> Measure {
-        match self {
-            MetricKind::Psnr => Measure::Psnr,
-            MetricKind::PsnrLuma => Measure::PsnrLuma,
-            MetricKind::MaxAbsError => Measure::MaxAbsError,
-            MetricKind::Ssim => Measure::Ssim,
-            MetricKind::SsimLuma => Measure::SsimLuma,
-            MetricKind::Flip => Measure::Flip,
-            MetricKind::Flicker => Measure::Flicker,
-            MetricKind::FlipHdr => Measure::FlipHdr,
-            MetricKind::Tde => Measure::Tde,
-            MetricKind::Cvvdp => Measure::Cvvdp,
-        }
-    }
-
-    /// The name in `metrics = [...]`, gates, the CSV and the store: the measure's.
-    pub fn name(self) -> &'static str {
-        self.measure().name()
-    }
-
-    pub fn higher_is_better(self) -> bool {
-        self.measure().direction().higher_is_better()
     }
 }
 

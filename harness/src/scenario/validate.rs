@@ -13,6 +13,8 @@ use toml_edit::Document;
 use super::raw::*;
 use super::span::{line_col, locate, KeyPath};
 use super::*;
+use crate::metric::cvvdp::CVVDP_MEASURES;
+use crate::metric::MetricKind;
 use crate::params::{closest, quoted_list, ParamValue};
 use crate::techniques;
 use crate::techniques::{variant_name, Variant};
@@ -306,8 +308,8 @@ fn build(ctx: &mut Ctx, path: &Path, raw: RawScenario) -> Scenario {
     }
     let metrics = metrics(ctx, &root.key("metrics"), raw.metrics.as_deref(), reference);
     for (i, m) in metrics.iter().enumerate() {
-        let min = tessera_metrics::SSIM_MIN_SIZE;
-        if matches!(m, MetricKind::Ssim | MetricKind::SsimLuma) && (width < min || height < min) {
+        let min = m.def().needs.min_size;
+        if width < min || height < min {
             ctx.err(
                 &root.key("metrics").index(i),
                 format!("{} needs at least {min}x{min} pixels (one Gaussian window); the resolution is {width}x{height}", m.name()),

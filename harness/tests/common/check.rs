@@ -45,7 +45,7 @@ impl<R: Renderer> Rig<R> {
     /// Submits frame `index` of `s` as the run loop does and waits for the GPU to finish it.
     pub fn frame(&mut self, s: &Scenario, index: u32) {
         let g = &self.gpu;
-        tessera::run::frames::submit_frame(
+        tessera::run::sequence::submit_frame(
             g,
             &mut self.scene,
             s,

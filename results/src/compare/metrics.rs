@@ -13,22 +13,8 @@ use crate::{MetricRecord, VariantResult};
 
 use super::{findings::Verdict, Pair};
 
-/// The change a metric must exceed to count, in its own unit: 0.1 dB of PSNR, 0.001 of SSIM and
-/// FLIP, 0.05 JOD (1/20 of the step at which 75% of viewers prefer one video), 0.01 of the
-/// transient share. Any other metric: 0.1% of the larger magnitude ([`RELATIVE_TOLERANCE`]).
-pub const TOLERANCES: [(&str, f64); 9] = [
-    ("psnr", 0.1),
-    ("psnr-luma", 0.1),
-    ("ssim", 0.001),
-    ("ssim-luma", 0.001),
-    ("flip", 0.001),
-    ("flip-hdr", 0.001),
-    ("cvvdp", 0.05),
-    ("cvvdp-flicker", 0.05),
-    ("cvvdp-transient-share", 0.01),
-];
-
-/// The tolerance of a metric without one in [`TOLERANCES`], relative to the larger magnitude.
+/// The tolerance of a measure without one of its own ([`crate::measure::Info::tolerance`]), relative to the
+/// larger magnitude.
 pub const RELATIVE_TOLERANCE: f64 = 0.001;
 
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -58,10 +44,9 @@ pub fn judge(name: &str, a: f64, b: f64, higher_is_better: bool) -> Verdict {
     if a == b || a.is_nan() || b.is_nan() {
         return Verdict::Same;
     }
-    let tolerance = TOLERANCES
-        .iter()
-        .find(|(n, _)| *n == name)
-        .map_or_else(|| RELATIVE_TOLERANCE * a.abs().max(b.abs()), |(_, t)| *t);
+    let tolerance = Measure::from_name(name)
+        .and_then(|m| m.info().tolerance)
+        .unwrap_or_else(|| RELATIVE_TOLERANCE * a.abs().max(b.abs()));
     let gain = if higher_is_better { b - a } else { a - b };
     if gain < -tolerance {
         Verdict::Worse
