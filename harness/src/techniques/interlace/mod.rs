@@ -1,20 +1,19 @@
 //! Technique `interlace`: temporal interlaced rendering, the checkerboarding that shipped before
 //! checkerboards (Rainbow Six Siege's "temporal interlaced rendering" as the depth-based report
-//! describes it, `seeds/depth-based-checkerboarding.txt` section 3.3). By default
-//! (`pattern = "interlaced"`) the sampling is offset row by row so that each frame shades half the
-//! pixels in a checkerboard and every unshaded pixel has four shaded orthogonal neighbours; an
+//! describes it, `seeds/depth-based-checkerboarding.txt` section 3.3). The sampling is offset row
+//! by row so that each frame shades half the pixels in a checkerboard and every unshaded pixel has four shaded orthogonal neighbours; an
 //! unshaded pixel takes its motion from the neighbour closest to the camera, the history there is
 //! clamped to the neighbours, blended back towards the unclamped value by depth confidence, and
 //! weighted against the spatial fill by colour coherency and velocity (`gpu.rs`, `model.rs`,
-//! `reconstruct.wgsl`). `pattern = "columns"` is the scheme Tessera had before: whole columns
-//! alternate, the history clamped to six neighbours, no confidence or weights (`columns.rs`,
-//! `columns_model.rs`, `columns.wgsl`), kept to compare.
+//! `reconstruct.wgsl`). The scheme Tessera had before issue 26 (whole columns alternating, the
+//! history clamped to six neighbours, no confidence or weights; `pattern = "columns"`) was retired
+//! with issue 39: it was kept to compare, and it was a second complete technique in this folder.
+//! Its last measure is in `scenarios/quality/static.toml`'s notes (29.63 dB against 40.58 on
+//! lavapipe).
 //!
 //! The report gives the steps, not their formulas: the confidence ramp, the coherency measure
 //! and the way the two weights combine are this module's reading, documented in the shader.
 
-pub mod columns;
-pub mod columns_model;
 pub mod gpu;
 pub mod model;
 
@@ -23,46 +22,30 @@ use crate::gpu::Unsupported;
 use crate::render::graph::Plan;
 use crate::render::renderer::Renderer;
 
-pub use columns::{half_view, ColumnsGpu};
 pub use gpu::{rows_view, InterlaceGpu, LastFrame};
-
-crate::choice! {
-    /// Which pixels a frame shades.
-    pub enum Pattern {
-        /// A checkerboard from two offset quarter-resolution renders: four shaded neighbours
-        /// (section 3.3).
-        Interlaced = "interlaced",
-        /// Alternate whole columns at half width: two shaded neighbours (Tessera before issue 26).
-        Columns = "columns",
-    }
-}
 
 crate::options! {
     /// A variant's options, typed.
     #[derive(Clone, Copy, Debug, PartialEq)]
     pub struct Options {
-        pattern: Pattern = choice(
-            Pattern::Interlaced,
-            "`interlaced`: each frame shades a checkerboard (two quarter-resolution renders, rows offset by one pixel: vertex work twice), every missing pixel with four shaded neighbours, confidence blend and coherency/velocity weights (section 3.3); `columns`: alternate whole columns at half width, the history clamped to six neighbours, no confidence or weights",
-        ),
         clamp: bool = flag(
             true,
-            "clamp the reprojected colour to the min/max of the shaded neighbours (interlaced: the four orthogonal ones, then blended back by depth confidence; columns: six, rows y-1 to y+1); off: the history unclamped",
+            "clamp the reprojected colour to the min/max of the four orthogonal shaded neighbours, then blend back towards the unclamped value by depth confidence; off: the history unclamped",
         ),
         depth_tolerance: f32 = float(
             (0.0, false, 1.0e3),
             0.05,
-            "interlaced: how far (relative view depth) the previous depth at the reprojected position may lie outside the neighbours' depth range before the confidence reaches 0 (the clamped history); inside the range the confidence is 1 (the unclamped history)",
+            "how far (relative view depth) the previous depth at the reprojected position may lie outside the neighbours' depth range before the confidence reaches 0 (the clamped history); inside the range the confidence is 1 (the unclamped history)",
         ),
         coherency: f32 = float(
             (0.0, false, 1.0e3),
             0.1,
-            "interlaced: relative luma difference of the more coherent neighbour pair at which the history keeps its full weight in motion; below it a moving pixel leans towards the spatial fill",
+            "relative luma difference of the more coherent neighbour pair at which the history keeps its full weight in motion; below it a moving pixel leans towards the spatial fill",
         ),
         velocity_scale: f32 = float(
             (0.0, false, 1.0e6),
             4.0,
-            "interlaced: motion in pixels per frame at which the velocity weight is full (over coherent neighbours: the spatial fill); at rest the history",
+            "motion in pixels per frame at which the velocity weight is full (over coherent neighbours: the spatial fill); at rest the history",
         ),
         velocity: bool = flag(
             true,
@@ -71,7 +54,7 @@ crate::options! {
         gradient_scale: f32 = float(
             (0.0, false, 1.0),
             0.5,
-            "multiplies screen-space derivatives of the reduced render (the ground filter's width): interlaced renders at quarter resolution, so 0.5 matches native in x and y (1: uncorrected, blurs); columns at half width: 0.5 matches native in x and halves y",
+            "multiplies screen-space derivatives of the reduced render (the ground filter's width): it renders at quarter resolution, so 0.5 matches native in x and y (1: uncorrected, blurs)",
         ),
     }
 }
@@ -85,7 +68,7 @@ impl Definition for Interlace {
         "interlace"
     }
 
-    /// Even and odd frames shade the two checkerboard parities (or columns).
+    /// Even and odd frames shade the two checkerboard parities.
     fn frames(&self, _options: &Options) -> FramePattern {
         FramePattern::Alternating
     }
@@ -96,10 +79,7 @@ impl Definition for Interlace {
 
     fn plan(&self, options: &Options, target: Target) -> Plan {
         let (w, h, dynamic) = (target.width, target.height, target.dynamic_scene);
-        match options.pattern {
-            Pattern::Interlaced => gpu::graph(options, w, h, dynamic).0,
-            Pattern::Columns => columns::graph(options, w, h, dynamic).0,
-        }
+        gpu::graph(options, w, h, dynamic).0
     }
 
     fn build(
@@ -109,16 +89,13 @@ impl Definition for Interlace {
     ) -> Result<Box<dyn Renderer>, Unsupported> {
         let t = cx.target;
         let (w, h, dynamic) = (t.width, t.height, t.dynamic_scene);
-        Ok(match options.pattern {
-            Pattern::Interlaced => Box::new(InterlaceGpu::new(cx.gpu, *options, w, h, dynamic)),
-            Pattern::Columns => Box::new(ColumnsGpu::new(cx.gpu, *options, w, h, dynamic)),
-        })
+        Ok(Box::new(InterlaceGpu::new(cx.gpu, *options, w, h, dynamic)))
     }
 
     fn shaders(&self) -> Vec<Shader> {
-        vec![
-            Shader::file("interlace/reconstruct.wgsl", gpu::RECONSTRUCT_WGSL),
-            Shader::file("interlace/columns.wgsl", columns::COLUMNS_WGSL),
-        ]
+        vec![Shader::file(
+            "interlace/reconstruct.wgsl",
+            gpu::RECONSTRUCT_WGSL,
+        )]
     }
 }
