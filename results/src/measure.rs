@@ -216,6 +216,7 @@ measures! {
     SsimLuma => metric("ssim-luma", "", Higher, "SSIM luma", Some(0.001)),
     Flip => metric("flip", "", Lower, "FLIP", Some(0.001)),
     FlipHdr => metric("flip-hdr", "", Lower, "HDR-FLIP", Some(0.001)),
+    FlipMax => metric("flip-max", "", Lower, "FLIP max", Some(0.01)),
     Flicker => metric("flicker", "", Lower, "flicker", None),
     Tde => metric("tde", "", Lower, "TDE", None),
     Cvvdp => metric("cvvdp", "JOD", Higher, "ColorVideoVDP JOD", Some(0.05)),

@@ -34,6 +34,19 @@ pub const FLIP_HDR: MetricDef = MetricDef {
     },
 };
 
+/// The worst pixel: the largest per-pixel LDR-FLIP error of any measured frame (a firefly, a
+/// sparkle or a NaN fill that a mean over millions of pixels hides).
+pub const FLIP_MAX: MetricDef = MetricDef {
+    kind: MetricKind::FlipMax,
+    measure: Measure::FlipMax,
+    needs: Needs::NONE,
+    values: Values::Pair {
+        ask: |r, _| ask_ldr(r, false),
+        read: |v| v.flip.as_ref().map(|f| f.max),
+        aggregate: Aggregate::Max,
+    },
+};
+
 /// Asks for LDR-FLIP (and its heat map when `heatmap`), keeping a heat map already asked for.
 pub fn ask_ldr(request: &mut PairRequest, heatmap: bool) {
     let f = request.flip.get_or_insert(FlipRequest {

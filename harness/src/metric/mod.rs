@@ -34,6 +34,8 @@ pub enum MetricKind {
     Flicker,
     /// HDR-FLIP on the linear output, exposures from the reference frame.
     FlipHdr,
+    /// The largest per-pixel LDR-FLIP error of the sequence.
+    FlipMax,
     /// Temporal difference error with the renderer's exact motion (notes/metrics.md 3.3).
     Tde,
     /// ColorVideoVDP in JOD on the scenario's `display`, plus its perceptual-flicker measures.
@@ -41,7 +43,7 @@ pub enum MetricKind {
 }
 
 /// Every metric, in the order `tessera` lists them.
-pub const METRICS: [&MetricDef; 10] = [
+pub const METRICS: [&MetricDef; 11] = [
     &pixel::PSNR,
     &pixel::PSNR_LUMA,
     &pixel::MAX_ABS_ERROR,
@@ -50,6 +52,7 @@ pub const METRICS: [&MetricDef; 10] = [
     &flip::FLIP,
     &flicker::FLICKER,
     &flip::FLIP_HDR,
+    &flip::FLIP_MAX,
     &tde::TDE,
     &cvvdp::CVVDP,
 ];
