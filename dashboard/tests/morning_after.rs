@@ -285,7 +285,6 @@ fn an_alert_that_moves_leaves_a_group_whose_others_stay() {
             location_probability: 0.9,
             first_candidate: pk(c, n),
             last_candidate: pk(c, n),
-            range_before: pk(c, n - 1),
             status: DetectionStatus::Pending,
         };
         let group_of = |c: &mut dyn tessera_dashboard::db::Connection, id: i64| {
@@ -362,96 +361,148 @@ fn an_alert_that_moves_leaves_a_group_whose_others_stay() {
     }
 }
 
-#[test]
-fn a_loosely_located_series_does_not_join_an_exact_group_through_the_shared_night() {
-    use tessera_dashboard::store::alerts::{self, DetectionStatus, Placement};
-    for store in common::stores("a_loosely_located_series_does_not_join") {
-        let h = StepHistory::h200(10, 99, "native", 1.0);
-        let mut c = store.pool.get().unwrap();
+/// An H200 and a lavapipe history of 10 nights at the same commits (the nightly pair of one
+/// commit shares its night), stored without detection: the tests below place alerts by hand.
+/// Returns the store's run pk of (adapter, night), `h200` first.
+fn two_adapters_nightly(
+    c: &mut dyn tessera_dashboard::db::Connection,
+) -> impl Fn(&mut dyn tessera_dashboard::db::Connection, &str, usize) -> i64 {
+    let h200 = StepHistory::h200(10, 99, "native", 1.0);
+    let lavapipe = StepHistory {
+        name: "lavapipe".into(),
+        gpu: false,
+        ..h200.clone()
+    };
+    for h in [&h200, &lavapipe] {
         for run in h.runs(&common::template()) {
-            tessera_dashboard::store::ingest::ingest(&mut *c, &run).unwrap();
+            tessera_dashboard::store::ingest::ingest(c, &run).unwrap();
         }
-        let pk = |c: &mut dyn tessera_dashboard::db::Connection, n: usize| {
-            c.query(
-                "SELECT id FROM runs WHERE run_id = $1",
-                &[h.run_id(n).as_str().into()],
-            )
-            .unwrap()[0]
-                .i64(0)
-                .unwrap()
-        };
-        let series: Vec<i64> = c
-            .query("SELECT id FROM series ORDER BY id LIMIT 3", &[])
+    }
+    move |c: &mut dyn tessera_dashboard::db::Connection, adapter: &str, n: usize| {
+        c.query(
+            "SELECT id FROM runs WHERE run_id = $1",
+            &[format!("{adapter}-{n:04}").as_str().into()],
+        )
+        .unwrap()[0]
+            .i64(0)
             .unwrap()
-            .iter()
-            .map(|r| r.i64(0).unwrap())
-            .collect();
-        // Located at night 5; `first..=last` the candidate nights.
-        let at =
-            |c: &mut dyn tessera_dashboard::db::Connection, first: usize, last: usize, p: f64| {
-                Placement {
-                    run_pk_before: pk(c, 4),
-                    run_pk_after: pk(c, 5),
-                    value_before: 1.0,
-                    value_after: 1.1,
-                    relative_change: 0.1,
-                    change_low: 0.02,
-                    change_high: 0.18,
-                    confidence: 0.999,
-                    location_probability: p,
-                    first_candidate: pk(c, first),
-                    last_candidate: pk(c, last),
-                    range_before: pk(c, first - 1),
-                    status: DetectionStatus::Pending,
-                }
-            };
-        let group_of = |c: &mut dyn tessera_dashboard::db::Connection, id: i64| {
-            c.query(
-                "SELECT group_id FROM regressions WHERE id = $1",
-                &[id.into()],
-            )
-            .unwrap()[0]
-                .i64(0)
-                .unwrap()
-        };
-        let exact = at(&mut *c, 5, 5, 0.99);
-        let loose = at(&mut *c, 4, 6, 0.58);
-        let h200 = alerts::insert(&mut *c, series[0], &exact).unwrap();
-        // Placed on the same night, but its own location spans nights 4 to 6: a group of its own.
-        let cpu = alerts::insert(&mut *c, series[1], &loose).unwrap();
-        assert_ne!(
-            group_of(&mut *c, cpu),
-            group_of(&mut *c, h200),
-            "{}",
-            store.name
-        );
-        // A second loose series with the same candidate range shares that group.
-        let cpu2 = alerts::insert(&mut *c, series[2], &loose).unwrap();
-        assert_eq!(group_of(&mut *c, cpu2), group_of(&mut *c, cpu));
-        // Once located exactly on night 5, it joins the exact group, and leaves the loose one.
-        alerts::place(&mut *c, cpu, &exact).unwrap();
-        assert_eq!(group_of(&mut *c, cpu), group_of(&mut *c, h200));
-        assert_ne!(group_of(&mut *c, cpu2), group_of(&mut *c, h200));
-        // The exact alert placed again at its own range stays in its group.
-        alerts::place(&mut *c, h200, &exact).unwrap();
-        assert_eq!(group_of(&mut *c, h200), group_of(&mut *c, cpu));
+    }
+}
 
-        // The title leads with the surest change, not the largest: two variants' frame times
-        // on one night, +5% with a tight interval and +40% with a wide one located at 60%.
-        let two: Vec<(i64, String)> = c
-            .query(
-                "SELECT MIN(id), variant FROM series WHERE measure = 'gpu_ms.median' GROUP BY variant ORDER BY MIN(id) LIMIT 2",
-                &[],
-            )
-            .unwrap()
-            .iter()
-            .map(|r| (r.i64(0).unwrap(), r.string(1).unwrap()))
+/// The frame-time series of `adapter` (a part of its name), by variant.
+fn frame_series(
+    c: &mut dyn tessera_dashboard::db::Connection,
+    adapter: &str,
+) -> Vec<(i64, String)> {
+    c.query(
+        "SELECT s.id, s.variant FROM series s JOIN adapters a ON a.id = s.adapter_id
+         WHERE s.measure = 'gpu_ms.median' AND a.name LIKE $1 ORDER BY s.id",
+        &[format!("%{adapter}%").as_str().into()],
+    )
+    .unwrap()
+    .iter()
+    .map(|r| (r.i64(0).unwrap(), r.string(1).unwrap()))
+    .collect()
+}
+
+fn group_of(c: &mut dyn tessera_dashboard::db::Connection, id: i64) -> i64 {
+    c.query(
+        "SELECT group_id FROM regressions WHERE id = $1",
+        &[id.into()],
+    )
+    .unwrap()[0]
+        .i64(0)
+        .unwrap()
+}
+
+#[test]
+fn a_series_joins_a_group_by_its_own_located_commit_not_an_overlapping_range() {
+    use tessera_dashboard::store::alerts::{self, DetectionStatus, Placement};
+    for store in common::stores("a_series_joins_a_group_by_its_own_located_commit") {
+        let mut c = store.pool.get().unwrap();
+        let pk = two_adapters_nightly(&mut *c);
+        let gpu = frame_series(&mut *c, "H200");
+        // lavapipe's series of other variants than the H200's, so the title's lead tells them apart.
+        let cpu: Vec<(i64, String)> = frame_series(&mut *c, "llvmpipe")
+            .into_iter()
+            .filter(|s| s.1 != gpu[0].1)
             .collect();
-        let mut sure = at(&mut *c, 8, 8, 0.99);
-        sure.run_pk_before = pk(&mut *c, 7);
-        sure.run_pk_after = pk(&mut *c, 8);
-        sure.relative_change = 0.05;
-        (sure.change_low, sure.change_high) = (0.045, 0.055);
+        // Located between nights `at - 1` and `at` of `adapter`; `first..=last` the candidates.
+        let place = |c: &mut dyn tessera_dashboard::db::Connection,
+                     adapter: &str,
+                     at: usize,
+                     (first, last): (usize, usize),
+                     p: f64| Placement {
+            run_pk_before: pk(c, adapter, at - 1),
+            run_pk_after: pk(c, adapter, at),
+            value_before: 1.0,
+            value_after: 1.05,
+            relative_change: 0.05,
+            change_low: if p > 0.9 { 0.048 } else { 0.01 },
+            change_high: if p > 0.9 { 0.052 } else { 0.09 },
+            confidence: 0.999,
+            location_probability: p,
+            first_candidate: pk(c, adapter, first),
+            last_candidate: pk(c, adapter, last),
+            status: DetectionStatus::Pending,
+        };
+        // The morning after the step: the H200 places it on night 5, its candidates still
+        // nights 4 to 6.
+        let early = place(&mut *c, "h200", 5, (4, 6), 0.9);
+        let h200 = alerts::insert(&mut *c, gpu[0].0, &early).unwrap();
+        let g = group_of(&mut *c, h200);
+        // lavapipe's noisy series locates a change on night 6 at 58%, over the same candidate
+        // nights: its own commit is another, so it is not in the H200's group.
+        let other_night = place(&mut *c, "lavapipe", 6, (4, 6), 0.58);
+        let late = alerts::insert(&mut *c, cpu[0].0, &other_night).unwrap();
+        assert_ne!(group_of(&mut *c, late), g, "{}", store.name);
+        // A lavapipe series that locates it on night 5, however loosely, names the same commit:
+        // it joins the H200's group (two adapters, one change).
+        let same_night = place(&mut *c, "lavapipe", 5, (4, 6), 0.58);
+        let joined = alerts::insert(&mut *c, cpu[1].0, &same_night).unwrap();
+        assert_eq!(group_of(&mut *c, joined), g, "{}", store.name);
+        // The H200's location turns exact on night 5: the same commit, the same group; the
+        // night-6 series is still apart.
+        let exact = place(&mut *c, "h200", 5, (5, 5), 0.99);
+        alerts::place(&mut *c, h200, &exact).unwrap();
+        assert_eq!(group_of(&mut *c, h200), g);
+        assert_ne!(group_of(&mut *c, late), g);
+        // The night-6 series moves to night 5: now it joins.
+        alerts::place(&mut *c, late, &same_night).unwrap();
+        assert_eq!(group_of(&mut *c, late), g);
+        // The group is led by the H200's sure change, not a loose lavapipe one.
+        let title = tessera_dashboard::titles::of(
+            &tessera_dashboard::store::groups::get(&mut *c, g).unwrap(),
+        );
+        assert!(title.contains("3 series on 2 adapters"), "{title}");
+        let lead = title.split("; ").nth(1).unwrap();
+        assert!(lead.starts_with(&format!("{} ", gpu[0].1)), "{title}");
+    }
+}
+
+#[test]
+fn a_group_title_leads_with_the_surest_change_not_the_largest() {
+    use tessera_dashboard::store::alerts::{self, DetectionStatus, Placement};
+    for store in common::stores("a_group_title_leads_with_the_surest_change") {
+        let mut c = store.pool.get().unwrap();
+        let pk = two_adapters_nightly(&mut *c);
+        // Two variants' frame times on one night, +5% with a tight interval and +40% with a
+        // wide one located at 60%.
+        let two = frame_series(&mut *c, "H200");
+        let sure = Placement {
+            run_pk_before: pk(&mut *c, "h200", 7),
+            run_pk_after: pk(&mut *c, "h200", 8),
+            value_before: 1.0,
+            value_after: 1.05,
+            relative_change: 0.05,
+            change_low: 0.045,
+            change_high: 0.055,
+            confidence: 0.999,
+            location_probability: 0.99,
+            first_candidate: pk(&mut *c, "h200", 8),
+            last_candidate: pk(&mut *c, "h200", 8),
+            status: DetectionStatus::Pending,
+        };
         let mut big = sure.clone();
         big.relative_change = 0.4;
         (big.change_low, big.change_high) = (0.05, 0.75);
