@@ -404,7 +404,11 @@ return {
       bands: (u.bands || []).length,
       x_labels: (u.axes[0]._values || []).filter(v => v !== '' && v != null).length,
       y_labels: (u.axes[1]._values || []).filter(v => v !== '' && v != null).length,
-      legend: Array.from(c.querySelectorAll('.u-legend .u-series .u-label')).map(l => l.textContent)};
+      legend: Array.from(c.querySelectorAll('.u-legend .u-series .u-label')).map(l => l.textContent),
+      // Where the legend's rows start, from the chart's left edge (left-aligned: a few px), and
+      // the legend's value cells shown.
+      legend_left: Math.min(...Array.from(c.querySelectorAll('.u-legend .u-series')).map(r => r.getBoundingClientRect().left)) - c.getBoundingClientRect().left,
+      legend_values: Array.from(c.querySelectorAll('.u-legend .u-value')).filter(v => v.offsetParent !== null).length};
   }),
   overflow: Math.max(0, ...Array.from(document.querySelectorAll('main table')).map(t => t.getBoundingClientRect().right)) - window.innerWidth,
   tables: Array.from(document.querySelectorAll('main table')).map(t => ({id: t.id, rows: t.rows.length})),
@@ -670,6 +674,13 @@ fn every_page_draws_in_chromium_and_its_links_resolve() {
             if !ok {
                 problems.push(format!(
                     "{path}: canvas chart {i} not painted with axis labels and legend: {c}"
+                ));
+            }
+            // The legend's rows start at the chart's left edge, one under the other, not
+            // centred under it with each line starting elsewhere.
+            if c["legend_left"].as_f64().is_none_or(|l| l > 12.0) {
+                problems.push(format!(
+                    "{path}: canvas chart {i}'s legend is not at its left edge: {c}"
                 ));
             }
         }
@@ -1055,6 +1066,16 @@ return {full, wheeled, left: r.left, top: r.top, width: r.width, height: r.heigh
         "error-vs-time chart without points and front: {}",
         pareto[0]["canvases"]
     );
+    // Its legend names the runs and their fronts without values: no "run …: –" under it (the
+    // values under the cursor are in the hover line).
+    for p in &pareto {
+        for c in p["canvases"].as_array().into_iter().flatten() {
+            assert_eq!(
+                c["legend_values"], 0,
+                "error-vs-time legend with values: {c}"
+            );
+        }
+    }
     // The default view is not empty: the scenario's metrics are offered and one is shown.
     assert!(
         pareto[0]["text"].as_str().unwrap().contains("on front"),

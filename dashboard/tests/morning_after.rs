@@ -862,6 +862,68 @@ fn error_against_time_lists_only_error_measures_and_shows_two_beside_each_other(
     });
 }
 
+/// A number beside a point names a row of the table; a point with no row (`native` and
+/// `native-deferred` have an SSIM but no PSNR, so the PSNR table has no row for them) gets none:
+/// not the "1" every such point read before.
+#[test]
+fn error_against_time_numbers_only_the_points_with_a_table_row() {
+    let store = common::sqlite();
+    let viewer =
+        std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/viewer-runs");
+    tessera_dashboard::import::import(&store.pool, &viewer, &Params::default()).unwrap();
+    let app = app(AppState::new(store.pool.clone(), None));
+    block_on(async {
+        let page = get(&app, "/pareto?scenario=adaptive&metric=psnr&metric2=ssim").await;
+        // The table's rows: number and variant.
+        let table = &page[page.find("<table id=pareto>").expect("table")..];
+        let rows: Vec<(String, String)> = table
+            .split("<tr><td class=n>")
+            .skip(1)
+            .map(|r| {
+                let n = r[..r.find("</td>").unwrap()].to_string();
+                let name = &r[r.find("</span>").unwrap() + "</span>".len()..];
+                let name = &name[..name.find("</td>").unwrap()];
+                let plain: String = name
+                    .split('<')
+                    .map(|part| part.split_once('>').map_or(part, |(_, t)| t))
+                    .collect();
+                (n, plain)
+            })
+            .collect();
+        assert!(!rows.is_empty(), "{table}");
+        // The canvas chart's points: a number only where the table has that row.
+        let spec = &page[page.find("id=\"pareto-chart-data\">").unwrap()..];
+        let spec = &spec[spec.find('>').unwrap() + 1..spec.find("</script>").unwrap()];
+        let spec: serde_json::Value = serde_json::from_str(spec).unwrap();
+        for p in spec["points"].as_array().unwrap() {
+            let row = rows
+                .iter()
+                .find(|(_, v)| *v == p["label"].as_str().unwrap());
+            match row {
+                Some((n, _)) => assert_eq!(p["num"].to_string(), *n, "{p}"),
+                None => assert!(p["num"].is_null(), "{p}"),
+            }
+        }
+        // The SSIM chart beside it holds the two natives (no PSNR row): four points, two numbers.
+        let second = &page[page.find("id=pareto-second").unwrap()..];
+        let second = &second[..second.find("</svg>").unwrap()];
+        let points = second.matches("<circle class='point'").count();
+        let numbers: Vec<&str> = second
+            .split("font-size='10'>")
+            .skip(1)
+            .map(|t| &t[..t.find("</text>").unwrap()])
+            .filter(|t| t.chars().all(|c| c.is_ascii_digit()))
+            .collect();
+        assert!(second.contains("<title>native: "), "{second}");
+        assert!(points > rows.len(), "{second}");
+        let mut want: Vec<&str> = rows.iter().map(|(n, _)| n.as_str()).collect();
+        let mut got = numbers.clone();
+        want.sort();
+        got.sort();
+        assert_eq!(got, want, "{second}");
+    });
+}
+
 #[test]
 fn error_against_time_draws_error_bars_where_repeats_exist() {
     let store = common::sqlite();
