@@ -879,7 +879,14 @@ return {
     assert_eq!(w["pair"], 2, "A and B side by side: {w}");
 
     // At 390 px (a phone): the viewport tag, and no horizontal scroll on the runs, run,
-    // regressions, comparison, adapters, error-against-time and image viewer pages.
+    // regressions, alert group, comparison, adapters, error-against-time and image viewer pages.
+    let groups: Value =
+        serde_json::from_slice(&http(addr, "GET", "/api/regressions/groups?status=all", None).body)
+            .unwrap();
+    let group = format!(
+        "/regressions/groups/{}",
+        groups[0]["id"].as_i64().expect("an alert group")
+    );
     browser.call(
         "POST",
         "window/rect",
@@ -889,6 +896,7 @@ return {
         ("runs", "/".to_string()),
         ("run", format!("/runs/{}", smoke_runs[1])),
         ("regressions", "/regressions".to_string()),
+        ("group", group.clone()),
         (
             "compare",
             format!("/compare/runs?a={}&b={}", smoke_runs[0], smoke_runs[1]),
@@ -918,6 +926,7 @@ return {
         assert_eq!(n["broken_names"], json!([]), "{name} at 390 px: {n}");
         match name {
             "regressions" => assert!(n["groups"].as_u64() >= Some(1), "{n}"),
+            "group" => assert!(n["group_charts"].as_u64() >= Some(1), "{n}"),
             "run" => assert!(n["frame_charts"].as_u64() >= Some(6), "{n}"),
             "compare" => assert!(n["names"].as_u64() >= Some(8), "{n}"),
             _ => {}
@@ -932,6 +941,17 @@ return {
         "POST",
         "window/rect",
         Some(json!({"width": 1400, "height": 1000})),
+    );
+    // The alert group page at 1400 px as well: its charts and tables inside the window, no
+    // sideways scroll.
+    browser.goto(&format!("{origin}{group}"));
+    let n = browser.eval(NARROW);
+    std::fs::write(shots.join("wide-1400-group.png"), browser.screenshot()).unwrap();
+    assert_eq!(n["clipped"], json!([]), "group at 1400 px: {n}");
+    assert!(n["group_charts"].as_u64() >= Some(1), "{n}");
+    assert!(
+        n["scroll"].as_f64().unwrap() <= n["inner"].as_f64().unwrap(),
+        "the group page scrolls sideways at 1400 px: {n}"
     );
     // The run page's per-frame charts: a line per variant, and a worst frame that was saved
     // (the harness saves each metric's worst frame) opens the viewer at that frame.
@@ -1122,7 +1142,8 @@ return {full, wheeled, left: r.left, top: r.top, width: r.width, height: r.heigh
 // The regressions page: alert groups, bulk triage with the token entered once, filters, feed.
 
 /// What a page shows at 390 px: its width and scroll width, the viewport tag; the elements cut
-/// off (group headings, alert tables, per-frame charts and their legends reaching past the window,
+/// off (group headings, alert tables, a group's series charts and their headings, per-frame
+/// charts and their legends reaching past the window,
 /// or boxes that hide their content in a horizontal scroll, the run page's wide tables aside);
 /// and names broken inside a word: a `span.name` narrower than its widest unbreakable part
 /// (between the separators it may wrap after).
@@ -1130,7 +1151,7 @@ const NARROW: &str = r#"
 const inner = window.innerWidth;
 const clipped = [];
 const right = el => el.getBoundingClientRect().right;
-for (const el of document.querySelectorAll('#regressions h2, #regressions .meta, #regressions tr.series-row, .run-frame-chart, .run-frame-chart ul.legend')) {
+for (const el of document.querySelectorAll('#regressions h2, #regressions .meta, #regressions tr.series-row, .run-frame-chart, .run-frame-chart ul.legend, .charts h3, .charts svg')) {
   if (right(el) > inner + 0.5) clipped.push(el.tagName + '.' + el.className + ' right ' + right(el));
 }
 for (const el of document.querySelectorAll('#regressions')) {
@@ -1151,6 +1172,7 @@ return {inner, scroll: document.documentElement.scrollWidth,
   viewport: !!document.querySelector('meta[name=viewport][content*="width=device-width"]'),
   clipped, broken_names: broken, names: names.length,
   groups: document.querySelectorAll('#regressions tbody.group').length,
+  group_charts: document.querySelectorAll('.charts svg').length,
   frame_charts: document.querySelectorAll('.run-frame-chart svg polyline').length};
 "#;
 
