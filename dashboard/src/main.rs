@@ -405,6 +405,9 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             for (path, err) in &summary.failed {
                 eprintln!("error: {}: {err}", path.display());
             }
+            for (path, warning) in &summary.warnings {
+                eprintln!("warning: {}: {warning}", path.display());
+            }
             println!("{}", summary.line());
             if !summary.failed.is_empty() {
                 anyhow::bail!(
