@@ -989,7 +989,7 @@ fn replay_with_a_bad_template_leaves_no_store() {
             "replay",
             "no/such/run",
             "--nights",
-            "20",
+            "40",
             "--scenarios",
             "1",
             "--db",
@@ -1004,4 +1004,102 @@ fn replay_with_a_bad_template_leaves_no_store() {
         "{err}"
     );
     assert!(!db.exists(), "an empty store was left behind");
+}
+
+/// Runs `tessera-dashboard` with `args` in `dir`, killed after `limit`; its exit code (`None`
+/// when it was killed), stdout and stderr, and its process id.
+fn dashboard_in(
+    dir: &std::path::Path,
+    args: &[&str],
+    limit: std::time::Duration,
+) -> (Option<i32>, String, String, u32) {
+    use std::io::Read;
+    use std::process::{Command, Stdio};
+    let mut child = Command::new(env!("CARGO_BIN_EXE_tessera-dashboard"))
+        .current_dir(dir)
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let pid = child.id();
+    // Read as it comes, so a full pipe never stops the child.
+    let reader = |r: Option<Box<dyn std::io::Read + Send>>| {
+        std::thread::spawn(move || {
+            let mut s = String::new();
+            if let Some(mut r) = r {
+                r.read_to_string(&mut s).unwrap();
+            }
+            s
+        })
+    };
+    let out = reader(child.stdout.take().map(|r| Box::new(r) as _));
+    let err = reader(child.stderr.take().map(|r| Box::new(r) as _));
+    let start = std::time::Instant::now();
+    let code = loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            break status.code();
+        }
+        if start.elapsed() > limit {
+            child.kill().unwrap();
+            child.wait().unwrap();
+            break None;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    };
+    let (out, err) = (out.join().unwrap(), err.join().unwrap());
+    (code, out, err, pid)
+}
+
+#[test]
+fn replay_runs_outside_the_repository_and_refuses_too_few_nights() {
+    let dir = tempfile::tempdir().unwrap();
+    let limit = std::time::Duration::from_secs(240);
+    // Too few nights for its injections: refused at once (it looked for a night for ever), with
+    // the least it needs, before a store or its temporary folder is made.
+    let few = dir.path().join("few.sqlite");
+    let few_arg = few.to_str().unwrap();
+    let (code, _, err, pid) = dashboard_in(
+        dir.path(),
+        &["replay", "--nights", "20", "--db", few_arg],
+        limit,
+    );
+    assert_eq!(code, Some(1), "{err}");
+    assert!(err.contains("replay needs at least 35 nights"), "{err}");
+    assert!(!few.exists(), "a store was left behind");
+    let (code, _, err, pid2) = dashboard_in(dir.path(), &["replay", "--nights", "34"], limit);
+    assert_eq!(code, Some(1), "{err}");
+    for p in [pid, pid2] {
+        let prefix = format!("tessera-replay-{p}-");
+        assert!(
+            !std::fs::read_dir(std::env::temp_dir()).unwrap().any(|e| e
+                .unwrap()
+                .file_name()
+                .to_string_lossy()
+                .starts_with(&prefix)),
+            "a temporary folder {prefix}* was left behind"
+        );
+    }
+    // The least it needs, from a folder outside the repository: the default template (a path
+    // relative to the repository) is found, and the replay runs to its report.
+    let db = dir.path().join("replay.sqlite");
+    let (code, out, err, _) = dashboard_in(
+        dir.path(),
+        &[
+            "replay",
+            "--nights",
+            "35",
+            "--scenarios",
+            "1",
+            "--db",
+            db.to_str().unwrap(),
+        ],
+        limit,
+    );
+    assert!(
+        code.is_some(),
+        "35 nights did not finish in {limit:?}: {err}"
+    );
+    assert!(out.contains("replayed"), "{out}\n{err}");
+    assert!(db.exists());
 }
