@@ -1103,3 +1103,50 @@ fn replay_runs_outside_the_repository_and_refuses_too_few_nights() {
     assert!(out.contains("replayed"), "{out}\n{err}");
     assert!(db.exists());
 }
+
+/// Each series chart on a group page has an x axis: its line, and ticks labelled with the short
+/// commits of its points, oldest left; the chart of the step's series names the step's commit
+/// among them or between two of them.
+#[test]
+fn a_groups_charts_have_an_x_axis_of_commits() {
+    let store = common::sqlite();
+    let h = StepHistory::h200(24, 20, "native", 1.05);
+    let app = served(&store, &h, 22);
+    block_on(async {
+        let groups: serde_json::Value =
+            serde_json::from_str(&get(&app, "/api/regressions/groups?status=all").await).unwrap();
+        let id = &groups[0]["id"];
+        let page = get(&app, &format!("/regressions/groups/{id}")).await;
+        let charts = &page[page.find("<div class=charts>").expect("charts")..];
+        let svgs: Vec<&str> = charts
+            .split("<svg")
+            .skip(1)
+            .map(|s| &s[..s.find("</svg>").unwrap()])
+            .collect();
+        assert!(!svgs.is_empty(), "{page}");
+        let short = |n: usize| tessera_dashboard::steps::sha(n)[..10].to_string();
+        for svg in svgs {
+            assert!(svg.contains("<line class='x-axis'"), "no x axis: {svg}");
+            // The tick labels: the x axis's texts, centred under their points.
+            let ticks: Vec<&str> = svg
+                .split("text-anchor='middle' fill='#444'>")
+                .skip(1)
+                .map(|t| &t[..t.find("</text>").unwrap()])
+                .collect();
+            assert!(ticks.len() >= 3, "too few commits on the x axis: {ticks:?}");
+            let nights: Vec<usize> = ticks
+                .iter()
+                .map(|t| {
+                    (0..h.nights)
+                        .find(|&n| short(n) == *t)
+                        .unwrap_or_else(|| panic!("{t:?} is not a commit of the history"))
+                })
+                .collect();
+            assert!(nights.windows(2).all(|w| w[0] < w[1]), "{nights:?}");
+            assert!(
+                nights[0] < h.step_night && *nights.last().unwrap() >= h.step_night - 1,
+                "the axis does not span the step: {nights:?}"
+            );
+        }
+    });
+}
