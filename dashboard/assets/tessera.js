@@ -153,7 +153,8 @@
   }
 
   // Error against time: spec = {x_label, y_label, log, points: [{x, y, group, num, label, front}],
-  // groups: [label, ...]}. Points are numbered as in the table beside the chart.
+  // groups: [label, ...]}. Points are numbered as in the table beside the chart; a point with no
+  // row there (num null) is drawn without a number.
   function scatterChart(box, spec) {
     const xs = Array.from(new Set(spec.points.map(p => p.x))).sort((a, b) => a - b);
     const at = new Map(xs.map((x, i) => [x, i]));
@@ -197,6 +198,9 @@
         scales: { x: { time: false, range: (u, lo, hi) => pad(lo, hi) }, y: { distr: state.log ? 3 : 1, range: state.log ? undefined : (u, lo, hi) => pad(lo, hi) } },
         axes: [{ label: spec.x_label }, { label: spec.y_label, size: 70 }],
         cursor: { drag: { x: true, y: true, uni: 20 }, points: { size: 11 } },
+        // The legend names the runs and their fronts (a click hides one); the values under the
+        // cursor are in the hover line, so the legend has none ("run …: –" otherwise).
+        legend: { live: false },
         hooks: {
           draw: [u => {
             const ctx = u.ctx;
@@ -230,6 +234,7 @@
               if (px < u.bbox.left || px > u.bbox.left + u.bbox.width || py < u.bbox.top || py > u.bbox.top + u.bbox.height) return;
               ctx.fillStyle = p.colour || '#4e79a7';
               ctx.beginPath(); ctx.arc(px, py, 4.5 * d, 0, 2 * Math.PI); ctx.fill();
+              if (p.num == null) return;
               const text = String(p.num), w = ctx.measureText(text).width, h = 11 * d;
               let spot = null;
               for (const k of [1, 2, 3]) {
@@ -249,7 +254,7 @@
           setCursor: [u => {
             const i = u.cursor.idx;
             if (i == null) { hover.textContent = '\u00a0'; return; }
-            const ps = members.flatMap((who, gi) => who[i].map(p => '#' + p.num + ' ' + p.label + ' (' + spec.groups[gi] + '): ' + fmt(p.x) + ' ms, ' + fmt(p.y)));
+            const ps = members.flatMap((who, gi) => who[i].map(p => (p.num == null ? '' : '#' + p.num + ' ') + p.label + ' (' + spec.groups[gi] + '): ' + fmt(p.x) + ' ms, ' + fmt(p.y)));
             hover.textContent = ps.join(' · ') || '\u00a0';
           }],
         },

@@ -289,6 +289,22 @@ impl RunBundle {
         RunBundle::from_parts(raw.run, raw.scenarios, images)
     }
 
+    /// What storing this run should tell the one who sends it, though nothing refuses it: a run
+    /// whose record carries no commit (tessera ran outside a git checkout) is stored, but has no
+    /// commit to place it among and is never a previous run, which nothing else would say until
+    /// someone opens its page. `import` prints these; `POST /api/runs` answers them for `tessera
+    /// upload` to print.
+    pub fn warnings(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        if self.run.commit.is_none() {
+            out.push(format!(
+                "run {} records no commit (tessera ran outside a git checkout): it is stored, but it is never the previous run of its suite and no alert can name its commit; run tessera from a checkout of the project",
+                self.run.run_id
+            ));
+        }
+        out
+    }
+
     /// The upload body for this bundle (what `tessera run --upload` sends).
     pub fn to_upload(&self) -> UploadBody {
         UploadBody {

@@ -115,8 +115,9 @@ pub struct ScatterPoint {
     pub y: f64,
     /// Index into `groups`.
     pub group: usize,
-    /// The row number in the table beside the chart.
-    pub num: usize,
+    /// The row number in the table beside the chart; `None` for a point with no row there (a
+    /// variant only the older run has), which the chart leaves unnumbered.
+    pub num: Option<usize>,
     pub label: String,
     pub front: bool,
     /// The point's colour (by technique on the error-against-time page).

@@ -140,7 +140,7 @@ table{border-collapse:collapse;margin:8px 0}td,th{border-bottom:1px solid #ddd;p
 td.n,th.n{text-align:right;font-variant-numeric:tabular-nums}td.n{white-space:nowrap;overflow-wrap:normal}.nw{white-space:nowrap}.ok{color:#17803d}.skipped{color:#8a6d00}.failed{color:#b3261e}
 .worse{color:#b3261e}.better{color:#17803d}.muted{color:#777}.neutral{color:#444;background:#eceff3;padding:0 4px;border-radius:3px}svg{background:#fff;border:1px solid #eee;max-width:100%;height:auto}
 form.inline{display:inline}.scroll{overflow-x:auto;max-width:100%}td.wrap{max-width:28em;overflow-wrap:break-word;font-size:12px}
-.chart{width:100%;max-width:1400px;margin:8px 0}.chart-controls{margin:4px 0;font-size:13px}.chart-hover{font-size:12px;color:#444;min-height:1.4em;font-variant-numeric:tabular-nums}
+.chart{width:100%;max-width:1400px;margin:8px 0}.uplot .u-legend{text-align:left;margin:4px 0 0;display:block}.uplot .u-legend th,.uplot .u-legend td{border:0;padding:1px 4px;vertical-align:middle}.uplot .u-legend.u-inline tr{margin-right:14px}.chart-controls{margin:4px 0;font-size:13px}.chart-hover{font-size:12px;color:#444;min-height:1.4em;font-variant-numeric:tabular-nums}
 .alert{background:#b3261e;color:#fff;border-radius:8px;padding:0 6px;font-size:12px}.pager{margin:8px 0}.pager a{margin-right:12px}
 .viewer .panes{display:flex;flex-wrap:wrap;gap:8px}.viewer figure{margin:0}.viewer figcaption{font-size:12px;color:#555}
 .pane{overflow:auto;max-width:min(100%,720px);max-height:600px;border:1px solid #ccc;background:#333;cursor:grab}

@@ -20,6 +20,9 @@ pub struct ImportSummary {
     pub results: usize,
     pub regressions: usize,
     pub failed: Vec<(PathBuf, String)>,
+    /// What a stored (or already stored) run folder should tell the one importing it
+    /// ([`RunBundle::warnings`]: a run without a commit).
+    pub warnings: Vec<(PathBuf, String)>,
     pub elapsed: Duration,
 }
 
@@ -91,8 +94,12 @@ pub fn import(pool: &Pool, root: &Path, params: &Params) -> anyhow::Result<Impor
         let outcome = RunBundle::read_folder(&folder)
             .map_err(anyhow::Error::from)
             .and_then(|b| {
-                crate::regressions::ingest_and_detect(&mut *conn, &b, params)
-                    .map_err(anyhow::Error::from)
+                let stored = crate::regressions::ingest_and_detect(&mut *conn, &b, params)
+                    .map_err(anyhow::Error::from)?;
+                summary
+                    .warnings
+                    .extend(b.warnings().into_iter().map(|w| (folder.clone(), w)));
+                Ok(stored)
             });
         match outcome {
             Ok((Ingested::Stored { results, .. }, changes)) => {

@@ -405,6 +405,9 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             for (path, err) in &summary.failed {
                 eprintln!("error: {}: {err}", path.display());
             }
+            for (path, warning) in &summary.warnings {
+                eprintln!("warning: {}: {warning}", path.display());
+            }
             println!("{}", summary.line());
             if !summary.failed.is_empty() {
                 anyhow::bail!(
@@ -694,8 +697,15 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             db,
             verbose,
         } => {
-            // The default template is the repository's fixture wherever the command runs from,
-            // and it is read before a store is made: a bad path leaves no empty store behind.
+            // Everything that can refuse the replay is asked before a store is made, so a refusal
+            // leaves no empty store behind: the number of nights, then the template. The default
+            // template is the repository's fixture wherever the command runs from.
+            let config = replay::Config {
+                nights,
+                scenarios,
+                seed,
+            };
+            config.check().map_err(anyhow::Error::msg)?;
             let template = if template.is_relative() && !template.exists() {
                 let fixture = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
                     .join("..")
@@ -721,11 +731,6 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                     anyhow::bail!("{url} already holds {runs} runs; replay needs an empty store");
                 }
             }
-            let config = replay::Config {
-                nights,
-                scenarios,
-                seed,
-            };
             eprintln!(
                 "replaying {nights} nights x {} profiles into {}",
                 replay::PROFILES.len(),

@@ -252,7 +252,6 @@ fn placement(f: &Found, pks: &[i64], at: usize) -> Placement {
         location_probability: c.probability_at(at),
         first_candidate: pks[c.first_candidate.min(at)],
         last_candidate: pks[c.last_candidate.max(at)],
-        range_before: pks[c.first_candidate.min(at).max(1) - 1],
         status: f.status,
     }
 }

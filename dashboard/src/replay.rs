@@ -46,6 +46,25 @@ pub struct Config {
     pub seed: u64,
 }
 
+/// The fewest nights a history has room for its injections in: each lands after the first 12
+/// nights, more than 8 nights from the driver change (at 3/5 of the history) and more than 6
+/// before the end, which leaves a night first at 35. With fewer, [`schedule`] would look for one
+/// for ever.
+pub const MIN_NIGHTS: usize = 35;
+
+impl Config {
+    /// Why this replay cannot run, said before any store is made or template read.
+    pub fn check(&self) -> Result<(), String> {
+        if self.nights < MIN_NIGHTS {
+            return Err(format!(
+                "replay needs at least {MIN_NIGHTS} nights (--nights {} given): its changes are injected after night 12, away from the driver change at 3/5 of the history and from the last 6 nights",
+                self.nights
+            ));
+        }
+        Ok(())
+    }
+}
+
 /// An adapter profile: its name in the store and its per-night noise.
 #[derive(Clone, Copy, Debug)]
 pub struct Profile {
@@ -495,6 +514,7 @@ pub fn run(
     config: &Config,
     params: &Params,
 ) -> anyhow::Result<Report> {
+    config.check().map_err(anyhow::Error::msg)?;
     let template = widen(template, config.scenarios);
     let mut conn = pool.get()?;
     let mut report = Report::default();

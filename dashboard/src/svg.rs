@@ -306,7 +306,7 @@ pub struct ScatterPoint {
     pub group: usize,
     pub on_front: bool,
     /// Drawn beside a point of the newer run: a short tag (its row number), so that labels do not
-    /// collide; the label is its tooltip.
+    /// collide; the label is its tooltip. Empty: nothing drawn (a point with no table row).
     pub tag: String,
     /// The point's colour (the page colours by technique, so every chart of it agrees).
     pub colour: &'static str,
@@ -389,7 +389,7 @@ pub fn scatter(points: &[ScatterPoint], x_label: &str, y_label: &str) -> String 
             num(p.x),
             num(p.y)
         );
-        if p.group == 0 {
+        if p.group == 0 && !p.tag.is_empty() {
             let _ = write!(
                 out,
                 "<text x='{:.1}' y='{:.1}' font-size='10'>{}</text>",

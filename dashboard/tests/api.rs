@@ -220,6 +220,82 @@ async fn upload_needs_the_token_and_is_idempotent() {
     drop(store);
 }
 
+/// A run started outside a git checkout records no commit; it is stored, but never the previous
+/// run of its suite, so the one sending it is told: the upload's answer carries a warning (which
+/// `tessera upload` prints) and `import` prints it. A run with a commit gets none.
+#[tokio::test]
+async fn a_run_without_a_commit_is_stored_with_a_warning_on_upload_and_import() {
+    let (store, app) = setup(false);
+    let mut body = template_body();
+    let (s, _, ok) = send(&app, upload(body.to_string(), Some(TOKEN))).await;
+    assert_eq!(s, StatusCode::CREATED, "{ok}");
+    assert!(json(&ok).get("warnings").is_none(), "{ok}");
+    body["run"]["commit"] = serde_json::Value::Null;
+    body["run"]["run_id"] = "no-commit".into();
+    for sc in body["scenarios"].as_array_mut().unwrap() {
+        sc["run_id"] = "no-commit".into();
+    }
+    let (s, _, ok) = send(&app, upload(body.to_string(), Some(TOKEN))).await;
+    assert_eq!(s, StatusCode::CREATED, "{ok}");
+    let warnings = json(&ok)["warnings"].clone();
+    assert_eq!(warnings.as_array().map(Vec::len), Some(1), "{ok}");
+    let w = warnings[0].as_str().unwrap();
+    assert!(
+        w.starts_with("run no-commit records no commit") && w.contains("never the previous run"),
+        "{w}"
+    );
+    // Sent again: already stored, and still told.
+    let (s, _, again) = send(&app, upload(body.to_string(), Some(TOKEN))).await;
+    assert_eq!(s, StatusCode::OK);
+    assert_eq!(json(&again)["warnings"], warnings);
+    drop(store);
+
+    // `import` of a folder holding one run with a commit and one without: one warning, naming
+    // the folder without.
+    let dir = tempfile::tempdir().unwrap();
+    let fixture = std::fs::read_dir(common::fixtures())
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .min()
+        .unwrap();
+    for (name, commit) in [("with-commit", true), ("no-commit", false)] {
+        let run = dir.path().join("runs").join(name);
+        std::fs::create_dir_all(run.join("scenarios")).unwrap();
+        let mut record = json(&std::fs::read_to_string(fixture.join("run.json")).unwrap());
+        record["run_id"] = name.into();
+        if !commit {
+            record["commit"] = serde_json::Value::Null;
+        }
+        std::fs::write(run.join("run.json"), record.to_string()).unwrap();
+        for e in std::fs::read_dir(fixture.join("scenarios")).unwrap() {
+            let e = e.unwrap();
+            let mut sc = json(&std::fs::read_to_string(e.path()).unwrap());
+            sc["run_id"] = name.into();
+            std::fs::write(run.join("scenarios").join(e.file_name()), sc.to_string()).unwrap();
+        }
+    }
+    let db = dir.path().join("store.sqlite");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_tessera-dashboard"))
+        .arg("import")
+        .arg(dir.path().join("runs"))
+        .arg("--db")
+        .arg(&db)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(
+        String::from_utf8_lossy(&out.stdout).contains("imported 2 runs"),
+        "{out:?}"
+    );
+    let warnings: Vec<&str> = err.lines().filter(|l| l.starts_with("warning:")).collect();
+    assert_eq!(warnings.len(), 1, "{err}");
+    assert!(
+        warnings[0].contains("runs/no-commit: run no-commit records no commit"),
+        "{err}"
+    );
+}
+
 #[tokio::test]
 async fn writes_are_refused_without_a_configured_token() {
     let store = common::sqlite();

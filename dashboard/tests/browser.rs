@@ -404,7 +404,11 @@ return {
       bands: (u.bands || []).length,
       x_labels: (u.axes[0]._values || []).filter(v => v !== '' && v != null).length,
       y_labels: (u.axes[1]._values || []).filter(v => v !== '' && v != null).length,
-      legend: Array.from(c.querySelectorAll('.u-legend .u-series .u-label')).map(l => l.textContent)};
+      legend: Array.from(c.querySelectorAll('.u-legend .u-series .u-label')).map(l => l.textContent),
+      // Where the legend's rows start, from the chart's left edge (left-aligned: a few px), and
+      // the legend's value cells shown.
+      legend_left: Math.min(...Array.from(c.querySelectorAll('.u-legend .u-series')).map(r => r.getBoundingClientRect().left)) - c.getBoundingClientRect().left,
+      legend_values: Array.from(c.querySelectorAll('.u-legend .u-value')).filter(v => v.offsetParent !== null).length};
   }),
   overflow: Math.max(0, ...Array.from(document.querySelectorAll('main table')).map(t => t.getBoundingClientRect().right)) - window.innerWidth,
   tables: Array.from(document.querySelectorAll('main table')).map(t => ({id: t.id, rows: t.rows.length})),
@@ -672,6 +676,13 @@ fn every_page_draws_in_chromium_and_its_links_resolve() {
                     "{path}: canvas chart {i} not painted with axis labels and legend: {c}"
                 ));
             }
+            // The legend's rows start at the chart's left edge, one under the other, not
+            // centred under it with each line starting elsewhere.
+            if c["legend_left"].as_f64().is_none_or(|l| l > 12.0) {
+                problems.push(format!(
+                    "{path}: canvas chart {i}'s legend is not at its left edge: {c}"
+                ));
+            }
         }
         if page["overflow"].as_f64().unwrap_or(0.0) > 0.5 {
             problems.push(format!(
@@ -868,7 +879,14 @@ return {
     assert_eq!(w["pair"], 2, "A and B side by side: {w}");
 
     // At 390 px (a phone): the viewport tag, and no horizontal scroll on the runs, run,
-    // regressions, comparison, adapters, error-against-time and image viewer pages.
+    // regressions, alert group, comparison, adapters, error-against-time and image viewer pages.
+    let groups: Value =
+        serde_json::from_slice(&http(addr, "GET", "/api/regressions/groups?status=all", None).body)
+            .unwrap();
+    let group = format!(
+        "/regressions/groups/{}",
+        groups[0]["id"].as_i64().expect("an alert group")
+    );
     browser.call(
         "POST",
         "window/rect",
@@ -878,6 +896,7 @@ return {
         ("runs", "/".to_string()),
         ("run", format!("/runs/{}", smoke_runs[1])),
         ("regressions", "/regressions".to_string()),
+        ("group", group.clone()),
         (
             "compare",
             format!("/compare/runs?a={}&b={}", smoke_runs[0], smoke_runs[1]),
@@ -907,6 +926,7 @@ return {
         assert_eq!(n["broken_names"], json!([]), "{name} at 390 px: {n}");
         match name {
             "regressions" => assert!(n["groups"].as_u64() >= Some(1), "{n}"),
+            "group" => assert!(n["group_charts"].as_u64() >= Some(1), "{n}"),
             "run" => assert!(n["frame_charts"].as_u64() >= Some(6), "{n}"),
             "compare" => assert!(n["names"].as_u64() >= Some(8), "{n}"),
             _ => {}
@@ -921,6 +941,17 @@ return {
         "POST",
         "window/rect",
         Some(json!({"width": 1400, "height": 1000})),
+    );
+    // The alert group page at 1400 px as well: its charts and tables inside the window, no
+    // sideways scroll.
+    browser.goto(&format!("{origin}{group}"));
+    let n = browser.eval(NARROW);
+    std::fs::write(shots.join("wide-1400-group.png"), browser.screenshot()).unwrap();
+    assert_eq!(n["clipped"], json!([]), "group at 1400 px: {n}");
+    assert!(n["group_charts"].as_u64() >= Some(1), "{n}");
+    assert!(
+        n["scroll"].as_f64().unwrap() <= n["inner"].as_f64().unwrap(),
+        "the group page scrolls sideways at 1400 px: {n}"
     );
     // The run page's per-frame charts: a line per variant, and a worst frame that was saved
     // (the harness saves each metric's worst frame) opens the viewer at that frame.
@@ -1055,6 +1086,16 @@ return {full, wheeled, left: r.left, top: r.top, width: r.width, height: r.heigh
         "error-vs-time chart without points and front: {}",
         pareto[0]["canvases"]
     );
+    // Its legend names the runs and their fronts without values: no "run …: –" under it (the
+    // values under the cursor are in the hover line).
+    for p in &pareto {
+        for c in p["canvases"].as_array().into_iter().flatten() {
+            assert_eq!(
+                c["legend_values"], 0,
+                "error-vs-time legend with values: {c}"
+            );
+        }
+    }
     // The default view is not empty: the scenario's metrics are offered and one is shown.
     assert!(
         pareto[0]["text"].as_str().unwrap().contains("on front"),
@@ -1101,7 +1142,8 @@ return {full, wheeled, left: r.left, top: r.top, width: r.width, height: r.heigh
 // The regressions page: alert groups, bulk triage with the token entered once, filters, feed.
 
 /// What a page shows at 390 px: its width and scroll width, the viewport tag; the elements cut
-/// off (group headings, alert tables, per-frame charts and their legends reaching past the window,
+/// off (group headings, alert tables, a group's series charts and their headings, per-frame
+/// charts and their legends reaching past the window,
 /// or boxes that hide their content in a horizontal scroll, the run page's wide tables aside);
 /// and names broken inside a word: a `span.name` narrower than its widest unbreakable part
 /// (between the separators it may wrap after).
@@ -1109,7 +1151,7 @@ const NARROW: &str = r#"
 const inner = window.innerWidth;
 const clipped = [];
 const right = el => el.getBoundingClientRect().right;
-for (const el of document.querySelectorAll('#regressions h2, #regressions .meta, #regressions tr.series-row, .run-frame-chart, .run-frame-chart ul.legend')) {
+for (const el of document.querySelectorAll('#regressions h2, #regressions .meta, #regressions tr.series-row, .run-frame-chart, .run-frame-chart ul.legend, .charts h3, .charts svg')) {
   if (right(el) > inner + 0.5) clipped.push(el.tagName + '.' + el.className + ' right ' + right(el));
 }
 for (const el of document.querySelectorAll('#regressions')) {
@@ -1130,6 +1172,7 @@ return {inner, scroll: document.documentElement.scrollWidth,
   viewport: !!document.querySelector('meta[name=viewport][content*="width=device-width"]'),
   clipped, broken_names: broken, names: names.length,
   groups: document.querySelectorAll('#regressions tbody.group').length,
+  group_charts: document.querySelectorAll('.charts svg').length,
   frame_charts: document.querySelectorAll('.run-frame-chart svg polyline').length};
 "#;
 

@@ -285,7 +285,6 @@ fn an_alert_that_moves_leaves_a_group_whose_others_stay() {
             location_probability: 0.9,
             first_candidate: pk(c, n),
             last_candidate: pk(c, n),
-            range_before: pk(c, n - 1),
             status: DetectionStatus::Pending,
         };
         let group_of = |c: &mut dyn tessera_dashboard::db::Connection, id: i64| {
@@ -362,96 +361,148 @@ fn an_alert_that_moves_leaves_a_group_whose_others_stay() {
     }
 }
 
-#[test]
-fn a_loosely_located_series_does_not_join_an_exact_group_through_the_shared_night() {
-    use tessera_dashboard::store::alerts::{self, DetectionStatus, Placement};
-    for store in common::stores("a_loosely_located_series_does_not_join") {
-        let h = StepHistory::h200(10, 99, "native", 1.0);
-        let mut c = store.pool.get().unwrap();
+/// An H200 and a lavapipe history of 10 nights at the same commits (the nightly pair of one
+/// commit shares its night), stored without detection: the tests below place alerts by hand.
+/// Returns the store's run pk of (adapter, night), `h200` first.
+fn two_adapters_nightly(
+    c: &mut dyn tessera_dashboard::db::Connection,
+) -> impl Fn(&mut dyn tessera_dashboard::db::Connection, &str, usize) -> i64 {
+    let h200 = StepHistory::h200(10, 99, "native", 1.0);
+    let lavapipe = StepHistory {
+        name: "lavapipe".into(),
+        gpu: false,
+        ..h200.clone()
+    };
+    for h in [&h200, &lavapipe] {
         for run in h.runs(&common::template()) {
-            tessera_dashboard::store::ingest::ingest(&mut *c, &run).unwrap();
+            tessera_dashboard::store::ingest::ingest(c, &run).unwrap();
         }
-        let pk = |c: &mut dyn tessera_dashboard::db::Connection, n: usize| {
-            c.query(
-                "SELECT id FROM runs WHERE run_id = $1",
-                &[h.run_id(n).as_str().into()],
-            )
-            .unwrap()[0]
-                .i64(0)
-                .unwrap()
-        };
-        let series: Vec<i64> = c
-            .query("SELECT id FROM series ORDER BY id LIMIT 3", &[])
+    }
+    move |c: &mut dyn tessera_dashboard::db::Connection, adapter: &str, n: usize| {
+        c.query(
+            "SELECT id FROM runs WHERE run_id = $1",
+            &[format!("{adapter}-{n:04}").as_str().into()],
+        )
+        .unwrap()[0]
+            .i64(0)
             .unwrap()
-            .iter()
-            .map(|r| r.i64(0).unwrap())
-            .collect();
-        // Located at night 5; `first..=last` the candidate nights.
-        let at =
-            |c: &mut dyn tessera_dashboard::db::Connection, first: usize, last: usize, p: f64| {
-                Placement {
-                    run_pk_before: pk(c, 4),
-                    run_pk_after: pk(c, 5),
-                    value_before: 1.0,
-                    value_after: 1.1,
-                    relative_change: 0.1,
-                    change_low: 0.02,
-                    change_high: 0.18,
-                    confidence: 0.999,
-                    location_probability: p,
-                    first_candidate: pk(c, first),
-                    last_candidate: pk(c, last),
-                    range_before: pk(c, first - 1),
-                    status: DetectionStatus::Pending,
-                }
-            };
-        let group_of = |c: &mut dyn tessera_dashboard::db::Connection, id: i64| {
-            c.query(
-                "SELECT group_id FROM regressions WHERE id = $1",
-                &[id.into()],
-            )
-            .unwrap()[0]
-                .i64(0)
-                .unwrap()
-        };
-        let exact = at(&mut *c, 5, 5, 0.99);
-        let loose = at(&mut *c, 4, 6, 0.58);
-        let h200 = alerts::insert(&mut *c, series[0], &exact).unwrap();
-        // Placed on the same night, but its own location spans nights 4 to 6: a group of its own.
-        let cpu = alerts::insert(&mut *c, series[1], &loose).unwrap();
-        assert_ne!(
-            group_of(&mut *c, cpu),
-            group_of(&mut *c, h200),
-            "{}",
-            store.name
-        );
-        // A second loose series with the same candidate range shares that group.
-        let cpu2 = alerts::insert(&mut *c, series[2], &loose).unwrap();
-        assert_eq!(group_of(&mut *c, cpu2), group_of(&mut *c, cpu));
-        // Once located exactly on night 5, it joins the exact group, and leaves the loose one.
-        alerts::place(&mut *c, cpu, &exact).unwrap();
-        assert_eq!(group_of(&mut *c, cpu), group_of(&mut *c, h200));
-        assert_ne!(group_of(&mut *c, cpu2), group_of(&mut *c, h200));
-        // The exact alert placed again at its own range stays in its group.
-        alerts::place(&mut *c, h200, &exact).unwrap();
-        assert_eq!(group_of(&mut *c, h200), group_of(&mut *c, cpu));
+    }
+}
 
-        // The title leads with the surest change, not the largest: two variants' frame times
-        // on one night, +5% with a tight interval and +40% with a wide one located at 60%.
-        let two: Vec<(i64, String)> = c
-            .query(
-                "SELECT MIN(id), variant FROM series WHERE measure = 'gpu_ms.median' GROUP BY variant ORDER BY MIN(id) LIMIT 2",
-                &[],
-            )
-            .unwrap()
-            .iter()
-            .map(|r| (r.i64(0).unwrap(), r.string(1).unwrap()))
+/// The frame-time series of `adapter` (a part of its name), by variant.
+fn frame_series(
+    c: &mut dyn tessera_dashboard::db::Connection,
+    adapter: &str,
+) -> Vec<(i64, String)> {
+    c.query(
+        "SELECT s.id, s.variant FROM series s JOIN adapters a ON a.id = s.adapter_id
+         WHERE s.measure = 'gpu_ms.median' AND a.name LIKE $1 ORDER BY s.id",
+        &[format!("%{adapter}%").as_str().into()],
+    )
+    .unwrap()
+    .iter()
+    .map(|r| (r.i64(0).unwrap(), r.string(1).unwrap()))
+    .collect()
+}
+
+fn group_of(c: &mut dyn tessera_dashboard::db::Connection, id: i64) -> i64 {
+    c.query(
+        "SELECT group_id FROM regressions WHERE id = $1",
+        &[id.into()],
+    )
+    .unwrap()[0]
+        .i64(0)
+        .unwrap()
+}
+
+#[test]
+fn a_series_joins_a_group_by_its_own_located_commit_not_an_overlapping_range() {
+    use tessera_dashboard::store::alerts::{self, DetectionStatus, Placement};
+    for store in common::stores("a_series_joins_a_group_by_its_own_located_commit") {
+        let mut c = store.pool.get().unwrap();
+        let pk = two_adapters_nightly(&mut *c);
+        let gpu = frame_series(&mut *c, "H200");
+        // lavapipe's series of other variants than the H200's, so the title's lead tells them apart.
+        let cpu: Vec<(i64, String)> = frame_series(&mut *c, "llvmpipe")
+            .into_iter()
+            .filter(|s| s.1 != gpu[0].1)
             .collect();
-        let mut sure = at(&mut *c, 8, 8, 0.99);
-        sure.run_pk_before = pk(&mut *c, 7);
-        sure.run_pk_after = pk(&mut *c, 8);
-        sure.relative_change = 0.05;
-        (sure.change_low, sure.change_high) = (0.045, 0.055);
+        // Located between nights `at - 1` and `at` of `adapter`; `first..=last` the candidates.
+        let place = |c: &mut dyn tessera_dashboard::db::Connection,
+                     adapter: &str,
+                     at: usize,
+                     (first, last): (usize, usize),
+                     p: f64| Placement {
+            run_pk_before: pk(c, adapter, at - 1),
+            run_pk_after: pk(c, adapter, at),
+            value_before: 1.0,
+            value_after: 1.05,
+            relative_change: 0.05,
+            change_low: if p > 0.9 { 0.048 } else { 0.01 },
+            change_high: if p > 0.9 { 0.052 } else { 0.09 },
+            confidence: 0.999,
+            location_probability: p,
+            first_candidate: pk(c, adapter, first),
+            last_candidate: pk(c, adapter, last),
+            status: DetectionStatus::Pending,
+        };
+        // The morning after the step: the H200 places it on night 5, its candidates still
+        // nights 4 to 6.
+        let early = place(&mut *c, "h200", 5, (4, 6), 0.9);
+        let h200 = alerts::insert(&mut *c, gpu[0].0, &early).unwrap();
+        let g = group_of(&mut *c, h200);
+        // lavapipe's noisy series locates a change on night 6 at 58%, over the same candidate
+        // nights: its own commit is another, so it is not in the H200's group.
+        let other_night = place(&mut *c, "lavapipe", 6, (4, 6), 0.58);
+        let late = alerts::insert(&mut *c, cpu[0].0, &other_night).unwrap();
+        assert_ne!(group_of(&mut *c, late), g, "{}", store.name);
+        // A lavapipe series that locates it on night 5, however loosely, names the same commit:
+        // it joins the H200's group (two adapters, one change).
+        let same_night = place(&mut *c, "lavapipe", 5, (4, 6), 0.58);
+        let joined = alerts::insert(&mut *c, cpu[1].0, &same_night).unwrap();
+        assert_eq!(group_of(&mut *c, joined), g, "{}", store.name);
+        // The H200's location turns exact on night 5: the same commit, the same group; the
+        // night-6 series is still apart.
+        let exact = place(&mut *c, "h200", 5, (5, 5), 0.99);
+        alerts::place(&mut *c, h200, &exact).unwrap();
+        assert_eq!(group_of(&mut *c, h200), g);
+        assert_ne!(group_of(&mut *c, late), g);
+        // The night-6 series moves to night 5: now it joins.
+        alerts::place(&mut *c, late, &same_night).unwrap();
+        assert_eq!(group_of(&mut *c, late), g);
+        // The group is led by the H200's sure change, not a loose lavapipe one.
+        let title = tessera_dashboard::titles::of(
+            &tessera_dashboard::store::groups::get(&mut *c, g).unwrap(),
+        );
+        assert!(title.contains("3 series on 2 adapters"), "{title}");
+        let lead = title.split("; ").nth(1).unwrap();
+        assert!(lead.starts_with(&format!("{} ", gpu[0].1)), "{title}");
+    }
+}
+
+#[test]
+fn a_group_title_leads_with_the_surest_change_not_the_largest() {
+    use tessera_dashboard::store::alerts::{self, DetectionStatus, Placement};
+    for store in common::stores("a_group_title_leads_with_the_surest_change") {
+        let mut c = store.pool.get().unwrap();
+        let pk = two_adapters_nightly(&mut *c);
+        // Two variants' frame times on one night, +5% with a tight interval and +40% with a
+        // wide one located at 60%.
+        let two = frame_series(&mut *c, "H200");
+        let sure = Placement {
+            run_pk_before: pk(&mut *c, "h200", 7),
+            run_pk_after: pk(&mut *c, "h200", 8),
+            value_before: 1.0,
+            value_after: 1.05,
+            relative_change: 0.05,
+            change_low: 0.045,
+            change_high: 0.055,
+            confidence: 0.999,
+            location_probability: 0.99,
+            first_candidate: pk(&mut *c, "h200", 8),
+            last_candidate: pk(&mut *c, "h200", 8),
+            status: DetectionStatus::Pending,
+        };
         let mut big = sure.clone();
         big.relative_change = 0.4;
         (big.change_low, big.change_high) = (0.05, 0.75);
@@ -811,6 +862,68 @@ fn error_against_time_lists_only_error_measures_and_shows_two_beside_each_other(
     });
 }
 
+/// A number beside a point names a row of the table; a point with no row (`native` and
+/// `native-deferred` have an SSIM but no PSNR, so the PSNR table has no row for them) gets none:
+/// not the "1" every such point read before.
+#[test]
+fn error_against_time_numbers_only_the_points_with_a_table_row() {
+    let store = common::sqlite();
+    let viewer =
+        std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/viewer-runs");
+    tessera_dashboard::import::import(&store.pool, &viewer, &Params::default()).unwrap();
+    let app = app(AppState::new(store.pool.clone(), None));
+    block_on(async {
+        let page = get(&app, "/pareto?scenario=adaptive&metric=psnr&metric2=ssim").await;
+        // The table's rows: number and variant.
+        let table = &page[page.find("<table id=pareto>").expect("table")..];
+        let rows: Vec<(String, String)> = table
+            .split("<tr><td class=n>")
+            .skip(1)
+            .map(|r| {
+                let n = r[..r.find("</td>").unwrap()].to_string();
+                let name = &r[r.find("</span>").unwrap() + "</span>".len()..];
+                let name = &name[..name.find("</td>").unwrap()];
+                let plain: String = name
+                    .split('<')
+                    .map(|part| part.split_once('>').map_or(part, |(_, t)| t))
+                    .collect();
+                (n, plain)
+            })
+            .collect();
+        assert!(!rows.is_empty(), "{table}");
+        // The canvas chart's points: a number only where the table has that row.
+        let spec = &page[page.find("id=\"pareto-chart-data\">").unwrap()..];
+        let spec = &spec[spec.find('>').unwrap() + 1..spec.find("</script>").unwrap()];
+        let spec: serde_json::Value = serde_json::from_str(spec).unwrap();
+        for p in spec["points"].as_array().unwrap() {
+            let row = rows
+                .iter()
+                .find(|(_, v)| *v == p["label"].as_str().unwrap());
+            match row {
+                Some((n, _)) => assert_eq!(p["num"].to_string(), *n, "{p}"),
+                None => assert!(p["num"].is_null(), "{p}"),
+            }
+        }
+        // The SSIM chart beside it holds the two natives (no PSNR row): four points, two numbers.
+        let second = &page[page.find("id=pareto-second").unwrap()..];
+        let second = &second[..second.find("</svg>").unwrap()];
+        let points = second.matches("<circle class='point'").count();
+        let numbers: Vec<&str> = second
+            .split("font-size='10'>")
+            .skip(1)
+            .map(|t| &t[..t.find("</text>").unwrap()])
+            .filter(|t| t.chars().all(|c| c.is_ascii_digit()))
+            .collect();
+        assert!(second.contains("<title>native: "), "{second}");
+        assert!(points > rows.len(), "{second}");
+        let mut want: Vec<&str> = rows.iter().map(|(n, _)| n.as_str()).collect();
+        let mut got = numbers.clone();
+        want.sort();
+        got.sort();
+        assert_eq!(got, want, "{second}");
+    });
+}
+
 #[test]
 fn error_against_time_draws_error_bars_where_repeats_exist() {
     let store = common::sqlite();
@@ -876,7 +989,7 @@ fn replay_with_a_bad_template_leaves_no_store() {
             "replay",
             "no/such/run",
             "--nights",
-            "20",
+            "40",
             "--scenarios",
             "1",
             "--db",
@@ -891,4 +1004,149 @@ fn replay_with_a_bad_template_leaves_no_store() {
         "{err}"
     );
     assert!(!db.exists(), "an empty store was left behind");
+}
+
+/// Runs `tessera-dashboard` with `args` in `dir`, killed after `limit`; its exit code (`None`
+/// when it was killed), stdout and stderr, and its process id.
+fn dashboard_in(
+    dir: &std::path::Path,
+    args: &[&str],
+    limit: std::time::Duration,
+) -> (Option<i32>, String, String, u32) {
+    use std::io::Read;
+    use std::process::{Command, Stdio};
+    let mut child = Command::new(env!("CARGO_BIN_EXE_tessera-dashboard"))
+        .current_dir(dir)
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let pid = child.id();
+    // Read as it comes, so a full pipe never stops the child.
+    let reader = |r: Option<Box<dyn std::io::Read + Send>>| {
+        std::thread::spawn(move || {
+            let mut s = String::new();
+            if let Some(mut r) = r {
+                r.read_to_string(&mut s).unwrap();
+            }
+            s
+        })
+    };
+    let out = reader(child.stdout.take().map(|r| Box::new(r) as _));
+    let err = reader(child.stderr.take().map(|r| Box::new(r) as _));
+    let start = std::time::Instant::now();
+    let code = loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            break status.code();
+        }
+        if start.elapsed() > limit {
+            child.kill().unwrap();
+            child.wait().unwrap();
+            break None;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    };
+    let (out, err) = (out.join().unwrap(), err.join().unwrap());
+    (code, out, err, pid)
+}
+
+#[test]
+fn replay_runs_outside_the_repository_and_refuses_too_few_nights() {
+    let dir = tempfile::tempdir().unwrap();
+    let limit = std::time::Duration::from_secs(240);
+    // Too few nights for its injections: refused at once (it looked for a night for ever), with
+    // the least it needs, before a store or its temporary folder is made.
+    let few = dir.path().join("few.sqlite");
+    let few_arg = few.to_str().unwrap();
+    let (code, _, err, pid) = dashboard_in(
+        dir.path(),
+        &["replay", "--nights", "20", "--db", few_arg],
+        limit,
+    );
+    assert_eq!(code, Some(1), "{err}");
+    assert!(err.contains("replay needs at least 35 nights"), "{err}");
+    assert!(!few.exists(), "a store was left behind");
+    let (code, _, err, pid2) = dashboard_in(dir.path(), &["replay", "--nights", "34"], limit);
+    assert_eq!(code, Some(1), "{err}");
+    for p in [pid, pid2] {
+        let prefix = format!("tessera-replay-{p}-");
+        assert!(
+            !std::fs::read_dir(std::env::temp_dir()).unwrap().any(|e| e
+                .unwrap()
+                .file_name()
+                .to_string_lossy()
+                .starts_with(&prefix)),
+            "a temporary folder {prefix}* was left behind"
+        );
+    }
+    // The least it needs, from a folder outside the repository: the default template (a path
+    // relative to the repository) is found, and the replay runs to its report.
+    let db = dir.path().join("replay.sqlite");
+    let (code, out, err, _) = dashboard_in(
+        dir.path(),
+        &[
+            "replay",
+            "--nights",
+            "35",
+            "--scenarios",
+            "1",
+            "--db",
+            db.to_str().unwrap(),
+        ],
+        limit,
+    );
+    assert!(
+        code.is_some(),
+        "35 nights did not finish in {limit:?}: {err}"
+    );
+    assert!(out.contains("replayed"), "{out}\n{err}");
+    assert!(db.exists());
+}
+
+/// Each series chart on a group page has an x axis: its line, and ticks labelled with the short
+/// commits of its points, oldest left; the chart of the step's series names the step's commit
+/// among them or between two of them.
+#[test]
+fn a_groups_charts_have_an_x_axis_of_commits() {
+    let store = common::sqlite();
+    let h = StepHistory::h200(24, 20, "native", 1.05);
+    let app = served(&store, &h, 22);
+    block_on(async {
+        let groups: serde_json::Value =
+            serde_json::from_str(&get(&app, "/api/regressions/groups?status=all").await).unwrap();
+        let id = &groups[0]["id"];
+        let page = get(&app, &format!("/regressions/groups/{id}")).await;
+        let charts = &page[page.find("<div class=charts>").expect("charts")..];
+        let svgs: Vec<&str> = charts
+            .split("<svg")
+            .skip(1)
+            .map(|s| &s[..s.find("</svg>").unwrap()])
+            .collect();
+        assert!(!svgs.is_empty(), "{page}");
+        let short = |n: usize| tessera_dashboard::steps::sha(n)[..10].to_string();
+        for svg in svgs {
+            assert!(svg.contains("<line class='x-axis'"), "no x axis: {svg}");
+            // The tick labels: the x axis's texts, centred under their points.
+            let ticks: Vec<&str> = svg
+                .split("text-anchor='middle' fill='#444'>")
+                .skip(1)
+                .map(|t| &t[..t.find("</text>").unwrap()])
+                .collect();
+            assert!(ticks.len() >= 3, "too few commits on the x axis: {ticks:?}");
+            let nights: Vec<usize> = ticks
+                .iter()
+                .map(|t| {
+                    (0..h.nights)
+                        .find(|&n| short(n) == *t)
+                        .unwrap_or_else(|| panic!("{t:?} is not a commit of the history"))
+                })
+                .collect();
+            assert!(nights.windows(2).all(|w| w[0] < w[1]), "{nights:?}");
+            assert!(
+                nights[0] < h.step_night && *nights.last().unwrap() >= h.step_night - 1,
+                "the axis does not span the step: {nights:?}"
+            );
+        }
+    });
 }

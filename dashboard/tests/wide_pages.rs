@@ -168,7 +168,6 @@ fn a_large_alert_group_pivots_by_scenario_and_variant() {
         location_probability: 0.99,
         first_candidate: pk(&mut *c, 2),
         last_candidate: pk(&mut *c, 2),
-        range_before: pk(&mut *c, 1),
         status: DetectionStatus::Confirmed,
     };
     let mut group = 0;

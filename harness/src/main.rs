@@ -653,6 +653,9 @@ fn run_command(
         }
         Some((Ok(reply), _)) => {
             eprintln!("{}", reply.summary());
+            for w in &reply.warnings {
+                eprintln!("warning: {w}");
+            }
             code
         }
         None => code,
@@ -732,6 +735,9 @@ fn upload_command(run: &std::path::Path, url: &str) -> u8 {
     match tessera::upload::upload(run, url) {
         Ok(reply) => {
             println!("{}", reply.summary());
+            for w in &reply.warnings {
+                eprintln!("warning: {w}");
+            }
             0
         }
         Err(e) => {

@@ -71,6 +71,10 @@ pub struct Reply {
     pub results: usize,
     #[serde(default)]
     pub new_regressions: usize,
+    /// What the dashboard says about a run it took (a run without a commit: never the previous
+    /// run of its suite); printed on stderr. Absent from older dashboards.
+    #[serde(default)]
+    pub warnings: Vec<String>,
     /// Request body bytes sent, every request of the upload together.
     #[serde(skip)]
     pub bytes_sent: u64,

@@ -243,6 +243,27 @@ fn already_stored_is_success() {
     server.join().unwrap();
 }
 
+/// The dashboard's warnings about a run it took (this run records no commit) are printed on
+/// stderr, one line each, after the summary on stdout; the upload still succeeds.
+#[test]
+fn the_dashboards_warnings_are_printed() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = run_folder(dir.path());
+    let (url, server) = fake_dashboard(
+        "201 Created",
+        r#"{"run_id":"r1","stored":true,"results":1,"new_regressions":0,
+            "warnings":["run r1 records no commit (tessera ran outside a git checkout)"]}"#,
+    );
+    let (code, out, err) = tessera(&["upload", &run, "--url", &url], Some("s3cret"));
+    assert_eq!(code, 0, "{err}");
+    assert!(out.starts_with("uploaded: r1 stored"), "{out}");
+    assert_eq!(
+        err,
+        "warning: run r1 records no commit (tessera ran outside a git checkout)\n"
+    );
+    server.join().unwrap();
+}
+
 #[test]
 fn refused_upload_exits_4_with_the_dashboards_message() {
     let dir = tempfile::tempdir().unwrap();

@@ -315,14 +315,21 @@ pub fn render(v: &ParetoView) -> String {
             techniques.push(p.technique.clone());
         }
     }
-    // Row numbers: the newer run's points in table order; a base-only variant gets its own.
-    let mut order: Vec<&str> = v.points.iter().map(|p| p.variant.as_str()).collect();
-    for p in &v.base_points {
-        if !order.contains(&p.variant.as_str()) {
-            order.push(&p.variant);
-        }
-    }
-    let num_of = |variant: &str| order.iter().position(|o| *o == variant).unwrap_or(0) + 1;
+    // Row numbers: the table's rows (the newer run's points, in order). A point with no row (a
+    // variant only the older run has, or only the second measure: the reference, whose error
+    // against itself the first measure leaves out) is drawn without a number, since a number on
+    // the chart names a row of the table.
+    let num_of = |variant: &str| {
+        v.points
+            .iter()
+            .position(|p| p.variant == variant)
+            .map(|i| i + 1)
+    };
+    let tag_of = |variant: &str| num_of(variant).map_or(String::new(), |n| n.to_string());
+    let label_of = |variant: &str| match num_of(variant) {
+        Some(n) => format!("#{n} {variant}"),
+        None => variant.to_string(),
+    };
     let tagged = v
         .points
         .iter()
@@ -331,12 +338,12 @@ pub fn render(v: &ParetoView) -> String {
     let pts: Vec<ScatterPoint> = tagged
         .clone()
         .map(|(p, group)| ScatterPoint {
-            label: format!("#{} {}", num_of(&p.variant), p.variant),
+            label: label_of(&p.variant),
             x: p.gpu_ms,
             y: p.value,
             group,
             on_front: p.on_front,
-            tag: num_of(&p.variant).to_string(),
+            tag: tag_of(&p.variant),
             colour: technique_colour(&techniques, &p.technique),
         })
         .collect();
@@ -380,12 +387,12 @@ pub fn render(v: &ParetoView) -> String {
                 .points2
                 .iter()
                 .map(|p| ScatterPoint {
-                    label: format!("#{} {}", num_of(&p.variant), p.variant),
+                    label: label_of(&p.variant),
                     x: p.gpu_ms,
                     y: p.value,
                     group: 0,
                     on_front: p.on_front,
-                    tag: num_of(&p.variant).to_string(),
+                    tag: tag_of(&p.variant),
                     colour: technique_colour(&techniques, &p.technique),
                 })
                 .collect();
@@ -432,12 +439,12 @@ pub fn render(v: &ParetoView) -> String {
             esc(m2)
         ))
     );
-    for p in &v.points {
+    for (row, p) in v.points.iter().enumerate() {
         let old = v.base_points.iter().find(|q| q.variant == p.variant);
         let _ = write!(
             b,
             "<tr><td class=n>{}</td><td><span class=swatch style=\"background:{}\" title=\"{}\"></span>{}</td><td class=n>{}</td><td class=n>{}</td><td class=n>{}</td><td>{}</td>{}<td class=n>{}</td><td class=n>{}</td></tr>",
-            num_of(&p.variant),
+            row + 1,
             technique_colour(&techniques, &p.technique),
             esc(&p.technique),
             crate::html::name(&p.variant),

@@ -25,6 +25,10 @@ pub struct UploadResponse {
     pub stored: bool,
     pub results: usize,
     pub new_regressions: usize,
+    /// What the sender should know though the run was taken ([`RunBundle::warnings`]: a run
+    /// without a commit); absent when there is nothing to say.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
 }
 
 pub async fn api(
@@ -63,6 +67,7 @@ pub async fn api(
         .await
         .map_err(|e| AppError::Internal(e.to_string()))??;
     let run_id = bundle.run.run_id.clone();
+    let warnings = bundle.warnings();
     let params = state.detect;
     let job = if who.scope.allows(Scope::Write) {
         None
@@ -99,6 +104,7 @@ pub async fn api(
                             stored: true,
                             results,
                             new_regressions,
+                            warnings,
                         },
                     ))
                 }
@@ -109,6 +115,7 @@ pub async fn api(
                         stored: false,
                         results: 0,
                         new_regressions: 0,
+                        warnings,
                     },
                 )),
             }

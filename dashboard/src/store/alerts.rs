@@ -614,18 +614,16 @@ pub struct Placement {
     pub location_probability: f64,
     pub first_candidate: i64,
     pub last_candidate: i64,
-    /// The run before the first candidate: with `last_candidate`, the commit range the series'
-    /// own location of the change spans, which names its group ([`own_key`]).
-    pub range_before: i64,
     pub status: DetectionStatus,
 }
 
-/// The group key of a placement: the commit range its own location spans (the located commit
-/// when the location is exact, its whole candidate range otherwise). A series whose change is
-/// located loosely (a noisy CPU adapter at 58%) does not join, through a shared nightly range, a
-/// group another series located exactly.
+/// The group key of a placement: the commit the series itself locates the change at (its runs
+/// before and after the change), never the candidate range around it. Two series join one group
+/// only when each places the change on the same commit; a candidate range that merely overlaps
+/// another series' commit (a noisy CPU adapter's 95% range over the night a GPU located exactly)
+/// names no group of its own, so it cannot pull a series of another commit in with it.
 fn own_key(conn: &mut dyn Connection, p: &Placement) -> Result<String, StoreError> {
-    key_of_runs(conn, p.range_before, p.last_candidate.max(p.run_pk_after))
+    key_of_runs(conn, p.run_pk_before, p.run_pk_after)
 }
 
 fn placement_values(p: &Placement) -> Vec<Value> {
@@ -714,7 +712,7 @@ pub fn place(conn: &mut dyn Connection, id: i64, p: &Placement) -> Result<(), St
     let Some(g) = row.opt_i64(0)? else {
         return Ok(());
     };
-    // Staying at its range (exact, or the candidate range already recorded for its group).
+    // Staying at its located commit (the one its group was recorded under).
     let named = conn
         .query_opt(
             "SELECT group_id FROM alert_group_keys WHERE key = $1",

@@ -154,7 +154,6 @@ pub fn store(
             location_probability: 1.0,
             first_candidate: run_pk,
             last_candidate: run_pk,
-            range_before: before,
             status: DetectionStatus::Confirmed,
         };
         let id = alerts::insert(conn, series, &placement)?;

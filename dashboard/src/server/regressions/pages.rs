@@ -65,7 +65,7 @@ const STYLE: &str = "<style>
 form.triage{margin:4px 0 0}form.triage input[name=note]{width:260px}form.triage input[name=bug_url]{width:220px}
 .result{margin-left:8px}.result.ok{color:#17803d}.result.failed{color:#b3261e}
 tr.series-row td{font-size:13px}tr.series-row.stat-withdrawn td{color:#888}
-.charts h3{font-size:14px;margin:16px 0 2px}.group h2{overflow-wrap:anywhere}
+.charts h3{font-size:14px;margin:16px 0 2px}.group h2{overflow-wrap:anywhere}#events td:last-child{overflow-wrap:anywhere;min-width:12em}
 @media (max-width:700px){#regressions,#regressions tbody,#regressions tr,#regressions td{display:block;width:auto}
 #regressions{overflow-x:visible}#regressions tr.cols{display:none}#regressions tbody.group>tr.head>td{padding:8px 6px 6px}
 #regressions tr.series-row{border-bottom:1px solid #ddd;padding:4px 0}#regressions tr.series-row td{display:inline-block;border:0;padding:1px 8px 1px 0;text-align:left}
@@ -629,8 +629,15 @@ fn render_history(g: &Group, events: &[Event], keys: &[String]) -> String {
         if events.len() == 1 { "" } else { "s" },
         moves,
         if moves == 1 { "" } else { "s" },
+        // Each key's commits shortened as everywhere else, the whole key on hover: two whole
+        // shas are 82 characters that cannot break, wider than a phone.
         keys.iter()
-            .map(|k| format!("<code>{}</code>", esc(k)))
+            .map(|k| {
+                let short = k.split_once("..").map_or(k.to_string(), |(b, a)| {
+                    format!("{}..{}", commit(Some(b)), commit(Some(a)))
+                });
+                format!("<code title=\"{}\">{}</code>", esc(k), esc(&short))
+            })
             .collect::<Vec<_>>()
             .join(", ")
     );
