@@ -796,13 +796,19 @@ fn a_wrong_token_is_called_unknown_not_missing() {
     });
 }
 
-#[test]
-fn error_against_time_lists_only_error_measures_and_shows_two_beside_each_other() {
+/// A store holding the image viewer's fixture runs (the error-against-time pages' data), served.
+fn viewer_runs() -> (common::TestStore, Router) {
     let store = common::sqlite();
     let viewer =
         std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/viewer-runs");
     tessera_dashboard::import::import(&store.pool, &viewer, &Params::default()).unwrap();
     let app = app(AppState::new(store.pool.clone(), None));
+    (store, app)
+}
+
+#[test]
+fn error_against_time_lists_only_error_measures_and_shows_two_beside_each_other() {
+    let (_store, app) = viewer_runs();
     block_on(async {
         let v: serde_json::Value =
             serde_json::from_str(&get(&app, "/api/pareto?scenario=adaptive").await).unwrap();
@@ -867,11 +873,7 @@ fn error_against_time_lists_only_error_measures_and_shows_two_beside_each_other(
 /// not the "1" every such point read before.
 #[test]
 fn error_against_time_numbers_only_the_points_with_a_table_row() {
-    let store = common::sqlite();
-    let viewer =
-        std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/viewer-runs");
-    tessera_dashboard::import::import(&store.pool, &viewer, &Params::default()).unwrap();
-    let app = app(AppState::new(store.pool.clone(), None));
+    let (_store, app) = viewer_runs();
     block_on(async {
         let page = get(&app, "/pareto?scenario=adaptive&metric=psnr&metric2=ssim").await;
         // The table's rows: number and variant.
@@ -926,11 +928,7 @@ fn error_against_time_numbers_only_the_points_with_a_table_row() {
 
 #[test]
 fn error_against_time_draws_error_bars_where_repeats_exist() {
-    let store = common::sqlite();
-    let viewer =
-        std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/viewer-runs");
-    tessera_dashboard::import::import(&store.pool, &viewer, &Params::default()).unwrap();
-    let app = app(AppState::new(store.pool.clone(), None));
+    let (_store, app) = viewer_runs();
     block_on(async {
         let v: serde_json::Value =
             serde_json::from_str(&get(&app, "/api/pareto?scenario=basic&metric=psnr").await)

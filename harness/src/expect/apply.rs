@@ -186,11 +186,5 @@ pub fn merge_in_order(
     extra: Vec<VariantResult>,
 ) {
     results.extend(extra);
-    results.sort_by_key(|r| {
-        scenario
-            .variants
-            .iter()
-            .position(|v| v.name == r.variant)
-            .unwrap_or(usize::MAX)
-    });
+    results.sort_by_key(|r| scenario.declared_position(&r.variant));
 }

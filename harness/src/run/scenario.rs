@@ -82,13 +82,7 @@ pub fn run(
         .collect();
     run.save_reference_images(&mut results);
     // Put results back in the scenario's declaration order.
-    results.sort_by_key(|r| {
-        scenario
-            .variants
-            .iter()
-            .position(|v| v.name == r.variant)
-            .unwrap_or(usize::MAX)
-    });
+    results.sort_by_key(|r| scenario.declared_position(&r.variant));
     let failed = phases::time("images", images::finish_writes);
     images::forget_failed(&mut results, &failed, run_dir);
     gates::apply(scenario, &mut results);

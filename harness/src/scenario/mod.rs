@@ -93,6 +93,15 @@ impl From<&Scenario> for Stage {
 }
 
 impl Scenario {
+    /// Where a variant stands in the scenario's declaration (results are reported in this
+    /// order); a name the scenario does not declare sorts last.
+    pub fn declared_position(&self, variant: &str) -> usize {
+        self.variants
+            .iter()
+            .position(|v| v.name == variant)
+            .unwrap_or(usize::MAX)
+    }
+
     /// Whether a reference is rendered at all: only when there are metrics to compute against it.
     pub fn needs_reference(&self) -> bool {
         self.reference != Reference::None && !self.metrics.is_empty()
