@@ -22,7 +22,6 @@ use crate::render::scene::{Objects, SceneGpu, ScenePipeline, View, COLOR_FORMAT,
 use crate::render::timers::Timers;
 use crate::render::velocity::{self, VelocityPass, VELOCITY, VELOCITY_DEPTH};
 use crate::techniques::shared::jitter::{jitter, ndc_offset};
-use crate::techniques::shared::rcas::{rcas_pass, FsrPass};
 
 pub static COMMON_WGSL: &str = include_str!("common.wgsl");
 pub static MOTION_WGSL: &str = include_str!("motion.wgsl");
@@ -31,6 +30,7 @@ pub static RECONSTRUCT_WGSL: &str = include_str!("reconstruct.wgsl");
 pub static DEPTH_CLIP_WGSL: &str = include_str!("depth_clip.wgsl");
 pub static LOCK_WGSL: &str = include_str!("lock.wgsl");
 pub static ACCUMULATE_WGSL: &str = include_str!("accumulate.wgsl");
+pub static RCAS_WGSL: &str = include_str!("rcas.wgsl");
 
 /// Every pass file, each compiled after `common.wgsl`.
 pub static PASSES: &[(&str, &str)] = &[
@@ -40,6 +40,7 @@ pub static PASSES: &[(&str, &str)] = &[
     ("fsr2/depth_clip.wgsl", DEPTH_CLIP_WGSL),
     ("fsr2/lock.wgsl", LOCK_WGSL),
     ("fsr2/accumulate.wgsl", ACCUMULATE_WGSL),
+    ("fsr2/rcas.wgsl", RCAS_WGSL),
 ];
 
 /// A pass file's module as the GPU compiles it: `common.wgsl` then the pass.
@@ -179,7 +180,7 @@ pub fn graph(options: &Options, width: u32, height: u32, dynamic_scene: bool) ->
         g.resource(COLOR, tex(COLOR_FORMAT, width, height)).pass(
             "rcas",
             PassKind::Compute,
-            &[INTERNAL[0]],
+            &[INTERNAL[0], EXPOSURE],
             &[COLOR],
         );
         g.output(COLOR);
@@ -218,7 +219,7 @@ struct Side {
     reconstruct: wgpu::BindGroup,
     depth_clip: wgpu::BindGroup,
     accumulate: wgpu::BindGroup,
-    rcas: Option<FsrPass>,
+    rcas: Option<wgpu::BindGroup>,
     output: Res,
 }
 
@@ -230,6 +231,8 @@ struct Pipelines {
     depth_clip: wgpu::ComputePipeline,
     lock: wgpu::ComputePipeline,
     accumulate: wgpu::ComputePipeline,
+    /// With sharpening only.
+    rcas: Option<wgpu::ComputePipeline>,
 }
 
 pub struct Fsr2Gpu {
@@ -296,7 +299,19 @@ impl Fsr2Gpu {
             depth_clip: pipe(DEPTH_CLIP_WGSL, "depth_clip"),
             lock: pipe(LOCK_WGSL, "lock"),
             accumulate: pipe(ACCUMULATE_WGSL, "accumulate"),
+            rcas: options.sharpening.then(|| pipe(RCAS_WGSL, "rcas")),
         };
+        // AMD's `cbRCAS` (ffx_fsr2.cpp `fsr2Dispatch`: `FsrRcasCon` of `-2 sharpness + 2` stops).
+        let rcas_config = options.rcas_stops().map(|stops| {
+            let linear = (-stops).exp2();
+            let half = u32::from(half::f16::from_f32(linear).to_bits());
+            let con = [linear.to_bits(), half | (half << 16), 0, 0];
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("fsr2 rcas config"),
+                contents: bytemuck::cast_slice(&con),
+                usage: wgpu::BufferUsages::UNIFORM,
+            })
+        });
         let velocity = VelocityPass::new(device, &plan, &textures);
         debug_assert_eq!(velocity.runs(), use_velocity);
         let layout = |p: &wgpu::ComputePipeline| p.get_bind_group_layout(0);
@@ -387,15 +402,19 @@ impl Fsr2Gpu {
                     (12, &view(*luma_cur)),
                 ],
             );
-            let rcas = options.rcas_stops().map(|stops| {
-                rcas_pass(
-                    gpu,
-                    (&view(*internal_cur), &view(COLOR)),
-                    (width, height),
-                    stops,
-                    true,
-                )
-            });
+            let rcas = pipelines
+                .rcas
+                .as_ref()
+                .zip(rcas_config.as_ref())
+                .map(|(p, con)| {
+                    bind_group(
+                        device,
+                        "rcas",
+                        &layout(p),
+                        &[(0, &params), (2, &exposure_buf), (4, con)],
+                        &[(1, &view(*internal_cur)), (3, &view(COLOR))],
+                    )
+                });
             let output = if rcas.is_some() { COLOR } else { *internal_cur };
             Side {
                 reconstruct,
@@ -572,8 +591,8 @@ impl Renderer for Fsr2Gpu {
             &[&side.accumulate],
             high,
         );
-        if let Some(rcas) = &side.rcas {
-            rcas.record(timers, encoder);
+        if let (Some(pipeline), Some(group)) = (&p.rcas, &side.rcas) {
+            timed_dispatch(encoder, timers, "rcas", pipeline, &[group], high);
         }
     }
 }

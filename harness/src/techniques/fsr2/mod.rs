@@ -3,7 +3,7 @@
 //! per pass citing the header and function it follows: `luminance.wgsl` (the luminance pyramid
 //! and auto exposure, a plain reduction in place of SPD), `reconstruct.wgsl` (reconstruct and
 //! dilate depth and motion), `depth_clip.wgsl`, `lock.wgsl`, `accumulate.wgsl` (reproject and
-//! accumulate with Lanczos-2 upsampling), then RCAS (`techniques/shared/rcas.rs`). Its inputs are
+//! accumulate with Lanczos-2 upsampling) and `rcas.wgsl` (AMD's FSR 2 RCAS). Its inputs are
 //! what an engine gives it: colour and depth at the render size, motion vectors at the render
 //! size (`motion.wgsl`: the cameras' from depth, dynamic objects' from the shared motion
 //! provider `render/velocity.rs`), AMD's jitter (`ffxFsr2GetJitterOffset` over
@@ -19,7 +19,6 @@ use crate::gpu::Unsupported;
 use crate::render::graph::Plan;
 use crate::render::renderer::Renderer;
 use crate::techniques::shared::jitter;
-use crate::techniques::shared::rcas::RCAS_WGSL;
 
 pub use gpu::Fsr2Gpu;
 
@@ -167,15 +166,13 @@ impl Definition for Fsr2 {
     }
 
     fn shaders(&self) -> Vec<Shader> {
-        let mut out: Vec<Shader> = gpu::PASSES
+        gpu::PASSES
             .iter()
             .map(|(file, source)| Shader {
                 name: file.to_string(),
                 source: gpu::module(source),
                 files: vec!["fsr2/common.wgsl", file],
             })
-            .collect();
-        out.push(Shader::file("shared/rcas.wgsl", RCAS_WGSL));
-        out
+            .collect()
     }
 }

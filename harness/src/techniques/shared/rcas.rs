@@ -1,5 +1,6 @@
 //! RCAS as a compute pass (`rcas.wgsl`, CPU model in `rcas_model.rs`): FSR 1's sharpening, run by
-//! `fsr1` after EASU and by `taau` and `fsr2` after their resolve. Also the one pass type of the
+//! `fsr1` after EASU and by `taau` after its resolve (`fsr2` runs AMD's FSR 2 RCAS,
+//! `techniques/fsr2/rcas.wgsl`). Also the one pass type of the
 //! FSR 1 module (its uniforms and bindings), so `fsr1`'s EASU pass is recorded the same way.
 //! Not a technique: no plan or options here, only the pass.
 
@@ -78,7 +79,7 @@ impl FsrPass {
 }
 
 /// An RCAS pass (`rcas`) from `src` to `dst`, both `width` x `height`, at `sharpness` stops;
-/// `linear_input`: `src` holds linear colour, encoded per tap (`taau`'s and `fsr2`'s RCAS).
+/// `linear_input`: `src` holds linear colour, encoded per tap (`taau`'s RCAS).
 pub fn rcas_pass(
     gpu: &Gpu,
     (src, dst): (&wgpu::TextureView, &wgpu::TextureView),

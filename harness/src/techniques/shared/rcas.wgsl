@@ -3,8 +3,9 @@
 // v1.0.2 (GPUOpen-Effects/FidelityFX-FSR commit a21ffb8, whose one change is RCAS's limiter
 // bounded by the centre pixel; sections "NON-PACKED 32-BIT VERSION" of RCAS and "[SRTM] SIMPLE
 // REVERSIBLE TONE-MAPPER"). Shared by `fsr1` (its module is this file followed by
-// `fsr1/fsr1.wgsl`, whose EASU uses the bindings and encoding below), and by `taau` and `fsr2`,
-// which run this file alone as their RCAS pass over their linear resolved output. CPU model:
+// `fsr1/fsr1.wgsl`, whose EASU uses the bindings and encoding below), and by `taau`, which runs
+// this file alone as its RCAS pass over its linear resolved output (`fsr2` runs AMD's FSR 2
+// RCAS instead, `fsr2/rcas.wgsl`). CPU model:
 // `techniques/shared/rcas_model.rs`.
 //
 // RCAS works in SRTM + gamma 2.0 space (finite, non-negative; c / (max3(c) + 1), then sqrt) and
