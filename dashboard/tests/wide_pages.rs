@@ -101,6 +101,43 @@ fn a_wide_run_opens_on_its_summary_and_each_scenario_has_a_page() {
     });
 }
 
+/// A wide run's summary reads rows, not records, and asks for a series' noise only where it can
+/// decide: a 3% step (below the fixed 5%) thirty σ outside `native`'s nightly noise is still
+/// called slower in every scenario's row, and the other variants are not, as the run page of the
+/// same nights says at a width where every series' noise is read (`morning_after.rs`).
+#[test]
+fn a_wide_summary_calls_a_step_below_the_threshold_by_its_noise() {
+    let store = common::sqlite();
+    let h = StepHistory::h200(12, 11, "native", 1.03);
+    let mut c = store.pool.get().unwrap();
+    for run in h.runs(&common::template()) {
+        ingest_and_detect(&mut *c, &widen(&run, COPIES), &Params::default()).unwrap();
+    }
+    drop(c);
+    let app = app(AppState::new(store.pool.clone(), None));
+    block_on(async {
+        let (status, page) = get(&app, &format!("/runs/{}", h.run_id(11))).await;
+        assert_eq!(status, StatusCode::OK);
+        assert!(page.contains("<table id=run-summary>"), "{page}");
+        assert!(page.contains(&format!(
+            "<span class=worse>{COPIES} with a slower variant</span> · <span class=better>0 with a faster one</span>"
+        )), "{page}");
+        assert_eq!(
+            page.matches("native</span></span> <span class=worse>+3.")
+                .count(),
+            COPIES,
+            "{page}"
+        );
+        assert!(!page.contains("upscale[scale=0.5]</span></span> <span class=worse>"));
+        // The night before the step: nothing changed.
+        let (_, before) = get(&app, &format!("/runs/{}", h.run_id(10))).await;
+        assert!(
+            before.contains("<span class=worse>0 with a slower variant</span>"),
+            "{before}"
+        );
+    });
+}
+
 #[test]
 fn a_wide_comparison_opens_on_its_summary_with_one_scenario_on_demand() {
     let (store, h) = wide_store();

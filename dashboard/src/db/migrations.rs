@@ -338,6 +338,13 @@ INSERT INTO images_compact (run_pk, scenario, variant, frame, kind, digest)
 DROP TABLE images;
 ALTER TABLE images_compact RENAME TO images;
 "#,
+    // i37: a result's per-frame GPU times (each measured frame's sum over passes, the samples
+    // `tessera compare` tests; little-endian f64s, store/records.rs) beside its row, so a run's
+    // summary against the previous run reads rows instead of decoding every scenario record.
+    // NULL in rows stored before: their readers decode the records.
+    r#"
+ALTER TABLE results ADD COLUMN frame_ms {blob};
+"#,
 ];
 
 fn render(step: &str, backend: Backend) -> String {

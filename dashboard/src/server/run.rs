@@ -9,6 +9,7 @@
 //! changed against the previous run beyond noise); a run wider than [`INLINE_RESULTS`] shows only
 //! the summary, each scenario's detail on its own page (`/runs/{run_id}/scenarios/{scenario}`).
 
+use std::collections::HashMap;
 use std::fmt::Write;
 
 use axum::extract::{Path, Query, State};
@@ -16,13 +17,13 @@ use axum::response::{Html, IntoResponse, Response};
 use axum::Json;
 use tessera_results::measure::{self, points, Key, Measure, DEFAULT_BASELINE};
 use tessera_results::stats::{compare_times, frame_samples, TimeVerdict, DEFAULT_THRESHOLD_PCT};
-use tessera_results::{ScenarioResult, Status};
+use tessera_results::{RunInfo, ScenarioResult, Status};
 
 use super::export::{csv, csv_response, no_markdown, Format, FormatQuery};
 use super::{AppError, AppState};
 use crate::html::{bytes, commit, enc, esc, ms, name, num, page as layout, pct};
 use crate::store::browse;
-use crate::store::read::{self, RunDetail};
+use crate::store::read::{self, RunDetail, RunHead, RunRow, ScenarioLines};
 use crate::svg::{stacked_bars, Bar};
 
 async fn load(state: &AppState, run_id: String) -> Result<RunDetail, AppError> {
@@ -74,30 +75,35 @@ pub async fn api(
     }
 }
 
-/// The previous run of the same suite on the same adapter, with its scenario records.
+/// The previous run of the same suite on the same adapter: the per-frame GPU times of its
+/// variants that ran, by scenario and variant.
 pub struct Previous {
     pub run_id: String,
-    pub scenarios: Vec<ScenarioResult>,
+    pub frames: HashMap<(String, String), Vec<f64>>,
     /// The fixed threshold and each frame-time series' own noise ([`crate::store::noise`]).
     pub options: tessera_results::compare::Options,
 }
 
-/// GPU time of `variant` against the previous run: the engine's comparison, the threshold it
-/// was judged with and the series' own noise; `None` without a previous run or frames on both sides.
+impl Previous {
+    fn frames_of(&self, scenario: &str, variant: &str) -> Option<&[f64]> {
+        self.frames
+            .get(&(scenario.to_string(), variant.to_string()))
+            .map(Vec::as_slice)
+    }
+}
+
+/// GPU time of `variant` (its per-frame times `frames`) against the previous run: the engine's
+/// comparison, the threshold it was judged with and the series' own noise; `None` without a
+/// previous run or frames on both sides.
 fn change_of(
     prev: &Previous,
     scenario: &str,
-    v: &tessera_results::VariantResult,
+    variant: &str,
+    frames: Option<&[f64]>,
 ) -> Option<(tessera_results::stats::TimeChange, f64, Option<f64>)> {
-    let before = prev
-        .scenarios
-        .iter()
-        .find(|s| s.scenario == scenario)
-        .and_then(|s| s.results.iter().find(|w| w.variant == v.variant))
-        .filter(|w| w.status == Status::Ok)?;
-    let (a, b) = (frame_samples(before)?, frame_samples(v)?);
-    let (threshold, noise) = prev.options.threshold_for(scenario, &v.variant);
-    compare_times(&a, &b, threshold).map(|c| (c, threshold, noise))
+    let (a, b) = (prev.frames_of(scenario, variant)?, frames?);
+    let (threshold, noise) = prev.options.threshold_for(scenario, variant);
+    compare_times(a, b, threshold).map(|c| (c, threshold, noise))
 }
 
 /// GPU time of `variant` against the previous run: change and verdict, as a table cell.
@@ -109,7 +115,7 @@ fn change_cell(
     let Some(prev) = prev else {
         return "<td class=n></td>".into();
     };
-    match change_of(prev, scenario, v) {
+    match change_of(prev, scenario, &v.variant, frame_samples(v).as_deref()) {
         Some((c, threshold, noise)) => {
             let (class, word) = match c.verdict {
                 TimeVerdict::Slower => ("worse", "slower"),
@@ -334,17 +340,21 @@ fn named_list(items: &[String]) -> String {
 
 /// The per-scenario summary: variants, ok / skipped / failed, and what changed against the
 /// previous run beyond noise (slower, faster; the largest first), what could not be decided.
-pub fn summary(d: &RunDetail, prev: Option<&Previous>, inline: bool) -> String {
+pub fn summary(
+    run_id: &str,
+    scenarios: &[ScenarioLines],
+    prev: Option<&Previous>,
+    inline: bool,
+) -> String {
     struct Row<'a> {
-        s: &'a ScenarioResult,
+        s: &'a ScenarioLines,
         ok: usize,
         skipped: usize,
         failed: Vec<String>,
         changed: Vec<(f64, bool, String)>,
         undecided: usize,
     }
-    let rows: Vec<Row> = d
-        .scenarios
+    let rows: Vec<Row> = scenarios
         .iter()
         .map(|s| {
             let mut r = Row {
@@ -355,7 +365,7 @@ pub fn summary(d: &RunDetail, prev: Option<&Previous>, inline: bool) -> String {
                 changed: Vec::new(),
                 undecided: 0,
             };
-            for v in &s.results {
+            for v in &s.variants {
                 match &v.status {
                     Status::Ok => r.ok += 1,
                     Status::Skipped { .. } => r.skipped += 1,
@@ -368,7 +378,8 @@ pub fn summary(d: &RunDetail, prev: Option<&Previous>, inline: bool) -> String {
                 if v.status != Status::Ok {
                     continue;
                 }
-                match prev.and_then(|p| change_of(p, &s.scenario, v)) {
+                match prev.and_then(|p| change_of(p, &s.scenario, &v.variant, v.frames.as_deref()))
+                {
                     Some((c, ..))
                         if matches!(c.verdict, TimeVerdict::Slower | TimeVerdict::Faster) =>
                     {
@@ -387,10 +398,10 @@ pub fn summary(d: &RunDetail, prev: Option<&Previous>, inline: bool) -> String {
         })
         .collect();
     let count = |f: &dyn Fn(&Row) -> bool| rows.iter().filter(|r| f(r)).count();
-    let results: usize = d.scenarios.iter().map(|s| s.results.len()).sum();
+    let results: usize = scenarios.iter().map(|s| s.variants.len()).sum();
     let mut out = format!(
         "<h2 id=summary>Scenarios</h2><p id=summary-counts>{results} results in {} scenarios · <span class=worse>{} with a slower variant</span> · <span class=better>{} with a faster one</span> · <span class=failed>{} with a failure</span>{}</p>",
-        d.scenarios.len(),
+        scenarios.len(),
         count(&|r| r.changed.iter().any(|c| c.1)),
         count(&|r| r.changed.iter().any(|c| !c.1)),
         count(&|r| !r.failed.is_empty()),
@@ -420,9 +431,9 @@ pub fn summary(d: &RunDetail, prev: Option<&Previous>, inline: bool) -> String {
         let _ = write!(
             out,
             "<tr><td><a href=\"{}\">{}</a></td><td class=n>{}</td><td class=n>{}</td><td class=n>{}</td><td class=\"n{}\">{}</td><td>{}</td><td class=n>{}</td><td>{}</td></tr>",
-            scenario_href(&d.run.run_id, &r.s.scenario, inline),
+            scenario_href(run_id, &r.s.scenario, inline),
             name(&r.s.scenario),
-            r.s.results.len(),
+            r.s.variants.len(),
             r.ok,
             r.skipped,
             if r.failed.is_empty() { "" } else { " failed" },
@@ -437,23 +448,22 @@ pub fn summary(d: &RunDetail, prev: Option<&Previous>, inline: bool) -> String {
 }
 
 /// The lines above the detail: commit, times, adapter, counts, exports, and the previous run.
-fn header(d: &RunDetail, prev: Option<&Previous>) -> String {
-    let r = &d.run;
+fn header(r: &RunRow, info: &RunInfo, prev: Option<&Previous>) -> String {
     let mut out = format!(
         "<p>commit <code>{}</code>{} · started {} · finished {} · {} · harness {}</p><p>adapter <a href=\"/?adapter={}\">{}</a> ({}, {}) · driver {} {} · host {}</p><p><span class=ok>{} ok</span> · <span class=skipped>{} skipped</span> · <span class=failed>{} failed</span></p>",
         esc(&commit(r.commit.as_deref())),
         if r.dirty { " (dirty)" } else { "" },
         esc(&r.started_at),
-        esc(d.info.finished_at.as_deref().unwrap_or("–")),
+        esc(info.finished_at.as_deref().unwrap_or("–")),
         esc(&r.status),
         esc(&r.harness_version),
         r.adapter_id,
         esc(&r.adapter),
-        esc(&d.info.adapter.device_type),
+        esc(&info.adapter.device_type),
         esc(&r.backend),
         esc(&r.driver),
         esc(&r.driver_info),
-        esc(&d.info.host.hostname),
+        esc(&info.host.hostname),
         r.ok,
         r.skipped,
         r.failed
@@ -490,11 +500,11 @@ fn header(d: &RunDetail, prev: Option<&Previous>) -> String {
 /// The run page body: the header, the per-scenario summary (for more than one scenario), and
 /// every scenario's detail when the run has at most [`INLINE_RESULTS`] results.
 pub fn render(d: &RunDetail, prev: Option<&Previous>) -> String {
-    let mut out = header(d, prev);
-    let results: usize = d.scenarios.iter().map(|s| s.results.len()).sum();
-    let inline = results <= INLINE_RESULTS;
+    let lines: Vec<ScenarioLines> = d.scenarios.iter().map(ScenarioLines::of).collect();
+    let mut out = header(&d.run, &d.info, prev);
+    let inline = is_inline(&d.run);
     if d.scenarios.len() > 1 || !inline {
-        out.push_str(&summary(d, prev, inline));
+        out.push_str(&summary(&d.run.run_id, &lines, prev, inline));
     }
     if inline {
         for s in &d.scenarios {
@@ -502,6 +512,19 @@ pub fn render(d: &RunDetail, prev: Option<&Previous>) -> String {
         }
     }
     out
+}
+
+/// The body of a run wider than [`INLINE_RESULTS`]: the header and the per-scenario summary,
+/// from the results' rows alone.
+pub fn render_wide(head: &RunHead, lines: &[ScenarioLines], prev: Option<&Previous>) -> String {
+    let mut out = header(&head.run, &head.info, prev);
+    out.push_str(&summary(&head.run.run_id, lines, prev, false));
+    out
+}
+
+/// Whether the run's detail is on its page (at most [`INLINE_RESULTS`] results).
+fn is_inline(r: &RunRow) -> bool {
+    (r.ok + r.skipped + r.failed) as usize <= INLINE_RESULTS
 }
 
 /// One scenario of a large run on its own page: a link back to the summary, the previous and
@@ -553,46 +576,98 @@ pub fn render_scenario(d: &RunDetail, prev: Option<&Previous>, scenario: &str) -
     out
 }
 
-/// The previous run of `run_id`'s suite, with the scenarios `scenarios` reads of it, compared at
-/// the default threshold and `run_id`'s frame-time noise.
+/// The previous run of `run_id`'s suite with its per-frame GPU times (its results' rows), compared
+/// at the default threshold and `run_id`'s frame-time noise. The noise of a series costs two
+/// queries, so it is read only for the variants `needs_noise` accepts, given their frame times
+/// against the previous run's: where it can change a verdict or where the page shows it.
 fn previous(
     c: &mut dyn crate::db::Connection,
     run_id: &str,
-    scenarios: impl FnOnce(
-        &mut dyn crate::db::Connection,
-        &str,
-    )
-        -> Result<Vec<tessera_results::ScenarioResult>, crate::store::StoreError>,
+    needs_noise: &dyn Fn(&str, &str, &Previous) -> bool,
 ) -> Result<Option<Previous>, crate::store::StoreError> {
     let Some(p) = browse::previous_in_suite(c, run_id)? else {
         return Ok(None);
     };
-    Ok(Some(Previous {
-        scenarios: scenarios(c, &p)?,
+    let pk = read::run_pk(c, &p)?;
+    let mut frames = HashMap::new();
+    for s in read::lines(c, pk)? {
+        for v in s.variants {
+            if let (Status::Ok, Some(f)) = (v.status, v.frames) {
+                frames.insert((s.scenario.clone(), v.variant), f);
+            }
+        }
+    }
+    let mut prev = Previous {
         run_id: p,
+        frames,
         options: tessera_results::compare::Options {
             threshold_pct: DEFAULT_THRESHOLD_PCT,
-            noise: crate::store::noise::frame_time_noise(c, run_id)?,
+            noise: Default::default(),
         },
-    }))
+    };
+    prev.options.noise =
+        crate::store::noise::frame_time_noise_where(c, run_id, &|s, v| needs_noise(s, v, &prev))?;
+    Ok(Some(prev))
+}
+
+/// Whether a series' noise can change the verdict on `frames` against the previous run: only
+/// where the change is significant but below the fixed threshold (the noise only lowers it).
+fn noise_can_decide(
+    prev: &Previous,
+    scenario: &str,
+    variant: &str,
+    frames: Option<&[f64]>,
+) -> bool {
+    let (Some(a), Some(b)) = (prev.frames_of(scenario, variant), frames) else {
+        return false;
+    };
+    compare_times(a, b, prev.options.threshold_pct)
+        .is_some_and(|c| c.verdict == TimeVerdict::BelowThreshold)
+}
+
+enum RunPage {
+    Inline(RunDetail),
+    Wide(RunHead, Vec<ScenarioLines>),
 }
 
 pub async fn page(
     State(state): State<AppState>,
     Path(run_id): Path<String>,
 ) -> Result<Html<String>, AppError> {
-    let (d, prev) = state
+    let (body, prev) = state
         .db(move |c| {
-            let d = read::run(c, &run_id)?;
-            let prev = previous(c, &run_id, |c, p| read::run_scenarios(c, p))?;
-            Ok((d, prev))
+            let head = read::run_head(c, &run_id)?;
+            if is_inline(&head.run) {
+                // The detail shows every variant's noise in its vs-prev cell.
+                let prev = previous(c, &run_id, &|_, _, _| true)?;
+                return Ok((RunPage::Inline(read::run(c, &run_id)?), prev));
+            }
+            let lines = read::lines(c, head.pk)?;
+            let by_key: HashMap<(&str, &str), Option<&[f64]>> = lines
+                .iter()
+                .flat_map(|s| {
+                    s.variants.iter().map(move |v| {
+                        (
+                            (s.scenario.as_str(), v.variant.as_str()),
+                            v.frames.as_deref(),
+                        )
+                    })
+                })
+                .collect();
+            let prev = previous(c, &run_id, &|s, v, p| {
+                by_key
+                    .get(&(s, v))
+                    .is_some_and(|f| noise_can_decide(p, s, v, *f))
+            })?;
+            drop(by_key);
+            Ok((RunPage::Wide(head, lines), prev))
         })
         .await?;
-    Ok(Html(layout(
-        &format!("Run {}", d.run.run_id),
-        "runs",
-        &render(&d, prev.as_ref()),
-    )))
+    let (title, html) = match &body {
+        RunPage::Inline(d) => (&d.run.run_id, render(d, prev.as_ref())),
+        RunPage::Wide(head, lines) => (&head.run.run_id, render_wide(head, lines, prev.as_ref())),
+    };
+    Ok(Html(layout(&format!("Run {title}"), "runs", &html)))
 }
 
 /// `GET /runs/{run_id}/scenarios/{scenario}`: one scenario's detail, against the same
@@ -610,12 +685,8 @@ pub async fn scenario_page(
                     "run {run_id} has no scenario {scenario:?}"
                 )));
             }
-            // The previous run may not hold this scenario: then nothing to compare.
-            let prev = previous(c, &run_id, |c, p| {
-                Ok(read::scenario_result(c, p, &scenario)
-                    .map(|s| vec![s])
-                    .unwrap_or_default())
-            })?;
+            // The detail shows this scenario's noise in its vs-prev cells.
+            let prev = previous(c, &run_id, &|s, _, _| s == scenario)?;
             Ok((d, prev))
         })
         .await?;

@@ -16,6 +16,7 @@ use super::StoreError;
 use crate::bundle::RunBundle;
 use crate::db::{transaction, Connection, DbError, Value};
 use tessera_results::measure::{points, speedup, DEFAULT_BASELINE};
+use tessera_results::stats::frame_samples;
 
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Ingested {
@@ -299,8 +300,8 @@ fn ingest_once(conn: &mut dyn Connection, bundle: &RunBundle) -> Result<Ingested
             };
             conn.execute(
                 "INSERT INTO results (run_pk, scenario, variant, technique, status, reason, gpu_ms, cpu_ms,
-                     speedup, allocated_bytes)
-                 VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10)",
+                     speedup, allocated_bytes, frame_ms)
+                 VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11)",
                 &[
                     Value::Int(run_pk),
                     s.scenario.as_str().into(),
@@ -312,6 +313,11 @@ fn ingest_once(conn: &mut dyn Connection, bundle: &RunBundle) -> Result<Ingested
                     Value::from(v.cpu_frame_ms.median),
                     speedup(&s.results, v, DEFAULT_BASELINE).into(),
                     Value::Int(v.allocated_bytes.min(i64::MAX as u64) as i64),
+                    // Empty where the variant has no frame timestamps (not NULL: that is a row
+                    // stored before the column).
+                    Value::Blob(super::records::encode_frames(
+                        &frame_samples(v).unwrap_or_default(),
+                    )),
                 ],
             )?;
             for img in &v.images {

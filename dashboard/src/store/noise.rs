@@ -30,6 +30,16 @@ pub fn frame_time_noise(
     conn: &mut dyn Connection,
     run_id: &str,
 ) -> Result<BTreeMap<String, BTreeMap<String, f64>>, StoreError> {
+    frame_time_noise_where(conn, run_id, &|_, _| true)
+}
+
+/// [`frame_time_noise`] of the series whose scenario and variant `wanted` accepts only: each
+/// series costs two queries, so a page that needs a few of a wide run's 1,700 asks for those.
+pub fn frame_time_noise_where(
+    conn: &mut dyn Connection,
+    run_id: &str,
+    wanted: &dyn Fn(&str, &str) -> bool,
+) -> Result<BTreeMap<String, BTreeMap<String, f64>>, StoreError> {
     let mut out: BTreeMap<String, BTreeMap<String, f64>> = BTreeMap::new();
     let Some(run) = conn.query_opt(
         "SELECT id, driver, driver_info, harness_version FROM runs WHERE run_id = $1",
@@ -41,6 +51,9 @@ pub fn frame_time_noise(
     let pk = run.i64(0)?;
     let env = (run.string(1)?, run.string(2)?, run.string(3)?);
     for s in series::of_run_with_measure(conn, pk, FRAME_TIME)? {
+        if !wanted(&s.scenario, &s.variant) {
+            continue;
+        }
         let mut values = Vec::new();
         for (value, run_env) in series::before_with_environment(conn, s.id, pk, NOISE_POINTS)? {
             if run_env != env {

@@ -3,7 +3,8 @@
 //! [`crate::server`]) or statistics (see [`crate::detect`]).
 
 use serde::Serialize;
-use tessera_results::{RunInfo, ScenarioResult};
+use tessera_results::stats::frame_samples;
+use tessera_results::{RunInfo, ScenarioResult, Status};
 
 pub(crate) use super::run_pk;
 use super::series::{self, series_key, SERIES_COLUMNS};
@@ -133,16 +134,7 @@ pub struct RunDetail {
 }
 
 pub fn run(conn: &mut dyn Connection, run_id: &str) -> Result<RunDetail, StoreError> {
-    let pk = run_pk(conn, run_id)?;
-    let row = conn.query(
-        &format!(
-            "SELECT {RUN_COLUMNS}, r.run_json FROM runs r JOIN adapters a ON a.id = r.adapter_id WHERE r.id = $1"
-        ),
-        &[Value::Int(pk)],
-    )?;
-    let run = run_row(&row[0])?;
-    let info: RunInfo =
-        serde_json::from_str(row[0].str(16)?).map_err(|e| StoreError::Corrupt(e.to_string()))?;
+    let RunHead { pk, run, info } = run_head(conn, run_id)?;
     let scenarios = scenarios_of(conn, pk)?;
     let images = images_of(conn, pk, None)?;
     let series = super::series::links_of_run(conn, pk)?;
@@ -153,6 +145,102 @@ pub fn run(conn: &mut dyn Connection, run_id: &str) -> Result<RunDetail, StoreEr
         images,
         series,
     })
+}
+
+/// A run's row and record, without its scenarios: what a page says above them.
+pub struct RunHead {
+    pub pk: i64,
+    pub run: RunRow,
+    pub info: RunInfo,
+}
+
+pub fn run_head(conn: &mut dyn Connection, run_id: &str) -> Result<RunHead, StoreError> {
+    let pk = run_pk(conn, run_id)?;
+    let row = conn.query(
+        &format!(
+            "SELECT {RUN_COLUMNS}, r.run_json FROM runs r JOIN adapters a ON a.id = r.adapter_id WHERE r.id = $1"
+        ),
+        &[Value::Int(pk)],
+    )?;
+    let run = run_row(&row[0])?;
+    let info: RunInfo =
+        serde_json::from_str(row[0].str(16)?).map_err(|e| StoreError::Corrupt(e.to_string()))?;
+    Ok(RunHead { pk, run, info })
+}
+
+/// What a run's summary reads of one variant: its status and its per-frame GPU times (the
+/// samples `tessera compare` tests; `None` without timestamps).
+#[derive(Clone, Debug, PartialEq)]
+pub struct VariantLine {
+    pub variant: String,
+    pub status: Status,
+    pub frames: Option<Vec<f64>>,
+}
+
+/// One scenario's variants as summary lines, in the run's order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ScenarioLines {
+    pub scenario: String,
+    pub variants: Vec<VariantLine>,
+}
+
+impl ScenarioLines {
+    pub fn of(s: &ScenarioResult) -> Self {
+        ScenarioLines {
+            scenario: s.scenario.clone(),
+            variants: s
+                .results
+                .iter()
+                .map(|v| VariantLine {
+                    variant: v.variant.clone(),
+                    status: v.status.clone(),
+                    frames: frame_samples(v),
+                })
+                .collect(),
+        }
+    }
+}
+
+/// Run `pk`'s scenarios as summary lines, by scenario name, read from its `results` rows: no
+/// scenario record is decoded, so a run of 1,700 results reads in milliseconds. A run stored
+/// before the rows kept their frame times (`frame_ms` NULL) is read from its records.
+pub fn lines(conn: &mut dyn Connection, pk: i64) -> Result<Vec<ScenarioLines>, StoreError> {
+    let rows = conn.query(
+        "SELECT scenario, variant, status, reason, frame_ms FROM results WHERE run_pk = $1
+         ORDER BY scenario, id",
+        &[Value::Int(pk)],
+    )?;
+    let mut out: Vec<ScenarioLines> = Vec::new();
+    for r in &rows {
+        let Some(frames) = r.opt_blob(4)? else {
+            return Ok(scenarios_of(conn, pk)?
+                .iter()
+                .map(ScenarioLines::of)
+                .collect());
+        };
+        let frames = super::records::decode_frames(frames)?;
+        let reason = r.opt_string(3)?.unwrap_or_default();
+        let status = match r.str(2)? {
+            "ok" => Status::Ok,
+            "skipped" => Status::Skipped { reason },
+            "failed" => Status::Failed { error: reason },
+            other => return Err(StoreError::Corrupt(format!("result status {other:?}"))),
+        };
+        let line = VariantLine {
+            variant: r.string(1)?,
+            status,
+            frames: (!frames.is_empty()).then_some(frames),
+        };
+        let scenario = r.str(0)?;
+        match out.last_mut() {
+            Some(s) if s.scenario == scenario => s.variants.push(line),
+            _ => out.push(ScenarioLines {
+                scenario: scenario.to_string(),
+                variants: vec![line],
+            }),
+        }
+    }
+    Ok(out)
 }
 
 pub(crate) fn scenarios_of(

@@ -46,6 +46,25 @@ pub fn decode(r: &Row, at: usize) -> Result<ScenarioResult, StoreError> {
     serde_json::from_str(&text(r, at)?).map_err(|e| StoreError::Corrupt(e.to_string()))
 }
 
+/// Per-frame GPU times as `results.frame_ms` stores them: little-endian f64s, in frame order.
+pub fn encode_frames(frames: &[f64]) -> Vec<u8> {
+    frames.iter().flat_map(|f| f.to_le_bytes()).collect()
+}
+
+/// The per-frame GPU times of a `results.frame_ms` value.
+pub fn decode_frames(bytes: &[u8]) -> Result<Vec<f64>, StoreError> {
+    if !bytes.len().is_multiple_of(8) {
+        return Err(StoreError::Corrupt(format!(
+            "frame times of {} bytes, not a whole number of f64s",
+            bytes.len()
+        )));
+    }
+    Ok(bytes
+        .chunks_exact(8)
+        .map(|c| f64::from_le_bytes(c.try_into().expect("8 bytes")))
+        .collect())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -68,5 +87,18 @@ mod tests {
             .read_to_string(&mut back)
             .unwrap();
         assert_eq!(back, compact);
+    }
+
+    #[test]
+    fn frame_times_read_back_exactly_and_a_torn_value_is_corrupt() {
+        let frames = [1.25, 0.1 + 0.2, f64::MIN_POSITIVE, 1.0 / 3.0];
+        let bytes = encode_frames(&frames);
+        assert_eq!(bytes.len(), 32);
+        assert_eq!(decode_frames(&bytes).unwrap(), frames);
+        assert!(decode_frames(&[]).unwrap().is_empty());
+        assert!(matches!(
+            decode_frames(&bytes[..31]),
+            Err(StoreError::Corrupt(_))
+        ));
     }
 }
