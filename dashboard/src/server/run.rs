@@ -529,9 +529,14 @@ fn is_inline(r: &RunRow) -> bool {
 
 /// One scenario of a large run on its own page: a link back to the summary, the previous and
 /// next scenarios, and the scenario's detail as the run page shows it for a small run.
-pub fn render_scenario(d: &RunDetail, prev: Option<&Previous>, scenario: &str) -> String {
+pub fn render_scenario(
+    d: &RunDetail,
+    names: &[String],
+    prev: Option<&Previous>,
+    scenario: &str,
+) -> String {
     let r = &d.run;
-    let names: Vec<&str> = d.scenarios.iter().map(|s| s.scenario.as_str()).collect();
+    let names: Vec<&str> = names.iter().map(String::as_str).collect();
     let at = names.iter().position(|n| *n == scenario);
     let link = |n: &str, word: &str| {
         format!(
@@ -677,22 +682,21 @@ pub async fn scenario_page(
     Path((run_id, scenario)): Path<(String, String)>,
 ) -> Result<Html<String>, AppError> {
     let wanted = scenario.clone();
-    let (d, prev) = state
+    let (d, names, prev) = state
         .db(move |c| {
-            let d = read::run(c, &run_id)?;
-            if !d.scenarios.iter().any(|s| s.scenario == scenario) {
+            let Some((d, names)) = read::run_scenario(c, &run_id, &scenario)? else {
                 return Err(AppError::NotFound(format!(
                     "run {run_id} has no scenario {scenario:?}"
                 )));
-            }
+            };
             // The detail shows this scenario's noise in its vs-prev cells.
             let prev = previous(c, &run_id, &|s, _, _| s == scenario)?;
-            Ok((d, prev))
+            Ok((d, names, prev))
         })
         .await?;
     Ok(Html(layout(
         &format!("Run {} · {}", d.run.run_id, wanted),
         "runs",
-        &render_scenario(&d, prev.as_ref(), &wanted),
+        &render_scenario(&d, &names, prev.as_ref(), &wanted),
     )))
 }

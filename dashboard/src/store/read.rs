@@ -147,6 +147,36 @@ pub fn run(conn: &mut dyn Connection, run_id: &str) -> Result<RunDetail, StoreEr
     })
 }
 
+/// One scenario of a run as [`run`] reads the whole run (its record, images and series links),
+/// with the names of all the run's scenarios; no other record is decoded. `None` when the run
+/// has no such scenario.
+pub fn run_scenario(
+    conn: &mut dyn Connection,
+    run_id: &str,
+    scenario: &str,
+) -> Result<Option<(RunDetail, Vec<String>)>, StoreError> {
+    let RunHead { pk, run, info } = run_head(conn, run_id)?;
+    let names = conn
+        .query(
+            "SELECT scenario FROM scenario_results WHERE run_pk = $1 ORDER BY scenario",
+            &[Value::Int(pk)],
+        )?
+        .iter()
+        .map(|r| r.string(0).map_err(StoreError::from))
+        .collect::<Result<Vec<String>, _>>()?;
+    if !names.iter().any(|n| n == scenario) {
+        return Ok(None);
+    }
+    let detail = RunDetail {
+        run,
+        info,
+        scenarios: vec![scenario_result(conn, run_id, scenario)?],
+        images: images_of(conn, pk, Some(scenario))?,
+        series: super::series::links_of_run_in(conn, pk, Some(scenario))?,
+    };
+    Ok(Some((detail, names)))
+}
+
 /// A run's row and record, without its scenarios: what a page says above them.
 pub struct RunHead {
     pub pk: i64,

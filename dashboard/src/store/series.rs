@@ -257,10 +257,20 @@ pub struct SeriesLink {
 
 /// The series run `run_pk` has a point in, by scenario, variant and measure.
 pub fn links_of_run(conn: &mut dyn Connection, run_pk: i64) -> Result<Vec<SeriesLink>, StoreError> {
+    links_of_run_in(conn, run_pk, None)
+}
+
+/// [`links_of_run`], of one scenario only when `scenario` names it.
+pub fn links_of_run_in(
+    conn: &mut dyn Connection,
+    run_pk: i64,
+    scenario: Option<&str>,
+) -> Result<Vec<SeriesLink>, StoreError> {
     conn.query(
         "SELECT DISTINCT s.scenario, s.variant, s.measure, s.id FROM points p JOIN series s ON s.id = p.series_id
-         WHERE p.run_pk = $1 ORDER BY s.scenario, s.variant, s.measure",
-        &[Value::Int(run_pk)],
+         WHERE p.run_pk = $1 AND (CAST($2 AS TEXT) IS NULL OR s.scenario = $2)
+         ORDER BY s.scenario, s.variant, s.measure",
+        &[Value::Int(run_pk), scenario.into()],
     )?
     .iter()
     .map(|r| {
