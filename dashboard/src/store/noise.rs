@@ -55,7 +55,7 @@ pub fn frame_time_noise_where(
             continue;
         }
         let mut values = Vec::new();
-        for (value, run_env) in series::before_with_environment(conn, s.id, pk, NOISE_POINTS)? {
+        for (value, run_env) in series::before_with_environment(conn, &s, pk, NOISE_POINTS)? {
             if run_env != env {
                 break;
             }

@@ -277,16 +277,14 @@ pub(crate) fn scenarios_of(
     conn: &mut dyn Connection,
     pk: i64,
 ) -> Result<Vec<ScenarioResult>, StoreError> {
-    conn.query(
+    let rows = conn.query(
         &format!(
             "SELECT {} FROM scenario_results WHERE run_pk = $1 ORDER BY scenario",
             super::records::COLUMNS
         ),
         &[Value::Int(pk)],
-    )?
-    .iter()
-    .map(|r| super::records::decode(r, 0))
-    .collect()
+    )?;
+    super::records::decode_all(&rows, 0)
 }
 
 fn images_of(

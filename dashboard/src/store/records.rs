@@ -46,6 +46,36 @@ pub fn decode(r: &Row, at: usize) -> Result<ScenarioResult, StoreError> {
     serde_json::from_str(&text(r, at)?).map_err(|e| StoreError::Corrupt(e.to_string()))
 }
 
+/// Every row's record (columns [`COLUMNS`] from `at`), in row order. A nightly run holds
+/// hundreds of records of several megabytes of JSON in all, so they are inflated and parsed on
+/// as many threads as the machine has (at most 8), in contiguous chunks.
+pub fn decode_all(rows: &[Row], at: usize) -> Result<Vec<ScenarioResult>, StoreError> {
+    let threads = std::thread::available_parallelism()
+        .map_or(1, |n| n.get())
+        .min(8);
+    if threads < 2 || rows.len() < 16 {
+        return rows.iter().map(|r| decode(r, at)).collect();
+    }
+    let chunk = rows.len().div_ceil(threads);
+    std::thread::scope(|scope| {
+        let parts: Vec<_> = rows
+            .chunks(chunk)
+            .map(|part| {
+                scope.spawn(move || {
+                    part.iter()
+                        .map(|r| decode(r, at))
+                        .collect::<Result<Vec<_>, _>>()
+                })
+            })
+            .collect();
+        let mut out = Vec::with_capacity(rows.len());
+        for p in parts {
+            out.extend(p.join().expect("a record decoder panicked")?);
+        }
+        Ok(out)
+    })
+}
+
 /// Per-frame GPU times as `results.frame_ms` stores them: little-endian f64s, in frame order.
 pub fn encode_frames(frames: &[f64]) -> Vec<u8> {
     frames.iter().flat_map(|f| f.to_le_bytes()).collect()
@@ -87,6 +117,34 @@ mod tests {
             .read_to_string(&mut back)
             .unwrap();
         assert_eq!(back, compact);
+    }
+
+    #[test]
+    fn records_decoded_on_threads_keep_row_order_and_report_a_corrupt_one() {
+        let json =
+            include_str!("../../tests/fixtures/runs/20261122T030520Z-34ab2b4/scenarios/tiny.json");
+        let s: ScenarioResult = serde_json::from_str(json).unwrap();
+        let rows: Vec<Row> = (0..40)
+            .map(|i| {
+                let mut r = s.clone();
+                r.scenario = format!("s{i:02}");
+                let text = serde_json::to_string(&r).unwrap();
+                Row(vec![
+                    crate::db::Value::Text(String::new()),
+                    crate::db::Value::Blob(encode(&text)),
+                ])
+            })
+            .collect();
+        let back = decode_all(&rows, 0).unwrap();
+        let names: Vec<String> = back.iter().map(|r| r.scenario.clone()).collect();
+        let want: Vec<String> = (0..40).map(|i| format!("s{i:02}")).collect();
+        assert_eq!(names, want);
+        let mut torn = rows;
+        torn[33] = Row(vec![
+            crate::db::Value::Text(String::new()),
+            crate::db::Value::Blob(vec![1, 2, 3]),
+        ]);
+        assert!(matches!(decode_all(&torn, 0), Err(StoreError::Corrupt(_))));
     }
 
     #[test]

@@ -409,6 +409,8 @@ pub struct RunSeries {
     pub id: i64,
     pub scenario: String,
     pub variant: String,
+    /// The commit order of the run's point in the series.
+    pub ord: String,
 }
 
 /// The series of measure `measure` run `run_pk` has a point in, by id.
@@ -418,7 +420,7 @@ pub fn of_run_with_measure(
     measure: &str,
 ) -> Result<Vec<RunSeries>, StoreError> {
     conn.query(
-        "SELECT s.id, s.scenario, s.variant FROM points p JOIN series s ON s.id = p.series_id
+        "SELECT s.id, s.scenario, s.variant, p.ord FROM points p JOIN series s ON s.id = p.series_id
          WHERE p.run_pk = $1 AND s.measure = $2 ORDER BY s.id",
         &[Value::Int(run_pk), measure.into()],
     )?
@@ -428,6 +430,7 @@ pub fn of_run_with_measure(
             id: r.i64(0)?,
             scenario: r.string(1)?,
             variant: r.string(2)?,
+            ord: r.string(3)?,
         })
     })
     .collect()
@@ -436,32 +439,22 @@ pub fn of_run_with_measure(
 /// A run's environment as three parts: driver, driver version, harness version.
 pub type Environment = (String, String, String);
 
-/// Up to `limit` points of series `series` before run `run_pk`'s point, newest first, each with
-/// its run's environment.
+/// Up to `limit` points of series `s` before run `run_pk`'s point (`s.ord`, as
+/// [`of_run_with_measure`] read it), newest first, each with its run's environment.
 pub fn before_with_environment(
     conn: &mut dyn Connection,
-    series: i64,
+    s: &RunSeries,
     run_pk: i64,
     limit: i64,
 ) -> Result<Vec<(f64, Environment)>, StoreError> {
-    let Some(ord) = conn
-        .query_opt(
-            "SELECT ord FROM points WHERE series_id = $1 AND run_pk = $2",
-            &[Value::Int(series), Value::Int(run_pk)],
-        )?
-        .map(|r| r.string(0))
-        .transpose()?
-    else {
-        return Ok(Vec::new());
-    };
     conn.query(
         "SELECT p.value, r.driver, r.driver_info, r.harness_version
          FROM points p JOIN runs r ON r.id = p.run_pk
          WHERE p.series_id = $1 AND (p.ord < $2 OR (p.ord = $2 AND p.run_pk < $3))
          ORDER BY p.ord DESC, p.run_pk DESC LIMIT $4",
         &[
-            Value::Int(series),
-            ord.as_str().into(),
+            Value::Int(s.id),
+            s.ord.as_str().into(),
             Value::Int(run_pk),
             Value::Int(limit),
         ],
