@@ -16,6 +16,11 @@ use tessera_dashboard::{
     bundle::RunBundle, db, detect::Params, import, queue_cli, regressions, replay, server, synth,
 };
 
+/// The server decodes hundreds of scenario records per wide page on several threads; mimalloc
+/// keeps their many small allocations off glibc's shared arenas.
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 const DEFAULT_DB: &str = "tessera-dashboard.sqlite";
 
 #[derive(Parser)]
