@@ -625,7 +625,7 @@ mod tests {
 
     #[test]
     fn a_baseline_naming_a_variant_is_found_by_name_else_by_technique() {
-        use crate::compare::time::tests::result;
+        let result = VariantResult::timed;
         let (plain, motion, twox2) = (
             result("native", &[2.0]),
             result("native[motion_pass=true]", &[2.5]),
