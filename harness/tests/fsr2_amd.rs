@@ -2,24 +2,36 @@
 //! adapter (lavapipe in CI) through wgpu's SPIR-V passthrough: both run on the same inputs and
 //! their outputs are compared pixel by pixel. AMD's passes are compiled as
 //! `tests/fsr2_amd/README.md` says and bound as their pass files declare (samplers at set 0,
-//! resources and the std140 constant buffers at set 1, every declared binding bound). Proven so
-//! far: `lock` (the new locks of a thin-feature test over a luma image with ridges, valleys, flat
-//! regions and noise must be the same pixels, and both must clear the reconstructed previous
-//! depth), `rcas` (the sharpened colour of an HDR image with edges, peaks, flat and noisy
-//! regions at two sharpnesses, within one f16 step) and `depth_clip` (the prepared colour and
-//! depth clip within one f16 step, the dilated reactive masks within one 8-bit step after the
-//! port's f32 is rounded as AMD's rg8 unorm store rounds, on a moving box that uncovers the
-//! background, a steep ground, swirling motion and HDR colour). Each test's tolerance is stated
-//! beside its assertion and in `techniques/fsr2/README.md`.
+//! resources and the std140 constant buffers at set 1, every declared binding bound, the gaps
+//! a pass file leaves in set 1 closed by unread textures: lavapipe 22.3 crashes on them).
+//! Proven so far, five of six: `lock` (the new locks of a thin-feature test over a luma image
+//! with ridges, valleys, flat regions and noise must be the same pixels, and both must clear the
+//! reconstructed previous depth), `rcas` (the sharpened colour of an HDR image with edges,
+//! peaks, flat and noisy regions at two sharpnesses, within one f16 step), `depth_clip` (the
+//! prepared colour and depth clip within one f16 step, the dilated reactive masks within one
+//! 8-bit step after the port's f32 is rounded as AMD's rg8 unorm store rounds, on a moving box
+//! that uncovers the background, a steep ground, swirling motion and HDR colour),
+//! `reconstruct` (dilated depth, dilated motion and lock luma within one f16 step, the
+//! reconstructed previous depth bit for bit, on a moving box, a thin pole moving below AMD's
+//! threshold, a ground reprojecting off the screen and noisy HDR colour) and `accumulate` (the
+//! accumulated colour and temporal reactive factor and the lock status within one f16 step, the
+//! luma history within one 8-bit step, on a moving box with its uncovered trail, locks on a
+//! thin line, shading change, luma instability, new samples at the edge and mask patches).
+//! Each test's tolerance is stated beside its assertion and in `techniques/fsr2/README.md`.
 
 mod common;
 
 use tessera::render::kit::{bind_group, compute_pipeline};
-use tessera::techniques::fsr2::gpu::{module, DEPTH_CLIP_WGSL, LOCK_WGSL, RCAS_WGSL};
+use tessera::techniques::fsr2::gpu::{
+    module, ACCUMULATE_WGSL, DEPTH_CLIP_WGSL, LOCK_WGSL, RCAS_WGSL, RECONSTRUCT_WGSL,
+};
 
 static LOCK_SPV: &[u8] = include_bytes!("fsr2_amd/ffx_fsr2_lock_pass.spv");
 static RCAS_SPV: &[u8] = include_bytes!("fsr2_amd/ffx_fsr2_rcas_pass.spv");
 static DEPTH_CLIP_SPV: &[u8] = include_bytes!("fsr2_amd/ffx_fsr2_depth_clip_pass.spv");
+static RECONSTRUCT_SPV: &[u8] =
+    include_bytes!("fsr2_amd/ffx_fsr2_reconstruct_previous_depth_pass.spv");
+static ACCUMULATE_SPV: &[u8] = include_bytes!("fsr2_amd/ffx_fsr2_accumulate_pass.spv");
 const RENDER: (u32, u32) = (40, 30);
 const DISPLAY: (u32, u32) = (60, 45);
 const JITTER: [f32; 2] = [0.3125, -0.2222];
@@ -336,10 +348,6 @@ fn amd_pass(
     workgroup: (u32, u32, u32),
     bindings: &[(u32, Amd)],
 ) -> Pass {
-    let words: Vec<u32> = spv
-        .chunks_exact(4)
-        .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
-        .collect();
     let module = unsafe {
         device.create_shader_module_passthrough(wgpu::ShaderModuleDescriptorPassthrough {
             label: Some(label),
@@ -347,7 +355,7 @@ fn amd_pass(
                 name: "main".into(),
                 workgroup_size: workgroup,
             }]),
-            spirv: Some(std::borrow::Cow::Owned(words)),
+            spirv: Some(std::borrow::Cow::Owned(words(spv))),
             ..Default::default()
         })
     };
@@ -1030,4 +1038,822 @@ fn depth_clip_equals_amds_compiled_glsl() {
         reactive_d.over, 0,
         "reactive masks differ beyond one 8-bit step: {reactive_d:?}"
     );
+}
+
+/// A `Depth32Float` texture holding `depths` (one per texel, rows unpadded): WebGPU cannot copy
+/// into a depth texture, so a full-screen pass writes `frag_depth` from a storage buffer.
+fn depth_texture(device: &wgpu::Device, queue: &wgpu::Queue, depths: &[f32]) -> wgpu::Texture {
+    const WGSL: &str = r#"
+@group(0) @binding(0) var<storage, read> depths: array<f32>;
+@group(0) @binding(1) var<uniform> width: vec4<u32>;
+@vertex
+fn vs(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
+    let uv = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
+    return vec4<f32>(uv * 2.0 - 1.0, 0.0, 1.0);
+}
+@fragment
+fn fs(@builtin(position) p: vec4<f32>) -> @builtin(frag_depth) f32 {
+    let q = vec2<u32>(p.xy);
+    return depths[q.y * width.x + q.x];
+}
+"#;
+    let format = wgpu::TextureFormat::Depth32Float;
+    let t = texture(
+        device,
+        RENDER,
+        format,
+        wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::RENDER_ATTACHMENT,
+    );
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("depth writer"),
+        source: wgpu::ShaderSource::Wgsl(WGSL.into()),
+    });
+    let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some("depth writer"),
+        layout: None,
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some("vs"),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        fragment: Some(wgpu::FragmentState {
+            module: &module,
+            entry_point: Some("fs"),
+            compilation_options: Default::default(),
+            targets: &[],
+        }),
+        primitive: Default::default(),
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::Always),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }),
+        multisample: Default::default(),
+        multiview_mask: None,
+        cache: None,
+    });
+    let values = storage_buffer(device, queue, bytemuck::cast_slice(depths));
+    let width = uniform(device, queue, bytemuck::cast_slice(&[RENDER.0, 0, 0, 0]));
+    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: None,
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &[
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: values.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: width.as_entire_binding(),
+            },
+        ],
+    });
+    let v = view(&t);
+    let mut enc = device.create_command_encoder(&Default::default());
+    {
+        let mut rp = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("depth writer"),
+            color_attachments: &[],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &v,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(0.0),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            ..Default::default()
+        });
+        rp.set_pipeline(&pipeline);
+        rp.set_bind_group(0, &group, &[]);
+        rp.draw(0..3, 0..1);
+    }
+    queue.submit([enc.finish()]);
+    t
+}
+
+/// Reconstruct's inputs at the render size: the engine's depth (reversed), motion (uv, current
+/// to previous) and colour (rgba16f, 4 values per pixel).
+struct ReconstructInputs {
+    depth: Vec<f32>,
+    motion: Vec<[f32; 2]>,
+    colour: Vec<half::f16>,
+}
+
+/// A far background (device depth about 0.02, with a little noise: the nearest of nine is not
+/// always the centre) panning by a fraction of a pixel; a box (0.3) moving left by 10.3 render
+/// pixels and down by 0.4; a one-pixel pole (0.5) at x = 30 moving by less than AMD's 0.1
+/// display-pixel threshold (its reconstruction stays in place); a ground (rows 22 and down)
+/// nearer row by row whose motion grows with the row, its last rows reprojecting below the
+/// image (taps off the screen). Noisy HDR colour with negatives, as depth clip's.
+fn reconstruct_inputs() -> ReconstructInputs {
+    let (w, h) = RENDER;
+    let mut inputs = ReconstructInputs {
+        depth: vec![],
+        motion: vec![],
+        colour: vec![],
+    };
+    for i in 0..w * h {
+        let (x, y) = (i % w, i / w);
+        let in_box = (12..24).contains(&x) && (8..20).contains(&y);
+        let pole = x == 30 && y < 22;
+        let ground = y >= 22;
+        let (depth, motion) = if in_box {
+            (0.3, [-10.3 / w as f32, 0.4 / h as f32])
+        } else if pole {
+            (0.5, [0.05 / DISPLAY.0 as f32, 0.0])
+        } else if ground {
+            (
+                0.05 + 0.02 * (y - 22) as f32,
+                [0.0013, 0.02 * (y - 21) as f32],
+            )
+        } else {
+            (0.02 + 0.002 * noise(i, 3), [0.0043, -0.0021])
+        };
+        inputs.depth.push(depth);
+        inputs.motion.push(motion);
+        let n = |k| noise(i, k);
+        let c = [4.0 * n(0), n(1), 0.5 * n(2) - 0.1, 1.0];
+        inputs.colour.extend(c.map(half::f16::from_f32));
+    }
+    inputs
+}
+
+#[test]
+fn reconstruct_equals_amds_compiled_glsl() {
+    let (device, queue) = device();
+    use wgpu::TextureFormat::{
+        R16Float, R32Float, R32Uint, Rg16Float, Rg32Float, Rgba16Float, Rgba8Unorm,
+    };
+    let (sampled, storage) = (
+        wgpu::TextureUsages::TEXTURE_BINDING,
+        wgpu::TextureUsages::STORAGE_BINDING,
+    );
+    let px = (RENDER.0 * RENDER.1) as usize;
+    let inp = reconstruct_inputs();
+    let tex = |format, bytes: &[u8], texel| {
+        texture_with(&device, &queue, RENDER, (format, sampled), bytes, texel)
+    };
+    let flat: Vec<f32> = inp.motion.iter().flatten().copied().collect();
+    // Shared by both sides: the engine's depth (Depth32Float, as the scene pass makes it),
+    // motion (rg32f) and colour (rgba16f); the exposure as in the RCAS test.
+    let depth = depth_texture(&device, &queue, &inp.depth);
+    let motion = tex(Rg32Float, bytemuck::cast_slice(&flat), 8);
+    let colour = tex(Rgba16Float, bytemuck::cast_slice(&inp.colour), 8);
+    let exposure = [0.7f32, -1.0];
+    // The reconstructed previous depth starts cleared (the lock pass of the frame before).
+    let cleared = vec![0u8; px * 4];
+
+    // AMD's pass, its every binding (ffx_fsr2_reconstruct_previous_depth_pass.glsl): the
+    // exposure as the 1x1 rg32f auto exposure AMD binds as its input exposure; the luma history
+    // (read and write) and prepared colour declared by the pass file but unused by this pass.
+    let amd_exposure = texture_with(
+        &device,
+        &queue,
+        (1, 1),
+        (Rg32Float, sampled),
+        bytemuck::cast_slice(&exposure),
+        8,
+    );
+    let unread = tex(R32Float, &cleared, 4);
+    let amd_reconstructed = texture_with(&device, &queue, RENDER, (R32Uint, storage), &cleared, 4);
+    let amd_motion = texture(&device, RENDER, Rg16Float, storage);
+    let amd_depth = texture(&device, RENDER, R16Float, storage);
+    let amd_prepared = texture(&device, RENDER, Rgba16Float, storage);
+    let amd_luma_history = texture(&device, RENDER, Rgba8Unorm, storage);
+    let amd_luma = texture(&device, RENDER, R16Float, storage);
+    let cb = uniform(&device, &queue, &amd_constants(RENDER, DISPLAY));
+    let v = [
+        &motion,
+        &depth,
+        &colour,
+        &amd_exposure,
+        &unread,
+        &amd_reconstructed,
+        &amd_motion,
+        &amd_depth,
+        &amd_prepared,
+        &amd_luma_history,
+        &amd_luma,
+    ]
+    .map(view);
+    let amd = amd_pass(
+        &device,
+        "ffx_fsr2_reconstruct_previous_depth_pass",
+        RECONSTRUCT_SPV,
+        (8, 8, 1),
+        &[
+            (0, Amd::Texture(&v[0])),
+            (1, Amd::Texture(&v[1])),
+            (2, Amd::Texture(&v[2])),
+            (3, Amd::Texture(&v[3])),
+            (4, Amd::Texture(&v[4])),
+            (5, Amd::Image(&v[5], R32Uint)),
+            (6, Amd::Image(&v[6], Rg16Float)),
+            (7, Amd::Image(&v[7], R16Float)),
+            (8, Amd::Image(&v[8], Rgba16Float)),
+            (9, Amd::Image(&v[9], Rgba8Unorm)),
+            // Declared by the pass file (FSR2_BIND_UAV_LUMA_INSTABILITY) but by no binding in
+            // the callbacks: a gap at 10 crashes lavapipe 22.3's vkCreateComputePipelines, as
+            // depth clip's at 11 did; an unread texture here closes it.
+            (10, Amd::Texture(&v[4])),
+            (11, Amd::Image(&v[10], R16Float)),
+            (12, Amd::Uniform(&cb)),
+        ],
+    );
+
+    // The port: f32 outputs, the reconstructed depth in a storage buffer.
+    let port_exposure = storage_buffer(&device, &queue, bytemuck::cast_slice(&exposure));
+    let port_reconstructed = storage_buffer(&device, &queue, &cleared);
+    let port_depth = texture(&device, RENDER, R32Float, storage);
+    let port_motion = texture(&device, RENDER, Rg32Float, storage);
+    let port_luma = texture(&device, RENDER, R32Float, storage);
+    let params = uniform(&device, &queue, &port_params(RENDER, DISPLAY));
+    let port = port_pass(
+        &device,
+        RECONSTRUCT_WGSL,
+        "reconstruct",
+        &[(0, &params), (4, &port_exposure), (8, &port_reconstructed)],
+        &[
+            (1, &v[1]),
+            (2, &v[0]),
+            (3, &v[2]),
+            (5, &view(&port_depth)),
+            (6, &view(&port_motion)),
+            (7, &view(&port_luma)),
+        ],
+    );
+    let groups = (RENDER.0.div_ceil(8), RENDER.1.div_ceil(8));
+    dispatch(&device, &queue, &[(&amd, groups), (&port, groups)]);
+
+    let halves = |t: &wgpu::Texture, texel| -> Vec<f32> {
+        bytemuck::cast_slice::<u8, half::f16>(&read(&device, &queue, t, texel))
+            .iter()
+            .map(|v| v.to_f32())
+            .collect()
+    };
+    // Dilated depth and motion, lock luma: AMD's r16f and rg16f, the port's f32 rounded to f16
+    // as AMD's store rounds.
+    let floats = |t: &wgpu::Texture, texel| -> Vec<f32> {
+        bytemuck::cast_slice::<u8, f32>(&read(&device, &queue, t, texel))
+            .iter()
+            .map(|v| f16_round(*v))
+            .collect()
+    };
+    let depth_d = diff(&halves(&amd_depth, 2), &floats(&port_depth, 4), f16_step);
+    let (amd_m, port_m) = (halves(&amd_motion, 4), floats(&port_motion, 8));
+    let motion_d = diff(&amd_m, &port_m, f16_step);
+    let (amd_l, port_l) = (halves(&amd_luma, 2), floats(&port_luma, 4));
+    let luma_d = diff(&amd_l, &port_l, f16_step);
+    // The reconstructed previous depth: the same f32 bits pushed by the same atomic max.
+    let amd_r: Vec<u32> =
+        bytemuck::cast_slice(&read(&device, &queue, &amd_reconstructed, 4)).to_vec();
+    let port_r: Vec<u32> =
+        bytemuck::cast_slice(&read_storage(&device, &queue, &port_reconstructed)).to_vec();
+    let reconstructed = amd_r.iter().filter(|v| **v != 0).count();
+    let differ: Vec<(u32, u32)> = (0..px)
+        .filter(|&i| amd_r[i] != port_r[i])
+        .map(|i| (i as u32 % RENDER.0, i as u32 / RENDER.0))
+        .collect();
+    let dilated = inp
+        .depth
+        .iter()
+        .zip(halves(&amd_depth, 2))
+        .filter(|(d, a)| (f16_round(**d) - a).abs() > 1e-6)
+        .count();
+    let moved = (0..px)
+        .filter(|&i| (f16_round(inp.motion[i][0]) - amd_m[2 * i]).abs() > 1e-6)
+        .count();
+    eprintln!(
+        "reconstruct: AMD dilates {dilated} of {px} depths and {moved} motions, reconstructs {reconstructed} previous depths; dilated depth {depth_d:?}, motion {motion_d:?}, lock luma {luma_d:?} (AMD {}, port {}); reconstructed depths differ at {} pixels {:?}",
+        amd_l[luma_d.at], port_l[luma_d.at], differ.len(), &differ[..differ.len().min(12)]
+    );
+    assert!(
+        dilated > 50 && moved > 50 && reconstructed > px / 2 && reconstructed < px,
+        "the inputs exercise too little: {dilated} dilated, {moved} moved, {reconstructed} reconstructed"
+    );
+    // One f16 step: AMD stores f16 (r16f, rg16f), the port f32 of the same arithmetic; the
+    // test rounds the port's to nearest where lavapipe's store may round the other way (about
+    // half the values one step apart).
+    assert_eq!(depth_d.over, 0, "dilated depth differs: {depth_d:?}");
+    assert_eq!(motion_d.over, 0, "dilated motion differs: {motion_d:?}");
+    assert_eq!(luma_d.over, 0, "lock luma differs: {luma_d:?}");
+    // Exact: both push the input depth's f32 bits.
+    assert!(
+        differ.is_empty(),
+        "reconstructed depths differ at {differ:?}"
+    );
+}
+
+/// Accumulate's sizes: the shading-change mip (level 4 of AMD's half-size luminance chain)
+/// needs a render size of 32 texels or more per mip texel: 4x3 here.
+const ACC_RENDER: (u32, u32) = (128, 96);
+const ACC_DISPLAY: (u32, u32) = (192, 144);
+/// The luminance chain's level AMD samples (FFX_FSR2_SHADING_CHANGE_MIP_LEVEL) and its size.
+const LUMA_LEVEL: u32 = 4;
+const LUMA_MIP: (u32, u32) = (ACC_RENDER.0 / 32, ACC_RENDER.1 / 32);
+/// The jitter phase count (`JitterSequenceLength`) and a frame index other than a reset.
+const PHASES: f32 = 18.0;
+const EXPOSURE: f32 = 0.7;
+
+/// AMD's `RGBToYCoCg` (ffx_fsr2_common.h).
+fn ycocg(c: [f32; 3]) -> [f32; 3] {
+    [
+        0.25 * c[0] + 0.5 * c[1] + 0.25 * c[2],
+        0.5 * c[0] - 0.5 * c[2],
+        -0.25 * c[0] + 0.5 * c[1] - 0.25 * c[2],
+    ]
+}
+
+/// Accumulate's inputs, stored as AMD stores them and read by both sides from the same
+/// textures: at the render size the prepared colour (YCoCg, depth clip in w; rgba16f), dilated
+/// motion (rg16f) and reactive masks (rg8 unorm values, as bytes); the shading-change mip (r16f log
+/// luma); at the display size the history (linear rgb and the signed temporal reactive factor;
+/// rgba16f), lock status (lifetime, temporal luma; rg16f), luma history (rgba8 unorm values,
+/// as bytes) and new locks (r8 unorm, as bytes).
+struct AccumulateInputs {
+    prepared: Vec<half::f16>,
+    motion: Vec<half::f16>,
+    reactive: Vec<u8>,
+    luma_mip: Vec<half::f16>,
+    history: Vec<half::f16>,
+    lock_status: Vec<half::f16>,
+    luma_history: Vec<u8>,
+    new_locks: Vec<u8>,
+}
+
+/// The scene, in render-size uv: shaded background with a vertical step edge at u = 0.3, a
+/// one-pixel bright line at render column 90 (thin feature: new locks), noise at the right; a
+/// box (u 0.25-0.45, v 0.2-0.5) moving left 9.6 display pixels a frame (in motion: negative
+/// temporal reactive factors), its trail uncovered (depth clip 0.3-1), the background panning
+/// by 0.38 display pixels, a still patch, the left 6% moving off the screen (new samples), and
+/// patches of reactive and accumulation masks.
+fn accumulate_inputs() -> AccumulateInputs {
+    let h16 = half::f16::from_f32;
+    let colour = |u: f32, v: f32, k: u32| -> [f32; 3] {
+        let mut c = [
+            0.3 + 0.2 * (u * 9.0).sin(),
+            0.35 + 0.15 * (v * 7.0).cos(),
+            0.25 + 0.1 * ((u + v) * 5.0).sin(),
+        ];
+        if u > 0.3 {
+            c = [c[0] * 3.0, c[1] * 2.5, c[2] * 2.0];
+        }
+        if (0.25..0.45).contains(&u) && (0.2..0.5).contains(&v) {
+            c = [1.8, 0.4, 0.2];
+        }
+        if u > 0.8 {
+            for (j, x) in (0..).zip(c.iter_mut()) {
+                *x += 0.6 * noise(k, j);
+            }
+        }
+        c
+    };
+    let box_at = |u: f32, v: f32| (0.25..0.45).contains(&u) && (0.2..0.5).contains(&v);
+    let (rw, rh) = ACC_RENDER;
+    let mut inp = AccumulateInputs {
+        prepared: vec![],
+        motion: vec![],
+        reactive: vec![],
+        luma_mip: vec![],
+        history: vec![],
+        lock_status: vec![],
+        luma_history: vec![],
+        new_locks: vec![],
+    };
+    for i in 0..rw * rh {
+        let (x, y) = (i % rw, i / rw);
+        let (u, v) = ((x as f32 + 0.5) / rw as f32, (y as f32 + 0.5) / rh as f32);
+        let mut c = colour(u, v, i);
+        if x == 90 {
+            c = [2.5, 2.5, 2.2];
+        }
+        let p = ycocg(c.map(|x| (x * EXPOSURE).clamp(0.0, 65504.0)));
+        // Depth clip: the box's trail (uncovered this frame), weaker at its edges; a little
+        // below the lock threshold elsewhere in places.
+        let clip = if (0.45..0.5).contains(&u) && (0.2..0.5).contains(&v) {
+            0.3 + 0.7 * noise(i, 5)
+        } else if x % 17 == 3 && y % 13 == 5 {
+            0.05
+        } else {
+            0.0
+        };
+        inp.prepared.extend([p[0], p[1], p[2], clip].map(h16));
+        let m = if box_at(u, v) {
+            [-0.05, 0.0]
+        } else if u < 0.06 {
+            [-0.1, 0.002]
+        } else if (0.6..0.7).contains(&u) && (0.6..0.7).contains(&v) {
+            [0.0, 0.0]
+        } else {
+            [0.002, 0.001]
+        };
+        inp.motion.extend(m.map(h16));
+        let reactive = if (0.75..0.85).contains(&u) && (0.1..0.3).contains(&v) {
+            128
+        } else {
+            0
+        };
+        let accumulation = if (0.5..0.6).contains(&u) && (0.7..0.9).contains(&v) {
+            (200.0 * noise(i, 6)) as u8
+        } else {
+            0
+        };
+        inp.reactive.extend([reactive, accumulation]);
+    }
+    for i in 0..LUMA_MIP.0 * LUMA_MIP.1 {
+        // Log luma of the exposed scene's 32x32 blocks: one block brighter than the history's
+        // temporal luma below (shading change: locks killed there).
+        let l = if i == 5 {
+            0.9f32
+        } else {
+            0.25 + 0.05 * i as f32
+        };
+        inp.luma_mip.push(h16(l.ln()));
+    }
+    let (dw, dh) = ACC_DISPLAY;
+    for i in 0..dw * dh {
+        let (x, y) = (i % dw, i / dw);
+        let (u, v) = ((x as f32 + 0.5) / dw as f32, (y as f32 + 0.5) / dh as f32);
+        // The previous frame: the box 9.6 display pixels to the right, a little noise.
+        let mut c = colour(u - 0.002, v - 0.001, i);
+        if box_at(u - 0.05, v) {
+            c = [1.8, 0.4, 0.2];
+        } else if box_at(u, v) {
+            c = colour(u + 0.2, v, i);
+        }
+        if (x * 2 / 3) == 90 {
+            c = [2.4, 2.6, 2.1];
+        }
+        let n = |k| 0.05 * noise(i, k) - 0.025;
+        let reactive = if box_at(u - 0.05, v) {
+            -0.3
+        } else if x % 11 == 0 {
+            0.9
+        } else {
+            0.05 + 0.1 * noise(i, 7)
+        };
+        inp.history
+            .extend([c[0] + n(0), c[1] + n(1), c[2] + n(2), reactive].map(h16));
+        // Locks on the thin line and scattered; temporal luma near the mip's, lower in places.
+        let locked = (x * 2 / 3) == 90 || i % 23 == 0;
+        let lifetime = if locked {
+            1.5
+        } else if i % 7 == 0 {
+            0.6
+        } else {
+            0.0
+        };
+        let temporal = if i % 5 == 0 {
+            0.0
+        } else {
+            0.8 + 0.05 * noise(i, 8)
+        };
+        inp.lock_status.extend([lifetime, temporal].map(h16));
+        // Luma history: stable around 0.3 mostly, alternating in places (instability), the
+        // oldest unset in places.
+        let base = 70 + (30.0 * noise(i, 9)) as u8;
+        let hist = if i % 3 == 0 {
+            [base, base + 40, base, base + 40]
+        } else if i % 29 == 0 {
+            [base, base, base, 0]
+        } else {
+            [base, base + 1, base, base + 2]
+        };
+        inp.luma_history.extend(hist);
+        inp.new_locks.push(if (x * 2 / 3) == 90 || i % 41 == 0 {
+            255
+        } else {
+            0
+        });
+    }
+    inp
+}
+
+/// AMD's constants for accumulate: `amd_constants` at its sizes, a frame that is not a reset
+/// (`iFrameIndex` 5), the shading-change mip's size and level, the jitter phase count.
+fn amd_accumulate_constants() -> Vec<u8> {
+    let mut w = words(&amd_constants(ACC_RENDER, ACC_DISPLAY));
+    w[8] = LUMA_MIP.0; // iLumaMipDimensions at 32
+    w[9] = LUMA_MIP.1;
+    w[10] = LUMA_LEVEL; // iLumaMipLevelToUse
+    w[11] = 5; // iFrameIndex
+    w[27] = PHASES.to_bits(); // fJitterSequenceLength at 108
+    bytemuck::cast_slice(&w).to_vec()
+}
+
+/// The port's `Params` for accumulate: as `port_params`, with the phase count and the mip.
+fn port_accumulate_params() -> Vec<u8> {
+    let mut w = words(&port_params(ACC_RENDER, ACC_DISPLAY));
+    w[7] = PHASES.to_bits(); // jitter.w
+    w[16..20].copy_from_slice(&[LUMA_MIP.0, LUMA_MIP.1, LUMA_LEVEL, 0]); // luma
+    bytemuck::cast_slice(&w).to_vec()
+}
+
+/// Little-endian words of `bytes`.
+fn words(bytes: &[u8]) -> Vec<u32> {
+    bytes
+        .chunks_exact(4)
+        .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .collect()
+}
+
+#[test]
+fn accumulate_equals_amds_compiled_glsl() {
+    let (device, queue) = device();
+    use wgpu::TextureFormat::{
+        R16Float, R32Float, R8Unorm, Rg16Float, Rg32Float, Rgba16Float, Rgba8Unorm,
+    };
+    let (sampled, storage) = (
+        wgpu::TextureUsages::TEXTURE_BINDING,
+        wgpu::TextureUsages::STORAGE_BINDING,
+    );
+    let inp = accumulate_inputs();
+    let display_px = (ACC_DISPLAY.0 * ACC_DISPLAY.1) as usize;
+    let low = |format, bytes: &[u8], texel| {
+        texture_with(&device, &queue, ACC_RENDER, (format, sampled), bytes, texel)
+    };
+    let high = |format, bytes: &[u8], texel| {
+        texture_with(
+            &device,
+            &queue,
+            ACC_DISPLAY,
+            (format, sampled),
+            bytes,
+            texel,
+        )
+    };
+    // Shared by both sides, in AMD's formats (the port reads them with textureLoad), except the
+    // two 8-bit textures AMD reads through its linear sampler, the reactive masks (rg8 unorm)
+    // and the luma history (rgba8 unorm): they hold the same k/255 values in f16. Lavapipe
+    // filters 8-bit unorm textures with coarser weights than f16 ones: in AMD's formats, with
+    // the port's exact bilinear reads, 82 colour values and 112 lock statuses differed beyond
+    // one f16 step (max 0.049 and 0.0027) at the reactive patch's edges and where the luma
+    // history decides instability; the same values in f16 give none. That is the sampler's
+    // precision (D3D asks for 8 fractional bits), not the pass's code.
+    let prepared = low(Rgba16Float, bytemuck::cast_slice(&inp.prepared), 8);
+    let motion = low(Rg16Float, bytemuck::cast_slice(&inp.motion), 4);
+    let unorm_halves = |b: &[u8]| -> Vec<half::f16> {
+        b.iter()
+            .map(|v| half::f16::from_f32(f32::from(*v) / 255.0))
+            .collect()
+    };
+    let reactive = low(
+        Rg16Float,
+        bytemuck::cast_slice(&unorm_halves(&inp.reactive)),
+        4,
+    );
+    let history = high(Rgba16Float, bytemuck::cast_slice(&inp.history), 8);
+    let lock_status = high(Rg16Float, bytemuck::cast_slice(&inp.lock_status), 4);
+    let luma_history = high(
+        Rgba16Float,
+        bytemuck::cast_slice(&unorm_halves(&inp.luma_history)),
+        8,
+    );
+    let exposure = [EXPOSURE, -1.0];
+
+    // AMD's pass, its every binding (ffx_fsr2_accumulate_pass.glsl). The luminance chain: half
+    // the render size with every mip (ffx_fsr2.cpp), the mip at LUMA_LEVEL filled (the pass
+    // samples no other). The Lanczos and maximum-bias LUTs are declared but unread with
+    // FFX_FSR2_OPTION_UPSAMPLE_USE_LANCZOS_TYPE 2. New locks read and cleared in place.
+    let mips = device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("luminance chain"),
+        size: wgpu::Extent3d {
+            width: ACC_RENDER.0 / 2,
+            height: ACC_RENDER.1 / 2,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: LUMA_LEVEL + 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: R16Float,
+        usage: sampled | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    queue.write_texture(
+        wgpu::TexelCopyTextureInfo {
+            texture: &mips,
+            mip_level: LUMA_LEVEL,
+            origin: wgpu::Origin3d::ZERO,
+            aspect: wgpu::TextureAspect::All,
+        },
+        bytemuck::cast_slice(&inp.luma_mip),
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(LUMA_MIP.0 * 2),
+            rows_per_image: None,
+        },
+        wgpu::Extent3d {
+            width: LUMA_MIP.0,
+            height: LUMA_MIP.1,
+            depth_or_array_layers: 1,
+        },
+    );
+    let amd_exposure = texture_with(
+        &device,
+        &queue,
+        (1, 1),
+        (Rg32Float, sampled),
+        bytemuck::cast_slice(&exposure),
+        8,
+    );
+    let unread = low(
+        R32Float,
+        &vec![0u8; (ACC_RENDER.0 * ACC_RENDER.1 * 4) as usize],
+        4,
+    );
+    let lut = low(
+        R16Float,
+        &vec![0u8; (ACC_RENDER.0 * ACC_RENDER.1 * 2) as usize],
+        2,
+    );
+    let amd_colour = texture(&device, ACC_DISPLAY, Rgba16Float, storage);
+    let amd_lock = texture(&device, ACC_DISPLAY, Rg16Float, storage);
+    let amd_output = texture(&device, ACC_DISPLAY, Rgba16Float, storage);
+    let amd_new_locks = texture_with(
+        &device,
+        &queue,
+        ACC_DISPLAY,
+        (R8Unorm, storage),
+        &inp.new_locks,
+        1,
+    );
+    let amd_luma = texture(&device, ACC_DISPLAY, Rgba8Unorm, storage);
+    let cb = uniform(&device, &queue, &amd_accumulate_constants());
+    let v = [
+        &amd_exposure,
+        &reactive,
+        &motion,
+        &history,
+        &lock_status,
+        &unread,
+        &prepared,
+        &lut,
+        &mips,
+        &luma_history,
+        &amd_colour,
+        &amd_lock,
+        &amd_output,
+        &amd_new_locks,
+        &amd_luma,
+    ]
+    .map(view);
+    let amd = amd_pass(
+        &device,
+        "ffx_fsr2_accumulate_pass",
+        ACCUMULATE_SPV,
+        (8, 8, 1),
+        &[
+            (0, Amd::Texture(&v[0])),
+            (1, Amd::Filtered(&v[1])),
+            (2, Amd::Texture(&v[2])),
+            (3, Amd::Texture(&v[3])),
+            (4, Amd::Filtered(&v[4])),
+            // FSR2_BIND_SRV_INPUT_DEPTH_CLIP and FSR2_BIND_SRV_LUMA_INSTABILITY: declared by the
+            // pass file, by no binding in the callbacks: the gaps closed as in depth clip.
+            (5, Amd::Texture(&v[5])),
+            (6, Amd::Filtered(&v[6])),
+            (7, Amd::Texture(&v[5])),
+            (8, Amd::Filtered(&v[7])),
+            (9, Amd::Filtered(&v[7])),
+            (10, Amd::Filtered(&v[8])),
+            (11, Amd::Texture(&v[0])),
+            (12, Amd::Filtered(&v[9])),
+            (13, Amd::Image(&v[10], Rgba16Float)),
+            (14, Amd::Image(&v[11], Rg16Float)),
+            (15, Amd::Image(&v[12], Rgba16Float)),
+            (16, Amd::Image(&v[13], R8Unorm)),
+            (17, Amd::Image(&v[14], Rgba8Unorm)),
+            (18, Amd::Uniform(&cb)),
+        ],
+    );
+
+    // The port: the mip as its own texture, new locks as f32 in a storage buffer, its
+    // outputs rgba16f.
+    let port_mip = texture_with(
+        &device,
+        &queue,
+        LUMA_MIP,
+        (R16Float, sampled),
+        bytemuck::cast_slice(&inp.luma_mip),
+        2,
+    );
+    let locks: Vec<f32> = inp
+        .new_locks
+        .iter()
+        .map(|b| f32::from(*b) / 255.0)
+        .collect();
+    let port_new_locks = storage_buffer(&device, &queue, bytemuck::cast_slice(&locks));
+    let port_exposure = storage_buffer(&device, &queue, bytemuck::cast_slice(&exposure));
+    let port_colour = texture(&device, ACC_DISPLAY, Rgba16Float, storage);
+    let port_lock = texture(&device, ACC_DISPLAY, Rgba16Float, storage);
+    let port_luma = texture(&device, ACC_DISPLAY, Rgba16Float, storage);
+    let params = uniform(&device, &queue, &port_accumulate_params());
+    let port = port_pass(
+        &device,
+        ACCUMULATE_WGSL,
+        "accumulate",
+        &[(0, &params), (8, &port_exposure), (9, &port_new_locks)],
+        &[
+            (1, &v[6]),
+            (2, &v[2]),
+            (3, &v[1]),
+            (4, &v[3]),
+            (5, &v[4]),
+            (6, &v[9]),
+            (7, &view(&port_mip)),
+            (10, &view(&port_colour)),
+            (11, &view(&port_lock)),
+            (12, &view(&port_luma)),
+        ],
+    );
+    let groups = (ACC_DISPLAY.0.div_ceil(8), ACC_DISPLAY.1.div_ceil(8));
+    dispatch(&device, &queue, &[(&amd, groups), (&port, groups)]);
+
+    // The accumulated colour and temporal reactive factor: both rgba16f.
+    let (amd_c, port_c) = (
+        read_f16(&device, &queue, &amd_colour),
+        read_f16(&device, &queue, &port_colour),
+    );
+    let colour_d = diff(&amd_c, &port_c, f16_step);
+    // Lock status: AMD's rg16f, the port's rgba16f (its first two).
+    let amd_l: Vec<f32> =
+        bytemuck::cast_slice::<u8, half::f16>(&read(&device, &queue, &amd_lock, 4))
+            .iter()
+            .map(|v| v.to_f32())
+            .collect();
+    let port_l: Vec<f32> = read_f16(&device, &queue, &port_lock)
+        .chunks(4)
+        .flat_map(|c| c[..2].to_vec())
+        .collect();
+    let lock_d = diff(&amd_l, &port_l, f16_step);
+    // Luma history: AMD's rgba8 unorm, the port's rgba16f rounded to 8 bits as the store does.
+    let amd_h: Vec<f32> = read(&device, &queue, &amd_luma, 4)
+        .iter()
+        .map(|b| f32::from(*b) / 255.0)
+        .collect();
+    let port_h: Vec<f32> = read_f16(&device, &queue, &port_luma)
+        .iter()
+        .map(|v| (v.clamp(0.0, 1.0) * 255.0).round() / 255.0)
+        .collect();
+    let luma_d = diff(&amd_h, &port_h, |_| 1.0 / 255.0 + 1e-6);
+    // Both clear the new locks.
+    let amd_cleared = read(&device, &queue, &amd_new_locks, 1)
+        .iter()
+        .all(|b| *b == 0);
+    let port_cleared =
+        bytemuck::cast_slice::<u8, f32>(&read_storage(&device, &queue, &port_new_locks))
+            .iter()
+            .all(|v| *v == 0.0);
+
+    let history_in: Vec<f32> = inp.history.iter().map(|v| v.to_f32()).collect();
+    let changed = (0..display_px)
+        .filter(|&i| (0..3).any(|k| (amd_c[4 * i + k] - history_in[4 * i + k]).abs() > 0.01))
+        .count();
+    let locked = amd_l.iter().step_by(2).filter(|l| **l > 0.0).count();
+    let where_ = |d: &Diff, per: usize| {
+        (
+            (d.at / per) as u32 % ACC_DISPLAY.0,
+            (d.at / per) as u32 / ACC_DISPLAY.0,
+        )
+    };
+    eprintln!(
+        "accumulate: AMD's pass changes {changed} of {display_px} pixels' colour by more than 0.01, keeps {locked} locks; colour and reactive {colour_d:?} at {:?} (AMD {}, port {}); lock status {lock_d:?} at {:?} (AMD {}, port {}); luma history {luma_d:?} at {:?} (AMD {}, port {})",
+        where_(&colour_d, 4), amd_c[colour_d.at], port_c[colour_d.at],
+        where_(&lock_d, 2), amd_l[lock_d.at], port_l[lock_d.at],
+        where_(&luma_d, 4), amd_h[luma_d.at], port_h[luma_d.at],
+    );
+    let mut shown = 0;
+    for i in 0..amd_c.len() {
+        if (amd_c[i] - port_c[i]).abs() > f16_step(amd_c[i]) && shown < 20 {
+            shown += 1;
+            eprintln!(
+                "  colour {} differs at {:?}: AMD {}, port {}",
+                i % 4,
+                (
+                    (i / 4) as u32 % ACC_DISPLAY.0,
+                    (i / 4) as u32 / ACC_DISPLAY.0
+                ),
+                amd_c[i],
+                port_c[i]
+            );
+        }
+    }
+    assert!(
+        amd_cleared && port_cleared,
+        "new locks left: AMD {amd_cleared}, port {port_cleared}"
+    );
+    assert!(
+        changed > display_px / 4 && locked > 100,
+        "the inputs exercise too little: {changed} changed, {locked} locked"
+    );
+    // One f16 step (colour, reactive factor, lock status: both store f16 after the same f32
+    // arithmetic, which two compilers may round apart), one 8-bit step for the luma history
+    // (AMD's rgba8 store against the port's f16 rounded to 8 bits).
+    assert_eq!(colour_d.over, 0, "colour differs: {colour_d:?}");
+    assert_eq!(lock_d.over, 0, "lock status differs: {lock_d:?}");
+    assert_eq!(luma_d.over, 0, "luma history differs: {luma_d:?}");
 }

@@ -214,9 +214,13 @@ fn upsample_tap(u: Upsample, s: UpsampleSetup, row: i32, col: i32) -> Upsample {
     let rs = vec2<i32>(params.size.xy);
     let col_row = vec2<i32>(select(col, 3 - col, s.flip.x), select(row, 3 - row, s.flip.y));
     let pos = s.src_input + s.offset_tl + col_row;
-    let sample = load_clamped(prepared, pos, rs).xyz;
+    // AMD loads the tap unclamped (ClampLoad with a zero offset clamps nothing): off the screen
+    // it reads 0 (D3D12's out-of-bounds load, Vulkan's robust image access), which the
+    // rectification box takes in though the Lanczos weight is 0.
+    let on_screen_tap = is_on_screen(pos, rs);
+    let sample = select(vec3<f32>(0.0), load_clamped(prepared, pos, rs).xyz, on_screen_tap);
     let off = s.base_offset + vec2<f32>(s.offset_tl + col_row);
-    let on_screen = f32(is_on_screen(pos, rs));
+    let on_screen = f32(on_screen_tap);
     let biased = off * s.kernel_bias;
     let w = on_screen * lanczos2_approx_sq(dot(biased, biased));
     o.color += vec4<f32>(sample * w, w);
