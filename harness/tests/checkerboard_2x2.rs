@@ -116,122 +116,6 @@ fn color_texture(gpu: &Gpu, w: u32, h: u32, data: &[Vec4], storage: bool) -> wgp
     t
 }
 
-/// Depth32Float cannot be written from a buffer: a full-screen pass writes `frag_depth` from a
-/// storage buffer.
-fn depth_texture(gpu: &Gpu, w: u32, h: u32, data: &[f32]) -> wgpu::Texture {
-    use wgpu::util::DeviceExt;
-    const WGSL: &str = r#"
-@group(0) @binding(0) var<storage, read> depths: array<f32>;
-@group(0) @binding(1) var<uniform> width: vec4<u32>;
-@vertex
-fn vs(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
-    let uv = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
-    return vec4<f32>(uv * 2.0 - 1.0, 0.0, 1.0);
-}
-@fragment
-fn fs(@builtin(position) p: vec4<f32>) -> @builtin(frag_depth) f32 {
-    let q = vec2<u32>(p.xy);
-    return depths[q.y * width.x + q.x];
-}
-"#;
-    let device = &gpu.device;
-    let t = device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("synthetic depth"),
-        size: wgpu::Extent3d {
-            width: w,
-            height: h,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: DEPTH_FORMAT,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING
-            | wgpu::TextureUsages::RENDER_ATTACHMENT
-            | wgpu::TextureUsages::COPY_SRC,
-        view_formats: &[],
-    });
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("depth writer"),
-        source: wgpu::ShaderSource::Wgsl(WGSL.into()),
-    });
-    let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some("depth writer"),
-        layout: None,
-        vertex: wgpu::VertexState {
-            module: &module,
-            entry_point: Some("vs"),
-            compilation_options: Default::default(),
-            buffers: &[],
-        },
-        fragment: Some(wgpu::FragmentState {
-            module: &module,
-            entry_point: Some("fs"),
-            compilation_options: Default::default(),
-            targets: &[],
-        }),
-        primitive: Default::default(),
-        depth_stencil: Some(wgpu::DepthStencilState {
-            format: DEPTH_FORMAT,
-            depth_write_enabled: Some(true),
-            depth_compare: Some(wgpu::CompareFunction::Always),
-            stencil: Default::default(),
-            bias: Default::default(),
-        }),
-        multisample: Default::default(),
-        multiview_mask: None,
-        cache: None,
-    });
-    let depths = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("depths"),
-        contents: bytemuck::cast_slice(data),
-        usage: wgpu::BufferUsages::STORAGE,
-    });
-    let width = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("width"),
-        contents: bytemuck::cast_slice(&[w, 0, 0, 0]),
-        usage: wgpu::BufferUsages::UNIFORM,
-    });
-    let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("depth writer"),
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: depths.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: width.as_entire_binding(),
-            },
-        ],
-    });
-    let view = t.create_view(&Default::default());
-    let mut encoder = device.create_command_encoder(&Default::default());
-    {
-        let mut rp = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("depth writer"),
-            color_attachments: &[],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &view,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(0.0),
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: None,
-            }),
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
-        rp.set_pipeline(&pipeline);
-        rp.set_bind_group(0, &bind_group, &[]);
-        rp.draw(0..3, 0..1);
-    }
-    gpu.queue.submit([encoder.finish()]);
-    t
-}
-
 /// Random inputs exercising every branch: still, sub-threshold, moving and off-screen motion;
 /// coherent and incoherent motion history; depths on both sides of the blend limits.
 fn synthetic(w: u32, h: u32, seed: u64) -> [Vec<Vec4>; 4] {
@@ -313,8 +197,8 @@ fn synthetic_inputs_match_the_model_in_every_clamp_mode() {
             let t_hist = color_texture(&gpu, w, h, &history_color, false);
             let t_motion = color_texture(&gpu, w, h, &motion, false);
             let t_hmotion = color_texture(&gpu, w, h, &history_motion, false);
-            let t_depth = depth_texture(&gpu, w, h, &scene_depth);
-            let t_hdepth = depth_texture(&gpu, w, h, &history_depth);
+            let t_depth = common::depth_texture(&gpu.device, &gpu.queue, (w, h), &scene_depth);
+            let t_hdepth = common::depth_texture(&gpu.device, &gpu.queue, (w, h), &history_depth);
             let out = color_texture(&gpu, w, h, &vec![Vec4::ZERO; (w * h) as usize], true);
             let v = |t: &wgpu::Texture| t.create_view(&Default::default());
             let views = [

@@ -1040,101 +1040,6 @@ fn depth_clip_equals_amds_compiled_glsl() {
     );
 }
 
-/// A `Depth32Float` texture holding `depths` (one per texel, rows unpadded): WebGPU cannot copy
-/// into a depth texture, so a full-screen pass writes `frag_depth` from a storage buffer.
-fn depth_texture(device: &wgpu::Device, queue: &wgpu::Queue, depths: &[f32]) -> wgpu::Texture {
-    const WGSL: &str = r#"
-@group(0) @binding(0) var<storage, read> depths: array<f32>;
-@group(0) @binding(1) var<uniform> width: vec4<u32>;
-@vertex
-fn vs(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
-    let uv = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
-    return vec4<f32>(uv * 2.0 - 1.0, 0.0, 1.0);
-}
-@fragment
-fn fs(@builtin(position) p: vec4<f32>) -> @builtin(frag_depth) f32 {
-    let q = vec2<u32>(p.xy);
-    return depths[q.y * width.x + q.x];
-}
-"#;
-    let format = wgpu::TextureFormat::Depth32Float;
-    let t = texture(
-        device,
-        RENDER,
-        format,
-        wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::RENDER_ATTACHMENT,
-    );
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("depth writer"),
-        source: wgpu::ShaderSource::Wgsl(WGSL.into()),
-    });
-    let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some("depth writer"),
-        layout: None,
-        vertex: wgpu::VertexState {
-            module: &module,
-            entry_point: Some("vs"),
-            compilation_options: Default::default(),
-            buffers: &[],
-        },
-        fragment: Some(wgpu::FragmentState {
-            module: &module,
-            entry_point: Some("fs"),
-            compilation_options: Default::default(),
-            targets: &[],
-        }),
-        primitive: Default::default(),
-        depth_stencil: Some(wgpu::DepthStencilState {
-            format,
-            depth_write_enabled: Some(true),
-            depth_compare: Some(wgpu::CompareFunction::Always),
-            stencil: Default::default(),
-            bias: Default::default(),
-        }),
-        multisample: Default::default(),
-        multiview_mask: None,
-        cache: None,
-    });
-    let values = storage_buffer(device, queue, bytemuck::cast_slice(depths));
-    let width = uniform(device, queue, bytemuck::cast_slice(&[RENDER.0, 0, 0, 0]));
-    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: None,
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: values.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: width.as_entire_binding(),
-            },
-        ],
-    });
-    let v = view(&t);
-    let mut enc = device.create_command_encoder(&Default::default());
-    {
-        let mut rp = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("depth writer"),
-            color_attachments: &[],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &v,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(0.0),
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: None,
-            }),
-            ..Default::default()
-        });
-        rp.set_pipeline(&pipeline);
-        rp.set_bind_group(0, &group, &[]);
-        rp.draw(0..3, 0..1);
-    }
-    queue.submit([enc.finish()]);
-    t
-}
-
 /// Reconstruct's inputs at the render size: the engine's depth (reversed), motion (uv, current
 /// to previous) and colour (rgba16f, 4 values per pixel).
 struct ReconstructInputs {
@@ -1200,7 +1105,7 @@ fn reconstruct_equals_amds_compiled_glsl() {
     let flat: Vec<f32> = inp.motion.iter().flatten().copied().collect();
     // Shared by both sides: the engine's depth (Depth32Float, as the scene pass makes it),
     // motion (rg32f) and colour (rgba16f); the exposure as in the RCAS test.
-    let depth = depth_texture(&device, &queue, &inp.depth);
+    let depth = common::depth_texture(&device, &queue, RENDER, &inp.depth);
     let motion = tex(Rg32Float, bytemuck::cast_slice(&flat), 8);
     let colour = tex(Rgba16Float, bytemuck::cast_slice(&inp.colour), 8);
     let exposure = [0.7f32, -1.0];
