@@ -372,6 +372,20 @@ fn migrates_to_compact_storage(store: &common::TestStore) {
             &[Value::Int(series), Value::Int(run)],
         )
         .unwrap();
+        // A run stored later whose commit is older: commit order is not row order.
+        let early = id(
+            "INSERT INTO runs (run_id, dirty, started_at, status, harness_version, adapter_id, driver,
+                 driver_info, hostname, n_ok, n_skipped, n_failed, run_json, imported_at, commit_time)
+             VALUES ('old-early', 0, '2026-11-02T00:00:00Z', 'complete', '0.1.0', $1, 'llvmpipe', 'Mesa',
+                 'h', 1, 0, 0, $2, '2026-11-02T00:00:00Z', '2026-10-01T00:00:00Z') RETURNING id",
+            &[Value::Int(adapter), serde_json::to_string(&old.run).unwrap().into()],
+        );
+        c.execute(
+            "INSERT INTO points (series_id, run_pk, value, ord)
+             VALUES ($1, $2, 2.0, '2026-10-01T00:00:00Z 2026-11-02T00:00:00Z')",
+            &[Value::Int(series), Value::Int(early)],
+        )
+        .unwrap();
         c.execute(
             "INSERT INTO blobs (digest, bytes) VALUES ('d1', $1)",
             &[Value::Blob(vec![0])],
@@ -426,8 +440,33 @@ fn migrates_to_compact_storage(store: &common::TestStore) {
     // Old and new points of the series, in commit order.
     let pts = tessera_dashboard::store::series::points(&mut *c, series).unwrap();
     let runs: Vec<&str> = pts.iter().map(|p| p.run_id.as_str()).collect();
-    assert_eq!(runs, ["old-run", "new-run"]);
-    assert_eq!(pts[0].value, 2.5);
+    assert_eq!(runs, ["old-early", "old-run", "new-run"]);
+    assert_eq!(pts[0].value, 2.0);
+    assert_eq!(pts[1].value, 2.5);
+    // The order is stored as one integer per point (schema step 11), the old text converted.
+    let ords: Vec<i64> = c
+        .query(
+            "SELECT ord FROM points WHERE series_id = $1 ORDER BY ord",
+            &[Value::Int(series)],
+        )
+        .unwrap()
+        .iter()
+        .map(|r| r.i64(0).unwrap())
+        .collect();
+    let at = |t: &str| tessera_dashboard::store::ingest::epoch_seconds(t);
+    assert_eq!(
+        ords[..2],
+        [
+            tessera_dashboard::store::ingest::pack_order(
+                at("2026-10-01T00:00:00Z"),
+                at("2026-11-02T00:00:00Z")
+            ),
+            tessera_dashboard::store::ingest::pack_order(
+                at("2026-11-01T00:00:00Z"),
+                at("2026-11-01T00:00:00Z")
+            ),
+        ]
+    );
     // The same upload again is recognised as stored (its deflated record compared as text).
     assert!(matches!(
         ingest(&mut *c, &run).unwrap(),

@@ -1,15 +1,16 @@
 //! Schema migrations, one list for both backends: each step is SQL with `{id}`, `{real}` and
 //! `{blob}` standing for the column types that differ (and `{without_rowid}` for SQLite's
-//! clustered tables). Applied in order, each in a transaction,
+//! clustered tables), or, where a value must be computed that the two dialects cannot compute
+//! alike, code. Applied in order, each in a transaction,
 //! and recorded in `schema_migrations`. Never edit a released step; append a new one.
 //!
 //! Not for: queries (see [`crate::store`]). The tables are documented in `schema.md`.
 
 use super::{transaction, Backend, Connection, DbError, Value};
 
-const STEPS: &[&str] = &[
+const STEPS: &[Step] = &[
     // 1: the initial schema.
-    r#"
+    Sql(r#"
 CREATE TABLE adapters (
     id {id},
     name TEXT NOT NULL,
@@ -110,10 +111,10 @@ CREATE TABLE regressions (
     UNIQUE (series_id, run_pk_after)
 );
 CREATE INDEX regressions_state ON regressions (state, detected_at);
-"#,
+"#),
     // Online detection (issue 12): runs ordered by commit, points carrying that order so that the
     // newest points of a series are one covering index range, alerts with a status and a history.
-    r#"
+    Sql(r#"
 ALTER TABLE runs ADD COLUMN commit_time TEXT;
 ALTER TABLE points ADD COLUMN ord TEXT NOT NULL DEFAULT '';
 UPDATE points SET ord = (SELECT r.started_at || ' ' || r.started_at FROM runs r WHERE r.id = points.run_pk);
@@ -127,12 +128,12 @@ CREATE TABLE regression_events (
     detail TEXT NOT NULL
 );
 CREATE INDEX regression_events_alert ON regression_events (regression_id, id);
-"#,
+"#),
     // i12-triage: triage by alert group (a bug link and who changed an alert last, set on every
     // alert of a group at once) and the webhook's outbox (what was sent where, so that a restart
     // neither loses nor repeats a notification). `target` is a hash of the webhook URL, which
     // may hold a secret.
-    r#"
+    Sql(r#"
 ALTER TABLE regressions ADD COLUMN bug_url TEXT NOT NULL DEFAULT '';
 ALTER TABLE regressions ADD COLUMN updated_by TEXT NOT NULL DEFAULT '';
 CREATE INDEX regressions_runs ON regressions (run_pk_after, run_pk_before);
@@ -151,11 +152,11 @@ CREATE TABLE webhook_deliveries (
     sent_at TEXT,
     PRIMARY KEY (target, group_key)
 );
-"#,
+"#),
     // Suite and branch of each run (runs list filters, same-suite comparisons), the p5-p95 band
     // of each timed point (series charts), and regressions by the run they appeared in (the
     // runs list's alert marker).
-    r#"
+    Sql(r#"
 ALTER TABLE runs ADD COLUMN suite TEXT;
 ALTER TABLE runs ADD COLUMN branch TEXT;
 CREATE INDEX runs_suite ON runs (suite, adapter_id, started_at);
@@ -167,9 +168,9 @@ CREATE TABLE point_bands (
     PRIMARY KEY (series_id, run_pk)
 );
 CREATE INDEX regressions_after ON regressions (run_pk_after);
-"#,
+"#),
     // i12-write: named API tokens, stored as SHA-256 of the secret (see store/tokens.rs).
-    r#"
+    Sql(r#"
 CREATE TABLE api_tokens (
     id {id},
     name TEXT NOT NULL UNIQUE,
@@ -177,12 +178,12 @@ CREATE TABLE api_tokens (
     secret_sha256 TEXT NOT NULL UNIQUE,
     created_at TEXT NOT NULL
 );
-"#,
+"#),
     // i22: alert groups with an identity for life (old commit-range keys kept, so that links keep
     // answering), and where a change is apart from how sure it is: the interval of its size, the
     // probability of its split and its candidate range (`store/alerts.rs`). Candidates are run
     // ids without a foreign key: deleting a run shrinks a range that named it.
-    r#"
+    Sql(r#"
 CREATE TABLE alert_groups (
     id {id},
     created_at TEXT NOT NULL
@@ -201,12 +202,12 @@ ALTER TABLE regressions ADD COLUMN first_candidate BIGINT;
 ALTER TABLE regressions ADD COLUMN last_candidate BIGINT;
 CREATE INDEX regressions_group ON regressions (group_id);
 CREATE INDEX regressions_before ON regressions (run_pk_before);
-"#,
+"#),
     // i35: approved frames. Per scenario, variant, adapter class and frame, the digests people
     // judged (`positive`: approved, `negative`: a regression) and the run they judged them from;
     // per uploaded run, every frame's digest with its triage (`positive`, `negative`,
     // `untriaged`) and how it matched (`exact`, `none`). See store/frames.rs.
-    r#"
+    Sql(r#"
 CREATE TABLE approved_frames (
     id {id},
     scenario TEXT NOT NULL,
@@ -234,11 +235,11 @@ CREATE TABLE run_frames (
 );
 CREATE INDEX run_frames_triage ON run_frames (triage, run_pk);
 CREATE INDEX run_frames_digest ON run_frames (scenario, variant, adapter_class, frame, digest);
-"#,
+"#),
     // i34: the job queue (`store/queue.rs`): requests split into jobs per adapter-class label,
     // claimed with a lease (epoch milliseconds) kept alive by heartbeats; runners and the labels
     // they serve; bisections whose steps are A/B requests.
-    r#"
+    Sql(r#"
 CREATE TABLE runners (
     id {id},
     name TEXT NOT NULL UNIQUE,
@@ -303,13 +304,13 @@ CREATE TABLE queue_jobs (
 CREATE INDEX queue_jobs_claim ON queue_jobs (status, label, id);
 CREATE INDEX queue_jobs_request ON queue_jobs (request_id);
 CREATE INDEX queue_jobs_runner ON queue_jobs (runner_id, status);
-"#,
+"#),
     // i37: compact storage for a year of results. A scenario's record is stored deflated
     // (`record_z`, see store/records.rs; `record_json` stays for rows stored before, new rows
     // leave it empty) with its scenario file as a column; points become one B-tree keyed by
     // (series, commit order, run) holding the value (SQLite `WITHOUT ROWID`: the table, its
     // primary key and the covering `points_order` index were three copies), and so do images.
-    r#"
+    Sql(r#"
 ALTER TABLE scenario_results ADD COLUMN record_z {blob};
 ALTER TABLE scenario_results ADD COLUMN file TEXT;
 CREATE TABLE points_compact (
@@ -337,15 +338,63 @@ INSERT INTO images_compact (run_pk, scenario, variant, frame, kind, digest)
     SELECT run_pk, scenario, variant, frame, kind, digest FROM images;
 DROP TABLE images;
 ALTER TABLE images_compact RENAME TO images;
-"#,
+"#),
     // i37: a result's per-frame GPU times (each measured frame's sum over passes, the samples
     // `tessera compare` tests; little-endian f64s, store/records.rs) beside its row, so a run's
     // summary against the previous run reads rows instead of decoding every scenario record.
     // NULL in rows stored before: their readers decode the records.
-    r#"
+    Sql(r#"
 ALTER TABLE results ADD COLUMN frame_ms {blob};
-"#,
+"#),
+    // i37: a point's place in commit order as one integer (ingest::pack_order) instead of two
+    // RFC 3339 times as text: 8 bytes where there were 41, in the primary key and again in the
+    // `points_run` index. The integers are computed from the old text by code: the two dialects
+    // parse times differently.
+    Code(pack_point_order),
 ];
+
+/// One migration step.
+enum Step {
+    Sql(&'static str),
+    Code(fn(&mut dyn Connection) -> Result<(), DbError>),
+}
+use Step::{Code, Sql};
+
+/// Step 11: `points.ord` from text (`<commit> <started>`, RFC 3339) to the packed integer of
+/// [`crate::store::ingest::pack_order`]. Every point of a run has its run's key, so the text is
+/// read once per run; the points are then copied into the new table through that map.
+fn pack_point_order(c: &mut dyn Connection) -> Result<(), DbError> {
+    let backend = c.backend();
+    let runs = c.query("SELECT run_pk, MIN(ord) FROM points GROUP BY run_pk", &[])?;
+    c.batch("CREATE TABLE points_order_map (run_pk BIGINT PRIMARY KEY, ord BIGINT NOT NULL)")?;
+    for r in &runs {
+        c.execute(
+            "INSERT INTO points_order_map (run_pk, ord) VALUES ($1, $2)",
+            &[
+                Value::Int(r.i64(0)?),
+                Value::Int(crate::store::ingest::order_of_text(r.str(1)?)),
+            ],
+        )?;
+    }
+    c.batch(&render(
+        r#"
+CREATE TABLE points_packed (
+    series_id BIGINT NOT NULL REFERENCES series (id),
+    ord BIGINT NOT NULL,
+    run_pk BIGINT NOT NULL REFERENCES runs (id),
+    value {real} NOT NULL,
+    PRIMARY KEY (series_id, ord, run_pk)
+){without_rowid};
+INSERT INTO points_packed (series_id, ord, run_pk, value)
+    SELECT p.series_id, m.ord, p.run_pk, p.value FROM points p JOIN points_order_map m ON m.run_pk = p.run_pk;
+DROP TABLE points;
+DROP TABLE points_order_map;
+ALTER TABLE points_packed RENAME TO points;
+CREATE INDEX points_run ON points (run_pk);
+"#,
+        backend,
+    ))
+}
 
 fn render(step: &str, backend: Backend) -> String {
     let (id, real, blob, without_rowid) = match backend {
@@ -408,7 +457,10 @@ pub fn migrate_to(conn: &mut dyn Connection, target: i64) -> Result<(), DbError>
     for (i, step) in steps.enumerate().skip(current as usize) {
         let version = i as i64 + 1;
         transaction(conn, |c| {
-            c.batch(&render(step, backend))?;
+            match step {
+                Sql(sql) => c.batch(&render(sql, backend))?,
+                Code(f) => f(c)?,
+            }
             c.execute(
                 "INSERT INTO schema_migrations (version, applied_at) VALUES ($1, $2)",
                 &[Value::Int(version), Value::Text(crate::now_rfc3339())],

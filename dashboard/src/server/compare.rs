@@ -102,26 +102,26 @@ async fn load(state: &AppState, q: CompareQuery) -> Result<Comparison, AppError>
             let mut rows = Vec::new();
             let mut cpu_adapter = None;
             if let Some(p) = &pair {
-                let da = read::run(c, &p.run_a)?;
-                let db = read::run(c, &p.run_b)?;
-                for r in [&da.info, &db.info] {
+                let (ha, sa) = read::run_records(c, &p.run_a)?;
+                let (hb, sb) = read::run_records(c, &p.run_b)?;
+                for r in [&ha.info, &hb.info] {
                     if r.adapter.device_type == "cpu" && cpu_adapter.is_none() {
                         cpu_adapter = Some(r.adapter.name.clone());
                     }
                 }
                 let cmp = engine::compare(
                     RunRef {
-                        info: &da.info,
-                        scenarios: &da.scenarios,
+                        info: &ha.info,
+                        scenarios: &sa,
                     },
                     RunRef {
-                        info: &db.info,
-                        scenarios: &db.scenarios,
+                        info: &hb.info,
+                        scenarios: &sb,
                     },
                     &engine::Options::default(),
                 );
-                for s in &da.scenarios {
-                    let Some(t) = db.scenarios.iter().find(|t| t.scenario == s.scenario) else {
+                for s in &sa {
+                    let Some(t) = sb.iter().find(|t| t.scenario == s.scenario) else {
                         continue;
                     };
                     for v in &s.results {

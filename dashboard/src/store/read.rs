@@ -147,6 +147,18 @@ pub fn run(conn: &mut dyn Connection, run_id: &str) -> Result<RunDetail, StoreEr
     })
 }
 
+/// A run's record and every scenario's record, without its images or series links: what a
+/// comparison of two runs reads (a nightly run's 1,700 results have some 15,000 series links
+/// and thousands of image rows that a comparison never shows).
+pub fn run_records(
+    conn: &mut dyn Connection,
+    run_id: &str,
+) -> Result<(RunHead, Vec<ScenarioResult>), StoreError> {
+    let head = run_head(conn, run_id)?;
+    let scenarios = scenarios_of(conn, head.pk)?;
+    Ok((head, scenarios))
+}
+
 /// One scenario of a run as [`run`] reads the whole run (its record, images and series links),
 /// with the names of all the run's scenarios; no other record is decoded. `None` when the run
 /// has no such scenario.

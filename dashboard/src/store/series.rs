@@ -320,7 +320,7 @@ pub fn insert_point(
     series_id: i64,
     run_pk: i64,
     value: f64,
-    ord: &str,
+    ord: i64,
 ) -> Result<(), StoreError> {
     conn.execute(
         "INSERT INTO points (series_id, run_pk, value, ord) VALUES ($1, $2, $3, $4)",
@@ -328,7 +328,7 @@ pub fn insert_point(
             Value::Int(series_id),
             Value::Int(run_pk),
             Value::Real(value),
-            ord.into(),
+            Value::Int(ord),
         ],
     )?;
     Ok(())
@@ -354,7 +354,7 @@ pub fn neighbour(
             "SELECT ord FROM points WHERE series_id = $1 AND run_pk = $2",
             &[Value::Int(series), Value::Int(run_pk)],
         )?
-        .map(|r| r.string(0))
+        .map(|r| r.i64(0))
         .transpose()?
     else {
         return Ok(None);
@@ -369,7 +369,7 @@ pub fn neighbour(
     Ok(conn
         .query_opt(
             sql,
-            &[Value::Int(series), Value::Int(run_pk), ord.as_str().into()],
+            &[Value::Int(series), Value::Int(run_pk), Value::Int(ord)],
         )?
         .map(|r| r.i64(0))
         .transpose()?)
@@ -409,8 +409,8 @@ pub struct RunSeries {
     pub id: i64,
     pub scenario: String,
     pub variant: String,
-    /// The commit order of the run's point in the series.
-    pub ord: String,
+    /// The commit order of the run's point in the series ([`super::ingest::order_key`]).
+    pub ord: i64,
 }
 
 /// The series of measure `measure` run `run_pk` has a point in, by id.
@@ -430,7 +430,7 @@ pub fn of_run_with_measure(
             id: r.i64(0)?,
             scenario: r.string(1)?,
             variant: r.string(2)?,
-            ord: r.string(3)?,
+            ord: r.i64(3)?,
         })
     })
     .collect()
@@ -454,7 +454,7 @@ pub fn before_with_environment(
          ORDER BY p.ord DESC, p.run_pk DESC LIMIT $4",
         &[
             Value::Int(s.id),
-            s.ord.as_str().into(),
+            Value::Int(s.ord),
             Value::Int(run_pk),
             Value::Int(limit),
         ],

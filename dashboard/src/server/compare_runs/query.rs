@@ -122,8 +122,8 @@ pub async fn load(state: &AppState, q: CompareRunsQuery) -> Result<Option<Loaded
                 (_, _, [x, y]) => {
                     // Ticked in the runs list: the older is A.
                     let (x, y) = (resolve(c, x, &q)?, resolve(c, y, &q)?);
-                    let rx = read::run(c, &x)?.run.started_at;
-                    let ry = read::run(c, &y)?.run.started_at;
+                    let rx = read::run_head(c, &x)?.run.started_at;
+                    let ry = read::run_head(c, &y)?.run.started_at;
                     if rx <= ry {
                         (x, y)
                     } else {
@@ -139,22 +139,22 @@ pub async fn load(state: &AppState, q: CompareRunsQuery) -> Result<Option<Loaded
                 }
                 _ => return Err(AppError::BadRequest("give both a= and b=".into())),
             };
-            let da = read::run(c, &a)?;
-            let db = read::run(c, &b)?;
+            let (ha, sa) = read::run_records(c, &a)?;
+            let (hb, sb) = read::run_records(c, &b)?;
             // The series' own noise, where a history on B's adapter gives it (times in ms only).
-            let noise = if compare::same_adapter(&da.info, &db.info) {
+            let noise = if compare::same_adapter(&ha.info, &hb.info) {
                 noise::frame_time_noise(c, &b)?
             } else {
                 Default::default()
             };
             let comparison = compare::compare(
                 RunRef {
-                    info: &da.info,
-                    scenarios: &da.scenarios,
+                    info: &ha.info,
+                    scenarios: &sa,
                 },
                 RunRef {
-                    info: &db.info,
-                    scenarios: &db.scenarios,
+                    info: &hb.info,
+                    scenarios: &sb,
                 },
                 &Options {
                     threshold_pct: q.threshold,
@@ -162,15 +162,10 @@ pub async fn load(state: &AppState, q: CompareRunsQuery) -> Result<Option<Loaded
                 },
             );
             Ok(Some(Loaded {
-                environment: conditions_view::differences(
-                    &da.info,
-                    &da.scenarios,
-                    &db.info,
-                    &db.scenarios,
-                ),
+                environment: conditions_view::differences(&ha.info, &sa, &hb.info, &sb),
                 comparison,
-                a: da.scenarios,
-                b: db.scenarios,
+                a: sa,
+                b: sb,
             }))
         })
         .await
