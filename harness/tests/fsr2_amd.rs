@@ -4,7 +4,7 @@
 //! `tests/fsr2_amd/README.md` says and bound as their pass files declare (samplers at set 0,
 //! resources and the std140 constant buffers at set 1, every declared binding bound, the gaps
 //! a pass file leaves in set 1 closed by unread textures: lavapipe 22.3 crashes on them).
-//! Proven so far, five of six: `lock` (the new locks of a thin-feature test over a luma image
+//! All six proven: `lock` (the new locks of a thin-feature test over a luma image
 //! with ridges, valleys, flat regions and noise must be the same pixels, and both must clear the
 //! reconstructed previous depth), `rcas` (the sharpened colour of an HDR image with edges,
 //! peaks, flat and noisy regions at two sharpnesses, within one f16 step), `depth_clip` (the
@@ -16,14 +16,20 @@
 //! threshold, a ground reprojecting off the screen and noisy HDR colour) and `accumulate` (the
 //! accumulated colour and temporal reactive factor and the lock status within one f16 step, the
 //! luma history within one 8-bit step, on a moving box with its uncovered trail, locks on a
-//! thin line, shading change, luma instability, new samples at the edge and mask patches).
+//! thin line, shading change, luma instability, new samples at the edge and mask patches) and
+//! the luminance pyramid (AMD's SPD pass with its global atomic counter against the port's
+//! `luminance_pyramid` and `auto_exposure`: the shading-change mip within one f16 step, the
+//! average log luma and exposure within one f16 step of AMD's level 5, on a frame like a
+//! rendered one, once the port's two stated deviations from SPD, computed on the CPU from the
+//! input, are added to the port's; where they vanish, without them).
 //! Each test's tolerance is stated beside its assertion and in `techniques/fsr2/README.md`.
 
 mod common;
 
 use tessera::render::kit::{bind_group, compute_pipeline};
 use tessera::techniques::fsr2::gpu::{
-    module, ACCUMULATE_WGSL, DEPTH_CLIP_WGSL, LOCK_WGSL, RCAS_WGSL, RECONSTRUCT_WGSL,
+    module, ACCUMULATE_WGSL, DEPTH_CLIP_WGSL, LOCK_WGSL, LUMINANCE_WGSL, RCAS_WGSL,
+    RECONSTRUCT_WGSL,
 };
 
 static LOCK_SPV: &[u8] = include_bytes!("fsr2_amd/ffx_fsr2_lock_pass.spv");
@@ -32,6 +38,8 @@ static DEPTH_CLIP_SPV: &[u8] = include_bytes!("fsr2_amd/ffx_fsr2_depth_clip_pass
 static RECONSTRUCT_SPV: &[u8] =
     include_bytes!("fsr2_amd/ffx_fsr2_reconstruct_previous_depth_pass.spv");
 static ACCUMULATE_SPV: &[u8] = include_bytes!("fsr2_amd/ffx_fsr2_accumulate_pass.spv");
+static LUMINANCE_SPV: &[u8] =
+    include_bytes!("fsr2_amd/ffx_fsr2_compute_luminance_pyramid_pass.spv");
 const RENDER: (u32, u32) = (40, 30);
 const DISPLAY: (u32, u32) = (60, 45);
 const JITTER: [f32; 2] = [0.3125, -0.2222];
@@ -1761,4 +1769,558 @@ fn accumulate_equals_amds_compiled_glsl() {
     assert_eq!(colour_d.over, 0, "colour differs: {colour_d:?}");
     assert_eq!(lock_d.over, 0, "lock status differs: {lock_d:?}");
     assert_eq!(luma_d.over, 0, "luma history differs: {luma_d:?}");
+}
+
+/// A render-size frame like a recorded one, at any size (uv in [0, 1], y down; linear HDR,
+/// rgba16f, 4 values per pixel): a sky brightening towards the horizon with an HDR sun (40),
+/// a building lit on one face with dark and lit (HDR) windows, a black shadow (luma below
+/// AMD's 1e-3 floor), a one-pixel bright cable, textured ground with a road and its stripes,
+/// sensor-like noise everywhere. Edges and one-pixel features are where a sub-pixel shift of
+/// the reads (SPD's jittered bilinear colour) moves a block's mean.
+fn frame_colour((w, h): (u32, u32)) -> Vec<half::f16> {
+    (0..w * h)
+        .flat_map(|i| {
+            let (x, y) = (i % w, i / w);
+            let (u, v) = ((x as f32 + 0.5) / w as f32, (y as f32 + 0.5) / h as f32);
+            let n = |k| noise(i, k);
+            let mut c = if v < 0.45 {
+                let t = v / 0.45;
+                [0.6 + 0.5 * t, 0.8 + 0.25 * t, 1.4 - 0.3 * t]
+            } else {
+                let g = 0.6 + 0.8 * n(3);
+                let mut c = [0.08 * g, 0.1 * g, 0.05 * g];
+                if (0.45..0.7).contains(&(u - 0.3 * (v - 0.45))) {
+                    c = [0.12, 0.12, 0.13];
+                    if (0.56..0.58).contains(&(u - 0.3 * (v - 0.45))) && (y / 3) % 3 == 0 {
+                        c = [0.9, 0.85, 0.7];
+                    }
+                }
+                c
+            };
+            let (du, dv) = ((u - 0.78) * w as f32 / h as f32, v - 0.14);
+            if du * du + dv * dv < 0.0016 {
+                c = [40.0, 36.0, 30.0];
+            }
+            if (0.1..0.34).contains(&u) && (0.18..0.72).contains(&v) {
+                c = if u < 0.26 {
+                    [0.5, 0.45, 0.4]
+                } else {
+                    [0.15, 0.14, 0.14]
+                };
+                if x % 6 < 3 && y % 8 < 4 && v < 0.65 {
+                    c = if (x / 6 + y / 8) % 3 == 0 {
+                        [2.5, 2.0, 1.2]
+                    } else {
+                        [0.02, 0.02, 0.03]
+                    };
+                }
+            }
+            if (0.34..0.5).contains(&u) && (0.62..0.72).contains(&v) {
+                c = [0.0; 3];
+            }
+            if y == h / 3 && u > 0.34 {
+                c = [3.0, 3.0, 2.8];
+            }
+            for (k, x) in (0..).zip(c.iter_mut()) {
+                *x *= 0.95 + 0.1 * n(k);
+            }
+            [c[0], c[1], c[2], 1.0].map(half::f16::from_f32)
+        })
+        .collect()
+}
+
+/// SPD's mip count for the render size (ffx_spd.h `SpdSetup`, as ffx_fsr2.cpp calls it):
+/// floor(log2(max(w, h))), at most 12. Its last level (`MipCount() - 1`) is the one whose
+/// texel (0, 0) AMD takes as the 1x1 average.
+fn spd_mips((w, h): (u32, u32)) -> u32 {
+    ((w.max(h) as f32).log2().floor() as u32).min(12)
+}
+
+/// Level `level` of AMD's luminance chain (`FSR2_ExposureMips`: half the render size, every
+/// level down to 1x1): level 4 the shading-change mip, level 5 the one SPD's last workgroup
+/// reads back.
+fn spd_level((w, h): (u32, u32), level: u32) -> (u32, u32) {
+    (((w / 2) >> level).max(1), ((h / 2) >> level).max(1))
+}
+
+/// What one side of the luminance pyramid gave: the shading-change mip (level 4), AMD's level 5
+/// (empty for the port), the exposure buffer (exposure, average log luma) and AMD's atomic
+/// counter after the dispatch.
+struct Luminance {
+    mip: Vec<f32>,
+    mip5: Vec<f32>,
+    exposure: [f32; 2],
+    counter: u32,
+}
+
+/// One frame of the luminance pyramid: its render size, `Jitter()`, the exposure buffer it
+/// starts from (average log luma 1e8 and above: a reset, no smoothing) and `DeltaTime()`.
+#[derive(Clone, Copy)]
+struct LumaFrame {
+    size: (u32, u32),
+    jitter: [f32; 2],
+    previous: [f32; 2],
+    dt: f32,
+}
+
+/// AMD's compute luminance pyramid pass (ffx_fsr2_compute_luminance_pyramid_pass.glsl:
+/// `SpdDownsample` over 64x64 render pixels per workgroup of 256) on `colour`, every binding
+/// its pass file declares bound: the atomic counter (r32ui, zeroed as AMD creates it), levels 4
+/// and 5 of the chain (r16f, at AMD's sizes: level 5's size is what its last workgroup reads
+/// as zero beyond), the auto exposure (rg32f), `cbFSR2` and `cbSPD` as `fsr2Dispatch` fills
+/// them.
+fn amd_luminance(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    colour: &wgpu::TextureView,
+    f: LumaFrame,
+) -> Luminance {
+    use wgpu::TextureFormat::{R16Float, R32Uint, Rg32Float};
+    let storage = wgpu::TextureUsages::STORAGE_BINDING;
+    let (m4, m5) = (spd_level(f.size, 4), spd_level(f.size, 5));
+    let counter = texture_with(device, queue, (1, 1), (R32Uint, storage), &[0; 4], 4);
+    let zeros = |(w, h): (u32, u32)| vec![0u8; (w * h * 2) as usize];
+    let mip = texture_with(device, queue, m4, (R16Float, storage), &zeros(m4), 2);
+    let mip5 = texture_with(device, queue, m5, (R16Float, storage), &zeros(m5), 2);
+    let exposure = texture_with(
+        device,
+        queue,
+        (1, 1),
+        (Rg32Float, storage),
+        bytemuck::cast_slice(&f.previous),
+        8,
+    );
+    let mut w = words(&amd_constants(f.size, f.size));
+    w[8] = m4.0; // iLumaMipDimensions: maxRenderSize / 32
+    w[9] = m4.1;
+    w[10] = 4; // iLumaMipLevelToUse (FFX_FSR2_SHADING_CHANGE_MIP_LEVEL)
+    w[11] = u32::from(f.previous[1] < 1e8); // iFrameIndex: 0 on a reset
+    w[16] = f.jitter[0].to_bits(); // fJitter
+    w[17] = f.jitter[1].to_bits();
+    w[28] = f.dt.to_bits(); // fDeltaTime at 112
+    let cb = uniform(device, queue, bytemuck::cast_slice(&w));
+    // cbSPD: mips, numWorkGroups, workGroupOffset, renderSize (SpdSetup over the render rect).
+    let groups = (f.size.0.div_ceil(64), f.size.1.div_ceil(64));
+    let spd = [
+        spd_mips(f.size),
+        groups.0 * groups.1,
+        0,
+        0,
+        f.size.0,
+        f.size.1,
+        0,
+        0,
+    ];
+    let spd = uniform(device, queue, bytemuck::cast_slice(&spd));
+    let v = [&counter, &mip, &mip5, &exposure].map(view);
+    let amd = amd_pass(
+        device,
+        "ffx_fsr2_compute_luminance_pyramid_pass",
+        LUMINANCE_SPV,
+        (256, 1, 1),
+        &[
+            (0, Amd::Filtered(colour)),
+            (1, Amd::Image(&v[0], R32Uint)),
+            (2, Amd::Image(&v[1], R16Float)),
+            (3, Amd::Image(&v[2], R16Float)),
+            (4, Amd::Image(&v[3], Rg32Float)),
+            (5, Amd::Uniform(&cb)),
+            (6, Amd::Uniform(&spd)),
+        ],
+    );
+    dispatch(device, queue, &[(&amd, groups)]);
+    let halves = |t: &wgpu::Texture| -> Vec<f32> {
+        bytemuck::cast_slice::<u8, half::f16>(&read(device, queue, t, 2))
+            .iter()
+            .map(|v| v.to_f32())
+            .collect()
+    };
+    let e: Vec<f32> = bytemuck::cast_slice(&read(device, queue, &exposure, 8)).to_vec();
+    Luminance {
+        mip: halves(&mip),
+        mip5: halves(&mip5),
+        exposure: [e[0], e[1]],
+        counter: bytemuck::cast_slice::<u8, u32>(&read(device, queue, &counter, 4))[0],
+    }
+}
+
+/// The port's `luminance_pyramid` (one 8x8 workgroup per texel of the shading-change mip, r32f)
+/// then `auto_exposure` (one workgroup) on `colour`, with the exposure buffer starting from
+/// `f.previous` (a reset frame where AMD's would be: `mode.x` 1).
+fn port_luminance(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    colour: &wgpu::TextureView,
+    f: LumaFrame,
+) -> Luminance {
+    let m4 = tessera::techniques::fsr2::gpu::luma_mip_size(f.size);
+    let mip = texture(
+        device,
+        m4,
+        wgpu::TextureFormat::R32Float,
+        wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING,
+    );
+    let exposure = storage_buffer(device, queue, bytemuck::cast_slice(&f.previous));
+    let mut w = words(&port_params(f.size, f.size));
+    w[4] = f.jitter[0].to_bits();
+    w[5] = f.jitter[1].to_bits();
+    w[6] = f.dt.to_bits(); // jitter.z: DeltaTime
+    w[12] = u32::from(f.previous[1] >= 1e8); // mode.x: a reset frame
+    w[16..20].copy_from_slice(&[m4.0, m4.1, 4, 0]); // luma
+    let params = uniform(device, queue, bytemuck::cast_slice(&w));
+    let mv = view(&mip);
+    let pyramid = port_pass(
+        device,
+        LUMINANCE_WGSL,
+        "luminance_pyramid",
+        &[(0, &params)],
+        &[(1, colour), (2, &mv)],
+    );
+    let auto = port_pass(
+        device,
+        LUMINANCE_WGSL,
+        "auto_exposure",
+        &[(0, &params), (4, &exposure)],
+        &[(3, &mv)],
+    );
+    dispatch(device, queue, &[(&pyramid, m4), (&auto, (1, 1))]);
+    let e: Vec<f32> = bytemuck::cast_slice(&read_storage(device, queue, &exposure)).to_vec();
+    Luminance {
+        mip: bytemuck::cast_slice(&read(device, queue, &mip, 4)).to_vec(),
+        mip5: vec![],
+        exposure: [e[0], e[1]],
+        counter: 0,
+    }
+}
+
+/// `RGBToLuma`'s log as SPD's source load takes it: log(max(1e-3, luma)).
+fn log_luma(c: [f32; 3]) -> f64 {
+    f64::from((0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]).max(1e-3)).ln()
+}
+
+/// The two stated deviations of the port from AMD's pass, computed on the CPU from the input
+/// alone (f64 sums of f32 log lumas): per texel of the shading-change mip, the mean of the log
+/// luma SPD reads (`SpdLoadSourceImage`: the colour bilinear at (p + 0.5 + Jitter()), clamped
+/// half a texel inside the image by `ClampUv`) minus the mean of the pixels' own (the port's);
+/// for the 1x1 average, AMD's (the mean over the 2^mips square from the origin of those reads,
+/// zero for a pixel off the image or, once the last workgroup takes over at 7 mips and more,
+/// in no texel of level 5: AMD's imageLoad beyond level 5's size reads zero) minus the port's
+/// (the mean of its mip: the whole 32x32 blocks, the rest of the image left out). Zero jitter
+/// on a power-of-two square makes both zero.
+struct LumaDeviation {
+    mip: Vec<f64>,
+    lavg: f64,
+}
+
+fn luma_deviation(colour: &[half::f16], f: LumaFrame) -> LumaDeviation {
+    let (w, h) = (f.size.0 as i32, f.size.1 as i32);
+    let rgb = |x: i32, y: i32| -> [f32; 3] {
+        let i = 4 * (y.clamp(0, h - 1) * w + x.clamp(0, w - 1)) as usize;
+        [0, 1, 2].map(|k| colour[i + k].to_f32())
+    };
+    let own = |x: i32, y: i32| log_luma(rgb(x, y));
+    let spd_read = |x: i32, y: i32| -> f64 {
+        // ClampUv, then the sampler's texel space (clamp-to-edge addressing).
+        let s = [
+            (x as f32 + 0.5 + f.jitter[0]).clamp(0.5, w as f32 - 0.5) - 0.5,
+            (y as f32 + 0.5 + f.jitter[1]).clamp(0.5, h as f32 - 0.5) - 0.5,
+        ];
+        let (x0, y0) = (s[0].floor(), s[1].floor());
+        let (fx, fy) = (s[0] - x0, s[1] - y0);
+        let (x0, y0) = (x0 as i32, y0 as i32);
+        let (a, b, c, d) = (
+            rgb(x0, y0),
+            rgb(x0 + 1, y0),
+            rgb(x0, y0 + 1),
+            rgb(x0 + 1, y0 + 1),
+        );
+        log_luma([0, 1, 2].map(|k| {
+            (a[k] * (1.0 - fx) + b[k] * fx) * (1.0 - fy) + (c[k] * (1.0 - fx) + d[k] * fx) * fy
+        }))
+    };
+    let (mw, mh) = spd_level(f.size, 4);
+    let block = |x0: i32, y0: i32, side: i32, g: &dyn Fn(i32, i32) -> f64| -> f64 {
+        let mut s = 0.0;
+        for y in y0..y0 + side {
+            for x in x0..x0 + side {
+                if x < w && y < h {
+                    s += g(x, y);
+                }
+            }
+        }
+        s
+    };
+    let mut mip = vec![];
+    let mut port_sum = 0.0;
+    for ty in 0..mh as i32 {
+        for tx in 0..mw as i32 {
+            let own_sum = block(32 * tx, 32 * ty, 32, &own);
+            port_sum += own_sum;
+            mip.push((block(32 * tx, 32 * ty, 32, &spd_read) - own_sum) / 1024.0);
+        }
+    }
+    let mips = spd_mips(f.size);
+    let side = 1i32 << mips;
+    let amd_sum = if mips <= 6 {
+        block(0, 0, side, &spd_read)
+    } else {
+        let (m5w, m5h) = spd_level(f.size, 5);
+        let n = 1i32 << (mips - 6);
+        let mut s = 0.0;
+        for ty in 0..n.min(m5h as i32) {
+            for tx in 0..n.min(m5w as i32) {
+                s += block(64 * tx, 64 * ty, 64, &spd_read);
+            }
+        }
+        s
+    };
+    LumaDeviation {
+        mip,
+        lavg: amd_sum / f64::from(side * side) - port_sum / f64::from(mw * mh * 1024),
+    }
+}
+
+/// How one frame compares: the shading-change mip (AMD's r16f against the port's f32 plus the
+/// modelled deviation, one f16 step of AMD's value each; `raw_mip` without the deviation) and
+/// the 1x1 level: the average log luma (absolute) and the exposure (relative) against theirs
+/// (`raw_` without the deviation).
+#[derive(Debug)]
+struct LumaCompare {
+    mip: Diff,
+    raw_mip: Diff,
+    lavg: f32,
+    raw_lavg: f32,
+    lavg_tolerance: f32,
+    exposure: f32,
+    raw_exposure: f32,
+    exposure_tolerance: f32,
+}
+
+/// AMD's outputs against the port's plus `dev` (the stated deviations; smoothed by the same
+/// temporal factor as the average is on a frame that is not a reset).
+fn compare_luminance(
+    amd: &Luminance,
+    port: &Luminance,
+    dev: &LumaDeviation,
+    f: LumaFrame,
+) -> LumaCompare {
+    let expected: Vec<f32> = port
+        .mip
+        .iter()
+        .zip(&dev.mip)
+        .map(|(p, d)| (f64::from(*p) + d) as f32)
+        .collect();
+    // One f16 step: AMD stores the level in r16f (lavapipe's store rounds towards zero: up to
+    // one step from its f32, always towards zero); the f32 sums of two orders (SPD's 2x2 tree;
+    // 4x4 parts then a tree) and the model's f64 are far below it.
+    let mip = diff(&amd.mip, &expected, f16_step);
+    let raw_mip = diff(&amd.mip, &port.mip, f16_step);
+    // The 1x1 level: with 7 mips or more AMD's last workgroup averages level 5's r16f texels
+    // (one f16 step of the largest of them: lavapipe's store rounds every one towards zero, so
+    // their errors do not cancel), plus the f32 rounding of two sums of up to 2^16 values in
+    // different orders (1e-5). The exposure is 0.65 x 12.5 / 78 x exp(-lavg),
+    // so its relative error is the average's, plus exp/log2/pow in f32 (1e-5).
+    let largest5 = amd.mip5.iter().fold(0f32, |m, v| m.max(v.abs()));
+    let tolerance = if spd_mips(f.size) >= 7 {
+        f16_step(largest5) + 1e-5
+    } else {
+        1e-5
+    };
+    let k = if f.previous[1] < 1e8 {
+        1.0 - (-f64::from(f.dt)).exp()
+    } else {
+        1.0
+    };
+    let lavg_expected = f64::from(port.exposure[1]) + k * dev.lavg;
+    let lavg = (f64::from(amd.exposure[1]) - lavg_expected).abs() as f32;
+    let raw_lavg = (amd.exposure[1] - port.exposure[1]).abs();
+    let raw_exposure = (amd.exposure[0] / port.exposure[0] - 1.0).abs();
+    let exposure_expected = f64::from(port.exposure[0]) * (-k * dev.lavg).exp();
+    let exposure = (f64::from(amd.exposure[0]) / exposure_expected - 1.0).abs() as f32;
+    LumaCompare {
+        mip,
+        raw_mip,
+        lavg,
+        raw_lavg,
+        lavg_tolerance: tolerance,
+        exposure,
+        raw_exposure,
+        exposure_tolerance: tolerance + 1e-5,
+    }
+}
+
+/// Runs both sides on `frame`'s colour (and the port on it 2% brighter) and checks them:
+/// returns the comparison, the perturbed one and AMD's outputs.
+fn luminance_case(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    f: LumaFrame,
+) -> (LumaCompare, LumaCompare, Luminance, LumaDeviation) {
+    let colour = frame_colour(f.size);
+    let input = |c: &[half::f16]| {
+        texture_with(
+            device,
+            queue,
+            f.size,
+            (
+                wgpu::TextureFormat::Rgba16Float,
+                wgpu::TextureUsages::TEXTURE_BINDING,
+            ),
+            bytemuck::cast_slice(c),
+            8,
+        )
+    };
+    let brighter: Vec<half::f16> = colour
+        .chunks(4)
+        .flat_map(|c| {
+            [c[0], c[1], c[2]]
+                .map(|v| half::f16::from_f32(v.to_f32() * 1.02))
+                .into_iter()
+                .chain([c[3]])
+        })
+        .collect();
+    let (cv, bv) = (view(&input(&colour)), view(&input(&brighter)));
+    let amd = amd_luminance(device, queue, &cv, f);
+    let port = port_luminance(device, queue, &cv, f);
+    let perturbed = port_luminance(device, queue, &bv, f);
+    let dev = luma_deviation(&colour, f);
+    let c = compare_luminance(&amd, &port, &dev, f);
+    let p = compare_luminance(&amd, &perturbed, &dev, f);
+    let max_dev = dev.mip.iter().fold(0f64, |m, d| m.max(d.abs()));
+    eprintln!(
+        "luminance_pyramid {}x{} jitter {:?}{}: {} mip texels, {} SPD mips; modelled deviation: mip max {max_dev:.3e}, average log luma {:.4e}; AMD average {} exposure {} (port {} / {}); |AMD - port| mip {:?}, average {:.3e}, exposure relative {:.3e}; after the deviation mip {:?}, average {:.3e} (tolerance {:.3e}), exposure relative {:.3e} (tolerance {:.3e}); the port's colour 2% brighter: mip {} of {} beyond, max {:.3e}, average {:.3e}, exposure {:.3e}",
+        f.size.0,
+        f.size.1,
+        f.jitter,
+        if f.previous[1] < 1e8 { format!(", smoothed from {} over {} s", f.previous[1], f.dt) } else { String::new() },
+        amd.mip.len(),
+        spd_mips(f.size),
+        dev.lavg,
+        amd.exposure[1],
+        amd.exposure[0],
+        port.exposure[1],
+        port.exposure[0],
+        c.raw_mip,
+        c.raw_lavg,
+        c.raw_exposure,
+        c.mip,
+        c.lavg,
+        c.lavg_tolerance,
+        c.exposure,
+        c.exposure_tolerance,
+        p.mip.over,
+        amd.mip.len(),
+        p.mip.max,
+        p.lavg,
+        p.exposure,
+    );
+    (c, p, amd, dev)
+}
+
+/// Checks common to every frame: AMD's pass ran to its 1x1 level (the exposure written; with 7
+/// mips and more the last workgroup, found by the atomic counter, reset it to 0), the
+/// comparison holds, and fails with the port's input 2% brighter.
+fn check_luminance(f: LumaFrame, c: &LumaCompare, p: &LumaCompare, amd: &Luminance) {
+    assert!(
+        amd.exposure[0] > 0.0 && amd.exposure[0] != -1.0 && amd.exposure[1].abs() < 10.0,
+        "AMD's pass wrote no exposure: {:?}",
+        amd.exposure
+    );
+    assert_eq!(
+        amd.counter, 0,
+        "AMD's last workgroup did not reset the counter"
+    );
+    assert!(
+        spd_mips(f.size) < 7 || amd.mip5.iter().any(|v| *v != 0.0),
+        "AMD's level 5 is empty"
+    );
+    assert_eq!(
+        c.mip.over, 0,
+        "shading-change mip differs beyond one f16 step: {c:?}"
+    );
+    assert!(
+        c.lavg <= c.lavg_tolerance,
+        "average log luma differs: {c:?}"
+    );
+    assert!(
+        c.exposure <= c.exposure_tolerance,
+        "exposure differs: {c:?}"
+    );
+    // The test sees a luma 2% off (log luma 0.0198) in every output.
+    assert!(
+        p.mip.over > 0 && p.lavg > p.lavg_tolerance && p.exposure > p.exposure_tolerance,
+        "the port's colour 2% brighter passes: {p:?}"
+    );
+}
+
+#[test]
+fn luminance_pyramid_equals_amds_compiled_glsl() {
+    let (device, queue) = device();
+    // Where the port's deviations vanish: no jitter (SPD's bilinear read at p + 0.5 is the
+    // pixel's own value) on power-of-two squares (SPD's 2^mips square is the image, every
+    // 32x32 block whole): 128x128 (7 mips: 4 workgroups, the last one found by the atomic
+    // counter takes level 5's 2x2 to the 1x1 at level 6) and 256x256 (8 mips: 16 workgroups,
+    // level 5's 4x4 through levels 6 and 7), a reset frame each; then 256x256 smoothed from an
+    // earlier average over 0.25 s (`ComputeAutoExposureFromLavg` on
+    // prev + (lavg - prev)(1 - exp(-dt))).
+    let reset = [1.0, 1e9];
+    for f in [
+        LumaFrame {
+            size: (128, 128),
+            jitter: [0.0; 2],
+            previous: reset,
+            dt: 1.0 / 60.0,
+        },
+        LumaFrame {
+            size: (256, 256),
+            jitter: [0.0; 2],
+            previous: reset,
+            dt: 1.0 / 60.0,
+        },
+        LumaFrame {
+            size: (256, 256),
+            jitter: [0.0; 2],
+            previous: [0.5, -0.4],
+            dt: 0.25,
+        },
+    ] {
+        let (c, p, amd, dev) = luminance_case(&device, &queue, f);
+        // The deviation vanishes: the comparison is AMD's against the port's as they are.
+        assert!(
+            dev.lavg.abs() < 1e-9 && dev.mip.iter().all(|d| *d == 0.0),
+            "a deviation remains: {}",
+            dev.lavg
+        );
+        check_luminance(f, &c, &p, &amd);
+    }
+}
+
+#[test]
+fn luminance_pyramid_departs_from_amds_only_as_stated() {
+    let (device, queue) = device();
+    // Where they do not: 384x224 (whole 32x32 blocks, 8 mips: AMD's 1x1 is the 256x256 square
+    // from the origin, a quarter of it below level 5's 3 rows and read as zero, the right 128
+    // columns left out; the port's is the whole image) and 426x240 (AMD's Ultra Performance
+    // render size for 1280x720; not a multiple of 32: AMD's mip and the port's both leave the
+    // last 10 columns and 16 rows out, AMD's 1x1 the same square as 384x224), each with no
+    // jitter (only the 1x1 region deviates) and with jitter (SPD's bilinear reads shift every
+    // block by a fraction of a pixel).
+    let reset = [1.0, 1e9];
+    for size in [(384, 224), (426, 240)] {
+        for jitter in [[0.0; 2], JITTER] {
+            let f = LumaFrame {
+                size,
+                jitter,
+                previous: reset,
+                dt: 1.0 / 60.0,
+            };
+            let (c, p, amd, dev) = luminance_case(&device, &queue, f);
+            assert!(dev.lavg.abs() > 0.01, "the 1x1 region deviates too little");
+            assert!(
+                jitter == [0.0; 2] || dev.mip.iter().any(|d| d.abs() > 1e-3),
+                "the jitter moves no block"
+            );
+            check_luminance(f, &c, &p, &amd);
+        }
+    }
 }
