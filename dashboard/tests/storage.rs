@@ -366,12 +366,6 @@ fn migrates_to_compact_storage(store: &common::TestStore) {
              VALUES ('tiny', 'native', $1, 'gpu_ms.median', 0) RETURNING id",
             &[Value::Int(adapter)],
         );
-        c.execute(
-            "INSERT INTO points (series_id, run_pk, value, ord)
-             VALUES ($1, $2, 2.5, '2026-11-01T00:00:00Z 2026-11-01T00:00:00Z')",
-            &[Value::Int(series), Value::Int(run)],
-        )
-        .unwrap();
         // A run stored later whose commit is older: commit order is not row order.
         let early = id(
             "INSERT INTO runs (run_id, dirty, started_at, status, harness_version, adapter_id, driver,
@@ -380,6 +374,12 @@ fn migrates_to_compact_storage(store: &common::TestStore) {
                  'h', 1, 0, 0, $2, '2026-11-02T00:00:00Z', '2026-10-01T00:00:00Z') RETURNING id",
             &[Value::Int(adapter), serde_json::to_string(&old.run).unwrap().into()],
         );
+        c.execute(
+            "INSERT INTO points (series_id, run_pk, value, ord)
+             VALUES ($1, $2, 2.5, '2026-11-01T00:00:00Z 2026-11-01T00:00:00Z')",
+            &[Value::Int(series), Value::Int(run)],
+        )
+        .unwrap();
         c.execute(
             "INSERT INTO points (series_id, run_pk, value, ord)
              VALUES ($1, $2, 2.0, '2026-10-01T00:00:00Z 2026-11-02T00:00:00Z')",
