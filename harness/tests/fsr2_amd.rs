@@ -2324,3 +2324,108 @@ fn luminance_pyramid_departs_from_amds_only_as_stated() {
         }
     }
 }
+
+/// The adapter's bilinear filter weights, as AMD's passes get them through their linear
+/// sampler and the port does not (it filters with exact weights from `textureLoad`): an
+/// `rgba16float` 2x1 texture holding 0 and 1 sampled at 1,024 positions between the texel
+/// centres returns the weight itself. D3D asks for at least 8 fractional bits; where an adapter
+/// quantises to them, AMD's filtered reads (luma history, reactive masks, the SPD pass's
+/// jittered reads) depart from exact ones by up to 1/512 of the neighbours' difference, and a
+/// pass decision near its threshold can go the other way. Prints how many distinct weights the
+/// adapter gives and their largest departure; asserts they rise with the position and stay
+/// within D3D's bound.
+#[test]
+fn the_adapters_filter_weights_are_measured() {
+    let (device, queue) = device();
+    const N: u32 = 1024;
+    let texels = [0.0f32, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0, 1.0].map(half::f16::from_f32);
+    let source = texture_with(
+        &device,
+        &queue,
+        (2, 1),
+        (
+            wgpu::TextureFormat::Rgba16Float,
+            wgpu::TextureUsages::TEXTURE_BINDING,
+        ),
+        bytemuck::cast_slice(&texels),
+        8,
+    );
+    let out = storage_buffer(&device, &queue, &vec![0u8; N as usize * 4]);
+    let shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("filter weights"),
+        source: wgpu::ShaderSource::Wgsl(
+            "@group(0) @binding(0) var src: texture_2d<f32>;
+             @group(0) @binding(1) var lin: sampler;
+             @group(0) @binding(2) var<storage, read_write> out: array<f32>;
+             @compute @workgroup_size(64)
+             fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+                 let t = f32(id.x) / 1024.0;
+                 out[id.x] = textureSampleLevel(src, lin, vec2<f32>((0.5 + t) / 2.0, 0.5), 0.0).r;
+             }"
+            .into(),
+        ),
+    });
+    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: None,
+        layout: None,
+        module: &shader,
+        entry_point: Some("main"),
+        compilation_options: Default::default(),
+        cache: None,
+    });
+    let linear = device.create_sampler(&wgpu::SamplerDescriptor {
+        mag_filter: wgpu::FilterMode::Linear,
+        min_filter: wgpu::FilterMode::Linear,
+        ..Default::default()
+    });
+    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: None,
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &[
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::TextureView(&view(&source)),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: wgpu::BindingResource::Sampler(&linear),
+            },
+            wgpu::BindGroupEntry {
+                binding: 2,
+                resource: out.as_entire_binding(),
+            },
+        ],
+    });
+    let mut enc = device.create_command_encoder(&Default::default());
+    {
+        let mut pass = enc.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.dispatch_workgroups(N / 64, 1, 1);
+    }
+    queue.submit([enc.finish()]);
+    let weights: Vec<f32> = bytemuck::cast_slice(&read_storage(&device, &queue, &out)).to_vec();
+    let mut distinct = weights.clone();
+    distinct.dedup();
+    let (worst, at) = weights
+        .iter()
+        .enumerate()
+        .map(|(i, w)| ((w - i as f32 / N as f32).abs(), i))
+        .fold((0.0f32, 0), |a, b| if b.0 > a.0 { b } else { a });
+    eprintln!(
+        "filter weights: {} distinct over {N} positions between two texel centres; largest \
+         departure from the exact weight {worst:.6} at {at}/{N} (8 fractional bits: 256 weights, \
+         departures up to 1/512 = {:.6})",
+        distinct.len(),
+        1.0 / 512.0
+    );
+    assert!(
+        weights.windows(2).all(|w| w[1] >= w[0]),
+        "the weights fall somewhere: {weights:?}"
+    );
+    // D3D's 8 fractional bits: a weight within one 256th (and the f16 texel's own rounding).
+    assert!(
+        worst <= 1.0 / 256.0 + 1e-3,
+        "a weight departs by {worst} at {at}"
+    );
+}

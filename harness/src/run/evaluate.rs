@@ -84,6 +84,7 @@ pub fn evaluate(gpu: &Gpu, plan: &Plan<'_>, inputs: &MetricInputs<'_>) -> Evalua
         }
     };
     if plan.scenario.metrics.contains(&MetricKind::Cvvdp) {
+        let _span = super::phases::span("metrics: cvvdp");
         let r = inputs.reference;
         let mut device = on_gpu.then(|| gpu.metrics());
         match super::cvvdp::records_on(

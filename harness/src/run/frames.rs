@@ -75,6 +75,50 @@ pub fn render_keeping(
     render_sampled(gpu, scene, scenario, technique, keep, None, on_frame)
 }
 
+/// A history-free reference (the converged or supersampled ground truth: each frame a function of
+/// its scene time alone) captured once, measured frames only: no clock warm-up, no timed phase,
+/// no warm-up frames. Its timings are never read, and a renderer without history has nothing for
+/// the warm-up frames to build, so the frames kept are the same bits as after the full sequence
+/// (scene time is set per frame from its index). On the H200 a 32-sample 4K city reference
+/// rendered its 42 frames twice for the 10 it is compared on.
+pub fn render_history_free(
+    gpu: &Gpu,
+    scene: &mut SceneGpu,
+    scenario: &Scenario,
+    technique: &mut dyn Renderer,
+    keep: Keep,
+    on_frame: &mut dyn FnMut(),
+) -> Result<Rendered, RenderError> {
+    let render_passes: Vec<&'static str> = technique
+        .plan()
+        .passes
+        .iter()
+        .filter(|p| p.kind == PassKind::Render && !p.self_counted)
+        .map(|p| p.name)
+        .collect();
+    let timers = Timers::new(&gpu.device, &render_passes)?;
+    let out = technique.output();
+    let readback = Readback::new(&gpu.device, out.width(), out.height());
+    let check = FrameCheck::new(gpu, out.width(), out.height());
+    let mut rendered = Rendered::empty(timers.has_timestamps(), readback.bytes() + check.bytes());
+    let mut capture = Capture::new(gpu, scenario, out, keep, readback, check)?;
+    let mut seq = Sequence {
+        gpu,
+        scene,
+        scenario,
+        technique,
+        timers,
+    };
+    seq.timers.enable_stats(true);
+    for index in scenario.warmup_frames..scenario.total_frames() {
+        capture.frame(&mut seq, index, &mut rendered)?;
+        on_frame();
+    }
+    // Nothing was rendered twice to compare.
+    rendered.deterministic = None;
+    Ok(rendered)
+}
+
 /// [`render`], with `sampler` reading the sensors during the measured frames.
 pub fn render_sampled(
     gpu: &Gpu,

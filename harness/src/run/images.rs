@@ -188,6 +188,7 @@ pub fn save_cvvdp_maps(
         return;
     }
     let _ = std::fs::create_dir_all(dir);
+    let _span = super::phases::span("images: cvvdp maps");
     let stem = sanitize(&result.variant);
     for m in maps {
         let path = dir.join(format!("{stem}-cvvdp-f{:03}.png", m.frame));
@@ -363,7 +364,9 @@ fn write_all(result: &mut VariantResult, images: Vec<Pending<'_>>, run_dir: &Pat
     let jobs = DEFERRED.with(|d| d.borrow().as_ref().map(|d| d.jobs.clone()));
     if let Some(jobs) = jobs {
         for p in images {
-            let queued = jobs.send((p.path.clone(), p.image.into_owned())).is_ok();
+            let image = p.image.into_owned();
+            let _span = super::phases::span("images: queue wait");
+            let queued = jobs.send((p.path.clone(), image)).is_ok();
             if queued {
                 record(result, &p.path, run_dir, p.frame, &p.kind);
             }

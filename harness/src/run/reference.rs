@@ -37,7 +37,20 @@ pub fn render(
         match built {
             Err(Unsupported(reason)) => Err(format!("no reference: {reason}")),
             Ok(mut t) => {
-                frames::render_keeping(gpu, scene, scenario, t.as_mut(), plan.keep(true), on_frame)
+                // The ground truth, converged or supersampled, keeps no history: its measured
+                // frames alone, once. (A motion-blurred capture and a native reference go through
+                // the whole sequence.)
+                let history_free = matches!(
+                    scenario.reference,
+                    Reference::GroundTruth { .. } | Reference::Converged { .. }
+                ) && !scenario.motion_blur;
+                let keep = plan.keep(true);
+                let rendered = if history_free {
+                    frames::render_history_free(gpu, scene, scenario, t.as_mut(), keep, on_frame)
+                } else {
+                    frames::render_keeping(gpu, scene, scenario, t.as_mut(), keep, on_frame)
+                };
+                rendered
                     .map(|mut r| {
                         rendered::append_hashes(&scenario.name, "(reference)", &r.hashes);
                         ReferenceFrames::take(&mut r)

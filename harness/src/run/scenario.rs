@@ -273,7 +273,7 @@ impl<'a> ScenarioRun<'a> {
         if let (None, Some(own_gpu)) = (own_frames, own_gpu) {
             let mut backend = self.gpu.metrics();
             let reference = &inputs.reference.gpu;
-            let refs = phases::time("images", || {
+            let refs = phases::time("images: worst from device", || {
                 images::save_worst_from_device(
                     result,
                     &mut backend,

@@ -23,7 +23,7 @@ use tessera_metrics::{
 };
 
 use crate::error::GpuMetricsError;
-use crate::plumbing::{pack, read_buffer};
+use crate::plumbing::read_buffer;
 use crate::shaders::pipeline;
 use model::{safe_pow, Decode, Model};
 use plan::{Plan, PlanKey};
@@ -149,19 +149,66 @@ struct Predictor<'a> {
     state: &'a mut Option<Box<CvvdpState>>,
 }
 
-/// Frame `i` as the ring's texels: packed 8-bit pixels, or RGBA floats.
-fn texels(frames: &Frames<'_>, i: usize) -> Vec<u8> {
+/// Frame `i` as the ring's texels: packed 8-bit pixels, or RGBA floats; converted in row bands on
+/// the machine's cores (a 4K frame is 8.3 million pixels, converted twice per frame pair).
+fn texels(frames: &Frames<'_>, i: usize) -> Texels {
     match frames {
-        Frames::Srgb(f) => bytemuck::cast_slice(&pack(&f[i])).to_vec(),
+        Frames::Srgb(f) => {
+            let image = &f[i];
+            let mut out = vec![0u32; image.data.len() / 3];
+            in_bands(&image.data, 3, &mut out, 1, |src, dst| {
+                for (p, d) in src.chunks_exact(3).zip(dst) {
+                    *d = p[0] as u32 | (p[1] as u32) << 8 | (p[2] as u32) << 16;
+                }
+            });
+            Texels::Packed(out)
+        }
         Frames::Linear { frames, .. } => {
-            let rgba: Vec<f32> = frames[i]
-                .data
-                .chunks_exact(3)
-                .flat_map(|p| [p[0], p[1], p[2], 0.0])
-                .collect();
-            bytemuck::cast_slice(&rgba).to_vec()
+            let image = &frames[i];
+            let mut out = vec![0f32; image.data.len() / 3 * 4];
+            in_bands(&image.data, 3, &mut out, 4, |src, dst| {
+                for (p, d) in src.chunks_exact(3).zip(dst.chunks_exact_mut(4)) {
+                    d.copy_from_slice(&[p[0], p[1], p[2], 0.0]);
+                }
+            });
+            Texels::Floats(out)
         }
     }
+}
+
+/// A frame's texels as the ring takes them.
+enum Texels {
+    Packed(Vec<u32>),
+    Floats(Vec<f32>),
+}
+
+impl Texels {
+    fn bytes(&self) -> &[u8] {
+        match self {
+            Texels::Packed(v) => bytemuck::cast_slice(v),
+            Texels::Floats(v) => bytemuck::cast_slice(v),
+        }
+    }
+}
+
+/// `f(source band, destination band)` over pixel bands of `src` (`src_px` values a pixel) and
+/// `dst` (`dst_px` values a pixel), one band per core.
+fn in_bands<S: Sync, D: Send>(
+    src: &[S],
+    src_px: usize,
+    dst: &mut [D],
+    dst_px: usize,
+    f: impl Fn(&[S], &mut [D]) + Sync,
+) {
+    let pixels = dst.len() / dst_px;
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let band = pixels.div_ceil(threads.max(1)).max(1 << 16);
+    std::thread::scope(|scope| {
+        for (s, d) in src.chunks(band * src_px).zip(dst.chunks_mut(band * dst_px)) {
+            let f = &f;
+            scope.spawn(move || f(s, d));
+        }
+    });
 }
 
 fn size(frames: &Frames<'_>) -> (u32, u32) {
@@ -288,12 +335,8 @@ impl Predictor<'_> {
         let mut pending = 0;
         for k in 0..frames {
             let f = shot.frames.start + k;
-            plan.upload_frame(
-                queue,
-                k,
-                &texels(&shot.test, f),
-                &texels(&shot.reference, f),
-            );
+            let (test, reference) = (texels(&shot.test, f), texels(&shot.reference, f));
+            plan.upload_frame(queue, k, test.bytes(), reference.bytes());
             let slot = k % batch;
             let wants_map = shot.map_frames.contains(&f);
             let mut encoder = device.create_command_encoder(&Default::default());
