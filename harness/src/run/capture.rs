@@ -32,6 +32,8 @@ pub(super) struct Capture<'a> {
     /// `reference.motion_blur`: the compared frames are blurred along the scene's motion first.
     blur: Option<BlurredCapture>,
     hash_frames: bool,
+    /// Digests being computed beside the next frames' work, in frame order ([`Capture::finish`]).
+    digests: Vec<std::thread::JoinHandle<String>>,
 }
 
 /// Where a captured frame's bits went: what the CPU got, the device's check results, and the
@@ -71,7 +73,18 @@ impl<'a> Capture<'a> {
             metric_copy: keep.gpu.then(|| metric_texture(gpu, output)),
             blur,
             hash_frames: frame_hash_file().is_some(),
+            digests: Vec::new(),
         })
+    }
+
+    /// Waits for the captured frames' digests, into `rendered` in frame order.
+    pub fn finish(&mut self, rendered: &mut Rendered) {
+        let _span = phases::span("capture: digests");
+        for job in self.digests.drain(..) {
+            rendered
+                .digests
+                .push(job.join().unwrap_or_else(|e| std::panic::resume_unwind(e)));
+        }
     }
 
     /// The device's checks (the timed phase copies its last compared frame aside into them).
@@ -224,7 +237,7 @@ impl<'a> Capture<'a> {
     /// Counts a captured frame's non-finite values, hashes and digests it, hands it to the
     /// technique's extras, and keeps what `keep` and `save_frames` ask for.
     fn keep_frame(
-        &self,
+        &mut self,
         seq: &mut Sequence<'_>,
         m: u32,
         captured: Captured,
@@ -262,10 +275,13 @@ impl<'a> Capture<'a> {
             _ => None,
         };
         if let Some(img) = &srgb {
+            // SHA-256 of a 4K frame is about 20 ms on one core: hashed on its own thread while
+            // the next frame renders.
             let _span = phases::span("capture: digests");
-            rendered.digests.push(tessera_results::digest::frame_digest(
-                img.width, img.height, &img.data,
-            ));
+            let img = img.clone();
+            self.digests.push(std::thread::spawn(move || {
+                tessera_results::digest::frame_digest(img.width, img.height, &img.data)
+            }));
         }
         let extras_span = phases::span("capture: technique extras");
         // Techniques read the frame only for the images of saved frames.

@@ -114,6 +114,7 @@ pub fn render_history_free(
         capture.frame(&mut seq, index, &mut rendered)?;
         on_frame();
     }
+    capture.finish(&mut rendered);
     // Nothing was rendered twice to compare.
     rendered.deterministic = None;
     Ok(rendered)
@@ -168,6 +169,7 @@ pub fn render_sampled(
         capture.frame(&mut seq, index, &mut rendered)?;
         on_frame();
     }
+    capture.finish(&mut rendered);
     Ok(rendered)
 }
 
