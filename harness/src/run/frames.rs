@@ -164,8 +164,14 @@ pub fn render_sampled(
     // The last compared frame of the timed phase was copied aside as it completed: the capture
     // phase renders the sequence again from frame 0 and must end on the same bits (determinism,
     // histories included), compared on the device.
+    // Nothing of the warm-up frames is captured: they are pipelined as in the timed phase
+    // instead of waited for one by one (the same commands in the same order on one queue).
+    let warmup = scenario.warmup_frames;
+    phases::time("capture: render", || {
+        seq.pipelined(0..warmup, None, &mut |_, _| on_frame())
+    });
     seq.timers.enable_stats(true);
-    for index in 0..scenario.total_frames() {
+    for index in warmup..scenario.total_frames() {
         capture.frame(&mut seq, index, &mut rendered)?;
         on_frame();
     }
