@@ -633,23 +633,31 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 let small = synth::widen(&base, upload_scenarios.unwrap_or(scenarios));
                 let first: u64 = conn.query("SELECT COUNT(*) FROM runs", &[])?[0].i64(0)? as u64;
                 let mut ms = Vec::new();
+                let mut checkpoints = Vec::new();
                 let mut series = 0;
                 for i in first..first + then_upload {
                     let b = synth::run_from(&small, "gen", i, 1.0, 0.01, &mut rng);
                     let t = std::time::Instant::now();
-                    let (ingested, _) =
-                        regressions::ingest_and_detect(&mut *conn, &b, &Params::default())?;
+                    // As `serve` stores an upload: the checkpoint after it, timed apart.
+                    let (ingested, _) = db::without_autocheckpoint(&mut *conn, |c| {
+                        regressions::ingest_and_detect(c, &b, &Params::default())
+                    })??;
                     ms.push(t.elapsed().as_secs_f64() * 1e3);
+                    let t = std::time::Instant::now();
+                    db::checkpoint(&mut *conn)?;
+                    checkpoints.push(t.elapsed().as_secs_f64() * 1e3);
                     if let Ingested::Stored { series: s, .. } = ingested {
                         series = s.len();
                     }
                 }
                 ms.sort_by(|a, b| a.total_cmp(b));
+                checkpoints.sort_by(|a, b| a.total_cmp(b));
                 println!(
-                    "{then_upload} uploads of {} results ({series} series each): p50 {:.1} ms, p95 {:.1} ms",
+                    "{then_upload} uploads of {} results ({series} series each): p50 {:.1} ms, p95 {:.1} ms; the checkpoint after each: p50 {:.1} ms",
                     small.scenarios.iter().map(|s| s.results.len()).sum::<usize>(),
                     ms[ms.len() / 2],
-                    ms[(ms.len() - 1) * 95 / 100]
+                    ms[(ms.len() - 1) * 95 / 100],
+                    checkpoints[checkpoints.len() / 2]
                 );
             }
         }

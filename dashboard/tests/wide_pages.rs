@@ -331,3 +331,50 @@ fn an_image_link_without_images_answers_an_html_404_page() {
         );
     });
 }
+
+/// The comparison keeps the two runs it decoded and B's noise in memory
+/// (`store::run_cache`): the page asked again, after the store changed under it (the oldest
+/// nights deleted, so B's series have too few earlier points for a noise of their own) and after
+/// B itself was deleted and stored again with other values, is byte for byte the page of a server
+/// that kept nothing.
+#[test]
+fn a_comparison_from_kept_runs_is_the_page_a_fresh_server_writes() {
+    let store = common::sqlite();
+    let h = StepHistory::h200(12, 11, "native", 1.03);
+    let mut c = store.pool.get().unwrap();
+    for run in h.runs(&common::template()) {
+        ingest_and_detect(&mut *c, &widen(&run, COPIES), &Params::default()).unwrap();
+    }
+    drop(c);
+    let kept = app(AppState::new(store.pool.clone(), None));
+    let fresh = || app(AppState::new(store.pool.clone(), None));
+    let url = format!("/compare/runs?a={}&b={}", h.run_id(10), h.run_id(11));
+    block_on(async {
+        let (status, first) = get(&kept, &url).await;
+        assert_eq!(status, StatusCode::OK);
+        // The 3% step is called by the series' noise alone.
+        assert!(first.contains("<td class=\"n worse\">1</td>"), "{first}");
+        assert_eq!(get(&kept, &url).await.1, first);
+        assert_eq!(get(&fresh(), &url).await.1, first);
+
+        let mut c = store.pool.get().unwrap();
+        for night in 0..4 {
+            tessera_dashboard::store::delete::delete_run(&mut *c, &h.run_id(night)).unwrap();
+        }
+        drop(c);
+        let (_, fewer) = get(&kept, &url).await;
+        assert_ne!(fewer, first);
+        assert!(!fewer.contains("<td class=\"n worse\">1</td>"), "{fewer}");
+        assert_eq!(get(&fresh(), &url).await.1, fewer);
+
+        let mut c = store.pool.get().unwrap();
+        tessera_dashboard::store::delete::delete_run(&mut *c, &h.run_id(11)).unwrap();
+        let flat = StepHistory::h200(12, 11, "native", 1.5).runs(&common::template());
+        ingest_and_detect(&mut *c, &widen(&flat[11], COPIES), &Params::default()).unwrap();
+        drop(c);
+        let (_, again) = get(&kept, &url).await;
+        assert_ne!(again, fewer);
+        assert!(again.contains("+50."), "{again}");
+        assert_eq!(get(&fresh(), &url).await.1, again);
+    });
+}

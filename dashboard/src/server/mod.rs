@@ -34,6 +34,8 @@ pub mod runs;
 pub mod series;
 pub mod upload;
 
+use std::sync::Arc;
+
 use axum::body::Body;
 use axum::extract::DefaultBodyLimit;
 use axum::extract::Request;
@@ -66,6 +68,8 @@ pub struct AppState {
     pub public_url: Option<String>,
     /// Lease, offline threshold, retries and repository of the job queue (see [`queue`]).
     pub queue: queue::QueueConfig,
+    /// Decoded records and noise of recently compared runs ([`crate::store::run_cache`]).
+    pub runs: Arc<crate::store::run_cache::RunCache>,
 }
 
 impl AppState {
@@ -79,6 +83,7 @@ impl AppState {
             timeouts: Timeouts::default(),
             public_url: None,
             queue: queue::QueueConfig::default(),
+            runs: Arc::default(),
         }
     }
 

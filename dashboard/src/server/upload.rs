@@ -94,7 +94,11 @@ pub async fn api(
                     return Err(AppError::Forbidden(why));
                 }
             }
-            match crate::regressions::ingest_and_detect(conn, &bundle, &params)? {
+            // The store's checkpoint runs after the response, off the writer's path.
+            let ingested = crate::db::without_autocheckpoint(conn, |c| {
+                crate::regressions::ingest_and_detect(c, &bundle, &params)
+            })??;
+            match ingested {
                 (Ingested::Stored { results, .. }, changes) => {
                     let new_regressions = changes.detected;
                     Ok((
@@ -121,6 +125,16 @@ pub async fn api(
             }
         })
         .await?;
+    if status == StatusCode::CREATED {
+        // Copies the pages the upload wrote into the store file ([`crate::db::checkpoint`]).
+        let pool = state.pool.clone();
+        tokio::task::spawn_blocking(move || {
+            let done = pool.get().and_then(|mut c| crate::db::checkpoint(&mut *c));
+            if let Err(e) = done {
+                eprintln!("tessera-dashboard: checkpoint after an upload failed: {e}");
+            }
+        });
+    }
     Ok((status, Json(response)).into_response())
 }
 

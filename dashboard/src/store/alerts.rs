@@ -301,19 +301,21 @@ pub fn bisect_target(conn: &mut dyn Connection, id: i64) -> Result<BisectTarget,
     })
 }
 
+/// Each alerted scenario's newest record's file: one seek of `scenario_results (scenario, id)`
+/// per scenario (schema step 12).
+fn suites_sql(backend: Backend) -> String {
+    format!(
+        "SELECT sr.scenario, {} FROM scenario_results sr
+         WHERE sr.id IN (SELECT (SELECT MAX(x.id) FROM scenario_results x WHERE x.scenario = d.scenario)
+                         FROM (SELECT DISTINCT s.scenario FROM regressions g JOIN series s ON s.id = g.series_id) d)",
+        file_of_record(backend)
+    )
+}
+
 /// The suite of each scenario that has alerts: the folder of its newest scenario file (one JSON
 /// read per scenario, not per alert).
 fn suites(conn: &mut dyn Connection) -> Result<BTreeMap<String, String>, StoreError> {
-    let file = file_of_record(conn.backend());
-    let rows = conn.query(
-        &format!(
-            "SELECT sr.scenario, {file} FROM scenario_results sr
-             WHERE sr.id IN (SELECT MAX(id) FROM scenario_results
-                             WHERE scenario IN (SELECT DISTINCT s.scenario FROM regressions g JOIN series s ON s.id = g.series_id)
-                             GROUP BY scenario)"
-        ),
-        &[],
-    )?;
+    let rows = conn.query(&suites_sql(conn.backend()), &[])?;
     let mut out = BTreeMap::new();
     for r in &rows {
         let scenario = r.string(0)?;
@@ -991,6 +993,28 @@ pub fn set_group_triage(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_scenarios_newest_record_is_a_seek_not_a_scan_of_every_record() {
+        let pool = crate::db::open(":memory:").unwrap();
+        let mut c = pool.get().unwrap();
+        let plan: Vec<String> = c
+            .query(
+                &format!("EXPLAIN QUERY PLAN {}", suites_sql(Backend::Sqlite)),
+                &[],
+            )
+            .unwrap()
+            .iter()
+            .map(|r| r.string(3).unwrap())
+            .collect();
+        let plan = plan.join("\n");
+        assert!(
+            plan.contains("SEARCH x USING COVERING INDEX scenario_results_scenario (scenario=?)"),
+            "{plan}"
+        );
+        assert!(!plan.contains("SCAN scenario_results"), "{plan}");
+        assert!(!plan.contains("SCAN x"), "{plan}");
+    }
 
     #[test]
     fn keys_have_a_shape() {

@@ -18,6 +18,7 @@ pub mod outbox;
 pub mod queue;
 pub mod read;
 pub mod records;
+pub mod run_cache;
 pub mod series;
 pub mod stoppage;
 pub mod tokens;

@@ -7,7 +7,7 @@
 //!
 //! Not for: detection itself ([`crate::regressions`]).
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
 
 use crate::db::Connection;
 use crate::detect::noise_sigma;
@@ -34,7 +34,7 @@ pub fn frame_time_noise(
 }
 
 /// [`frame_time_noise`] of the series whose scenario and variant `wanted` accepts only: each
-/// series costs two queries, so a page that needs a few of a wide run's 1,700 asks for those.
+/// series costs a query, so a page that needs a few of a wide run's 1,700 asks for those.
 pub fn frame_time_noise_where(
     conn: &mut dyn Connection,
     run_id: &str,
@@ -50,13 +50,23 @@ pub fn frame_time_noise_where(
     };
     let pk = run.i64(0)?;
     let env = (run.string(1)?, run.string(2)?, run.string(3)?);
+    // Whether each earlier run shares the run's environment, asked once per run.
+    let mut same_env: HashMap<i64, bool> = HashMap::new();
     for s in series::of_run_with_measure(conn, pk, FRAME_TIME)? {
         if !wanted(&s.scenario, &s.variant) {
             continue;
         }
         let mut values = Vec::new();
-        for (value, run_env) in series::before_with_environment(conn, &s, pk, NOISE_POINTS)? {
-            if run_env != env {
+        for (value, earlier) in series::before_with_run(conn, &s, pk, NOISE_POINTS)? {
+            let same = match same_env.get(&earlier) {
+                Some(same) => *same,
+                None => {
+                    let same = series::environment_of(conn, earlier)?.as_ref() == Some(&env);
+                    same_env.insert(earlier, same);
+                    same
+                }
+            };
+            if !same {
                 break;
             }
             values.push(value);

@@ -289,14 +289,18 @@ pub(crate) fn scenarios_of(
     conn: &mut dyn Connection,
     pk: i64,
 ) -> Result<Vec<ScenarioResult>, StoreError> {
-    let rows = conn.query(
+    super::records::decode_all(&record_rows(conn, pk)?, 0)
+}
+
+/// The stored records of run `pk` ([`super::records::COLUMNS`]), in scenario order, not decoded.
+pub(crate) fn record_rows(conn: &mut dyn Connection, pk: i64) -> Result<Vec<Row>, StoreError> {
+    Ok(conn.query(
         &format!(
             "SELECT {} FROM scenario_results WHERE run_pk = $1 ORDER BY scenario",
             super::records::COLUMNS
         ),
         &[Value::Int(pk)],
-    )?;
-    super::records::decode_all(&rows, 0)
+    )?)
 }
 
 fn images_of(

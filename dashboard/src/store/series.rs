@@ -440,16 +440,17 @@ pub fn of_run_with_measure(
 pub type Environment = (String, String, String);
 
 /// Up to `limit` points of series `s` before run `run_pk`'s point (`s.ord`, as
-/// [`of_run_with_measure`] read it), newest first, each with its run's environment.
-pub fn before_with_environment(
+/// [`of_run_with_measure`] read it), newest first, each with the primary key of its run (the
+/// run's environment is looked up once per run by the caller, see [`environment_of`], not joined
+/// into every point: a wide run asks this of each of its 1,700 series).
+pub fn before_with_run(
     conn: &mut dyn Connection,
     s: &RunSeries,
     run_pk: i64,
     limit: i64,
-) -> Result<Vec<(f64, Environment)>, StoreError> {
+) -> Result<Vec<(f64, i64)>, StoreError> {
     conn.query(
-        "SELECT p.value, r.driver, r.driver_info, r.harness_version
-         FROM points p JOIN runs r ON r.id = p.run_pk
+        "SELECT p.value, p.run_pk FROM points p
          WHERE p.series_id = $1 AND (p.ord < $2 OR (p.ord = $2 AND p.run_pk < $3))
          ORDER BY p.ord DESC, p.run_pk DESC LIMIT $4",
         &[
@@ -460,6 +461,19 @@ pub fn before_with_environment(
         ],
     )?
     .iter()
-    .map(|r| Ok((r.f64(0)?, (r.string(1)?, r.string(2)?, r.string(3)?))))
+    .map(|r| Ok((r.f64(0)?, r.i64(1)?)))
     .collect()
+}
+
+/// The environment of run `run_pk` (`None` for no such run).
+pub fn environment_of(
+    conn: &mut dyn Connection,
+    run_pk: i64,
+) -> Result<Option<Environment>, StoreError> {
+    conn.query_opt(
+        "SELECT driver, driver_info, harness_version FROM runs WHERE id = $1",
+        &[Value::Int(run_pk)],
+    )?
+    .map(|r| Ok((r.string(0)?, r.string(1)?, r.string(2)?)))
+    .transpose()
 }

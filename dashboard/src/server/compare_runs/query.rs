@@ -6,6 +6,8 @@
 //!
 //! Not for: presenting the comparison ([`super::view`], [`super::formats`]).
 
+use std::sync::Arc;
+
 use tessera_results::compare::{self, Comparison, Options, RunRef};
 use tessera_results::stats::DEFAULT_THRESHOLD_PCT;
 
@@ -13,7 +15,6 @@ use crate::server::conditions_view;
 use crate::server::export::Format;
 use crate::server::{AppError, AppState};
 use crate::store::browse;
-use crate::store::noise;
 use crate::store::read;
 
 /// The request, parsed from the query string (`pick` may repeat).
@@ -109,12 +110,13 @@ pub struct Loaded {
     /// What differs between A's and B's conditions ([`conditions_view::differences`]).
     pub environment: Vec<String>,
     /// Both runs' scenario records (their conditions per variant).
-    pub a: Vec<tessera_results::ScenarioResult>,
-    pub b: Vec<tessera_results::ScenarioResult>,
+    pub a: Arc<Vec<tessera_results::ScenarioResult>>,
+    pub b: Arc<Vec<tessera_results::ScenarioResult>>,
 }
 
 /// The comparison the request names; `None` when it names no runs (the empty form).
 pub async fn load(state: &AppState, q: CompareRunsQuery) -> Result<Option<Loaded>, AppError> {
+    let cache = state.runs.clone();
     state
         .db(move |c| {
             let (a, b) = match (&q.a, &q.b, q.picks.as_slice()) {
@@ -139,11 +141,12 @@ pub async fn load(state: &AppState, q: CompareRunsQuery) -> Result<Option<Loaded
                 }
                 _ => return Err(AppError::BadRequest("give both a= and b=".into())),
             };
-            let (ha, sa) = read::run_records(c, &a)?;
-            let (hb, sb) = read::run_records(c, &b)?;
+            let (ha, hb) = (read::run_head(c, &a)?, read::run_head(c, &b)?);
+            let sa = cache.records(c, ha.pk)?;
+            let sb = cache.records(c, hb.pk)?;
             // The series' own noise, where a history on B's adapter gives it (times in ms only).
             let noise = if compare::same_adapter(&ha.info, &hb.info) {
-                noise::frame_time_noise(c, &b)?
+                cache.noise(c, &b)?.as_ref().clone()
             } else {
                 Default::default()
             };
