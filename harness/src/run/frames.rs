@@ -75,6 +75,39 @@ pub fn render_keeping(
     render_sampled(gpu, scene, scenario, technique, keep, None, on_frame)
 }
 
+/// What renders a technique's sequence and captures its frames: the sequence with its timers
+/// (the technique's render passes), the capture (readback, the device's checks) and the empty
+/// result they fill.
+fn prepare<'a>(
+    gpu: &'a Gpu,
+    scene: &'a mut SceneGpu,
+    scenario: &'a Scenario,
+    technique: &'a mut dyn Renderer,
+    keep: Keep,
+) -> Result<(Sequence<'a>, Capture<'a>, Rendered), RenderError> {
+    let render_passes: Vec<&'static str> = technique
+        .plan()
+        .passes
+        .iter()
+        .filter(|p| p.kind == PassKind::Render && !p.self_counted)
+        .map(|p| p.name)
+        .collect();
+    let timers = Timers::new(&gpu.device, &render_passes)?;
+    let out = technique.output();
+    let readback = Readback::new(&gpu.device, out.width(), out.height());
+    let check = FrameCheck::new(gpu, out.width(), out.height());
+    let rendered = Rendered::empty(timers.has_timestamps(), readback.bytes() + check.bytes());
+    let capture = Capture::new(gpu, scenario, out, keep, readback, check)?;
+    let seq = Sequence {
+        gpu,
+        scene,
+        scenario,
+        technique,
+        timers,
+    };
+    Ok((seq, capture, rendered))
+}
+
 /// A history-free reference (the converged or supersampled ground truth: each frame a function of
 /// its scene time alone) captured once, measured frames only: no clock warm-up, no timed phase,
 /// no warm-up frames. Its timings are never read, and a renderer without history has nothing for
@@ -89,26 +122,7 @@ pub fn render_history_free(
     keep: Keep,
     on_frame: &mut dyn FnMut(),
 ) -> Result<Rendered, RenderError> {
-    let render_passes: Vec<&'static str> = technique
-        .plan()
-        .passes
-        .iter()
-        .filter(|p| p.kind == PassKind::Render && !p.self_counted)
-        .map(|p| p.name)
-        .collect();
-    let timers = Timers::new(&gpu.device, &render_passes)?;
-    let out = technique.output();
-    let readback = Readback::new(&gpu.device, out.width(), out.height());
-    let check = FrameCheck::new(gpu, out.width(), out.height());
-    let mut rendered = Rendered::empty(timers.has_timestamps(), readback.bytes() + check.bytes());
-    let mut capture = Capture::new(gpu, scenario, out, keep, readback, check)?;
-    let mut seq = Sequence {
-        gpu,
-        scene,
-        scenario,
-        technique,
-        timers,
-    };
+    let (mut seq, mut capture, mut rendered) = prepare(gpu, scene, scenario, technique, keep)?;
     seq.timers.enable_stats(true);
     for index in scenario.warmup_frames..scenario.total_frames() {
         capture.frame(&mut seq, index, &mut rendered)?;
@@ -130,26 +144,7 @@ pub fn render_sampled(
     sampler: Option<&Sampler>,
     on_frame: &mut dyn FnMut(),
 ) -> Result<Rendered, RenderError> {
-    let render_passes: Vec<&'static str> = technique
-        .plan()
-        .passes
-        .iter()
-        .filter(|p| p.kind == PassKind::Render && !p.self_counted)
-        .map(|p| p.name)
-        .collect();
-    let timers = Timers::new(&gpu.device, &render_passes)?;
-    let out = technique.output();
-    let readback = Readback::new(&gpu.device, out.width(), out.height());
-    let check = FrameCheck::new(gpu, out.width(), out.height());
-    let mut rendered = Rendered::empty(timers.has_timestamps(), readback.bytes() + check.bytes());
-    let mut capture = Capture::new(gpu, scenario, out, keep, readback, check)?;
-    let mut seq = Sequence {
-        gpu,
-        scene,
-        scenario,
-        technique,
-        timers,
-    };
+    let (mut seq, mut capture, mut rendered) = prepare(gpu, scene, scenario, technique, keep)?;
 
     // Clock warm-up, so that the GPU reaches its working clocks before the first timed frame,
     // and the energy window. The clocks of the measured frames are recorded either way
