@@ -40,6 +40,18 @@ fn block_on<F: std::future::Future>(f: F) -> F::Output {
 /// Copies of the template's scenario in each run: 3 variants each, 180 results.
 const COPIES: usize = 60;
 
+/// Twelve wide nights with a 3% step in `native` on the last one, stored as uploads are.
+fn nightly_step_store() -> (common::TestStore, StepHistory) {
+    let store = common::sqlite();
+    let h = StepHistory::h200(12, 11, "native", 1.03);
+    let mut c = store.pool.get().unwrap();
+    for run in h.runs(&common::template()) {
+        ingest_and_detect(&mut *c, &widen(&run, COPIES), &Params::default()).unwrap();
+    }
+    drop(c);
+    (store, h)
+}
+
 /// Three nights of a 180-result run; `native` 30% slower from night 2; one variant of one
 /// scenario failed on night 2.
 fn wide_store() -> (common::TestStore, StepHistory) {
@@ -107,13 +119,7 @@ fn a_wide_run_opens_on_its_summary_and_each_scenario_has_a_page() {
 /// same nights says at a width where every series' noise is read (`morning_after.rs`).
 #[test]
 fn a_wide_summary_calls_a_step_below_the_threshold_by_its_noise() {
-    let store = common::sqlite();
-    let h = StepHistory::h200(12, 11, "native", 1.03);
-    let mut c = store.pool.get().unwrap();
-    for run in h.runs(&common::template()) {
-        ingest_and_detect(&mut *c, &widen(&run, COPIES), &Params::default()).unwrap();
-    }
-    drop(c);
+    let (store, h) = nightly_step_store();
     let app = app(AppState::new(store.pool.clone(), None));
     block_on(async {
         let (status, page) = get(&app, &format!("/runs/{}", h.run_id(11))).await;
@@ -339,13 +345,7 @@ fn an_image_link_without_images_answers_an_html_404_page() {
 /// that kept nothing.
 #[test]
 fn a_comparison_from_kept_runs_is_the_page_a_fresh_server_writes() {
-    let store = common::sqlite();
-    let h = StepHistory::h200(12, 11, "native", 1.03);
-    let mut c = store.pool.get().unwrap();
-    for run in h.runs(&common::template()) {
-        ingest_and_detect(&mut *c, &widen(&run, COPIES), &Params::default()).unwrap();
-    }
-    drop(c);
+    let (store, h) = nightly_step_store();
     let kept = app(AppState::new(store.pool.clone(), None));
     let fresh = || app(AppState::new(store.pool.clone(), None));
     let url = format!("/compare/runs?a={}&b={}", h.run_id(10), h.run_id(11));
